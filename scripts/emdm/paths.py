@@ -1,0 +1,31 @@
+"""Where things live. Nothing machine-specific is hard-coded: the shared data folder is
+``$EMDM_SHARED_DATA`` or ``../shared/data`` beside the checkout."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+REPO_ROOT = Path(__file__).resolve().parents[2]
+MODELS_DIR = REPO_ROOT / "public" / "models"
+DATA_DIR = REPO_ROOT / "data"                 # git-ignored: unpacked sources, prepared datasets
+DATASET_DIR = DATA_DIR / "dataset"            # default output of `python -m emdm.data.prepare`
+RUNS_DIR = REPO_ROOT / "runs"                 # git-ignored: checkpoints and logs
+FIXTURES_DIR = REPO_ROOT / "tests" / "fixtures"
+
+
+def shared_data_dir() -> Path:
+    """The read-only folder of mocap archives and the CLIP tokenizer (see its README)."""
+    env = os.environ.get("EMDM_SHARED_DATA")
+    return Path(env) if env else REPO_ROOT.parent / "shared" / "data"
+
+
+def shared_file(name: str) -> Path:
+    """A file or folder inside the shared data folder; FileNotFoundError says where it looked."""
+    p = shared_data_dir() / name
+    if not p.exists():
+        raise FileNotFoundError(
+            f"{p}: not found. Put the shared data folder beside the checkout (../shared/data) "
+            f"or set EMDM_SHARED_DATA to its path."
+        )
+    return p
