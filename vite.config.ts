@@ -1,0 +1,78 @@
+/// <reference types="vitest/config" />
+// Vite (dev/build/preview) and vitest configuration.
+// - root is web/ (the pages), static files come from public/ (models, self-hosted ORT wasm).
+// - every web/**/index.html is a page of the multi-page build (web/index.html = the demo,
+//   web/harness/index.html = the test harness, ...), output in dist/.
+// - COOP/COEP headers on dev AND preview so ORT-web can use wasm threads (SharedArrayBuffer).
+// - the ORT wasm binaries are copied into public/ort* before anything runs (scripts/build/copy-ort.mjs).
+import fs from 'node:fs';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { defineConfig } from 'vite';
+// @ts-expect-error -- plain ESM build script without type declarations
+import { copyOrt } from './scripts/build/copy-ort.mjs';
+
+const ROOT = path.dirname(fileURLToPath(import.meta.url));
+const WEB = path.join(ROOT, 'web');
+
+export const CROSS_ORIGIN_ISOLATION_HEADERS = {
+  'Cross-Origin-Opener-Policy': 'same-origin',
+  'Cross-Origin-Embedder-Policy': 'require-corp',
+  'Cross-Origin-Resource-Policy': 'same-origin',
+};
+
+/** Every web/**\/index.html, keyed by its folder ('main' for web/index.html). */
+export function pageInputs(webDir: string = WEB): Record<string, string> {
+  const inputs: Record<string, string> = {};
+  if (!fs.existsSync(webDir)) return inputs;
+  const entries = fs.readdirSync(webDir, { recursive: true, encoding: 'utf8' });
+  for (const rel of entries.sort()) {
+    if (path.basename(rel) !== 'index.html') continue;
+    if (rel.split(path.sep).includes('node_modules')) continue;
+    const dir = path.dirname(rel);
+    const key = dir === '.' ? 'main' : dir.split(path.sep).join('/');
+    inputs[key] = path.join(webDir, rel);
+  }
+  return inputs;
+}
+
+copyOrt(ROOT);
+
+const inputs = pageInputs();
+
+export default defineConfig({
+  root: WEB,
+  publicDir: path.join(ROOT, 'public'),
+  build: {
+    outDir: path.join(ROOT, 'dist'),
+    emptyOutDir: true,
+    target: 'es2022',
+    chunkSizeWarningLimit: 4096,
+    rollupOptions: Object.keys(inputs).length ? { input: inputs } : {},
+  },
+  server: {
+    host: '127.0.0.1',
+    port: 5173,
+    headers: CROSS_ORIGIN_ISOLATION_HEADERS,
+    fs: { allow: [ROOT] },
+  },
+  preview: {
+    host: '127.0.0.1',
+    port: 5173,
+    headers: CROSS_ORIGIN_ISOLATION_HEADERS,
+  },
+  optimizeDeps: {
+    // ORT locates its wasm via wasmPaths (public/ort*); pre-bundling it breaks that lookup.
+    exclude: ['onnxruntime-web', '@huggingface/transformers'],
+  },
+  worker: { format: 'es' },
+  test: {
+    root: ROOT,
+    include: ['tests/unit/**/*.test.ts'],
+    environment: 'node',
+    testTimeout: 60_000,
+    hookTimeout: 120_000,
+    pool: 'forks',
+    maxWorkers: 2,
+  },
+});
