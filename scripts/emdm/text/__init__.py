@@ -1,0 +1,80 @@
+"""Text encoders: one interface, two implementations.
+
+    enc = load_encoder("all-MiniLM-L6-v2")      # the shipped default (int8 ONNX + tokenizers)
+    enc.dim                                      # 384
+    enc.encode(["a person walks"])              # float32 [N, 384], L2-normalised (mean pooling)
+    encode_texts(texts, encoder_id=..., batch_size=...)
+
+``"clip-vit-b32"`` (or any id of kind ``clip``) loads EMDM's paper encoder, CLIP ViT-B/32's text
+tower, from a local folder (``model_dir=``) or the Hub name; see :mod:`emdm.text.clip`.
+The shipped encoders are found through ``public/models/manifest.json`` (``textEncoders``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Protocol
+
+import numpy as np
+
+from emdm.text.minilm import MiniLMEncoder, TextEncoderError
+
+DEFAULT_ENCODER = "all-MiniLM-L6-v2"
+CLIP_ENCODER = "clip-vit-b32"
+
+__all__ = ["DEFAULT_ENCODER", "CLIP_ENCODER", "TextEncoder", "TextEncoderError", "load_encoder", "encode_texts"]
+
+
+class TextEncoder(Protocol):
+    id: str
+    kind: str
+    dim: int
+
+    def encode(self, texts: Sequence[str], batch_size: int = ...) -> np.ndarray: ...
+
+
+_CACHE: dict[tuple[str, str], TextEncoder] = {}
+
+
+def load_encoder(encoder_id: str = DEFAULT_ENCODER, *, models_dir: Path | str | None = None,
+                 model_dir: Path | str | None = None) -> TextEncoder:
+    """Load a text encoder by id.
+
+    ``all-MiniLM-L6-v2`` (and any manifest entry of kind ``minilm``): the shipped ONNX folder named by
+    the manifest under ``models_dir`` (default public/models), or ``model_dir`` directly.
+    ``clip-vit-b32`` / a manifest entry of kind ``clip``: CLIP's text tower via transformers from
+    ``model_dir`` (a local folder with weights) or the Hub id ``openai/clip-vit-base-patch32``.
+    """
+    from emdm import manifest as mf
+
+    models_dir = Path(models_dir) if models_dir is not None else mf.DEFAULT_MODELS_DIR
+    key = (encoder_id, str(model_dir or models_dir))
+    if key in _CACHE:
+        return _CACHE[key]
+    if encoder_id == CLIP_ENCODER or encoder_id.startswith("clip"):
+        from emdm.text.clip import ClipTextEncoder
+
+        enc: TextEncoder = ClipTextEncoder(model_dir or "openai/clip-vit-base-patch32", encoder_id=encoder_id)
+    elif model_dir is not None:
+        enc = MiniLMEncoder(model_dir, encoder_id=encoder_id)
+    else:
+        manifest = mf.load(models_dir)
+        entry = manifest["textEncoders"].get(encoder_id)
+        if entry is None:
+            known = ", ".join(sorted(manifest["textEncoders"])) or "none"
+            raise TextEncoderError(
+                f"{Path(models_dir) / mf.MANIFEST_NAME}: no textEncoders entry {encoder_id!r} (known: {known}); "
+                f"run `python -m emdm.text.export_minilm`")
+        if entry.get("kind") != "minilm":
+            raise TextEncoderError(f"manifest textEncoders.{encoder_id}: field 'kind' is {entry.get('kind')!r}, "
+                                   f"this loader runs 'minilm' folders (use model_dir= for clip)")
+        enc = MiniLMEncoder(Path(models_dir) / entry["dir"], encoder_id=encoder_id)
+    _CACHE[key] = enc
+    return enc
+
+
+def encode_texts(texts: Sequence[str], encoder_id: str = DEFAULT_ENCODER, batch_size: int = 1,
+                 **load_kwargs) -> np.ndarray:
+    """Embed texts with a (cached) encoder: float32 [N, dim]."""
+    return load_encoder(encoder_id, **load_kwargs).encode(texts, batch_size=batch_size)

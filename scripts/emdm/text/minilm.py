@@ -1,0 +1,97 @@
+"""all-MiniLM-L6-v2 sentence encoder running THE SHIPPED int8 ONNX file (what the browser runs).
+
+Tokenisation uses the shipped tokenizer.json through HuggingFace ``tokenizers`` (the same file
+transformers.js reads); the ONNX graph returns token vectors; sentences are mean-pooled over real
+tokens and L2-normalised (384-d).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from emdm.text.pooling import l2_normalize, mean_pool
+
+ONNX_REL = "onnx/model_quantized.onnx"
+
+
+class TextEncoderError(ValueError):
+    """Bad input to, or a broken file of, a text encoder (the message names which)."""
+
+
+def check_texts(texts: Sequence[str], who: str) -> list[str]:
+    if isinstance(texts, str):
+        raise TextEncoderError(f"{who}.encode: expected a list of strings, got one string (wrap it in a list)")
+    out = []
+    for i, t in enumerate(texts):
+        if not isinstance(t, str):
+            raise TextEncoderError(f"{who}.encode: texts[{i}] is {type(t).__name__}, expected str")
+        out.append(t)
+    return out
+
+
+class MiniLMEncoder:
+    """``encode(list[str]) -> float32 [N, 384]``, unit-length rows."""
+
+    kind = "minilm"
+
+    def __init__(self, model_dir: Path | str, *, encoder_id: str = "all-MiniLM-L6-v2", threads: int | None = None):
+        import onnxruntime as ort
+        from tokenizers import Tokenizer
+
+        self.id = encoder_id
+        self.dir = Path(model_dir)
+        onnx_path = self.dir / ONNX_REL
+        tok_path = self.dir / "tokenizer.json"
+        for p in (onnx_path, tok_path, self.dir / "tokenizer_config.json"):
+            if not p.is_file():
+                raise TextEncoderError(f"{p}: missing; run `python -m emdm.text.export_minilm` to build the encoder folder")
+        cfg = json.loads((self.dir / "tokenizer_config.json").read_text())
+        self.max_tokens = int(cfg.get("model_max_length", 128))
+        self.tokenizer = Tokenizer.from_file(str(tok_path))
+        self.tokenizer.no_padding()
+        self.tokenizer.enable_truncation(self.max_tokens)
+        so = ort.SessionOptions()
+        if threads:
+            so.intra_op_num_threads = threads
+        so.log_severity_level = 3
+        self.session = ort.InferenceSession(str(onnx_path), so, providers=["CPUExecutionProvider"])
+        out = self.session.get_outputs()[0]
+        self.dim = int(out.shape[-1]) if isinstance(out.shape[-1], int) else 384
+        self.input_names = [i.name for i in self.session.get_inputs()]
+
+    def _run(self, encs) -> np.ndarray:
+        n, t = len(encs), max(len(e.ids) for e in encs)
+        ids = np.zeros((n, t), np.int64)
+        mask = np.zeros((n, t), np.int64)
+        types = np.zeros((n, t), np.int64)
+        for i, e in enumerate(encs):
+            ids[i, : len(e.ids)] = e.ids
+            mask[i, : len(e.ids)] = 1
+            types[i, : len(e.ids)] = e.type_ids
+        feeds = {"input_ids": ids, "attention_mask": mask, "token_type_ids": types}
+        hidden = self.session.run(None, {k: feeds[k] for k in self.input_names})[0]
+        return l2_normalize(mean_pool(hidden, mask))
+
+    def encode(self, texts: Sequence[str], batch_size: int = 1) -> np.ndarray:
+        """Embed ``texts``. ``batch_size`` 1 (default) gives exactly the browser's vectors (int8 dynamic
+        quantisation scales activations per call, so batching shifts vectors: cosine ~0.99 to the unbatched ones);
+        larger batches group prompts of equal token length (no padding) for speed."""
+        texts = check_texts(texts, self.id)
+        if batch_size < 1:
+            raise TextEncoderError(f"{self.id}.encode: batch_size must be >= 1, got {batch_size}")
+        out = np.zeros((len(texts), self.dim), np.float32)
+        if not texts:
+            return out
+        encs = self.tokenizer.encode_batch(texts)
+        by_len: dict[int, list[int]] = {}
+        for i, e in enumerate(encs):
+            by_len.setdefault(len(e.ids), []).append(i)
+        for idx in by_len.values():
+            for s in range(0, len(idx), batch_size):
+                chunk = idx[s : s + batch_size]
+                out[chunk] = self._run([encs[i] for i in chunk])
+        return out
