@@ -1,0 +1,333 @@
+"""Parity fixtures for the TypeScript core (tests/fixtures/parity/), regenerated in one command:
+
+    .venv/bin/python -m emdm.fixtures            # everything that its inputs allow
+    .venv/bin/python -m emdm.fixtures --only tiny recover
+
+What it writes (each case = ``<name>.json`` index + ``<name>.bin`` float32 little-endian arrays):
+
+* ``tiny-step.onnx`` + ``tiny``: a tiny random step model with the real ONNX contract
+  (x_t, z, cond, t, mask -> x0), one step and a guided 4-step run with supplied noise, so the
+  runtime and sampler are tested without the shipped models.
+* ``recover``: features of a real clip from the prepared dataset and the joints
+  ``emdm.motion.features.recover_joints`` gives for them (the TypeScript port must match).
+* ``model-<name>`` for every model in ``public/models/manifest.json``: one step (x_t, z, cond, t
+  -> x0) and a whole ``defaultSteps`` run with classifier-free guidance and supplied noise
+  (-> final normalised x, de-normalised features, joints), computed with onnxruntime (CPU) by
+  ``reference_sample``, the numpy transcription of docs/ARCHITECTURE.md "Sampling".
+
+Model files are read through the manifest (paths, sha256 checked), so fixtures follow whatever is
+shipped; ``index.json`` lists the cases and the sha256 of the model each was made from, so a test
+can tell a stale fixture from a real mismatch.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from emdm import manifest as mf
+from emdm import paths
+from emdm.model.schedule import make_schedule
+
+PARITY_DIR = paths.FIXTURES_DIR / "parity"
+FRAMES = 40          # fixture motion length (the models take any L <= 196)
+TINY_COND_DIM = 8
+
+
+# ---------------------------------------------------------------------------------------------
+# fixture files
+
+def write_case(out_dir: Path, name: str, meta: dict[str, Any], arrays: dict[str, np.ndarray]) -> Path:
+    """``<name>.json`` (meta + array table) and ``<name>.bin`` (float32 LE, concatenated)."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    table = {}
+    offset = 0
+    blobs = []
+    for key, arr in arrays.items():
+        a = np.ascontiguousarray(np.asarray(arr, dtype="<f4"))
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"fixture {name}: array {key!r} has non-finite values")
+        table[key] = {"offset": offset, "shape": list(a.shape)}
+        blobs.append(a.tobytes())
+        offset += a.nbytes
+    (out_dir / f"{name}.bin").write_bytes(b"".join(blobs))
+    doc = {"name": name, "bin": f"{name}.bin", "dtype": "float32-le", **meta, "arrays": table}
+    path = out_dir / f"{name}.json"
+    path.write_text(json.dumps(doc, indent=1) + "\n")
+    return path
+
+
+# ---------------------------------------------------------------------------------------------
+# the reference sampler (numpy + onnxruntime), docs/ARCHITECTURE.md "Sampling"
+
+def step_session(onnx_path: Path):
+    import onnxruntime as ort
+
+    so = ort.SessionOptions()
+    so.intra_op_num_threads = 1
+    so.log_severity_level = 3
+    return ort.InferenceSession(str(onnx_path), so, providers=["CPUExecutionProvider"])
+
+
+def run_step(sess, x: np.ndarray, z: np.ndarray, cond: np.ndarray, t: np.ndarray) -> np.ndarray:
+    B, L, _ = x.shape
+    feeds = {"x_t": x.astype(np.float32), "z": z.astype(np.float32), "cond": cond.astype(np.float32),
+             "t": t.astype(np.float32), "mask": np.ones((B, L), np.float32)}
+    return sess.run(["x0"], feeds)[0]
+
+
+def reference_sample(sess, x_T: np.ndarray, zs: list[np.ndarray], epss: list[np.ndarray | None],
+                     cond: np.ndarray, guidance: float, sched) -> np.ndarray:
+    """x_T (L, D); zs[k] (zDim,), epss[k] (L, D) or None, indexed by step k; cond (C,) -> x_0 (L, D).
+
+    Guidance (s != 1 and a non-zero condition): one batched call with rows [cond, 0], same x and z,
+    x0 = x0_u + s (x0_c - x0_u)."""
+    x = x_T.astype(np.float32)[None]
+    guided = bool(np.any(cond != 0)) and guidance != 1.0
+    for k in range(sched.steps - 1, -1, -1):
+        t = np.float32(sched.time[k])
+        if guided:
+            out = run_step(sess, np.concatenate([x, x]), np.stack([zs[k], zs[k]]),
+                           np.stack([cond, np.zeros_like(cond)]), np.array([t, t], np.float32))
+            x0 = out[1:2] + np.float32(guidance) * (out[0:1] - out[1:2])
+        else:
+            x0 = run_step(sess, x, zs[k][None], cond[None], np.array([t], np.float32))
+        x_new = sched.coef1[k] * x0.astype(np.float64) + sched.coef2[k] * x.astype(np.float64)
+        if sched.sigma[k] != 0:
+            x_new = x_new + sched.sigma[k] * epss[k][None].astype(np.float64)
+        x = x_new.astype(np.float32)
+    return x[0]
+
+
+def draw_noise(rng: np.random.Generator, steps: int, frames: int, dim: int, z_dim: int, sched):
+    x_T = rng.standard_normal((frames, dim)).astype(np.float32)
+    zs = [rng.standard_normal(z_dim).astype(np.float32) for _ in range(steps)]
+    epss = [rng.standard_normal((frames, dim)).astype(np.float32) if sched.sigma[k] != 0 else None
+            for k in range(steps)]
+    return x_T, zs, epss
+
+
+def noise_arrays(x_T, zs, epss) -> dict[str, np.ndarray]:
+    """Noise in the documented draw order: x_T, then for k = T-1..0: z[k], eps[k] (when drawn)."""
+    arrays = {"x_T": x_T}
+    for k in range(len(zs) - 1, -1, -1):
+        arrays[f"z_{k}"] = zs[k]
+        if epss[k] is not None:
+            arrays[f"eps_{k}"] = epss[k]
+    return arrays
+
+
+def schedule_meta(sched) -> dict[str, list[float]]:
+    return {"time": sched.time.tolist(), "coef1": sched.coef1.tolist(), "coef2": sched.coef2.tolist(),
+            "sigma": sched.sigma.tolist()}
+
+
+# ---------------------------------------------------------------------------------------------
+# tiny model
+
+def export_tiny_model(path: Path, cond_dim: int = TINY_COND_DIM) -> Path:
+    """A small random step model with the real I/O contract (dynamic batch and length)."""
+    import torch
+
+    class TinyStep(torch.nn.Module):
+        def __init__(self):
+            super().__init__()
+            g = torch.Generator().manual_seed(1234)
+            d = 16
+            def lin(i, o):
+                m = torch.nn.Linear(i, o)
+                with torch.no_grad():
+                    m.weight.copy_(torch.randn(o, i, generator=g) / i ** 0.5)
+                    m.bias.copy_(torch.randn(o, generator=g) * 0.1)
+                return m
+            self.inp, self.zp, self.cp, self.tp = lin(263, d), lin(64, d), lin(cond_dim, d), lin(1, d)
+            self.q, self.k, self.v, self.out = lin(d, d), lin(d, d), lin(d, d), lin(d, 263)
+
+        def forward(self, x_t, z, cond, t, mask):
+            h = self.inp(x_t) + (self.zp(z) + self.cp(cond) + self.tp(t[:, None]))[:, None, :]
+            att = self.q(h) @ self.k(h).transpose(1, 2) / 4.0
+            att = att.masked_fill(mask[:, None, :] < 0.5, -1e9).softmax(-1)
+            h = torch.tanh(h + att @ self.v(h))
+            return x_t * 0.5 + self.out(h) * mask[..., None]
+
+    model = TinyStep().eval()
+    B, L = 2, 12
+    ex = (torch.randn(B, L, 263), torch.randn(B, 64), torch.randn(B, cond_dim), torch.rand(B), torch.ones(B, L))
+    bd, ld = torch.export.Dim("batch", min=1, max=64), torch.export.Dim("frames", min=1, max=196)
+    dyn = {"x_t": {0: bd, 1: ld}, "z": {0: bd}, "cond": {0: bd}, "t": {0: bd}, "mask": {0: bd, 1: ld}}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    prog = torch.onnx.export(model, ex, dynamo=True, opset_version=18, dynamic_shapes=dyn,
+                             input_names=["x_t", "z", "cond", "t", "mask"], output_names=["x0"])
+    prog.save(str(path), external_data=False)
+    return path
+
+
+def make_tiny(out_dir: Path) -> dict[str, Any]:
+    onnx_path = export_tiny_model(out_dir / "tiny-step.onnx")
+    sess = step_session(onnx_path)
+    rng = np.random.default_rng(20251122)
+    sched = make_schedule(4)
+    L, D, Z, C = 16, 263, 64, TINY_COND_DIM
+    step_x = rng.standard_normal((2, L, D)).astype(np.float32)
+    step_z = rng.standard_normal((2, Z)).astype(np.float32)
+    step_c = rng.standard_normal((2, C)).astype(np.float32)
+    step_t = np.array([0.3, 0.9], np.float32)
+    step_x0 = run_step(sess, step_x, step_z, step_c, step_t)
+    cond = rng.standard_normal(C).astype(np.float32)
+    x_T, zs, epss = draw_noise(rng, sched.steps, L, D, Z, sched)
+    x = reference_sample(sess, x_T, zs, epss, cond, 2.5, sched)
+    x_u = reference_sample(sess, x_T, zs, epss, np.zeros(C, np.float32), 2.5, sched)
+    arrays = {"step_x_t": step_x, "step_z": step_z, "step_cond": step_c, "step_t": step_t, "step_x0": step_x0,
+              "cond": cond, **noise_arrays(x_T, zs, epss), "final_x": x, "final_x_uncond": x_u}
+    meta = {"model": "tiny-step.onnx", "frames": L, "featureDim": D, "zDim": Z, "condDim": C,
+            "steps": sched.steps, "guidance": 2.5, "schedule": schedule_meta(sched)}
+    write_case(out_dir, "tiny", meta, arrays)
+    return {"case": "tiny", "model": "tiny-step.onnx"}
+
+
+# ---------------------------------------------------------------------------------------------
+# recover_joints on a real clip
+
+def real_clip_features(max_frames: int = 120) -> tuple[np.ndarray, str]:
+    """Features of a real clip: the prepared dataset (data/dataset/new_joint_vecs) first."""
+    vec_dir = paths.DATASET_DIR / "new_joint_vecs"
+    files = sorted(vec_dir.glob("*.npy")) if vec_dir.is_dir() else []
+    # prefer a clip that turns and travels, so heading integration is exercised
+    best = None
+    for f in files[:200]:
+        feats = np.load(f)
+        if feats.ndim != 2 or feats.shape[1] != 263 or feats.shape[0] < 40:
+            continue
+        score = abs(float(feats[:, 0].sum())) + float(np.abs(feats[:, 1:3]).sum()) * 0.05
+        if best is None or score > best[0]:
+            best = (score, f, feats)
+    if best is None:
+        raise FileNotFoundError(f"{vec_dir}: no prepared clips; run `python -m emdm.data.prepare` first")
+    _, f, feats = best
+    return feats[:max_frames].astype(np.float32), f"{paths.DATASET_DIR.name}/new_joint_vecs/{f.name}"
+
+
+def make_recover(out_dir: Path) -> dict[str, Any]:
+    from emdm.motion.features import recover_joints
+
+    feats, source = real_clip_features()
+    joints = recover_joints(feats)
+    write_case(out_dir, "recover", {"source": source, "frames": int(feats.shape[0])},
+               {"features": feats, "joints": joints})
+    return {"case": "recover", "source": source}
+
+
+# ---------------------------------------------------------------------------------------------
+# shipped models
+
+def condition_vector(name: str, entry: dict[str, Any], manifest: dict[str, Any], models_dir: Path,
+                     rng: np.random.Generator) -> tuple[np.ndarray, str]:
+    cond = entry["condition"]
+    dim = int(cond["dim"])
+    if cond["type"] == "action":
+        v = np.zeros(dim, np.float32)
+        v[0] = 1.0
+        return v, f"action {cond['labels'][0]!r} (one-hot 0)"
+    prompt = "a person walks forward and then turns around"
+    enc = manifest.get("textEncoders", {}).get(cond.get("encoder", ""))
+    if enc and enc.get("kind") == "minilm":
+        try:
+            from emdm.text.minilm import MiniLMEncoder
+
+            v = MiniLMEncoder(models_dir / enc["dir"]).encode([prompt])[0].astype(np.float32)
+            if v.shape == (dim,):
+                return v, f"text {prompt!r} ({enc['kind']})"
+        except Exception as e:  # fall back to a fixed unit vector, but say so
+            print(f"fixtures: {name}: text encoder unavailable ({e}); using a random unit condition", file=sys.stderr)
+    v = rng.standard_normal(dim).astype(np.float32)
+    return v / np.linalg.norm(v), "random unit vector"
+
+
+def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[str, Any], models_dir: Path) -> dict[str, Any]:
+    from emdm.motion.features import recover_joints
+
+    onnx_rel = entry["onnx"]
+    onnx_path = models_dir / onnx_rel
+    meta_file = manifest["files"].get(onnx_rel)
+    if meta_file is None:
+        raise mf.ManifestError(f"manifest models.{name}.onnx: {onnx_rel!r} is not listed in 'files'")
+    if mf.sha256_file(onnx_path) != meta_file["sha256"]:
+        raise mf.ManifestError(f"{onnx_path}: sha256 differs from the manifest; re-export or re-save the manifest")
+    D, Z = int(entry["featureDim"]), int(entry["zDim"])
+    steps = int(entry["defaultSteps"])
+    guidance = float(entry["guidance"])
+    ms = np.fromfile(models_dir / entry["meanStd"], dtype="<f4")
+    if ms.shape != (2 * D,):
+        raise ValueError(f"{models_dir / entry['meanStd']}: {ms.size} floats, expected {2 * D}")
+    mean, std = ms[:D], ms[D:]
+    sched = make_schedule(steps)
+    m_sched = entry.get("schedules", {}).get(str(steps))
+    if m_sched:
+        for key in ("time", "coef1", "coef2", "sigma"):
+            if np.max(np.abs(np.asarray(m_sched[key]) - getattr(sched, key))) > 1e-6:
+                raise ValueError(f"manifest models.{name}.schedules[{steps}].{key} differs from emdm.model.schedule")
+    sess = step_session(onnx_path)
+    rng = np.random.default_rng(int.from_bytes(name.encode(), 'little') % (2 ** 32))  # stable per model name
+    cond, cond_desc = condition_vector(name, entry, manifest, models_dir, rng)
+    C = cond.shape[0]
+    L = FRAMES
+    step_x = rng.standard_normal((1, L, D)).astype(np.float32)
+    step_z = rng.standard_normal((1, Z)).astype(np.float32)
+    step_t = np.array([sched.time[steps // 2]], np.float32)
+    step_x0 = run_step(sess, step_x, step_z, cond[None], step_t)
+    x_T, zs, epss = draw_noise(rng, steps, L, D, Z, sched)
+    x = reference_sample(sess, x_T, zs, epss, cond, guidance, sched)
+    feats = (x * std + mean).astype(np.float32)
+    joints = recover_joints(feats).astype(np.float32)
+    arrays = {"step_x_t": step_x, "step_z": step_z, "step_cond": cond[None], "step_t": step_t, "step_x0": step_x0,
+              "cond": cond, **noise_arrays(x_T, zs, epss), "final_x": x, "features": feats, "joints": joints}
+    case = f"model-{name}"
+    meta = {"model": name, "onnx": onnx_rel, "sha256": meta_file["sha256"], "frames": L, "featureDim": D, "zDim": Z,
+            "condDim": C, "condition": cond_desc, "steps": steps, "guidance": guidance, "schedule": schedule_meta(sched)}
+    write_case(out_dir, case, meta, arrays)
+    return {"case": case, "model": name, "sha256": meta_file["sha256"]}
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m emdm.fixtures", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", type=Path, default=PARITY_DIR)
+    ap.add_argument("--models-dir", type=Path, default=paths.MODELS_DIR)
+    ap.add_argument("--only", nargs="*", choices=["tiny", "recover", "models"], default=None)
+    args = ap.parse_args(argv)
+    want = set(args.only or ["tiny", "recover", "models"])
+    out: Path = args.out
+    index_path = out / "index.json"
+    index = json.loads(index_path.read_text()) if index_path.exists() else {"cases": {}}
+    if "tiny" in want:
+        index["cases"]["tiny"] = make_tiny(out)
+        print(f"fixtures: wrote {out / 'tiny.json'}")
+    if "recover" in want:
+        try:
+            index["cases"]["recover"] = make_recover(out)
+            print(f"fixtures: wrote {out / 'recover.json'} from {index['cases']['recover']['source']}")
+        except FileNotFoundError as e:
+            print(f"fixtures: recover skipped: {e}", file=sys.stderr)
+    if "models" in want:
+        manifest = mf.load(args.models_dir, missing_ok=True)
+        for key in [k for k in index["cases"] if k.startswith("model-")]:
+            if key[len("model-"):] not in manifest["models"]:
+                del index["cases"][key]
+                for ext in (".json", ".bin"):
+                    (out / f"{key}{ext}").unlink(missing_ok=True)
+        if not manifest["models"]:
+            print(f"fixtures: no models in {args.models_dir / 'manifest.json'}; model parity skipped", file=sys.stderr)
+        for name, entry in manifest["models"].items():
+            index["cases"][f"model-{name}"] = make_model(out, name, entry, manifest, args.models_dir)
+            print(f"fixtures: wrote {out / f'model-{name}.json'}")
+    out.mkdir(parents=True, exist_ok=True)
+    index_path.write_text(json.dumps(index, indent=1, sort_keys=True) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

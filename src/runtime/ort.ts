@@ -1,0 +1,159 @@
+/**
+ * The ONE place that loads ONNX Runtime Web and creates inference sessions.
+ *
+ * - Node (vitest, benchmarks): `onnxruntime-web` resolves to its Node build, which runs the same
+ *   `ort-wasm-simd-threaded.wasm` binary as the browser's `onnxruntime-web/wasm`, so CPU results
+ *   are bit-identical between Node and Chromium.
+ * - Browser: WASM via `onnxruntime-web/wasm` with self-hosted binaries (`wasmPaths`, default
+ *   `<BASE_URL>ort/`), threads when the page is cross-origin isolated; WebGPU via
+ *   `onnxruntime-web/webgpu` when `navigator.gpu` gives an adapter.
+ * - ORT's wasm flags (thread count, paths) are global and fixed by the first session: a later
+ *   request for a different thread count fails loudly instead of silently running with another.
+ * - Sessions are cached by (key, backend), so every generator for the same model file reuses one.
+ */
+import type * as OrtTypes from 'onnxruntime-web';
+
+export type Backend = 'webgpu' | 'wasm';
+export type BackendRequest = Backend | 'auto';
+type Ort = typeof OrtTypes;
+
+const isNode = typeof process !== 'undefined' && !!process.versions?.node && typeof window === 'undefined';
+
+export interface RuntimeConfig {
+  /** where the ORT wasm binaries are served (browser only); default `${import.meta.env.BASE_URL}ort/` */
+  wasmPaths?: string;
+  /** WASM threads; default: min(4, hardwareConcurrency) when cross-origin isolated, else 1 */
+  threads?: number;
+}
+
+let wasmOrt: Promise<Ort> | null = null;
+let webgpuOrt: Promise<Ort> | null = null;
+let configuredThreads: number | null = null;
+
+function defaultWasmPaths(): string {
+  const base = (import.meta as unknown as { env?: { BASE_URL?: string } }).env?.BASE_URL ?? '/';
+  return `${base.endsWith('/') ? base : base + '/'}ort/`;
+}
+
+/** The thread count used when none is requested. */
+export function defaultThreads(): number {
+  if (isNode) return 1;
+  const g = globalThis as { crossOriginIsolated?: boolean; navigator?: { hardwareConcurrency?: number } };
+  if (!g.crossOriginIsolated) return 1;
+  return Math.max(1, Math.min(4, g.navigator?.hardwareConcurrency ?? 1));
+}
+
+function configure(ort: Ort, cfg: RuntimeConfig): void {
+  const threads = cfg.threads ?? defaultThreads();
+  if (!Number.isInteger(threads) || threads < 1) throw new RangeError(`runtime: threads must be a positive integer, got ${threads}`);
+  if (configuredThreads !== null && configuredThreads !== threads) {
+    throw new Error(
+      `runtime: ONNX Runtime already initialised with ${configuredThreads} WASM thread(s); ` +
+        `${threads} requested. The thread count is global: use one value per page/process.`,
+    );
+  }
+  configuredThreads = threads;
+  ort.env.wasm.numThreads = threads;
+  ort.env.wasm.proxy = false;
+  ort.env.logLevel = 'error';
+  if (!isNode) ort.env.wasm.wasmPaths = cfg.wasmPaths ?? defaultWasmPaths();
+}
+
+async function loadOrt(backend: Backend, cfg: RuntimeConfig): Promise<Ort> {
+  if (backend === 'wasm') {
+    wasmOrt ??= (isNode ? import('onnxruntime-web') : import('onnxruntime-web/wasm')) as Promise<Ort>;
+    const ort = await wasmOrt;
+    configure(ort, cfg);
+    return ort;
+  }
+  webgpuOrt ??= import('onnxruntime-web/webgpu') as Promise<Ort>;
+  const ort = await webgpuOrt;
+  configure(ort, cfg);
+  return ort;
+}
+
+/** Whether this environment offers a WebGPU adapter (never in Node). */
+export async function webgpuAvailable(): Promise<boolean> {
+  if (isNode) return false;
+  const gpu = (globalThis as { navigator?: { gpu?: { requestAdapter(): Promise<unknown> } } }).navigator?.gpu;
+  if (!gpu) return false;
+  try {
+    return (await gpu.requestAdapter()) != null;
+  } catch {
+    return false;
+  }
+}
+
+export async function resolveBackend(request: BackendRequest = 'auto'): Promise<Backend> {
+  if (request === 'wasm') return 'wasm';
+  const ok = await webgpuAvailable();
+  if (request === 'webgpu' && !ok) throw new Error('runtime: WebGPU was requested but this browser offers no WebGPU adapter');
+  return ok ? 'webgpu' : 'wasm';
+}
+
+export interface OrtSession {
+  readonly backend: Backend;
+  readonly threads: number;
+  readonly inputNames: readonly string[];
+  readonly outputNames: readonly string[];
+  /** float32 inputs by name → float32 outputs by name */
+  run(feeds: Record<string, { data: Float32Array; dims: number[] }>): Promise<Record<string, { data: Float32Array; dims: readonly number[] }>>;
+  release(): Promise<void>;
+}
+
+const sessionCache = new Map<string, Promise<OrtSession>>();
+
+/**
+ * Create (or reuse) a session for model bytes. `key` identifies the bytes (e.g. path + sha256).
+ * Errors name the key and what went wrong.
+ */
+export function getSession(key: string, bytes: ArrayBuffer | Uint8Array, backend: Backend, cfg: RuntimeConfig = {}): Promise<OrtSession> {
+  const cacheKey = `${backend}|${key}`;
+  const hit = sessionCache.get(cacheKey);
+  if (hit) return hit;
+  const p = createSession(key, bytes, backend, cfg);
+  sessionCache.set(cacheKey, p);
+  p.catch(() => sessionCache.delete(cacheKey));
+  return p;
+}
+
+async function createSession(key: string, bytes: ArrayBuffer | Uint8Array, backend: Backend, cfg: RuntimeConfig): Promise<OrtSession> {
+  const ort = await loadOrt(backend, cfg);
+  const data = bytes instanceof Uint8Array ? bytes : new Uint8Array(bytes);
+  let session: OrtTypes.InferenceSession;
+  try {
+    session = await ort.InferenceSession.create(data, {
+      executionProviders: [backend],
+      graphOptimizationLevel: 'all',
+    });
+  } catch (e) {
+    throw new Error(`runtime: cannot load ONNX model ${key} on ${backend}: ${(e as Error).message}`, { cause: e });
+  }
+  const threads = backend === 'wasm' ? (ort.env.wasm.numThreads ?? 1) : 0;
+  let released = false;
+  return {
+    backend,
+    threads,
+    inputNames: session.inputNames,
+    outputNames: session.outputNames,
+    async run(feeds) {
+      if (released) throw new Error(`runtime: session for ${key} was released`);
+      const tensors: Record<string, OrtTypes.Tensor> = {};
+      for (const [name, { data: d, dims }] of Object.entries(feeds)) tensors[name] = new ort.Tensor('float32', d, dims);
+      const out = await session.run(tensors);
+      const result: Record<string, { data: Float32Array; dims: readonly number[] }> = {};
+      for (const [name, t] of Object.entries(out)) {
+        if (t.type !== 'float32') throw new Error(`runtime: ${key} output '${name}' is ${t.type}, expected float32`);
+        result[name] = { data: (await t.getData()) as Float32Array, dims: t.dims };
+        t.dispose();
+      }
+      return result;
+    },
+    async release() {
+      if (released) return;
+      released = true;
+      sessionCache.delete(`${backend}|${key}`);
+      await session.release();
+    },
+  };
+}

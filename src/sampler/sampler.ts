@@ -1,0 +1,126 @@
+/**
+ * The few-step DDGAN sampler loop (docs/ARCHITECTURE.md "Sampling"), independent of ONNX: the
+ * step model is a function, the noise a source, so tests can run it with fixture noise.
+ */
+import type { Schedule } from './schedule';
+
+/** One call of the denoising step model: inputs in the ONNX contract layout, returns x0 [B, L, D]. */
+export interface StepInputs {
+  x: Float32Array; // [B, L, D]
+  z: Float32Array; // [B, zDim]
+  cond: Float32Array; // [B, C]
+  t: Float32Array; // [B]
+  mask: Float32Array; // [B, L]
+  batch: number;
+  frames: number;
+}
+export type StepFn = (inputs: StepInputs) => Promise<Float32Array>;
+
+/** Where the random numbers come from; called in the documented order x_T, then per step z, ε. */
+export interface NoiseSource {
+  normals(n: number, what: 'xT' | 'z' | 'eps', stepIndex: number): Float32Array;
+}
+
+export class AbortError extends Error {
+  constructor(message = 'generation cancelled') {
+    super(message);
+    this.name = 'AbortError';
+  }
+}
+
+export interface SampleOptions {
+  step: StepFn;
+  schedule: Schedule;
+  noise: NoiseSource;
+  frames: number;
+  featureDim: number;
+  zDim: number;
+  /** condition vector [C]; a zero vector means unconditional */
+  cond: Float32Array;
+  /** classifier-free guidance scale; 1 (or an all-zero cond) = a single conditional pass */
+  guidance: number;
+  signal?: AbortSignal;
+  onStep?: (done: number, total: number) => void;
+  now?: () => number;
+}
+
+export interface SampleResult {
+  /** final x_0 in normalised feature space [L, D] */
+  x: Float32Array;
+  stepMs: number[];
+  modelCalls: number;
+}
+
+function throwIfAborted(signal: AbortSignal | undefined, done: number, total: number): void {
+  if (signal?.aborted) {
+    const err = new AbortError(`generation cancelled after ${done} of ${total} steps`);
+    (err as Error & { cause?: unknown }).cause = signal.reason;
+    throw err;
+  }
+}
+
+function checkLength(a: Float32Array, n: number, what: string): void {
+  if (a.length !== n) throw new Error(`sampler: ${what} has ${a.length} values, expected ${n}`);
+}
+
+/** Run T denoising steps from x_T ~ N(0, I); returns x_0 (normalised features). */
+export async function sample(o: SampleOptions): Promise<SampleResult> {
+  const { schedule, frames: L, featureDim: D, zDim, cond } = o;
+  const now = o.now ?? (() => performance.now());
+  if (!Number.isInteger(L) || L < 1) throw new RangeError(`sampler: frames must be a positive integer, got ${L}`);
+  if (!Number.isFinite(o.guidance)) throw new RangeError(`sampler: guidance must be a finite number, got ${o.guidance}`);
+  const n = L * D;
+  const C = cond.length;
+  const conditioned = cond.some((v) => v !== 0);
+  const guided = conditioned && o.guidance !== 1;
+  const B = guided ? 2 : 1;
+  const s = o.guidance;
+
+  throwIfAborted(o.signal, 0, schedule.steps);
+  const x = Float32Array.from(o.noise.normals(n, 'xT', schedule.steps));
+  checkLength(x, n, 'x_T noise');
+
+  const condB = new Float32Array(B * C);
+  condB.set(cond, 0); // guided: row 1 stays zero (unconditional)
+  const maskB = new Float32Array(B * L).fill(1);
+  const xB = new Float32Array(B * n);
+  const zB = new Float32Array(B * zDim);
+  const tB = new Float32Array(B);
+  const stepMs: number[] = [];
+  let modelCalls = 0;
+
+  for (let k = schedule.steps - 1; k >= 0; k--) {
+    throwIfAborted(o.signal, schedule.steps - 1 - k, schedule.steps);
+    const t0 = now();
+    const z = o.noise.normals(zDim, 'z', k);
+    checkLength(z, zDim, `z noise at step ${k}`);
+    for (let b = 0; b < B; b++) {
+      xB.set(x, b * n);
+      zB.set(z, b * zDim);
+      tB[b] = schedule.time[k];
+    }
+    const out = await o.step({ x: xB, z: zB, cond: condB, t: tB, mask: maskB, batch: B, frames: L });
+    modelCalls++;
+    checkLength(out, B * n, `model output x0 at step ${k}`);
+    const c1 = schedule.coef1[k];
+    const c2 = schedule.coef2[k];
+    const sig = schedule.sigma[k];
+    const eps = sig !== 0 ? o.noise.normals(n, 'eps', k) : null;
+    if (eps) checkLength(eps, n, `ε noise at step ${k}`);
+    for (let i = 0; i < n; i++) {
+      // guided: x0 = x0_u + s·(x0_c − x0_u), rounded to float32 like the Python reference
+      const x0 = guided ? Math.fround(out[n + i] + Math.fround(s * Math.fround(out[i] - out[n + i]))) : out[i];
+      let v = c1 * x0 + c2 * x[i];
+      if (eps) v += sig * eps[i];
+      x[i] = v;
+    }
+    stepMs.push(now() - t0);
+    o.onStep?.(schedule.steps - k, schedule.steps);
+  }
+  return { x, stepMs, modelCalls };
+}
+
+/** Noise from a seeded generator, drawn in the documented order. */
+export function seededNoise(rng: { normals(n: number): Float32Array }): NoiseSource {
+  return { normals: (n) => rng.normals(n) };
+}

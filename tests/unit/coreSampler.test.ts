@@ -1,0 +1,110 @@
+// The ORT runtime + sampler loop against the tiny step model of tests/fixtures/parity (exported
+// by `python -m emdm.fixtures`), whose outputs were computed by Python onnxruntime.
+import fs from 'node:fs';
+import path from 'node:path';
+import { describe, expect, it } from 'vitest';
+import { getSession } from '../../src/runtime/ort';
+import { IncompatibleModelError, stepFunction } from '../../src/runtime/stepModel';
+import { type NoiseSource, sample, type StepFn } from '../../src/sampler/sampler';
+import { scheduleFromEntry } from '../../src/sampler/schedule';
+import { SeededRandom } from '../../src/sampler/rng';
+import { type FixtureCase, PARITY_DIR, loadCase, maxAbsDiff } from './coreFixtures';
+
+const tiny = loadCase('tiny');
+const D = 263;
+const Z = 64;
+const C = tiny.meta.condDim as number;
+const L = tiny.meta.frames;
+
+async function tinyStep(): Promise<StepFn> {
+  const bytes = fs.readFileSync(path.join(PARITY_DIR, 'tiny-step.onnx'));
+  const session = await getSession('tests/fixtures/parity/tiny-step.onnx', bytes, 'wasm', { threads: 1 });
+  return stepFunction(session, { featureDim: D, zDim: Z, condDim: C }, 'tiny-step.onnx');
+}
+
+/** Noise supplied from the fixture, checking the documented draw order as it goes. */
+export function fixtureNoise(fx: FixtureCase): NoiseSource & { calls: string[] } {
+  const calls: string[] = [];
+  return {
+    calls,
+    normals(n, what, k) {
+      const key = what === 'xT' ? 'x_T' : `${what}_${k}`;
+      calls.push(key);
+      const a = fx.get(key);
+      if (a.length !== n) throw new Error(`fixture ${key}: ${a.length} values, sampler asked for ${n}`);
+      return a;
+    },
+  };
+}
+
+describe('runtime + sampler on the tiny step model', () => {
+  it('one step equals Python onnxruntime within 1e-4 (batch 2)', async () => {
+    const step = await tinyStep();
+    const x0 = await step({
+      x: tiny.get('step_x_t'), z: tiny.get('step_z'), cond: tiny.get('step_cond'), t: tiny.get('step_t'),
+      mask: new Float32Array(2 * L).fill(1), batch: 2, frames: L,
+    });
+    expect(maxAbsDiff(x0, tiny.get('step_x0'))).toBeLessThan(1e-4);
+  });
+
+  it('a guided 4-step run with fixture noise equals the Python reference; draws in the documented order', async () => {
+    const step = await tinyStep();
+    const schedule = scheduleFromEntry(tiny.meta.schedule!, 4, 'tiny.schedule');
+    const noise = fixtureNoise(tiny);
+    const progress: number[] = [];
+    const r = await sample({ step, schedule, noise, frames: L, featureDim: D, zDim: Z, cond: tiny.get('cond'), guidance: 2.5, onStep: (d) => progress.push(d) });
+    expect(maxAbsDiff(r.x, tiny.get('final_x'))).toBeLessThan(1e-4);
+    expect(noise.calls).toEqual(['x_T', 'z_3', 'eps_3', 'z_2', 'eps_2', 'z_1', 'eps_1', 'z_0']);
+    expect(r.modelCalls).toBe(4); // guidance batched: one call per step
+    expect(progress).toEqual([1, 2, 3, 4]);
+    expect(r.stepMs).toHaveLength(4);
+  });
+
+  it('a zero condition runs unguided (single pass) and equals the Python unconditional run', async () => {
+    const step = await tinyStep();
+    const schedule = scheduleFromEntry(tiny.meta.schedule!, 4, 'tiny.schedule');
+    let maxBatch = 0;
+    const counting: StepFn = (i) => ((maxBatch = Math.max(maxBatch, i.batch)), step(i));
+    const r = await sample({ step: counting, schedule, noise: fixtureNoise(tiny), frames: L, featureDim: D, zDim: Z, cond: new Float32Array(C), guidance: 2.5 });
+    expect(maxBatch).toBe(1);
+    expect(maxAbsDiff(r.x, tiny.get('final_x_uncond'))).toBeLessThan(1e-4);
+  });
+
+  it('same seed → bit-identical output; the guidance changes it', async () => {
+    const step = await tinyStep();
+    const schedule = scheduleFromEntry(tiny.meta.schedule!, 4, 'tiny.schedule');
+    const run = (seed: number, guidance: number) =>
+      sample({ step, schedule, noise: new SeededRandom(seed), frames: L, featureDim: D, zDim: Z, cond: tiny.get('cond'), guidance });
+    const a = await run(5, 2.5);
+    const b = await run(5, 2.5);
+    const c = await run(5, 1);
+    expect(Buffer.from(a.x.buffer).equals(Buffer.from(b.x.buffer))).toBe(true);
+    expect(maxAbsDiff(a.x, c.x)).toBeGreaterThan(1e-3);
+  });
+
+  it('cancels between steps with an AbortSignal', async () => {
+    const step = await tinyStep();
+    const schedule = scheduleFromEntry(tiny.meta.schedule!, 4, 'tiny.schedule');
+    const ctrl = new AbortController();
+    let calls = 0;
+    const p = sample({
+      step: (i) => (++calls === 2 && ctrl.abort(), step(i)),
+      schedule, noise: new SeededRandom(1), frames: L, featureDim: D, zDim: Z, cond: tiny.get('cond'), guidance: 2.5, signal: ctrl.signal,
+    });
+    await expect(p).rejects.toThrow(/generation cancelled after 2 of 4 steps/);
+    await expect(p).rejects.toHaveProperty('name', 'AbortError');
+    expect(calls).toBe(2);
+  });
+
+  it('rejects a model whose inputs break the contract, naming them', async () => {
+    const bytes = fs.readFileSync(path.join(PARITY_DIR, 'tiny-step.onnx'));
+    const session = await getSession('tiny-step.onnx', bytes, 'wasm', { threads: 1 });
+    const fake = { ...session, inputNames: ['x_t', 'z', 'cond', 'timestep'], outputNames: session.outputNames };
+    expect(() => stepFunction(fake, { featureDim: D, zDim: Z, condDim: C }, 'bad.onnx')).toThrow(IncompatibleModelError);
+    expect(() => stepFunction(fake, { featureDim: D, zDim: Z, condDim: C }, 'bad.onnx')).toThrow(/bad\.onnx: .*missing t, mask.*unexpected timestep/);
+  });
+
+  it('a corrupt model file fails with a clear error', async () => {
+    await expect(getSession('corrupt.onnx', new Uint8Array([1, 2, 3, 4]), 'wasm', { threads: 1 })).rejects.toThrow(/cannot load ONNX model corrupt\.onnx on wasm/);
+  });
+});
