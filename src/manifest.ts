@@ -1,0 +1,267 @@
+/**
+ * The model manifest (`public/models/manifest.json`, schema in docs/MANIFEST.md) and verified
+ * downloads: every file a runtime fetches is checked against the size and sha256 the manifest
+ * lists, and a mismatch is refused with a ModelFileError naming the file.
+ *
+ * `baseUrl` is the models folder: in the browser a URL (`'/models/'`, resolved against the page);
+ * in Node a `file://` URL or a filesystem path (read with node:fs, since Node's fetch has no file:).
+ */
+
+export interface Skeleton {
+  joints: string[];
+  parents: number[];
+  offsets: [number, number, number][];
+  chains: number[][];
+  footJoints: number[];
+  fps: number;
+  maxFrames: number;
+  featureDim: number;
+}
+
+export interface TextEncoderEntry {
+  kind: 'minilm' | 'clip';
+  dim: number;
+  pooling?: 'mean' | 'eos';
+  normalize?: boolean;
+  maxTokens?: number;
+  /** folder (relative to the models dir) in transformers.js layout */
+  dir: string;
+  /** transformers.js dtype of the ONNX file: 'q8' → onnx/model_quantized.onnx, 'fp32' → onnx/model.onnx */
+  dtype?: 'q8' | 'fp32';
+  files: string[];
+  [extra: string]: unknown;
+}
+
+export interface Schedule {
+  time: number[];
+  coef1: number[];
+  coef2: number[];
+  sigma: number[];
+}
+
+export type ModelCondition =
+  | { type: 'text'; encoder: string; dim: number }
+  | { type: 'action'; labels: string[]; dim: number }
+  | { type: 'none'; dim: number };
+
+export interface ModelEntry {
+  task: 'text' | 'action' | 'none';
+  condition: ModelCondition;
+  onnx: string;
+  variants?: Record<string, string>;
+  meanStd: string;
+  zDim: number;
+  featureDim: number;
+  fps: number;
+  maxFrames: number;
+  guidance: number;
+  defaultSteps: number;
+  supportedSteps: number[];
+  schedules: Record<string, Schedule>;
+  preset?: Record<string, number>;
+  training?: Record<string, unknown>;
+  files: string[];
+  [extra: string]: unknown;
+}
+
+export interface FileEntry {
+  bytes: number;
+  sha256: string;
+}
+
+export interface Manifest {
+  schema: 1;
+  skeleton: Skeleton;
+  textEncoders: Record<string, TextEncoderEntry>;
+  models: Record<string, ModelEntry>;
+  files: Record<string, FileEntry>;
+}
+
+export type ModelFileErrorReason = 'missing' | 'sha256' | 'incompatible' | 'network';
+
+/** A model file could not be used: `path` (relative to the models folder) and why. */
+export class ModelFileError extends Error {
+  readonly path: string;
+  readonly reason: ModelFileErrorReason;
+  constructor(path: string, reason: ModelFileErrorReason, message: string) {
+    super(`${path}: ${message}`);
+    this.name = 'ModelFileError';
+    this.path = path;
+    this.reason = reason;
+  }
+}
+
+export const MANIFEST_FILE = 'manifest.json';
+export const SCHEMA_VERSION = 1;
+
+const IS_NODE =
+  typeof process !== 'undefined' && !!(process as { versions?: { node?: string } }).versions?.node && typeof window === 'undefined';
+
+/** Join the models folder and a relative path ('a/' + 'b/c' → 'a/b/c'). */
+export function joinUrl(baseUrl: string, rel: string): string {
+  if (!baseUrl) return rel;
+  return (baseUrl.endsWith('/') ? baseUrl : baseUrl + '/') + rel.replace(/^\/+/, '');
+}
+
+function isFileLocation(url: string): boolean {
+  if (url.startsWith('file:')) return true;
+  // In Node a scheme-less location is a filesystem path.
+  return IS_NODE && !/^[a-z][a-z0-9+.-]*:/i.test(url);
+}
+
+async function readLocalFile(url: string, path: string): Promise<ArrayBuffer> {
+  const fsName = 'node:fs/promises';
+  const urlName = 'node:url';
+  const fs = (await import(/* @vite-ignore */ fsName)) as typeof import('node:fs/promises');
+  const { fileURLToPath } = (await import(/* @vite-ignore */ urlName)) as typeof import('node:url');
+  const filePath = url.startsWith('file:') ? fileURLToPath(url) : url;
+  try {
+    const buf = await fs.readFile(filePath);
+    return buf.buffer.slice(buf.byteOffset, buf.byteOffset + buf.byteLength) as ArrayBuffer;
+  } catch (e) {
+    const code = (e as { code?: string }).code;
+    if (code === 'ENOENT') throw new ModelFileError(path, 'missing', `not found at ${filePath}`);
+    throw new ModelFileError(path, 'network', `cannot read ${filePath}: ${(e as Error).message}`);
+  }
+}
+
+async function readBody(res: Response, onProgress?: (loaded: number, total: number) => void): Promise<ArrayBuffer> {
+  const total = Number(res.headers.get('content-length') ?? 0);
+  if (!onProgress || !res.body) return res.arrayBuffer();
+  const reader = res.body.getReader();
+  const chunks: Uint8Array[] = [];
+  let loaded = 0;
+  for (;;) {
+    const { done, value } = await reader.read();
+    if (done) break;
+    chunks.push(value);
+    loaded += value.byteLength;
+    onProgress(loaded, total || loaded);
+  }
+  const out = new Uint8Array(loaded);
+  let o = 0;
+  for (const c of chunks) {
+    out.set(c, o);
+    o += c.byteLength;
+  }
+  return out.buffer;
+}
+
+/** Fetch raw bytes of `path` under `baseUrl` (no verification). */
+export async function fetchBytes(
+  baseUrl: string,
+  path: string,
+  onProgress?: (loaded: number, total: number) => void,
+): Promise<ArrayBuffer> {
+  const url = joinUrl(baseUrl, path);
+  if (isFileLocation(url)) {
+    const buf = await readLocalFile(url, path);
+    onProgress?.(buf.byteLength, buf.byteLength);
+    return buf;
+  }
+  let res: Response;
+  try {
+    res = await fetch(url);
+  } catch (e) {
+    throw new ModelFileError(path, 'network', `cannot fetch ${url}: ${(e as Error).message}`);
+  }
+  if (res.status === 404) throw new ModelFileError(path, 'missing', `not found at ${url} (HTTP 404)`);
+  if (!res.ok) throw new ModelFileError(path, 'network', `fetching ${url} failed: HTTP ${res.status} ${res.statusText}`);
+  return readBody(res, onProgress);
+}
+
+/** Lower-case hex sha256 of the bytes (WebCrypto: browsers and Node ≥ 20). */
+export async function sha256Hex(data: ArrayBuffer | Uint8Array): Promise<string> {
+  const subtle = globalThis.crypto?.subtle;
+  if (!subtle) {
+    throw new Error('sha256: crypto.subtle is unavailable (the page must be served from localhost or https)');
+  }
+  const view = data instanceof Uint8Array ? data : new Uint8Array(data);
+  const digest = await subtle.digest('SHA-256', view as Uint8Array<ArrayBuffer>);
+  return Array.from(new Uint8Array(digest), (b) => b.toString(16).padStart(2, '0')).join('');
+}
+
+function fail(field: string, msg: string): never {
+  throw new ModelFileError(MANIFEST_FILE, 'incompatible', `field '${field}' ${msg}`);
+}
+
+function isObject(v: unknown): v is Record<string, unknown> {
+  return typeof v === 'object' && v !== null && !Array.isArray(v);
+}
+
+/** Structural check of a parsed manifest; throws ModelFileError naming the first bad field. */
+export function validateManifest(data: unknown): Manifest {
+  if (!isObject(data)) fail('(root)', 'must be a JSON object');
+  if (data.schema !== SCHEMA_VERSION) fail('schema', `is ${JSON.stringify(data.schema)}, this app reads schema ${SCHEMA_VERSION}`);
+  for (const key of ['skeleton', 'textEncoders', 'models', 'files'] as const) {
+    if (!isObject(data[key])) fail(key, 'must be an object');
+  }
+  const files = data.files as Record<string, unknown>;
+  for (const [rel, meta] of Object.entries(files)) {
+    if (!isObject(meta)) fail(`files["${rel}"]`, 'must be {bytes, sha256}');
+    if (typeof meta.bytes !== 'number' || !Number.isInteger(meta.bytes) || meta.bytes < 0) {
+      fail(`files["${rel}"].bytes`, 'must be a non-negative integer');
+    }
+    if (typeof meta.sha256 !== 'string' || !/^[0-9a-f]{64}$/.test(meta.sha256)) {
+      fail(`files["${rel}"].sha256`, 'must be 64 lower-case hex digits');
+    }
+  }
+  for (const section of ['textEncoders', 'models'] as const) {
+    for (const [name, entry] of Object.entries(data[section] as Record<string, unknown>)) {
+      if (!isObject(entry)) fail(`${section}.${name}`, 'must be an object');
+      if (!Array.isArray(entry.files)) fail(`${section}.${name}.files`, 'must be a list of paths');
+      for (const f of entry.files as unknown[]) {
+        if (typeof f !== 'string' || !(f in files)) {
+          fail(`${section}.${name}.files`, `names ${JSON.stringify(f)}, which is not listed under 'files'`);
+        }
+      }
+    }
+  }
+  for (const [name, entry] of Object.entries(data.textEncoders as Record<string, Record<string, unknown>>)) {
+    if (entry.kind !== 'minilm' && entry.kind !== 'clip') fail(`textEncoders.${name}.kind`, `is ${JSON.stringify(entry.kind)}, expected "minilm" or "clip"`);
+    if (typeof entry.dim !== 'number' || entry.dim <= 0) fail(`textEncoders.${name}.dim`, 'must be a positive number');
+    if (typeof entry.dir !== 'string') fail(`textEncoders.${name}.dir`, 'must be a folder path');
+  }
+  return data as unknown as Manifest;
+}
+
+/** Fetch and validate `<baseUrl>manifest.json` (the root of trust: it is not itself hashed). */
+export async function loadManifest(baseUrl: string): Promise<Manifest> {
+  const buf = await fetchBytes(baseUrl, MANIFEST_FILE);
+  let data: unknown;
+  try {
+    data = JSON.parse(new TextDecoder().decode(buf));
+  } catch (e) {
+    throw new ModelFileError(MANIFEST_FILE, 'incompatible', `not valid JSON: ${(e as Error).message}`);
+  }
+  return validateManifest(data);
+}
+
+/** Check bytes already in hand against the manifest's size and sha256 for `path`. */
+export async function verifyBytes(manifest: Manifest, path: string, data: ArrayBuffer): Promise<void> {
+  const meta = manifest.files[path];
+  if (!meta) throw new ModelFileError(path, 'missing', `not listed in ${MANIFEST_FILE} 'files'; refusing an unverified file`);
+  if (data.byteLength !== meta.bytes) {
+    throw new ModelFileError(path, 'sha256', `size ${data.byteLength} bytes differs from the manifest's ${meta.bytes}; the file is corrupt or from another build (re-download or re-export it)`);
+  }
+  const got = await sha256Hex(data);
+  if (got !== meta.sha256) {
+    throw new ModelFileError(path, 'sha256', `sha256 ${got} differs from the manifest's ${meta.sha256}; the file is corrupt or from another build (re-download or re-export it)`);
+  }
+}
+
+/** Fetch `path` (relative to the models folder) and verify it against the manifest. */
+export async function fetchVerified(
+  baseUrl: string,
+  manifest: Manifest,
+  path: string,
+  onProgress?: (loaded: number, total: number) => void,
+): Promise<ArrayBuffer> {
+  if (!manifest.files[path]) {
+    throw new ModelFileError(path, 'missing', `not listed in ${MANIFEST_FILE} 'files'; refusing an unverified file`);
+  }
+  const total = manifest.files[path].bytes;
+  const data = await fetchBytes(baseUrl, path, onProgress ? (loaded) => onProgress(loaded, total) : undefined);
+  await verifyBytes(manifest, path, data);
+  return data;
+}

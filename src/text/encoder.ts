@@ -1,0 +1,143 @@
+/**
+ * Text encoders (one interface, two implementations), run by transformers.js on verified files:
+ * - `minilm` (all-MiniLM-L6-v2, shipped): BERT token vectors → mean pooling → L2 norm (384-d).
+ * - `clip` (CLIP ViT-B/32 text tower, EMDM's encoder): EMDM truncation (20 tokens, padded to 77)
+ *   → projected end-of-text embedding (512-d, not normalised), as EMDM feeds its model.
+ * Python computes the same vectors from the same files (scripts/emdm/text).
+ */
+import { fetchVerified, joinUrl, ModelFileError, type Manifest, type TextEncoderEntry } from '../manifest';
+import { emdmClipIds } from './clipTokens';
+import { l2Normalize, meanPool } from './pooling';
+import { isNodeRuntime, loadTransformers, provideVerifiedFile } from './transformersEnv';
+
+export interface TextEncoder {
+  readonly id: string;
+  readonly dim: number;
+  encode(text: string): Promise<Float32Array>;
+}
+
+export interface TextEncoderOptions {
+  /** where transformers.js's ORT wasm is served (browser); default `<BASE_URL>ort-tfjs/` */
+  wasmPaths?: string;
+  /** download progress over all files of the encoder */
+  onDownload?: (loaded: number, total: number) => void;
+}
+
+export const DEFAULT_TEXT_ENCODER = 'all-MiniLM-L6-v2';
+
+/** Longest prompt accepted (characters); longer text is a caller bug, not a prompt. */
+export const MAX_PROMPT_CHARS = 100_000;
+
+export class TextEncoderError extends Error {
+  constructor(readonly encoderId: string, message: string) {
+    super(`text encoder ${encoderId}: ${message}`);
+    this.name = 'TextEncoderError';
+  }
+}
+
+function checkText(id: string, text: unknown): string {
+  if (typeof text !== 'string') throw new TextEncoderError(id, `encode() expects a string, got ${text === null ? 'null' : typeof text}`);
+  if (text.length > MAX_PROMPT_CHARS) {
+    throw new TextEncoderError(id, `prompt has ${text.length} characters; at most ${MAX_PROMPT_CHARS} are accepted`);
+  }
+  return text;
+}
+
+/** Model id handed to transformers.js: the encoder folder as a path it cannot mistake for a Hub id. */
+function modelRoot(baseUrl: string, dir: string): string {
+  let root = joinUrl(baseUrl, dir).replace(/\/+$/, '');
+  if (root.startsWith('file://')) root = decodeURIComponent(root.slice('file://'.length));
+  if (!root.startsWith('/') && !/^[a-z]+:/i.test(root)) root = '/' + root; // relative URL → absolute path
+  return root;
+}
+
+async function prefetch(manifest: Manifest, baseUrl: string, entry: TextEncoderEntry, root: string, onDownload?: (l: number, t: number) => void): Promise<void> {
+  const total = entry.files.reduce((s, f) => s + (manifest.files[f]?.bytes ?? 0), 0);
+  const done = new Map<string, number>();
+  const report = () => onDownload?.([...done.values()].reduce((a, b) => a + b, 0), total);
+  const prefix = entry.dir.replace(/\/+$/, '') + '/';
+  await Promise.all(
+    entry.files.map(async (rel) => {
+      if (!rel.startsWith(prefix)) {
+        throw new ModelFileError(rel, 'incompatible', `listed by a text encoder whose folder is '${entry.dir}'`);
+      }
+      const bytes = await fetchVerified(baseUrl, manifest, rel, (l) => {
+        done.set(rel, l);
+        report();
+      });
+      provideVerifiedFile(`${root}/${rel.slice(prefix.length)}`, bytes);
+    }),
+  );
+}
+
+function entryFor(manifest: Manifest, id: string): TextEncoderEntry {
+  const entry = manifest.textEncoders[id];
+  if (!entry) {
+    const known = Object.keys(manifest.textEncoders).join(', ') || 'none';
+    throw new ModelFileError('manifest.json', 'incompatible', `no textEncoders entry '${id}' (known: ${known})`);
+  }
+  return entry;
+}
+
+/** Load the encoder `id` (default: the shipped MiniLM) named by the manifest under `baseUrl`. */
+export async function createTextEncoder(manifest: Manifest, baseUrl: string, id: string = DEFAULT_TEXT_ENCODER, opts: TextEncoderOptions = {}): Promise<TextEncoder> {
+  const entry = entryFor(manifest, id);
+  const root = modelRoot(baseUrl, entry.dir);
+  const [tf] = await Promise.all([loadTransformers(opts.wasmPaths), prefetch(manifest, baseUrl, entry, root, opts.onDownload)]);
+  const device = isNodeRuntime ? 'cpu' : 'wasm';
+  const common = { local_files_only: true, device } as const;
+  if (entry.kind === 'minilm') {
+    const dtype = entry.dtype ?? 'q8';
+    const [tokenizer, model] = await Promise.all([
+      tf.AutoTokenizer.from_pretrained(root, { local_files_only: true }),
+      tf.AutoModel.from_pretrained(root, { ...common, dtype }),
+    ]);
+    const maxTokens = entry.maxTokens ?? 128;
+    return {
+      id,
+      dim: entry.dim,
+      async encode(text: string): Promise<Float32Array> {
+        const t = checkText(id, text);
+        const inputs = tokenizer(t, { truncation: true, max_length: maxTokens });
+        const out = await model(inputs);
+        const hidden = (out.last_hidden_state ?? out.token_embeddings) as { data: Float32Array; dims: number[] } | undefined;
+        if (!hidden) throw new TextEncoderError(id, `model output has no last_hidden_state (outputs: ${Object.keys(out).join(', ')})`);
+        const [, tokens, dim] = hidden.dims;
+        if (dim !== entry.dim) throw new TextEncoderError(id, `model gives ${dim}-d token vectors, manifest says dim ${entry.dim}`);
+        const mask = (inputs.attention_mask as { data: BigInt64Array }).data;
+        const v = meanPool(hidden.data, tokens, dim, mask);
+        return entry.normalize === false ? v : l2Normalize(v);
+      },
+    };
+  }
+  if (entry.kind === 'clip') {
+    const dtype = entry.dtype ?? 'fp32';
+    const [tokenizer, model] = await Promise.all([
+      tf.AutoTokenizer.from_pretrained(root, { local_files_only: true }),
+      tf.CLIPTextModelWithProjection.from_pretrained(root, { ...common, dtype }),
+    ]);
+    const eot = tokenizer.model.tokens_to_ids.get('<|endoftext|>');
+    if (eot === undefined) throw new TextEncoderError(id, 'tokenizer has no <|endoftext|> token; is this a CLIP tokenizer?');
+    return {
+      id,
+      dim: entry.dim,
+      async encode(text: string): Promise<Float32Array> {
+        const t = checkText(id, text);
+        const ids = emdmClipIds(tokenizeClip(tokenizer, t), eot);
+        const input_ids = new tf.Tensor('int64', BigInt64Array.from(ids, (x) => BigInt(x)), [1, ids.length]);
+        const out = await model({ input_ids });
+        const emb = out.text_embeds as { data: Float32Array; dims: number[] } | undefined;
+        if (!emb) throw new TextEncoderError(id, `model output has no text_embeds (outputs: ${Object.keys(out).join(', ')})`);
+        if (emb.data.length !== entry.dim) throw new TextEncoderError(id, `model gives ${emb.data.length}-d vectors, manifest says dim ${entry.dim}`);
+        const v = Float32Array.from(emb.data);
+        return entry.normalize ? l2Normalize(v) : v;
+      },
+    };
+  }
+  throw new ModelFileError('manifest.json', 'incompatible', `textEncoders.${id}.kind is '${String((entry as { kind: unknown }).kind)}', expected 'minilm' or 'clip'`);
+}
+
+/** CLIP token ids of `text` with [SOT] … [EOT], untruncated (EMDM's truncation is applied after). */
+export function tokenizeClip(tokenizer: { encode(text: string): number[] }, text: string): number[] {
+  return tokenizer.encode(text);
+}
