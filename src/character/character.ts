@@ -1,0 +1,58 @@
+// The skinned humanoid: the reference skeleton's bones + the body geometry in ONE SkinnedMesh, bound in
+// the rest T-pose. Poses are applied with applyPose (root translation + local joint quaternions).
+import { Group, MeshStandardMaterial, Skeleton, SkinnedMesh, type Bone } from 'three';
+import { buildBodyGeometry } from './body';
+import { buildBones, checkSkeleton, type RigSkeleton } from './rig';
+
+export interface Character {
+  /** Add this to the scene. */
+  object: Group;
+  mesh: SkinnedMesh;
+  bones: Bone[];
+  skeleton: Skeleton;
+  /** Rest-pose local positions of the bones (offsets), for resetting. */
+  dispose(): void;
+}
+
+export function createCharacter(s: RigSkeleton): Character {
+  checkSkeleton(s);
+  const bones = buildBones(s);
+  const geometry = buildBodyGeometry(s);
+  const material = new MeshStandardMaterial({ vertexColors: true, roughness: 0.55, metalness: 0.0 });
+  const mesh = new SkinnedMesh(geometry, material);
+  mesh.name = 'character';
+  mesh.castShadow = true;
+  mesh.receiveShadow = true;
+  // Skinned vertices move far from the bind-pose bounds when the root travels: never cull.
+  mesh.frustumCulled = false;
+  const object = new Group();
+  object.name = 'emdm-character';
+  object.add(bones[0]);
+  object.add(mesh);
+  object.updateMatrixWorld(true);
+  const skeleton = new Skeleton(bones);
+  mesh.bind(skeleton);
+  return {
+    object,
+    mesh,
+    bones,
+    skeleton,
+    dispose() {
+      geometry.dispose();
+      material.dispose();
+      skeleton.dispose();
+    },
+  };
+}
+
+/**
+ * Pose the bones: root = pelvis world position (3 numbers at rootOffset), quats = local rotations,
+ * xyzw, 4 numbers per joint starting at quatOffset.
+ */
+export function applyPose(bones: Bone[], root: ArrayLike<number>, quats: ArrayLike<number>, rootOffset = 0, quatOffset = 0): void {
+  bones[0].position.set(root[rootOffset], root[rootOffset + 1], root[rootOffset + 2]);
+  for (let j = 0; j < bones.length; j++) {
+    const q = quatOffset + j * 4;
+    bones[j].quaternion.set(quats[q], quats[q + 1], quats[q + 2], quats[q + 3]);
+  }
+}
