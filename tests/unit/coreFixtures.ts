@@ -55,3 +55,29 @@ export function maxJointDist(a: ArrayLike<number>, b: ArrayLike<number>): number
   }
   return m;
 }
+
+/** The reference skeleton from public/models/manifest.json (written by emdm.manifest from emdm.skeleton). */
+export function manifestSkeleton(): { joints: string[]; parents: number[]; offsets: number[][]; footJoints: number[]; fps: number } {
+  const p = path.join(MODELS_DIR, 'manifest.json');
+  const m = JSON.parse(fs.readFileSync(p, 'utf8'));
+  if (!m.skeleton?.joints) throw new Error(`${p}: no skeleton section`);
+  return m.skeleton;
+}
+
+/** A deterministic pseudo-random local pose: small random rotations (incl. twist) on every joint. */
+export function randomPoseQuats(frames: number, J: number, seed: number, amp = 0.6): Float32Array {
+  let s = seed >>> 0;
+  const rnd = () => ((s = (Math.imul(s, 1664525) + 1013904223) >>> 0) / 4294967296) * 2 - 1;
+  const q = new Float32Array(frames * J * 4);
+  const base = Array.from({ length: J }, () => [rnd(), rnd(), rnd()]);
+  for (let f = 0; f < frames; f++) {
+    for (let j = 0; j < J; j++) {
+      const ph = f / 10;
+      const ax = base[j].map((b, k) => amp * (b + 0.3 * Math.sin(ph + k + j)));
+      const ang = Math.hypot(ax[0], ax[1], ax[2]);
+      const sn = ang > 0 ? Math.sin(ang / 2) / ang : 0;
+      q.set([ax[0] * sn, ax[1] * sn, ax[2] * sn, Math.cos(ang / 2)], (f * J + j) * 4);
+    }
+  }
+  return q;
+}

@@ -1,0 +1,98 @@
+import { describe, expect, it } from 'vitest';
+import { forwardKinematics, solveIK } from '../../src/motion/ik';
+import { fixtureExists, loadCase, manifestSkeleton, maxJointDist, randomPoseQuats } from './coreFixtures';
+
+const sk = manifestSkeleton();
+const J = sk.joints.length;
+
+function restJoints(frames: number): Float32Array {
+  const q = new Float32Array(frames * J * 4);
+  for (let i = 3; i < q.length; i += 4) q[i] = 1;
+  const root = new Float32Array(frames * 3);
+  for (let f = 0; f < frames; f++) root.set(sk.offsets[0], f * 3);
+  return forwardKinematics(root, q, frames, sk);
+}
+
+describe('IK (joints → root + local quaternions with twist from body planes)', () => {
+  it('the rest pose gives identity rotations', () => {
+    const { quats } = solveIK(restJoints(1), 1, sk);
+    for (let j = 0; j < J; j++) expect(Math.abs(quats[4 * j + 3]), sk.joints[j]).toBeGreaterThan(1 - 1e-9);
+  });
+
+  it('FK(IK(joints)) reproduces posed joints of the reference skeleton within 1 mm', () => {
+    const frames = 30;
+    const root = new Float32Array(frames * 3);
+    for (let f = 0; f < frames; f++) root.set([0.02 * f, 0.9, -0.01 * f], f * 3);
+    const joints = forwardKinematics(root, randomPoseQuats(frames, J, 11), frames, sk);
+    const ik = solveIK(joints, frames, sk);
+    expect(maxJointDist(forwardKinematics(ik.rootPos, ik.quats, frames, sk), joints)).toBeLessThan(1e-3);
+  });
+
+  it('turning the whole body 90° about Y turns the pelvis by 90° and leaves the rest local', () => {
+    const frames = 1;
+    const q = new Float32Array(J * 4);
+    for (let j = 0; j < J; j++) q[4 * j + 3] = 1;
+    q.set([0, Math.SQRT1_2, 0, Math.SQRT1_2], 0);
+    const joints = forwardKinematics(Float32Array.from(sk.offsets[0]), q, frames, sk);
+    const ik = solveIK(joints, frames, sk);
+    [0, Math.SQRT1_2, 0, Math.SQRT1_2].forEach((v, c) => expect(ik.quats[c]).toBeCloseTo(v, 5));
+    for (let j = 1; j < J; j++) expect(Math.abs(ik.quats[4 * j + 3]), sk.joints[j]).toBeGreaterThan(1 - 1e-6);
+  });
+
+  it('a bent knee and elbow become pure hinges (no twist in the child joint)', () => {
+    const frames = 1;
+    const q = new Float32Array(J * 4);
+    for (let j = 0; j < J; j++) q[4 * j + 3] = 1;
+    const knee = sk.joints.indexOf('l_knee');
+    const hip = sk.joints.indexOf('l_hip');
+    const elbow = sk.joints.indexOf('r_elbow');
+    const a = 0.6;
+    q.set([Math.sin(a / 2), 0, 0, Math.cos(a / 2)], knee * 4); // flex about X
+    q.set([0, 0.3, 0.1, 1].map((v, i) => (i < 3 ? v : Math.sqrt(1 - 0.1))) as number[], hip * 4); // hip swing + twist
+    q.set([0, Math.sin(0.5), 0, Math.cos(0.5)], elbow * 4); // flex about Y (right arm hinge axis)
+    const joints = forwardKinematics(Float32Array.from(sk.offsets[0]), q, frames, sk);
+    const ik = solveIK(joints, frames, sk);
+    // the knee turns only about the rest leg's own bend normal (hinge), never twists
+    const k = Array.from(ik.quats.slice(knee * 4, knee * 4 + 4));
+    const [o1, o2] = [sk.offsets[knee], sk.offsets[sk.joints.indexOf('l_ankle')]];
+    const c0 = [o1[1] * o2[2] - o1[2] * o2[1], o1[2] * o2[0] - o1[0] * o2[2], o1[0] * o2[1] - o1[1] * o2[0]];
+    const cx = [k[1] * c0[2] - k[2] * c0[1], k[2] * c0[0] - k[0] * c0[2], k[0] * c0[1] - k[1] * c0[0]];
+    expect(Math.hypot(...cx) / Math.hypot(...c0)).toBeLessThan(1e-6);
+    expect(2 * Math.acos(Math.abs(k[3]))).toBeGreaterThan(a - 0.15);
+    const e = Array.from(ik.quats.slice(elbow * 4, elbow * 4 + 4));
+    expect(Math.abs(e[0])).toBeLessThan(1e-6);
+    expect(Math.abs(e[2])).toBeLessThan(1e-6);
+    // and the hip's twist is recovered from the knee's bend plane
+    expect(maxJointDist(forwardKinematics(ik.rootPos, ik.quats, frames, sk), joints)).toBeLessThan(1e-5);
+  });
+
+  it('twist stays continuous when a limb straightens (no 180° flips between frames)', () => {
+    const frames = 40;
+    const root = new Float32Array(frames * 3);
+    const q = new Float32Array(frames * J * 4);
+    const knee = sk.joints.indexOf('r_knee');
+    for (let f = 0; f < frames; f++) {
+      root.set(sk.offsets[0], f * 3);
+      for (let j = 0; j < J; j++) q[(f * J + j) * 4 + 3] = 1;
+      const a = 0.3 * (1 + Math.cos((f / frames) * 2 * Math.PI)) - 0.13; // bent → straight (the rest leg is bent ~0.13 rad) → bent
+      q.set([Math.sin(a / 2), 0, 0, Math.cos(a / 2)], (f * J + knee) * 4);
+    }
+    const ik = solveIK(forwardKinematics(root, q, frames, sk), frames, sk);
+    for (let f = 1; f < frames; f++) {
+      for (let j = 0; j < J; j++) {
+        let d = 0;
+        for (let c = 0; c < 4; c++) d += ik.quats[(f * J + j) * 4 + c] * ik.quats[((f - 1) * J + j) * 4 + c];
+        expect(d, `${sk.joints[j]} frame ${f}`).toBeGreaterThan(Math.cos(0.35 / 2)); // < 0.35 rad per frame
+      }
+    }
+  });
+
+  it('FK(IK(joints)) is within 1 cm on a real clip (recover fixture)', (ctx) => {
+    if (!fixtureExists('recover')) return ctx.skip('tests/fixtures/parity/recover.json absent: run `python -m emdm.fixtures` after preparing the dataset');
+    const fx = loadCase('recover');
+    const joints = fx.get('joints');
+    const frames = fx.meta.frames;
+    const ik = solveIK(joints, frames, sk);
+    expect(maxJointDist(forwardKinematics(ik.rootPos, ik.quats, frames, sk), joints)).toBeLessThan(0.01);
+  });
+});
