@@ -9,19 +9,20 @@ import { checkSkeleton, restPositions, type RigSkeleton } from './rig';
 /** A body part: a capsule from a to b (rest world coordinates) with an elliptic cross-section. */
 export interface BodyPart {
   name: string;
-  bone: number;              // joint whose rotation moves this part
   a: Vector3;                // axis start
   b: Vector3;                // axis end
   r0: number;                // radius at a
   r1: number;                // radius at b
+  /** optional radius profile: (t along a→b in 0..1, radius) control points, linear in between */
+  profile?: Array<[number, number]>;
   side: Vector3;             // first cross-section axis (made orthogonal to the axis)
   sx: number;                // cross-section scale along `side`
   sz: number;                // cross-section scale across (axis × side)
-  startBone?: number;        // neighbour blended in around startAt (usually the parent joint's bone)
-  startAt?: Vector3;         // where that joint is (default a)
-  endBone?: number;          // neighbour blended in around endAt (usually the child joint's bone)
-  endAt?: Vector3;           // where that joint is (default b)
-  blend: number;             // half-width of the blend band, metres
+  /** joints whose rotations move the part, in order along the axis: bones[0] up to joints[0], ... */
+  bones: number[];
+  /** where each next bone takes over (bones.length − 1 points, projected onto the axis) */
+  joints: Vector3[];
+  blend: number;             // half-width of the blend band around each joint, metres
   color: number;             // sRGB hex
 }
 
@@ -29,7 +30,7 @@ const SHIRT = 0x3f6fd8;
 const PANTS = 0x2b3242;
 const SKIN = 0xe3c4a8;
 const SHOE = 0xf1f1ee;
-const VISOR = 0x1a2030;
+const EYES = 0x1a2030;
 
 /** Standard joint names the body expects (SMPL order names used by the manifest). */
 const NAMES = [
@@ -54,49 +55,52 @@ export function bodyParts(s: RigSkeleton): BodyPart[] {
   const Z = new Vector3(0, 0, 1);
   const parts: BodyPart[] = [];
   const add = (p: Omit<BodyPart, 'blend'> & { blend?: number }) => parts.push({ blend: 0.05, ...p });
+  const limb = (parent: number, self: number, child: number | null, a: Vector3, b: Vector3) =>
+    child === null ? { bones: [parent, self], joints: [a] } : { bones: [parent, self, child], joints: [a, b] };
 
-  // Hips and trunk (elliptic sections: wide along X, shallow along Z).
-  add({ name: 'hips', bone: J('pelvis'), a: P('r_hip'), b: P('l_hip'), r0: 0.105, r1: 0.105, side: Z, sx: 0.86, sz: 1.0,
-    startBone: J('r_hip'), endBone: J('l_hip'), blend: 0.035, color: PANTS });
-  add({ name: 'belly', bone: J('pelvis'), a: P('pelvis').add(new Vector3(0, -0.02, 0)), b: P('spine1'), r0: 0.125, r1: 0.12,
-    side: X, sx: 1.12, sz: 0.78, endBone: J('spine1'), blend: 0.04, color: SHIRT });
-  add({ name: 'waist', bone: J('spine1'), a: P('spine1'), b: P('spine2'), r0: 0.12, r1: 0.125, side: X, sx: 1.1, sz: 0.78,
-    startBone: J('pelvis'), endBone: J('spine2'), blend: 0.045, color: SHIRT });
-  add({ name: 'lower-chest', bone: J('spine2'), a: P('spine2'), b: P('spine3'), r0: 0.125, r1: 0.13, side: X, sx: 1.16, sz: 0.78,
-    startBone: J('spine1'), endBone: J('spine3'), blend: 0.025, color: SHIRT });
-  add({ name: 'chest', bone: J('spine3'), a: P('spine3'), b: P('neck').add(new Vector3(0, -0.07, 0)), r0: 0.13, r1: 0.115,
-    side: X, sx: 1.3, sz: 0.74, startBone: J('spine2'), blend: 0.03, color: SHIRT });
-  add({ name: 'neck', bone: J('neck'), a: P('neck').add(new Vector3(0, -0.03, 0)), b: P('head'), r0: 0.05, r1: 0.045,
-    side: X, sx: 1, sz: 1, startBone: J('spine3'), startAt: P('neck'), endBone: J('head'), blend: 0.025, color: SKIN });
+  // Hips: across the hip joints, blending into each thigh.
+  add({ name: 'hips', a: P('r_hip'), b: P('l_hip'), r0: 0.105, r1: 0.105, side: Z, sx: 0.86, sz: 1.0,
+    bones: [J('r_hip'), J('pelvis'), J('l_hip')], joints: [P('r_hip'), P('l_hip')], blend: 0.035, color: PANTS });
+  // Trunk: one smooth capsule from the pelvis to the base of the neck, bending at each spine joint.
+  const trunkTop = P('neck').add(new Vector3(0, -0.075, 0));
+  add({ name: 'trunk', a: P('pelvis').add(new Vector3(0, -0.03, 0)), b: trunkTop, r0: 0.12, r1: 0.11,
+    profile: [[0, 0.12], [0.3, 0.112], [0.55, 0.118], [0.8, 0.13], [1, 0.112]],
+    side: X, sx: 1.22, sz: 0.78, bones: [J('pelvis'), J('spine1'), J('spine2'), J('spine3')],
+    joints: [P('spine1'), P('spine2'), P('spine3')], blend: 0.05, color: SHIRT });
+  add({ name: 'neck', a: P('neck').add(new Vector3(0, -0.03, 0)), b: P('head'), r0: 0.05, r1: 0.045, side: X, sx: 1, sz: 1,
+    bones: [J('spine3'), J('neck'), J('head')], joints: [P('neck'), P('head')], blend: 0.025, color: SKIN });
   const skull = P('head');
-  add({ name: 'head', bone: J('head'), a: skull.clone().add(new Vector3(0, 0.045, 0.005)), b: skull.clone().add(new Vector3(0, 0.115, -0.005)),
-    r0: 0.095, r1: 0.095, side: X, sx: 0.86, sz: 1.05, color: SKIN });
-  add({ name: 'visor', bone: J('head'), a: skull.clone().add(new Vector3(-0.055, 0.085, 0.072)),
-    b: skull.clone().add(new Vector3(0.055, 0.085, 0.072)), r0: 0.026, r1: 0.026, side: Y, sx: 0.85, sz: 0.7, color: VISOR });
+  add({ name: 'head', a: skull.clone().add(new Vector3(0, 0.045, 0.005)), b: skull.clone().add(new Vector3(0, 0.115, -0.005)),
+    r0: 0.095, r1: 0.095, side: X, sx: 0.86, sz: 1.05, bones: [J('head')], joints: [], color: SKIN });
+  for (const sx of [-1, 1]) {
+    add({ name: sx < 0 ? 'r-eye' : 'l-eye', a: skull.clone().add(new Vector3(0.034 * sx, 0.088, 0.083)),
+      b: skull.clone().add(new Vector3(0.034 * sx, 0.07, 0.083)), r0: 0.013, r1: 0.013, side: X, sx: 1, sz: 0.6,
+      bones: [J('head')], joints: [], color: EYES });
+  }
 
   for (const side of ['l', 'r'] as const) {
     const n = (base: string) => `${side}_${base}` as JointName;
     const sgn = side === 'l' ? 1 : -1;
-    add({ name: `${side}-collar`, bone: J(n('collar')), a: P(n('collar')).add(new Vector3(-0.04 * sgn, -0.02, 0)), b: P(n('shoulder')),
-      r0: 0.065, r1: 0.06, side: Z, sx: 0.9, sz: 0.95, startBone: J('spine3'), startAt: P(n('collar')),
-      endBone: J(n('shoulder')), blend: 0.04, color: SHIRT });
-    add({ name: `${side}-upper-arm`, bone: J(n('shoulder')), a: P(n('shoulder')), b: P(n('elbow')), r0: 0.056, r1: 0.043,
-      side: Z, sx: 1, sz: 1, startBone: J(n('collar')), endBone: J(n('elbow')), blend: 0.045, color: SHIRT });
-    add({ name: `${side}-forearm`, bone: J(n('elbow')), a: P(n('elbow')), b: P(n('wrist')), r0: 0.042, r1: 0.031,
-      side: Z, sx: 1.05, sz: 0.9, startBone: J(n('shoulder')), endBone: J(n('wrist')), blend: 0.04, color: SKIN });
+    add({ name: `${side}-collar`, a: P(n('collar')).add(new Vector3(-0.04 * sgn, -0.02, 0)), b: P(n('shoulder')),
+      r0: 0.065, r1: 0.06, side: Z, sx: 0.9, sz: 0.95,
+      ...limb(J('spine3'), J(n('collar')), J(n('shoulder')), P(n('collar')), P(n('shoulder'))), blend: 0.04, color: SHIRT });
+    add({ name: `${side}-upper-arm`, a: P(n('shoulder')), b: P(n('elbow')), r0: 0.056, r1: 0.043, side: Z, sx: 1, sz: 1,
+      ...limb(J(n('collar')), J(n('shoulder')), J(n('elbow')), P(n('shoulder')), P(n('elbow'))), blend: 0.045, color: SHIRT });
+    add({ name: `${side}-forearm`, a: P(n('elbow')), b: P(n('wrist')), r0: 0.042, r1: 0.031, side: Z, sx: 1.05, sz: 0.9,
+      ...limb(J(n('shoulder')), J(n('elbow')), J(n('wrist')), P(n('elbow')), P(n('wrist'))), blend: 0.04, color: SKIN });
     const armDir = P(n('wrist')).sub(P(n('elbow'))).normalize();
-    add({ name: `${side}-hand`, bone: J(n('wrist')), a: P(n('wrist')).addScaledVector(armDir, 0.035),
-      b: P(n('wrist')).addScaledVector(armDir, 0.13), r0: 0.038, r1: 0.034, side: Z, sx: 1.15, sz: 0.5,
-      startBone: J(n('elbow')), startAt: P(n('wrist')), blend: 0.025, color: SKIN });
-    add({ name: `${side}-thigh`, bone: J(n('hip')), a: P(n('hip')), b: P(n('knee')), r0: 0.085, r1: 0.058,
-      side: X, sx: 1, sz: 1.05, startBone: J('pelvis'), endBone: J(n('knee')), blend: 0.05, color: PANTS });
-    add({ name: `${side}-shin`, bone: J(n('knee')), a: P(n('knee')), b: P(n('ankle')), r0: 0.056, r1: 0.04,
-      side: X, sx: 1, sz: 1.05, startBone: J(n('hip')), endBone: J(n('ankle')), blend: 0.045, color: PANTS });
+    add({ name: `${side}-hand`, a: P(n('wrist')).addScaledVector(armDir, 0.035), b: P(n('wrist')).addScaledVector(armDir, 0.13),
+      r0: 0.038, r1: 0.034, side: Z, sx: 1.15, sz: 0.5, ...limb(J(n('elbow')), J(n('wrist')), null, P(n('wrist')), P(n('wrist'))),
+      blend: 0.025, color: SKIN });
+    add({ name: `${side}-thigh`, a: P(n('hip')), b: P(n('knee')), r0: 0.085, r1: 0.058, side: X, sx: 1, sz: 1.05,
+      ...limb(J('pelvis'), J(n('hip')), J(n('knee')), P(n('hip')), P(n('knee'))), blend: 0.05, color: PANTS });
+    add({ name: `${side}-shin`, a: P(n('knee')), b: P(n('ankle')), r0: 0.056, r1: 0.04, side: X, sx: 1, sz: 1.05,
+      ...limb(J(n('hip')), J(n('knee')), J(n('ankle')), P(n('knee')), P(n('ankle'))), blend: 0.045, color: PANTS });
     const ankle = P(n('ankle'));
     const ball = P(n('foot'));
-    add({ name: `${side}-foot`, bone: J(n('ankle')), a: new Vector3(ankle.x, 0.047, ankle.z - 0.05),
-      b: new Vector3(ball.x, 0.032, ball.z + 0.055), r0: 0.046, r1: 0.036, side: X, sx: 1.0, sz: 0.72,
-      startBone: J(n('knee')), startAt: ankle, endBone: J(n('foot')), endAt: ball, blend: 0.03, color: SHOE });
+    add({ name: `${side}-foot`, a: new Vector3(ankle.x, 0.047, ankle.z - 0.05), b: new Vector3(ball.x, 0.032, ball.z + 0.055),
+      r0: 0.046, r1: 0.036, side: X, sx: 1.0, sz: 0.72, ...limb(J(n('knee')), J(n('ankle')), J(n('foot')), ankle, ball),
+      blend: 0.03, color: SHOE });
   }
   return parts;
 }
@@ -107,22 +111,44 @@ function smoothstep(e0: number, e1: number, x: number): number {
 }
 
 /**
- * Skin weights of a point of a part, from its coordinate u along the part's axis: the part's own bone,
- * fading into startBone around uStart and into endBone around uEnd (each reaches 0.5 at its joint).
- * Returns up to three (bone, weight) pairs with positive weights summing to 1.
+ * Skin weights of a point at coordinate u along a part's axis, given where each next bone takes over
+ * (`at`, increasing, one fewer than bones): bone i weighs S_i(u) − S_{i+1}(u), where S_i rises from 0 to
+ * 1 by a smoothstep over ±h around at[i−1] (S_0 = 1, S_n+1 = 0). The weights are ≥ 0, sum to 1, equal
+ * 0.5/0.5 at each joint and are exactly one bone's away from the joints. Returns (bone, weight) pairs
+ * with positive weights.
  */
-export function partWeights(part: BodyPart, u: number, uStart: number, uEnd: number): Array<[number, number]> {
-  const room = Math.max(1e-4, (uEnd - uStart) / 2);
-  const h = Math.max(1e-4, Math.min(part.blend, room));
-  const ws = part.startBone === undefined ? 0 : 1 - smoothstep(uStart - h, uStart + h, u);
-  const we = part.endBone === undefined ? 0 : smoothstep(uEnd - h, uEnd + h, u);
+export function chainWeights(bones: number[], at: number[], blend: number, u: number): Array<[number, number]> {
+  if (at.length !== bones.length - 1) throw new Error(`chainWeights: ${bones.length} bones need ${bones.length - 1} joints, got ${at.length}`);
+  const S = (i: number): number => {
+    if (i <= 0) return 1;
+    if (i > at.length) return 0;
+    const gapL = i > 1 ? at[i - 1] - at[i - 2] : Infinity;
+    const gapR = i < at.length ? at[i] - at[i - 1] : Infinity;
+    const h = Math.max(1e-4, Math.min(blend, gapL / 2, gapR / 2));
+    return smoothstep(at[i - 1] - h, at[i - 1] + h, u);
+  };
   const out: Array<[number, number]> = [];
-  const self = Math.max(0, 1 - ws - we);
-  if (self > 0) out.push([part.bone, self]);
-  if (ws > 0) out.push([part.startBone!, ws]);
-  if (we > 0) out.push([part.endBone!, we]);
+  for (let i = 0; i < bones.length; i++) {
+    const w = S(i) - S(i + 1);
+    if (w > 1e-6) out.push([bones[i], w]);
+  }
   const sum = out.reduce((acc, [, w]) => acc + w, 0);
   return out.map(([b, w]) => [b, w / sum]);
+}
+
+/** Radius of a part at t ∈ [0, 1] along its axis. */
+export function partRadius(part: BodyPart, t: number): number {
+  const p = part.profile;
+  if (!p || p.length === 0) return part.r0 + (part.r1 - part.r0) * t;
+  if (t <= p[0][0]) return p[0][1];
+  for (let i = 1; i < p.length; i++) {
+    if (t <= p[i][0]) {
+      const [t0, r0] = p[i - 1];
+      const [t1, r1] = p[i];
+      return r0 + ((r1 - r0) * (t - t0)) / (t1 - t0);
+    }
+  }
+  return p[p.length - 1][1];
 }
 
 export interface BodyGeometryOptions {
@@ -152,24 +178,25 @@ export function buildBodyGeometry(s: RigSkeleton, parts: BodyPart[] = bodyParts(
     if (side.lengthSq() < 1e-8) throw new Error(`body part '${part.name}': side vector is parallel to its axis`);
     side.normalize();
     const across = new Vector3().crossVectors(dir, side);
-    const uStart = (part.startAt ?? part.a).clone().sub(part.a).dot(dir);
-    const uEnd = (part.endAt ?? part.b).clone().sub(part.a).dot(dir);
+    const at = part.joints.map((j) => j.clone().sub(part.a).dot(dir));
+    const r0 = partRadius(part, 0);
+    const r1 = partRadius(part, 1);
     hexToLinear(part.color, c);
 
     // Rings: (axial u, radius) from the start pole to the end pole.
     const rings: Array<[number, number]> = [];
     for (let i = 1; i < capRings; i++) {
       const phi = -Math.PI / 2 + (i / capRings) * (Math.PI / 2);
-      rings.push([part.r0 * Math.sin(phi), part.r0 * Math.cos(phi)]);
+      rings.push([r0 * Math.sin(phi), r0 * Math.cos(phi)]);
     }
     const bodyRings = Math.max(2, Math.ceil(L / spacing));
     for (let i = 0; i <= bodyRings; i++) {
       const t = i / bodyRings;
-      rings.push([t * L, part.r0 + (part.r1 - part.r0) * t]);
+      rings.push([t * L, partRadius(part, t)]);
     }
     for (let i = 1; i < capRings; i++) {
       const phi = (i / capRings) * (Math.PI / 2);
-      rings.push([L + part.r1 * Math.sin(phi), part.r1 * Math.cos(phi)]);
+      rings.push([L + r1 * Math.sin(phi), r1 * Math.cos(phi)]);
     }
 
     const base = pos.length / 3;
@@ -177,20 +204,20 @@ export function buildBodyGeometry(s: RigSkeleton, parts: BodyPart[] = bodyParts(
       const p = part.a.clone().addScaledVector(dir, u).addScaledVector(side, x * part.sx).addScaledVector(across, z * part.sz);
       pos.push(p.x, p.y, p.z);
       col.push(c.r, c.g, c.b);
-      const w = partWeights(part, u, uStart, uEnd);
+      const w = chainWeights(part.bones, at, part.blend, u);
       for (let k = 0; k < 4; k++) {
         skinIndex.push(k < w.length ? w[k][0] : 0);
         skinWeight.push(k < w.length ? w[k][1] : 0);
       }
     };
-    emit(-part.r0, 0, 0); // start pole
+    emit(-r0, 0, 0); // start pole
     for (const [u, r] of rings) {
       for (let k = 0; k < radial; k++) {
         const th = (k / radial) * Math.PI * 2;
         emit(u, r * Math.cos(th), r * Math.sin(th));
       }
     }
-    emit(L + part.r1, 0, 0); // end pole
+    emit(L + r1, 0, 0); // end pole
     const ring0 = base + 1;
     const endPole = base + 1 + rings.length * radial;
     for (let k = 0; k < radial; k++) {

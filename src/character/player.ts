@@ -37,7 +37,9 @@ export function samplePose(t: PoseTrack, time: number, outRoot: Float32Array, ou
   for (let k = 0; k < 3; k++) outRoot[k] = t.rootPos[i0 * 3 + k] * (1 - a) + t.rootPos[i1 * 3 + k] * a;
   const stride = t.joints * 4;
   for (let j = 0; j < t.joints; j++) {
-    Quaternion.slerpFlat(outQuats, j * 4, t.quats, i0 * stride + j * 4, t.quats, i1 * stride + j * 4, a);
+    // three's typings say number[]; slerpFlat only indexes, so typed arrays work the same.
+    Quaternion.slerpFlat(outQuats as unknown as number[], j * 4, t.quats as unknown as number[], i0 * stride + j * 4,
+      t.quats as unknown as number[], i1 * stride + j * 4, a);
   }
   return f;
 }
