@@ -1,0 +1,254 @@
+"""BVH reader and forward kinematics (numpy, vectorised over frames).
+
+Supports any channel count per joint (0-6: position and rotation channels in any order), End
+Sites (kept as joints named ``<parent>_End`` with no channels), any rotation order (channels
+multiply in the order listed: ``Zrotation Xrotation Yrotation`` -> R = Rz Rx Ry) and any length
+unit (positions are returned in file units; the joint map says how to convert).
+
+Position channels replace the joint's OFFSET (the usual convention); joints without position
+channels use their OFFSET. Rotation channels are in degrees.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from emdm.mocap.errors import MocapFormatError
+from emdm.mocap.rotations import axis_rotation
+
+_CHANNELS = {"xposition", "yposition", "zposition", "xrotation", "yrotation", "zrotation"}
+
+
+@dataclass
+class BVH:
+    path: str
+    names: list[str]
+    parents: list[int]
+    offsets: np.ndarray                  # (J, 3) file units
+    channels: list[list[str]]            # per joint, lower-case channel names, in file order
+    channel_start: list[int]             # index of each joint's first channel in a motion row
+    frame_time: float
+    motion: np.ndarray                   # (F, C) raw channel values
+    end_site: list[bool] = field(default_factory=list)
+
+    @property
+    def fps(self) -> float:
+        return 1.0 / self.frame_time
+
+    @property
+    def num_frames(self) -> int:
+        return int(self.motion.shape[0])
+
+    def index(self, name: str) -> int:
+        try:
+            return self.names.index(name)
+        except ValueError:
+            raise KeyError(f"{self.path}: no joint named {name!r} (joints: {', '.join(self.names)})") from None
+
+
+def _parse_float(tok: str, path: str, line: int, what: str) -> float:
+    try:
+        return float(tok)
+    except ValueError:
+        raise MocapFormatError(path, line, f"expected a number for {what}, got {tok!r}") from None
+
+
+def parse_bvh_text(text: str, path: str = "<string>") -> BVH:
+    lines = text.splitlines()
+    names: list[str] = []
+    parents: list[int] = []
+    offsets: list[list[float]] = []
+    channels: list[list[str]] = []
+    end_site: list[bool] = []
+    stack: list[int] = []
+    pending: int | None = None   # joint declared, waiting for '{'
+    i = 0
+    n = len(lines)
+
+    def next_nonempty(i: int) -> int:
+        while i < n and not lines[i].strip():
+            i += 1
+        return i
+
+    i = next_nonempty(0)
+    if i >= n or lines[i].split()[0].upper() != "HIERARCHY":
+        raise MocapFormatError(path, i + 1 if i < n else None, "expected 'HIERARCHY' at the start of a BVH file")
+    i += 1
+    while True:
+        i = next_nonempty(i)
+        if i >= n:
+            raise MocapFormatError(path, n, "unexpected end of file inside HIERARCHY (expected 'MOTION')")
+        toks = lines[i].split()
+        key = toks[0].upper()
+        lineno = i + 1
+        if key in ("ROOT", "JOINT"):
+            if key == "ROOT" and (stack or names):
+                if stack:
+                    raise MocapFormatError(path, lineno, "'ROOT' inside another joint")
+                raise MocapFormatError(path, lineno, "only one ROOT hierarchy is supported")
+            if key == "JOINT" and not stack:
+                raise MocapFormatError(path, lineno, "'JOINT' outside of a ROOT block")
+            if len(toks) < 2:
+                raise MocapFormatError(path, lineno, f"expected a joint name after {toks[0]}")
+            name = " ".join(toks[1:])
+            names.append(name)
+            parents.append(stack[-1] if stack else -1)
+            offsets.append([np.nan, np.nan, np.nan])
+            channels.append([])
+            end_site.append(False)
+            pending = len(names) - 1
+        elif key == "END":
+            if not stack:
+                raise MocapFormatError(path, lineno, "'End Site' outside of a joint")
+            parent = stack[-1]
+            names.append(f"{names[parent]}_End")
+            parents.append(parent)
+            offsets.append([np.nan, np.nan, np.nan])
+            channels.append([])
+            end_site.append(True)
+            pending = len(names) - 1
+        elif key == "{":
+            if pending is None:
+                raise MocapFormatError(path, lineno, "'{' without a ROOT, JOINT or End Site before it")
+            stack.append(pending)
+            pending = None
+        elif key == "}":
+            if not stack:
+                raise MocapFormatError(path, lineno, "unbalanced '}'")
+            j = stack.pop()
+            if np.isnan(offsets[j][0]):
+                raise MocapFormatError(path, lineno, f"joint {names[j]!r} has no OFFSET")
+        elif key == "OFFSET":
+            if not stack:
+                raise MocapFormatError(path, lineno, "OFFSET outside of a joint block")
+            if len(toks) != 4:
+                raise MocapFormatError(path, lineno, f"expected 'OFFSET x y z', got {len(toks) - 1} values")
+            offsets[stack[-1]] = [_parse_float(t, path, lineno, "OFFSET") for t in toks[1:]]
+        elif key == "CHANNELS":
+            if not stack:
+                raise MocapFormatError(path, lineno, "CHANNELS outside of a joint block")
+            j = stack[-1]
+            if end_site[j]:
+                raise MocapFormatError(path, lineno, "an End Site cannot have CHANNELS")
+            try:
+                count = int(toks[1])
+            except (IndexError, ValueError):
+                raise MocapFormatError(path, lineno, "expected 'CHANNELS <count> <names...>'") from None
+            chans = [t.lower() for t in toks[2:]]
+            if len(chans) != count:
+                raise MocapFormatError(path, lineno, f"CHANNELS says {count} channels but lists {len(chans)}")
+            for c in chans:
+                if c not in _CHANNELS:
+                    raise MocapFormatError(path, lineno, f"unknown channel {c!r} (expected X/Y/Z position or rotation)")
+            if len(set(chans)) != len(chans):
+                raise MocapFormatError(path, lineno, f"repeated channel in {' '.join(toks[2:])}")
+            channels[j] = chans
+        elif key == "MOTION":
+            if stack:
+                raise MocapFormatError(path, lineno, f"'MOTION' reached with {len(stack)} unclosed '{{'")
+            if not names:
+                raise MocapFormatError(path, lineno, "no ROOT joint before MOTION")
+            i += 1
+            break
+        else:
+            raise MocapFormatError(path, lineno, f"unexpected {toks[0]!r} in HIERARCHY")
+        i += 1
+
+    # MOTION header
+    i = next_nonempty(i)
+    if i >= n or not lines[i].strip().lower().startswith("frames:"):
+        raise MocapFormatError(path, i + 1 if i < n else n, "expected 'Frames: <count>'")
+    try:
+        frames = int(lines[i].split(":", 1)[1])
+    except ValueError:
+        raise MocapFormatError(path, i + 1, "expected an integer after 'Frames:'") from None
+    i = next_nonempty(i + 1)
+    if i >= n or not lines[i].strip().lower().startswith("frame time:"):
+        raise MocapFormatError(path, i + 1 if i < n else n, "expected 'Frame Time: <seconds>'")
+    frame_time = _parse_float(lines[i].split(":", 1)[1].strip(), path, i + 1, "Frame Time")
+    if not frame_time > 0:
+        raise MocapFormatError(path, i + 1, f"Frame Time must be positive, got {frame_time}")
+    first_data = i + 1
+    starts, total = [], 0
+    for c in channels:
+        starts.append(total)
+        total += len(c)
+    body = "\n".join(lines[first_data:])
+    try:
+        values = np.array(body.split(), dtype=np.float64)
+    except ValueError:
+        values = None
+    if values is None or values.size != frames * total:
+        _locate_motion_error(lines, first_data, frames, total, path)
+    motion = values.reshape(frames, total) if total else np.zeros((frames, 0))
+    return BVH(path, names, parents, np.array(offsets, dtype=np.float64), channels, starts, frame_time, motion, end_site)
+
+
+def _locate_motion_error(lines: list[str], first: int, frames: int, total: int, path: str) -> None:
+    row = 0
+    for k in range(first, len(lines)):
+        toks = lines[k].split()
+        if not toks:
+            continue
+        if row >= frames:
+            raise MocapFormatError(path, k + 1, f"more motion rows than 'Frames: {frames}'")
+        if len(toks) != total:
+            raise MocapFormatError(path, k + 1, f"motion row {row + 1} has {len(toks)} values, expected {total} (one per channel)")
+        for t in toks:
+            _parse_float(t, path, k + 1, f"motion row {row + 1}")
+        row += 1
+    raise MocapFormatError(path, len(lines), f"file has {row} motion rows, but the header says 'Frames: {frames}'")
+
+
+def read_bvh(path: str | Path) -> BVH:
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8", errors="replace")
+    except OSError as e:
+        raise MocapFormatError(str(p), None, f"cannot read: {e.strerror}") from e
+    return parse_bvh_text(text, str(p))
+
+
+def _needed(bvh: BVH, joints: list[int] | None) -> list[int]:
+    if joints is None:
+        return list(range(len(bvh.names)))
+    keep: set[int] = set()
+    for j in joints:
+        while j >= 0 and j not in keep:
+            keep.add(j)
+            j = bvh.parents[j]
+    return sorted(keep)  # parents are declared before children
+
+
+def forward_kinematics(bvh: BVH, joints: list[int] | None = None) -> np.ndarray:
+    """World positions (F, J, 3) in file units. With ``joints``, only those joints (and their
+    ancestors) are computed; the others are NaN."""
+    F = bvh.num_frames
+    J = len(bvh.names)
+    pos = np.full((F, J, 3), np.nan)
+    rot = np.zeros((F, J, 3, 3))
+    for j in _needed(bvh, joints):
+        chans = bvh.channels[j]
+        s = bvh.channel_start[j]
+        t = np.broadcast_to(bvh.offsets[j], (F, 3)).copy()
+        R = None
+        for k, c in enumerate(chans):
+            v = bvh.motion[:, s + k]
+            if c.endswith("position"):
+                t[:, "xyz".index(c[0])] = v
+            else:
+                r = axis_rotation(c[0], np.deg2rad(v))
+                R = r if R is None else R @ r
+        if R is None:
+            R = np.broadcast_to(np.eye(3), (F, 3, 3))
+        p = bvh.parents[j]
+        if p < 0:
+            rot[:, j] = R
+            pos[:, j] = t
+        else:
+            rot[:, j] = rot[:, p] @ R
+            pos[:, j] = pos[:, p] + np.einsum("fij,fj->fi", rot[:, p], t)
+    return pos

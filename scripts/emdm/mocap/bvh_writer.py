@@ -1,0 +1,93 @@
+"""Write joint motions as BVH on the reference skeleton (emdm.skeleton), rotations from emdm.motion.ik.
+
+Units: centimetres (offsets and root position ×100), Y up. Root: 6 channels (Xposition Yposition
+Zposition Zrotation Xrotation Yrotation), other joints: 3 rotation channels in the same ZXY order,
+i.e. R = Rz · Rx · Ry (intrinsic, as BVH readers apply the channels left to right). Leaf joints get an
+End Site one bone-length-ish further along their offset direction.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from emdm import skeleton as sk
+from emdm.motion.ik import solve_ik
+
+SCALE = 100.0   # metres → centimetres
+
+
+def matrix_to_euler_zxy(R: np.ndarray) -> np.ndarray:
+    """(..., 3, 3) → (..., 3) degrees (z, x, y) with R = Rz(z) Rx(x) Ry(y)."""
+    # R = Rz Rx Ry: R[2,1] = sin x; R[2,0] = -cos x sin y; R[2,2] = cos x cos y; R[0,1] = -sin z cos x; R[1,1] = cos z cos x
+    sx = np.clip(R[..., 2, 1], -1.0, 1.0)
+    x = np.arcsin(sx)
+    y = np.arctan2(-R[..., 2, 0], R[..., 2, 2])
+    z = np.arctan2(-R[..., 0, 1], R[..., 1, 1])
+    gimbal = np.abs(sx) > 1.0 - 1e-9
+    if np.any(gimbal):    # cos x ≈ 0: put everything into z
+        z = np.where(gimbal, np.arctan2(R[..., 1, 0], R[..., 0, 0]), z)
+        y = np.where(gimbal, 0.0, y)
+    return np.degrees(np.stack([z, x, y], axis=-1))
+
+
+def euler_zxy_to_matrix(deg: np.ndarray) -> np.ndarray:
+    z, x, y = np.radians(deg[..., 0]), np.radians(deg[..., 1]), np.radians(deg[..., 2])
+    cz, sz, cx, sx, cy, sy = np.cos(z), np.sin(z), np.cos(x), np.sin(x), np.cos(y), np.sin(y)
+    one, zero = np.ones_like(z), np.zeros_like(z)
+    Rz = np.stack([np.stack([cz, -sz, zero], -1), np.stack([sz, cz, zero], -1), np.stack([zero, zero, one], -1)], -2)
+    Rx = np.stack([np.stack([one, zero, zero], -1), np.stack([zero, cx, -sx], -1), np.stack([zero, sx, cx], -1)], -2)
+    Ry = np.stack([np.stack([cy, zero, sy], -1), np.stack([zero, one, zero], -1), np.stack([-sy, zero, cy], -1)], -2)
+    return Rz @ Rx @ Ry
+
+
+def _children(j: int) -> list[int]:
+    return [c for c, p in enumerate(sk.PARENTS) if p == j]
+
+
+def bvh_text(joints: np.ndarray, fps: float = sk.FPS) -> str:
+    """(F, 22, 3) joint positions (metres) → BVH text."""
+    root, local = solve_ik(joints)
+    euler = matrix_to_euler_zxy(local)                          # (F, 22, 3)
+    lines = ["HIERARCHY"]
+    order: list[int] = []
+
+    def emit(j: int, depth: int) -> None:
+        pad = "  " * depth
+        off = (np.zeros(3) if j == 0 else sk.REFERENCE_OFFSETS[j]) * SCALE
+        lines.append(f"{pad}{'ROOT' if j == 0 else 'JOINT'} {sk.JOINT_NAMES[j]}")
+        lines.append(f"{pad}{{")
+        lines.append(f"{pad}  OFFSET {off[0]:.4f} {off[1]:.4f} {off[2]:.4f}")
+        if j == 0:
+            lines.append(f"{pad}  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation")
+        else:
+            lines.append(f"{pad}  CHANNELS 3 Zrotation Xrotation Yrotation")
+        order.append(j)
+        kids = _children(j)
+        for c in kids:
+            emit(c, depth + 1)
+        if not kids:
+            d = sk.REFERENCE_OFFSETS[j]
+            end = d / max(np.linalg.norm(d), 1e-9) * 0.08 * SCALE
+            lines.append(f"{pad}  End Site")
+            lines.append(f"{pad}  {{")
+            lines.append(f"{pad}    OFFSET {end[0]:.4f} {end[1]:.4f} {end[2]:.4f}")
+            lines.append(f"{pad}  }}")
+        lines.append(f"{pad}}}")
+
+    emit(0, 0)
+    n = len(root)
+    lines += ["MOTION", f"Frames: {n}", f"Frame Time: {1.0 / fps:.6f}"]
+    for f in range(n):
+        vals = list(root[f] * SCALE)
+        for j in order:
+            vals += list(euler[f, j])
+        lines.append(" ".join(f"{v:.4f}" for v in vals))
+    return "\n".join(lines) + "\n"
+
+
+def write_bvh(joints: np.ndarray, path: Path | str, fps: float = sk.FPS) -> Path:
+    path = Path(path)
+    path.write_text(bvh_text(joints, fps))
+    return path
