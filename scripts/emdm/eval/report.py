@@ -1,0 +1,372 @@
+"""docs/RESULTS.md from evaluation outputs — the one command that regenerates it:
+
+    python -m emdm.eval.report                  # reads docs/results/json/*.json, writes docs/RESULTS.md + PNGs
+
+Every number in the file comes from a JSON written by ``python -m emdm.eval.evaluate`` (or a timing
+JSON of the same schema); nothing is typed by hand. Rows the seed's comparisons need but that have no
+JSON yet are listed under "Not measured yet", so a missing baseline is visible, never silent.
+
+Result JSON (schema 1), one file per (task, source):
+    {"schema": 1, "task": "text"|"action", "name": row label, "kind": "real"|"model",
+     "info": {"variant": "real"|"emdm"|"diffusion"|"ddgan-naive"|"ddgan-nodcond", "sampler": ...,
+              "steps": T, ...}, "dataset": {...}, "hardware": str, "evaluator": {...},
+     "metrics": {name: [one value per repeat]}, "plausibility": {name: [one value per motion]}, ...}
+Timing JSON:
+    {"schema": 1, "task": "timing", "runtime": "python-cpu"|"browser-wasm"|"gpu", "hardware": str,
+     "rows": [{"variant": ..., "sampler": ..., "steps": T, "frames": F, "ms_per_motion": [runs]}]}
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from emdm.eval.metrics import mean_ci95
+from emdm.paths import REPO_ROOT
+
+RESULTS_DIR = REPO_ROOT / "docs" / "results"
+RESULTS_MD = REPO_ROOT / "docs" / "RESULTS.md"
+SCHEMA = 1
+
+VARIANT_LABEL = {
+    "real": "Real motion",
+    "emdm": "EMDM (DDGAN + L_geo, D conditioned)",
+    "diffusion": "Diffusion (same transformer) + DDIM",
+    "ddgan-naive": "Naive DDGAN (R = 0, D unconditioned)",
+    "ddgan-nodcond": "DDGAN + L_geo, D unconditioned",
+}
+VARIANT_ORDER = ["real", "emdm", "diffusion", "ddgan-naive", "ddgan-nodcond"]
+
+# The rows the seed's comparisons need: (task, variant, steps or None for "any"), and the table they feed.
+EXPECTED = [
+    ("text", "real", None, "Tab. D2–D4 reference row"),
+    ("text", "emdm", 10, "Tab. D2–D4: EMDM at 10 steps"),
+    ("text", "diffusion", 10, "Tab. D2: diffusion + DDIM at 10 steps"),
+    ("text", "diffusion", 50, "Tab. D2: diffusion + DDIM at 50 steps"),
+    ("text", "diffusion", 100, "Tab. D2: diffusion + DDIM at 100 steps"),
+    ("text", "ddgan-naive", 10, "Tab. D3: naive DDGAN"),
+    ("text", "ddgan-nodcond", 10, "Tab. D4: D without condition (with L_geo)"),
+    ("action", "real", None, "action-to-motion reference row"),
+    ("action", "emdm", 10, "action-to-motion: EMDM at 10 steps"),
+]
+EXPECTED_TIMING = [("python-cpu", "emdm"), ("python-cpu", "diffusion"), ("browser-wasm", "emdm"),
+                   ("browser-wasm", "diffusion"), ("gpu", "emdm"), ("gpu", "diffusion")]
+
+
+class ReportError(ValueError):
+    pass
+
+
+# ----------------------------------------------------------------------------- loading
+
+def load_results(json_dir: Path | str) -> list[dict]:
+    json_dir = Path(json_dir)
+    out = []
+    for path in sorted(json_dir.glob("*.json")):
+        try:
+            r = json.loads(path.read_text())
+        except json.JSONDecodeError as e:
+            raise ReportError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from e
+        if r.get("schema") != SCHEMA:
+            raise ReportError(f"{path}: field 'schema' is {r.get('schema')!r}, expected {SCHEMA}")
+        task = r.get("task")
+        if task not in ("text", "action", "timing"):
+            raise ReportError(f"{path}: field 'task' is {task!r}, expected 'text', 'action' or 'timing'")
+        need = ("rows", "runtime") if task == "timing" else ("name", "kind", "info", "metrics")
+        for k in need:
+            if k not in r:
+                raise ReportError(f"{path}: missing field {k!r}")
+        r["_file"] = path.name
+        out.append(r)
+    return out
+
+
+# ----------------------------------------------------------------------------- formatting
+
+def fmt(values, digits: int = 3) -> str:
+    """'mean ±ci' over repeats (ci = 95 % half-interval); '–' when there are no values."""
+    if values is None or len(values) == 0:
+        return "–"
+    m, h = mean_ci95(values)
+    return f"{m:.{digits}f} ±{h:.{digits}f}" if len(values) > 1 else f"{m:.{digits}f}"
+
+
+def _steps(r: dict):
+    return r["info"].get("steps")
+
+
+def _sort_key(r: dict):
+    v = r["info"].get("variant", "real" if r["kind"] == "real" else "emdm")
+    return (VARIANT_ORDER.index(v) if v in VARIANT_ORDER else 99, _steps(r) or 0, r["name"])
+
+
+def _table(header: list[str], rows: list[list[str]]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join(" --- " for _ in header) + "|"]
+    lines += ["| " + " | ".join(row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def _method_cells(r: dict) -> list[str]:
+    info = r["info"]
+    steps = _steps(r)
+    return [r["name"], "–" if steps is None else str(steps), str(info.get("train_steps", "–"))]
+
+
+def text_table(results: list[dict]) -> str:
+    rows = []
+    for r in sorted((r for r in results if r["task"] == "text"), key=_sort_key):
+        m = r["metrics"]
+        rows.append(_method_cells(r) + [fmt(m.get("top1")), fmt(m.get("top2")), fmt(m.get("top3")),
+                                         fmt(m.get("fid")), fmt(m.get("mm_dist")), fmt(m.get("diversity")),
+                                         fmt(m.get("multimodality")), str(r.get("repeats", len(m.get("top1", []))))])
+    return _table(["Method", "Steps", "Train steps", "R-prec top-1 ↑", "top-2 ↑", "top-3 ↑", "FID ↓",
+                   "MM-Dist ↓", "Diversity →", "MModality ↑", "Repeats"], rows)
+
+
+def action_table(results: list[dict]) -> str:
+    rows = []
+    for r in sorted((r for r in results if r["task"] == "action"), key=_sort_key):
+        m = r["metrics"]
+        rows.append(_method_cells(r) + [fmt(m.get("accuracy")), fmt(m.get("fid")), fmt(m.get("diversity")),
+                                         fmt(m.get("multimodality")), str(r.get("repeats", len(m.get("accuracy", []))))])
+    return _table(["Method", "Steps", "Train steps", "Accuracy ↑", "FID ↓", "Diversity →", "Multimodality →",
+                   "Repeats"], rows)
+
+
+def plausibility_table(results: list[dict]) -> str:
+    rows = []
+    for r in sorted((r for r in results if r["task"] in ("text", "action") and r.get("plausibility")),
+                    key=lambda r: (r["task"], _sort_key(r))):
+        p = r["plausibility"]
+        n = len(p.get("penetration_mm", []))
+        rows.append([r["name"], r["task"], "–" if _steps(r) is None else str(_steps(r)), str(n),
+                     fmt(p.get("penetration_mm"), 1), fmt(p.get("floating_mm"), 1), fmt(p.get("skate_cm_s"), 1),
+                     fmt(p.get("skate_ratio"), 3), fmt(p.get("phys_err_mm"), 1)])
+    return _table(["Method", "Task", "Steps", "Motions", "Penetrate (mm) ↓", "Float (mm) ↓", "Skate (cm/s) ↓",
+                   "Skate ratio ↓", "Phys-Err (mm) ↓"], rows)
+
+
+def timing_rows(results: list[dict]) -> list[dict]:
+    """Flattened timing rows with runtime/hardware, ms per motion and per frame (means over runs)."""
+    flat = []
+    for r in results:
+        if r["task"] != "timing":
+            continue
+        for i, row in enumerate(r["rows"]):
+            for k in ("variant", "steps", "frames", "ms_per_motion"):
+                if k not in row:
+                    raise ReportError(f"{r['_file']}: rows[{i}] misses field {k!r}")
+            ms = float(np.mean(row["ms_per_motion"]))
+            flat.append({**row, "runtime": r["runtime"], "hardware": r.get("hardware", "?"),
+                         "ms": ms, "ms_per_frame": ms / row["frames"], "runs": len(row["ms_per_motion"])})
+    return flat
+
+
+def timing_table(results: list[dict]) -> tuple[str, list[str]]:
+    """The table and the headline ratios (diffusion time / EMDM time, same runtime, per frame)."""
+    flat = timing_rows(results)
+    rows, ratios = [], []
+    for runtime in sorted({f["runtime"] for f in flat}):
+        group = sorted((f for f in flat if f["runtime"] == runtime),
+                       key=lambda f: (VARIANT_ORDER.index(f["variant"]) if f["variant"] in VARIANT_ORDER else 99, f["steps"]))
+        emdm = {f["steps"]: f for f in group if f["variant"] == "emdm"}
+        ref = emdm.get(10) or (next(iter(emdm.values())) if emdm else None)
+        for f in group:
+            ratio = f"{f['ms_per_frame'] / ref['ms_per_frame']:.2f}×" if ref else "–"
+            rows.append([runtime, VARIANT_LABEL.get(f["variant"], f["variant"]), str(f["steps"]), str(f["frames"]),
+                         f"{f['ms']:.1f}", f"{f['ms_per_frame']:.3f}", ratio, str(f["runs"]), f["hardware"]])
+        if ref:
+            for f in group:
+                if f["variant"] == "diffusion":
+                    ratios.append(f"{runtime}: diffusion + DDIM at {f['steps']} steps takes "
+                                  f"{f['ms_per_frame'] / ref['ms_per_frame']:.1f}× the time per frame of EMDM at "
+                                  f"{ref['steps']} steps ({f['ms_per_frame']:.3f} vs {ref['ms_per_frame']:.3f} ms).")
+    table = _table(["Runtime", "Method", "Steps", "Frames", "ms / motion", "ms / frame", "× EMDM", "Runs",
+                    "Hardware"], rows)
+    return table, ratios
+
+
+# ----------------------------------------------------------------------------- plots
+
+def plot_fid_vs_steps(results: list[dict], path: Path) -> bool:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    series: dict[str, list[tuple[int, float, float]]] = {}
+    real = None
+    for r in results:
+        if r["task"] != "text" or "fid" not in r["metrics"]:
+            continue
+        m, h = mean_ci95(r["metrics"]["fid"])
+        v = r["info"].get("variant")
+        if r["kind"] == "real":
+            real = m
+        elif _steps(r) is not None:
+            series.setdefault(v, []).append((_steps(r), m, h))
+    if not series:
+        return False
+    fig, ax = plt.subplots(figsize=(6, 4), dpi=120)
+    for v, pts in sorted(series.items()):
+        pts.sort()
+        ax.errorbar([p[0] for p in pts], [p[1] for p in pts], yerr=[p[2] for p in pts], marker="o", capsize=3,
+                    label=VARIANT_LABEL.get(v, v))
+    if real is not None:
+        ax.axhline(real, color="gray", ls="--", label="real vs real")
+    ax.set_xscale("log")
+    ax.set_xlabel("sampling steps")
+    ax.set_ylabel("FID (matcher features) ↓")
+    ax.set_title("Text-to-motion FID vs steps (test split, ±95%)")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return True
+
+
+def plot_time_vs_steps(results: list[dict], path: Path) -> bool:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    flat = timing_rows(results)
+    if not flat:
+        return False
+    fig, ax = plt.subplots(figsize=(6, 4), dpi=120)
+    for key in sorted({(f["runtime"], f["variant"]) for f in flat}):
+        pts = sorted((f["steps"], f["ms_per_frame"]) for f in flat if (f["runtime"], f["variant"]) == key)
+        ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", label=f"{key[0]}: {VARIANT_LABEL.get(key[1], key[1])}")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("sampling steps")
+    ax.set_ylabel("time per frame (ms)")
+    ax.set_title("Generation time per frame vs steps")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3, which="both")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return True
+
+
+# ----------------------------------------------------------------------------- document
+
+def missing(results: list[dict]) -> list[str]:
+    have = {(r["task"], r["info"].get("variant", "real" if r["kind"] == "real" else "emdm"), _steps(r))
+            for r in results if r["task"] != "timing"}
+    out = []
+    for task, variant, steps, why in EXPECTED:
+        ok = any(t == task and v == variant and (steps is None or s == steps) for t, v, s in have)
+        if not ok:
+            out.append(f"{why} ({task}, {VARIANT_LABEL[variant]}{'' if steps is None else f', {steps} steps'})")
+    runtimes = {(f["runtime"], f["variant"]) for f in timing_rows(results)}
+    for runtime, variant in EXPECTED_TIMING:
+        if (runtime, variant) not in runtimes:
+            out.append(f"timing: {VARIANT_LABEL[variant]} on {runtime}")
+    if not any(r.get("plausibility") for r in results if r["task"] != "timing" and r["kind"] == "real"):
+        out.append("Tab. D5: plausibility of real data")
+    if not any(r.get("plausibility") for r in results if r["task"] != "timing" and r["kind"] != "real"):
+        out.append("Tab. D5: plausibility of generated motions")
+    return out
+
+
+def _describe(results: list[dict]) -> list[str]:
+    lines = []
+    seen = set()
+    for r in results:
+        if r["task"] == "timing":
+            continue
+        d = r.get("dataset", {})
+        key = (r["task"], json.dumps(d, sort_keys=True))
+        if key in seen:
+            continue
+        seen.add(key)
+        lines.append(f"- {r['task']}: dataset `{d.get('name', '?')}` ({d.get('description', '')}), split "
+                     f"`{d.get('split', '?')}`, {r.get('n', '?')} clips evaluated; evaluator: {r.get('evaluator', {}).get('summary', '?')}")
+    hw = sorted({r.get("hardware", "?") for r in results})
+    if hw:
+        lines.append("- hardware: " + "; ".join(hw))
+    return lines
+
+
+def render(results: list[dict], plots: dict[str, str]) -> str:
+    out = ["# Results", "",
+           "<!-- generated by `python -m emdm.eval.report` from docs/results/json/*.json; do not edit by hand -->", "",
+           "Every number below was measured in this repository by `python -m emdm.eval.evaluate` (JSON files in "
+           "`docs/results/json/`). Values are mean ±95 % half-interval (1.96·σ/√n) over the repeats listed; "
+           "plausibility intervals are over motions.", "", "## Setup", ""]
+    out += _describe(results) or ["- no evaluation results yet"]
+    out += ["", "Metrics follow Guo et al. (text: R-precision with 1 true motion + 31 distractors, FID on the "
+            "motion encoder's features, MM-Dist, Diversity over 300 pairs, MultiModality over 10 pairs of "
+            "generations per caption) and ACTOR (action: classifier accuracy, FID on its penultimate features, "
+            "Diversity over 200 pairs, Multimodality over 20 pairs per label). The evaluators are our own, "
+            "trained on this dataset's train split (`python -m emdm.eval.evaluators`), so the numbers are not "
+            "comparable with the paper's HumanML3D/HumanAct12 figures, only with each other. Embeddings are "
+            "L2-normalised, so FID and distances are on the unit sphere. The real row's FID is between two "
+            "random halves of the test split (the estimator's noise floor).", ""]
+    out += ["## Text-to-motion (the seed's Tab. D2–D4 comparisons)", ""]
+    out += [text_table(results) if any(r["task"] == "text" for r in results) else "_no text-to-motion results yet_", ""]
+    if "fid" in plots:
+        out += [f"![FID vs steps]({plots['fid']})", ""]
+    out += ["## Action-to-motion (ACTOR protocol)", ""]
+    out += [action_table(results) if any(r["task"] == "action" for r in results) else "_no action-to-motion results yet_", ""]
+    out += ["## Physical plausibility (the seed's Tab. D5)", "",
+            "Penetration: depth of the lowest joint below the floor; Float: height of the lowest joint beyond "
+            "5 cm above it; Skate: horizontal speed of a toe joint while below 5 cm in two consecutive frames; "
+            "Skate ratio: frames with a contact foot sliding faster than 0.5 m/s; Phys-Err: penetration + float + "
+            "skate displacement per frame (mm), as PhysDiff sums them. Joints from the 263-d features' "
+            "`recover_joints`, 20 fps (`emdm/eval/plausibility.py`).", ""]
+    has_p = any(r.get("plausibility") for r in results if r["task"] != "timing")
+    out += [plausibility_table(results) if has_p else "_no plausibility results yet_", ""]
+    out += ["## Running time", ""]
+    table, ratios = timing_table(results)
+    if timing_rows(results):
+        out += [table, ""]
+        if ratios:
+            out += ["Headline ratios:", ""] + [f"- {r}" for r in ratios] + [""]
+        if "time" in plots:
+            out += [f"![time per frame vs steps]({plots['time']})", ""]
+    else:
+        out += ["_no timing results yet_", ""]
+    miss = missing(results)
+    out += ["## Not measured yet", ""]
+    out += ([f"- {m}" for m in miss] if miss else ["- nothing: every row of the seed's comparisons is measured"]) + [""]
+    out += ["## Regenerate", "", "```",
+            "python -m emdm.eval.evaluators matcher      # train the evaluators (once)",
+            "python -m emdm.eval.evaluators classifier",
+            "python -m emdm.eval.evaluate text --source real            # and --checkpoint runs/<model>/ckpt.pt",
+            "python -m emdm.eval.report                  # this file + docs/results/*.png", "```", ""]
+    return "\n".join(out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m emdm.eval.report", description="regenerate docs/RESULTS.md")
+    ap.add_argument("--results", type=Path, default=RESULTS_DIR, help="folder with json/ (and where PNGs go)")
+    ap.add_argument("--out", type=Path, default=RESULTS_MD)
+    a = ap.parse_args(argv)
+    results = load_results(a.results / "json")
+    plots = {}
+    rel = lambda p: os.path.relpath(p, a.out.parent.resolve())  # noqa: E731 - links relative to the .md
+    if plot_fid_vs_steps(results, a.results / "fid_vs_steps.png"):
+        plots["fid"] = rel((a.results / "fid_vs_steps.png").resolve())
+    if plot_time_vs_steps(results, a.results / "time_vs_steps.png"):
+        plots["time"] = rel((a.results / "time_vs_steps.png").resolve())
+    text = render(results, plots)
+    a.out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = a.out.with_suffix(".tmp")
+    tmp.write_text(text)
+    tmp.replace(a.out)
+    print(f"wrote {a.out} from {len(results)} result files; {len(missing(results))} rows not measured yet")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
