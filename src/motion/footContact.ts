@@ -1,0 +1,149 @@
+/**
+ * Foot-contact clean-up: the model predicts per-frame contacts for l_ankle, l_foot, r_ankle, r_foot
+ * (features [259:263]); where a joint is in contact it should neither skate nor sink.
+ *
+ *  1. Floor: each frame whose lowest foot joint is below y = 0 is lifted as a whole by that depth.
+ *  2. Pinning: every contact run (≥ 2 frames with contact > 0.5) of a foot joint is held at the
+ *     run's mean position (y clamped to ≥ 0); the correction fades in/out linearly over `blend`
+ *     frames on both sides, so there are no pops.
+ *  3. Legs follow: a moved ankle re-solves its knee with two-bone IK (hip fixed, thigh and shin
+ *     lengths of that frame kept, bending in the original knee's plane); the ball-of-foot joint is
+ *     then placed at its original distance from the ankle, towards its pinned target.
+ */
+import { type V3, add, dot, norm, normalize, scale, sub } from './math3';
+
+export interface FootRig {
+  parents: number[];
+  /** [l_ankle, l_foot, r_ankle, r_foot] joint indices, the order of the four contact channels */
+  footJoints: number[];
+}
+
+export interface FootCleanupOptions {
+  threshold?: number;
+  blend?: number;
+}
+
+/** The 4 contact channels of de-normalised features (frames × dim) → frames × 4. */
+export function contactsFromFeatures(features: Float32Array, frames: number, dim = 263): Float32Array {
+  if (features.length !== frames * dim) throw new RangeError(`contactsFromFeatures: ${features.length} values, expected ${frames} × ${dim}`);
+  const out = new Float32Array(frames * 4);
+  for (let f = 0; f < frames; f++) for (let c = 0; c < 4; c++) out[f * 4 + c] = features[f * dim + dim - 4 + c];
+  return out;
+}
+
+function runs(contact: (f: number) => boolean, frames: number): [number, number][] {
+  const out: [number, number][] = [];
+  let s = -1;
+  for (let f = 0; f <= frames; f++) {
+    const on = f < frames && contact(f);
+    if (on && s < 0) s = f;
+    if (!on && s >= 0) {
+      if (f - s >= 2) out.push([s, f - 1]);
+      s = -1;
+    }
+  }
+  return out;
+}
+
+/** Two-bone IK: knee position for hip H reaching target A with lengths l1, l2, bending towards pole K. */
+export function solveKnee(H: V3, A: V3, K: V3, l1: number, l2: number): { knee: V3; ankle: V3 } {
+  const v = sub(A, H);
+  const d0 = norm(v);
+  const dir = normalize(v, [0, -1, 0]);
+  const d = Math.min(Math.max(d0, Math.abs(l1 - l2) + 1e-6), l1 + l2 - 1e-6);
+  const a = (l1 * l1 - l2 * l2 + d * d) / (2 * d);
+  const h = Math.sqrt(Math.max(0, l1 * l1 - a * a));
+  const kp = sub(K, H);
+  let pole = sub(kp, scale(dir, dot(kp, dir)));
+  if (norm(pole) < 1e-9) pole = [0, 0, 1];
+  const knee = add(add(H, scale(dir, a)), scale(normalize(pole), h));
+  return { knee, ankle: add(H, scale(dir, d)) };
+}
+
+export function cleanupFootContacts(
+  joints: Float32Array,
+  frames: number,
+  contacts: Float32Array,
+  rig: FootRig,
+  { threshold = 0.5, blend = 3 }: FootCleanupOptions = {},
+): Float32Array {
+  const J = rig.parents.length;
+  if (joints.length !== frames * J * 3) throw new RangeError(`cleanupFootContacts: joints has ${joints.length} values, expected ${frames} × ${J} × 3`);
+  if (contacts.length !== frames * 4) throw new RangeError(`cleanupFootContacts: contacts has ${contacts.length} values, expected ${frames} × 4`);
+  if (rig.footJoints.length !== 4) throw new RangeError('cleanupFootContacts: footJoints must list l_ankle, l_foot, r_ankle, r_foot');
+  const out = joints.slice();
+  const at = (f: number, j: number): V3 => [out[(f * J + j) * 3], out[(f * J + j) * 3 + 1], out[(f * J + j) * 3 + 2]];
+  const put = (f: number, j: number, p: V3) => out.set(p, (f * J + j) * 3);
+
+  // 1. floor
+  for (let f = 0; f < frames; f++) {
+    let low = Infinity;
+    for (const j of rig.footJoints) low = Math.min(low, out[(f * J + j) * 3 + 1]);
+    if (low < 0) for (let j = 0; j < J; j++) out[(f * J + j) * 3 + 1] -= low;
+  }
+
+  // 2. pinned targets per foot joint: target[f] and weight[f] in [0, 1]
+  const targets = rig.footJoints.map((j, c) => {
+    const tgt: (V3 | null)[] = new Array(frames).fill(null);
+    const wgt = new Float64Array(frames);
+    for (const [s, e] of runs((f) => contacts[f * 4 + c] > threshold, frames)) {
+      let m: V3 = [0, 0, 0];
+      for (let f = s; f <= e; f++) m = add(m, at(f, j));
+      m = scale(m, 1 / (e - s + 1));
+      m[1] = Math.max(0, m[1]);
+      for (let f = Math.max(0, s - blend); f <= Math.min(frames - 1, e + blend); f++) {
+        const w = f < s ? 1 - (s - f) / (blend + 1) : f > e ? 1 - (f - e) / (blend + 1) : 1;
+        if (w > wgt[f]) {
+          wgt[f] = w;
+          tgt[f] = m;
+        }
+      }
+    }
+    return { j, tgt, wgt };
+  });
+
+  // 3. apply per leg: ankle (knee follows), then ball of foot
+  for (const [ci, fi] of [[0, 1], [2, 3]]) {
+    const ank = targets[ci];
+    const ball = targets[fi];
+    const knee = rig.parents[ank.j];
+    const hip = rig.parents[knee];
+    for (let f = 0; f < frames; f++) {
+      const A0 = at(f, ank.j);
+      const B0 = at(f, ball.j);
+      let A = A0;
+      if (ank.wgt[f] > 0) {
+        const want = add(A0, scale(sub(ank.tgt[f]!, A0), ank.wgt[f]));
+        const H = at(f, hip);
+        const K = at(f, knee);
+        const r = solveKnee(H, want, K, norm(sub(K, H)), norm(sub(A0, K)));
+        put(f, knee, r.knee);
+        A = r.ankle;
+        put(f, ank.j, A);
+      }
+      const footLen = norm(sub(B0, A0));
+      let Bt = add(B0, sub(A, A0)); // carried along with the ankle
+      if (ball.wgt[f] > 0) Bt = add(Bt, scale(sub(ball.tgt[f]!, Bt), ball.wgt[f]));
+      if (ank.wgt[f] > 0 || ball.wgt[f] > 0) put(f, ball.j, add(A, scale(normalize(sub(Bt, A), sub(B0, A0)), footLen)));
+    }
+  }
+  return out;
+}
+
+/** Mean horizontal speed (m/frame) of foot joints during their contact frames: the skate measure. */
+export function footSkate(joints: Float32Array, frames: number, contacts: Float32Array, rig: FootRig, threshold = 0.5): number {
+  const J = rig.parents.length;
+  let sum = 0;
+  let n = 0;
+  rig.footJoints.forEach((j, c) => {
+    for (let f = 1; f < frames; f++) {
+      if (contacts[f * 4 + c] > threshold && contacts[(f - 1) * 4 + c] > threshold) {
+        const a = (f * J + j) * 3;
+        const b = ((f - 1) * J + j) * 3;
+        sum += Math.hypot(joints[a] - joints[b], joints[a + 2] - joints[b + 2]);
+        n++;
+      }
+    }
+  });
+  return n ? sum / n : 0;
+}

@@ -1,0 +1,104 @@
+import { describe, expect, it } from 'vitest';
+import { cleanupFootContacts, contactsFromFeatures, footSkate } from '../../src/motion/footContact';
+import { forwardKinematics } from '../../src/motion/ik';
+import { denormalize, parseMeanStd, recoverJoints } from '../../src/motion/recover';
+import { smoothJoints } from '../../src/motion/smooth';
+import { fixtureExists, loadCase, manifestSkeleton, maxJointDist, randomPoseQuats } from './coreFixtures';
+
+const sk = manifestSkeleton();
+const J = 22;
+
+describe('recover joints (port of emdm.motion.features.recover_joints)', () => {
+  it('equals Python on a real clip within 1e-5 m', (ctx) => {
+    if (!fixtureExists('recover')) return ctx.skip('tests/fixtures/parity/recover.json absent: prepare the dataset, then run `python -m emdm.fixtures`');
+    const fx = loadCase('recover');
+    const joints = recoverJoints(fx.get('features'), fx.meta.frames);
+    expect(maxJointDist(joints, fx.get('joints'))).toBeLessThan(1e-5);
+  });
+
+  it('integrates heading and root velocity (a quarter turn while walking forward)', () => {
+    const frames = 11;
+    const f = new Float32Array(frames * 263);
+    for (let t = 0; t < frames; t++) {
+      f[t * 263 + 0] = -Math.PI / 4 / 10; // half-angle convention: θ grows by π/2 over 10 frames
+      f[t * 263 + 2] = 0.1; // forward (root-frame +Z) 10 cm per frame
+      f[t * 263 + 3] = 0.9;
+      f[t * 263 + 4 + 2] = 0.2; // joint 1 20 cm in front of the root
+    }
+    const j = recoverJoints(f, frames);
+    const last = (frames - 1) * J * 3;
+    // after 10 frames facing has turned +90° (towards +X): joint 1 is 20 cm along +X from the root
+    expect(j[last + 3] - j[last]).toBeCloseTo(0.2, 5);
+    expect(j[last + 5] - j[last + 2]).toBeCloseTo(0, 5);
+    expect(j[last + 1]).toBeCloseTo(0.9, 6);
+  });
+
+  it('de-normalises with mean/std and parses the manifest meanStd layout', () => {
+    const buf = new ArrayBuffer(2 * 3 * 4);
+    const dv = new DataView(buf);
+    [1, 2, 3, 10, 20, 30].forEach((v, i) => dv.setFloat32(4 * i, v, true));
+    const { mean, std } = parseMeanStd(buf, 3, 'm.meanstd.f32');
+    expect(Array.from(denormalize(Float32Array.from([1, 1, 1, 0, 0, -1]), mean, std))).toEqual([11, 22, 33, 1, 2, -27]);
+    expect(() => parseMeanStd(new ArrayBuffer(8), 3, 'm.meanstd.f32')).toThrow(/m\.meanstd\.f32: 8 bytes, expected 24/);
+  });
+});
+
+describe('smoothing and foot-contact clean-up', () => {
+  it('smoothing removes jitter but keeps a steady motion', () => {
+    const frames = 50;
+    const x = new Float32Array(frames);
+    for (let f = 0; f < frames; f++) x[f] = 0.01 * f + (f % 2 ? 0.005 : -0.005);
+    const s = smoothJoints(x, frames, 1.5);
+    let jitter = 0;
+    for (let f = 10; f < 40; f++) jitter = Math.max(jitter, Math.abs(s[f] - 0.01 * f));
+    expect(jitter).toBeLessThan(0.001);
+    expect(smoothJoints(x, frames, 0)).toEqual(x);
+  });
+
+  function skatingWalk(frames: number) {
+    // standing pose translated forward; the left foot "skates" forward while marked in contact
+    const root = new Float32Array(frames * 3);
+    for (let f = 0; f < frames; f++) root.set([0, 0.88, 0.004 * f], f * 3);
+    const q = randomPoseQuats(frames, J, 5, 0.05);
+    for (let f = 0; f < frames; f++) {
+      for (const knee of [4, 5]) q.set([Math.sin(0.25), 0, 0, Math.cos(0.25)], (f * J + knee) * 4); // knees bent 0.5 rad
+    }
+    const joints = forwardKinematics(root, q, frames, sk);
+    for (let f = 0; f < frames; f++) joints[(f * J + sk.footJoints[1]) * 3 + 1] -= 0.03; // left ball sinks 3 cm
+    const contacts = new Float32Array(frames * 4);
+    for (let f = 5; f < 25; f++) contacts[f * 4] = contacts[f * 4 + 1] = 1;
+    return { joints, contacts };
+  }
+
+  it('pins feet in contact (no skating), keeps them above the floor and the leg bones rigid', () => {
+    const frames = 30;
+    const { joints, contacts } = skatingWalk(frames);
+    const rig = { parents: sk.parents, footJoints: sk.footJoints };
+    const before = footSkate(joints, frames, contacts, rig);
+    const out = cleanupFootContacts(joints, frames, contacts, rig);
+    expect(before).toBeGreaterThan(0.003);
+    expect(footSkate(out, frames, contacts, rig)).toBeLessThan(1e-4); // < 0.1 mm per frame (was > 3 mm)
+    let minY = Infinity;
+    for (let f = 0; f < frames; f++) for (const j of sk.footJoints) minY = Math.min(minY, out[(f * J + j) * 3 + 1]);
+    expect(minY).toBeGreaterThan(-1e-6);
+    const len = (a: Float32Array, f: number, i: number, k: number) =>
+      Math.hypot(...[0, 1, 2].map((c) => a[(f * J + i) * 3 + c] - a[(f * J + k) * 3 + c]));
+    const [hip, knee, ankle] = [1, 4, 7];
+    for (let f = 0; f < frames; f++) {
+      expect(len(out, f, hip, knee)).toBeCloseTo(len(joints, f, hip, knee), 5);
+      expect(len(out, f, knee, ankle)).toBeCloseTo(len(joints, f, knee, ankle), 5);
+    }
+  });
+
+  it('reduces skating on a generated motion (model fixture)', (ctx) => {
+    const name = ['model-emdm-t2m-web', 'model-emdm-a2m-web'].find(fixtureExists);
+    if (!name) return ctx.skip('no model parity fixture yet: run `python -m emdm.fixtures` once models are shipped');
+    const fx = loadCase(name);
+    const frames = fx.meta.frames;
+    const joints = fx.get('joints');
+    const contacts = contactsFromFeatures(fx.get('features'), frames);
+    const rig = { parents: sk.parents, footJoints: sk.footJoints };
+    const out = cleanupFootContacts(joints, frames, contacts, rig);
+    expect(footSkate(out, frames, contacts, rig)).toBeLessThanOrEqual(footSkate(joints, frames, contacts, rig) * 0.5 + 1e-6);
+  });
+});
