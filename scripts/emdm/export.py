@@ -1,0 +1,269 @@
+"""Export one denoising step of a trained generator to ONNX, with a browser variant, mean/std and a
+manifest entry (docs/ARCHITECTURE.md "ONNX step model", docs/MANIFEST.md).
+
+    python -m emdm.export --ckpt runs/t2m-web/ckpt.pt --name emdm-t2m-web            # → public/models/
+    python -m emdm.export --ckpt ... --name ... --out /tmp/models --variants int8,fp16
+
+The exported weights are the EMA weights. Export uses the dynamo exporter (opset 18) with an example
+batch of 2 so batch and length stay dynamic; parity against PyTorch is checked on several batch sizes and
+lengths and the export fails if the max abs error exceeds ``--tolerance`` (1e-4).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from emdm.model.generator import Generator
+from emdm.model.schedule import DEFAULT_STEPS, make_schedule
+
+INPUTS = ["x_t", "z", "cond", "t", "mask"]
+PARITY_CASES = ((1, 1), (1, 60), (2, 17), (3, 120), (2, 196))
+
+
+class ExportError(RuntimeError):
+    pass
+
+
+def load_generator(ckpt_path: Path | str, weights: str = "G_ema") -> tuple[Generator, dict, dict]:
+    """(generator in eval mode with the chosen weights, meta, checkpoint summary)."""
+    ckpt_path = Path(ckpt_path)
+    if not ckpt_path.is_file():
+        raise ExportError(f"{ckpt_path}: checkpoint not found")
+    st = torch.load(ckpt_path, map_location="cpu", weights_only=False)
+    for key in ("meta", weights, "step"):
+        if key not in st:
+            raise ExportError(f"{ckpt_path}: not an emdm.train checkpoint (missing {key!r})")
+    meta = st["meta"]
+    gcfg = meta["generator"]
+    G = Generator(gcfg["cond_dim"], gcfg["preset"], gcfg["feature_dim"], gcfg["z_dim"], gcfg["max_frames"])
+    G.load_state_dict(st[weights])
+    G.eval()
+    summary = {"steps": int(st["step"]), "wall_s": float(st.get("wall", 0.0)), "losses": st.get("last_losses", {})}
+    return G, meta, summary
+
+
+def example_inputs(G: Generator, batch: int, length: int, seed: int = 0, padded: bool = True) -> tuple[torch.Tensor, ...]:
+    g = torch.Generator().manual_seed(seed)
+    x = torch.randn(batch, length, G.feature_dim, generator=g)
+    z = torch.randn(batch, G.z_dim, generator=g)
+    c = torch.randn(batch, G.cond_dim, generator=g)
+    t = torch.rand(batch, generator=g) * 0.999 + 0.001
+    mask = torch.ones(batch, length)
+    if padded and batch > 1 and length > 2:
+        mask[-1, length // 2:] = 0.0           # one padded sequence in the batch
+    return x, z, c, t, mask
+
+
+def export_onnx(G: Generator, path: Path | str, opset: int = 18) -> Path:
+    """Dynamo export of G's forward (one denoising step) with dynamic batch and length; one self-contained file."""
+    import onnx
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    G = G.eval()
+    ex = example_inputs(G, 2, 64)                  # batch ≥ 2, or the batch dimension gets baked in
+    batch = torch.export.Dim("batch", min=1, max=1024)
+    frames = torch.export.Dim("frames", min=1, max=G.max_frames)
+    dyn = {"x_t": {0: batch, 1: frames}, "z": {0: batch}, "cond": {0: batch}, "t": {0: batch},
+           "mask": {0: batch, 1: frames}}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        prog = torch.onnx.export(G, ex, dynamo=True, opset_version=opset, input_names=INPUTS, output_names=["x0"],
+                                 dynamic_shapes=dyn, optimize=True, verbose=False)
+    tmp = path.with_name(path.name + ".tmp")
+    prog.save(str(tmp))
+    model = onnx.load(str(tmp))                    # inline any external data → one file
+    for f in tmp.parent.glob(tmp.name + "*.data"):
+        f.unlink()
+    tmp.unlink()
+    model.doc_string = "EMDM generator: one denoising step x0 = G(x_t, z, cond, t, mask)"
+    onnx.save(model, str(path), save_as_external_data=False)
+    onnx.checker.check_model(str(path))
+    return path
+
+
+def ort_session(path: Path | str, threads: int = 1):
+    import onnxruntime as ort
+
+    so = ort.SessionOptions()
+    so.intra_op_num_threads = threads
+    so.inter_op_num_threads = 1
+    so.log_severity_level = 3
+    return ort.InferenceSession(str(path), so, providers=["CPUExecutionProvider"])
+
+
+def parity(G: Generator, onnx_path: Path | str, cases=PARITY_CASES) -> dict[str, float]:
+    """Max abs difference ONNX vs PyTorch per (batch, length) case."""
+    sess = ort_session(onnx_path)
+    out = {}
+    for i, (b, length) in enumerate(cases):
+        ex = example_inputs(G, b, length, seed=100 + i)
+        with torch.no_grad():
+            ref = G(*ex).numpy()
+        got = sess.run(["x0"], {n: v.numpy() for n, v in zip(INPUTS, ex)})[0]
+        out[f"{b}x{length}"] = float(np.abs(got - ref).max())
+    return out
+
+
+def make_int8(src: Path, dst: Path) -> Path:
+    """Dynamic int8 quantisation of the MatMul/Gemm weights (per channel)."""
+    from onnxruntime.quantization import QuantType, quantize_dynamic
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        quantize_dynamic(str(src), str(dst), weight_type=QuantType.QInt8, per_channel=True,
+                         op_types_to_quantize=["MatMul", "Gemm"])
+    return dst
+
+
+def make_fp16(src: Path, dst: Path) -> Path:
+    """fp16 weights and compute with float32 inputs/outputs (keep_io_types)."""
+    import onnx
+    from onnxscript import ir  # noqa: F401  (ensures onnxscript is present for the float16 converter below)
+
+    model = onnx.load(str(src))
+    try:
+        from onnxconverter_common import float16 as f16      # optional dependency
+        model16 = f16.convert_float_to_float16(model, keep_io_types=True)
+    except ImportError as e:
+        raise ExportError("fp16 variant needs onnxconverter-common (not installed); use --variants int8") from e
+    onnx.save(model16, str(dst))
+    return dst
+
+
+def variant_error(G: Generator, path: Path, cases=((1, 60), (2, 196))) -> float:
+    """Max abs error of a quantised variant relative to PyTorch, divided by the output's std."""
+    sess = ort_session(path)
+    worst = 0.0
+    for i, (b, length) in enumerate(cases):
+        ex = example_inputs(G, b, length, seed=200 + i)
+        with torch.no_grad():
+            ref = G(*ex).numpy()
+        got = sess.run(["x0"], {n: v.numpy() for n, v in zip(INPUTS, ex)})[0]
+        worst = max(worst, float(np.abs(got - ref).max() / (ref.std() + 1e-8)))
+    return worst
+
+
+def time_step(path: Path | str, cond_dim: int, frames: int = 196, batch: int = 1, threads: int = 1,
+              repeats: int = 10) -> float:
+    """Median ms of one ORT CPU step (random inputs)."""
+    sess = ort_session(path, threads)
+    rng = np.random.default_rng(0)
+    feed = {"x_t": rng.standard_normal((batch, frames, 263), dtype=np.float32),
+            "z": rng.standard_normal((batch, 64), dtype=np.float32),
+            "cond": rng.standard_normal((batch, cond_dim), dtype=np.float32),
+            "t": np.full((batch,), 0.5, np.float32), "mask": np.ones((batch, frames), np.float32)}
+    sess.run(None, feed)
+    ts = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        sess.run(None, feed)
+        ts.append((time.perf_counter() - t0) * 1000)
+    return float(np.median(ts))
+
+
+def write_meanstd(mean: np.ndarray, std: np.ndarray, path: Path) -> Path:
+    """float32 little-endian: mean[263] then std[263]."""
+    arr = np.concatenate([np.asarray(mean, "<f4"), np.asarray(std, "<f4")])
+    if arr.shape != (526,):
+        raise ExportError(f"mean/std must be 263 values each, got {np.shape(mean)} and {np.shape(std)}")
+    path.write_bytes(arr.astype("<f4").tobytes())
+    return path
+
+
+def manifest_entry(name: str, meta: dict, summary: dict, files: dict[str, str], extra: dict) -> dict:
+    steps = list(meta["supported_steps"])
+    default = DEFAULT_STEPS if DEFAULT_STEPS in steps else max(steps)
+    task = meta["task"]
+    entry = {
+        "task": task,
+        "objective": meta.get("objective", "ddgan"),
+        "condition": meta["condition"],
+        "onnx": files["onnx"],
+        "variants": {k: v for k, v in files.items() if k not in ("onnx", "meanStd")},
+        "meanStd": files["meanStd"],
+        "zDim": meta["generator"]["z_dim"], "featureDim": meta["generator"]["feature_dim"], "fps": 20,
+        "maxFrames": meta["generator"]["max_frames"],
+        "guidance": 2.5, "defaultSteps": default, "supportedSteps": steps,
+        "schedules": {str(T): make_schedule(T).as_manifest() for T in steps},
+        "preset": {k: meta["generator"]["preset"][k] for k in ("d", "layers", "heads", "ff")},
+        "training": {"steps": summary["steps"], "wallSeconds": round(summary["wall_s"], 1),
+                     "dataset": meta["dataset"], "clips": meta.get("clips"), "device": meta["device"],
+                     "batch": meta.get("batch"), "losses": summary["losses"],
+                     "flags": {k: meta["args"].get(k) for k in ("geo_weight", "lambda_geo", "lr_g", "lr_d", "ema",
+                                                                "d_cond", "d_width", "cond_drop", "objective")}},
+        "files": sorted(files.values()),
+    }
+    entry.update(extra)
+    return entry
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from emdm import paths
+
+    p = argparse.ArgumentParser(prog="python -m emdm.export", description=__doc__.split("\n\n")[0])
+    p.add_argument("--ckpt", type=Path, required=True)
+    p.add_argument("--name", required=True, help="model name, e.g. emdm-t2m-web (file stem and manifest key)")
+    p.add_argument("--out", type=Path, default=paths.MODELS_DIR, help="models folder (holds manifest.json)")
+    p.add_argument("--weights", default="G_ema", choices=["G_ema", "G"])
+    p.add_argument("--variants", default="int8", help="comma list of int8, fp16 (empty for none)")
+    p.add_argument("--tolerance", type=float, default=1e-4)
+    p.add_argument("--no-manifest", action="store_true")
+    p.add_argument("--bench", action="store_true", help="also time one step (196 frames) on ORT CPU, 1 and 2 threads")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    from emdm import manifest as mf
+
+    a = build_parser().parse_args(argv)
+    G, meta, summary = load_generator(a.ckpt, a.weights)
+    out = a.out
+    out.mkdir(parents=True, exist_ok=True)
+    onnx_path = export_onnx(G, out / f"{a.name}.onnx")
+    par = parity(G, onnx_path)
+    worst = max(par.values())
+    print(f"{onnx_path}: {onnx_path.stat().st_size / 1e6:.2f} MB, parity max abs err {worst:.2e} {par}")
+    if worst > a.tolerance:
+        raise ExportError(f"{onnx_path}: ONNX differs from PyTorch by {worst:.3g} > {a.tolerance} ({par})")
+    files = {"onnx": onnx_path.name}
+    extra: dict = {"parityMaxAbsErr": float(f"{worst:.3g}")}
+    var_err = {}
+    for v in [s.strip() for s in a.variants.split(",") if s.strip()]:
+        dst = out / f"{a.name}.{v}.onnx"
+        {"int8": make_int8, "fp16": make_fp16}[v](onnx_path, dst)
+        var_err[v] = variant_error(G, dst)
+        files[v] = dst.name
+        print(f"{dst}: {dst.stat().st_size / 1e6:.2f} MB, max abs err / output std {var_err[v]:.3g}")
+    if var_err:
+        extra["variantRelErr"] = {k: float(f"{v:.3g}") for k, v in var_err.items()}
+    ms_path = write_meanstd(np.array(meta["mean"]), np.array(meta["std"]), out / f"{a.name}.meanstd.f32")
+    files["meanStd"] = ms_path.name
+    if a.bench:
+        bench = {}
+        for key, path in [("fp32", onnx_path)] + [(v, out / files[v]) for v in var_err]:
+            for th in (1, 2):
+                bench[f"{key}_{th}t"] = round(time_step(path, G.cond_dim, threads=th), 1)
+        extra["ortCpuMsPerStep196"] = bench
+        print("ORT CPU ms/step (196 frames, batch 1):", bench)
+    if not a.no_manifest:
+        entry = manifest_entry(a.name, meta, summary, files, extra)
+        mf.update_entry("models", a.name, entry, out)
+        print(f"manifest: models.{a.name} written to {out / mf.MANIFEST_NAME}")
+    return 0
+
+
+if __name__ == "__main__":
+    try:
+        raise SystemExit(main())
+    except ExportError as e:
+        print(f"error: {e}", file=sys.stderr)
+        raise SystemExit(2)

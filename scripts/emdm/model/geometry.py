@@ -1,0 +1,70 @@
+"""Differentiable torch port of ``emdm.motion.features.recover_joints`` (features → joint positions),
+plus the geometric losses EMDM adds to the DDGAN generator loss.
+
+The recovery uses only features [0:67] and follows emdm.motion.features exactly (half-angle root
+rotation velocity, root xz velocity in the root frame of the next frame, Ry right-handed about +Y).
+All functions take batched de-normalised features (B, L, 263) and a frame mask (B, L).
+"""
+
+from __future__ import annotations
+
+import torch
+
+FOOT_JOINTS = (7, 10, 8, 11)       # l_ankle, l_foot, r_ankle, r_foot == contact channels 259..262
+CONTACT_CHANNELS = slice(259, 263)
+
+
+def rot_y(angle: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
+    """Rotate v (..., 3) about +Y by angle (broadcast to v[..., 0]); same as features.rot_y."""
+    c, s = torch.cos(angle), torch.sin(angle)
+    x, y, z = v[..., 0], v[..., 1], v[..., 2]
+    return torch.stack([c * x + s * z, y, -s * x + c * z], dim=-1)
+
+
+def recover_root(feats: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """(B, N, ≥4) → theta (B, N), root (B, N, 3) with theta_0 = 0 and root_xz_0 = 0."""
+    a = torch.cumsum(feats[..., 0], dim=-1) - feats[..., 0]          # exclusive cumsum: a_t = Σ_{k<t} f[k,0]
+    theta = -2.0 * a
+    zeros = torch.zeros_like(feats[..., :1, 1])
+    sx = torch.cat([zeros, feats[..., :-1, 1]], dim=-1)
+    sz = torch.cat([zeros, feats[..., :-1, 2]], dim=-1)
+    step = torch.stack([sx, torch.zeros_like(sx), sz], dim=-1)
+    root = torch.cumsum(rot_y(theta, step), dim=-2)
+    root = torch.stack([root[..., 0], feats[..., 3], root[..., 2]], dim=-1)
+    return theta, root
+
+
+def recover_joints(feats: torch.Tensor) -> torch.Tensor:
+    """(..., N, ≥67) features → (..., N, 22, 3) joints. Matches the numpy recover_joints."""
+    if feats.shape[-1] < 67:
+        raise ValueError(f"recover_joints: expected feature dim ≥ 67 (263), got {feats.shape[-1]}")
+    theta, root = recover_root(feats)
+    rel = feats[..., 4:67].reshape(*feats.shape[:-1], 21, 3)
+    world = rot_y(theta.unsqueeze(-1), rel)
+    offset = torch.stack([root[..., 0], torch.zeros_like(root[..., 0]), root[..., 2]], dim=-1).unsqueeze(-2)
+    return torch.cat([root.unsqueeze(-2), world + offset], dim=-2)
+
+
+def _masked_mean(err: torch.Tensor, weight: torch.Tensor) -> torch.Tensor:
+    """Mean of err (B, N, ...) over entries where weight (B, N) (broadcast) is nonzero."""
+    while weight.dim() < err.dim():
+        weight = weight.unsqueeze(-1)
+    w = weight.expand_as(err)
+    return (err * w).sum() / w.sum().clamp_min(1.0)
+
+
+def geometric_losses(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor) -> dict[str, torch.Tensor]:
+    """L_pos, L_vel, L_foot on de-normalised features (B, L, 263) with mask (B, L).
+
+    pos: MSE of recovered joints (m²); vel: MSE of joint velocities between consecutive real frames;
+    foot: squared velocity of the predicted foot joints on the target's contact frames (MDM's foot loss).
+    """
+    jp, jt = recover_joints(pred), recover_joints(target)
+    pos = _masked_mean((jp - jt) ** 2, mask)
+    pair = mask[:, 1:] * mask[:, :-1]
+    vp, vt = jp[:, 1:] - jp[:, :-1], jt[:, 1:] - jt[:, :-1]
+    vel = _masked_mean((vp - vt) ** 2, pair)
+    contact = (target[:, :-1, CONTACT_CHANNELS] > 0.5).float() * pair.unsqueeze(-1)     # (B, L-1, 4)
+    foot_v = vp[:, :, list(FOOT_JOINTS)]                                                 # (B, L-1, 4, 3)
+    foot = _masked_mean(foot_v ** 2, contact)
+    return {"pos": pos, "vel": vel, "foot": foot}

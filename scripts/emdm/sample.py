@@ -1,0 +1,211 @@
+"""Generate motions with an exported step model (the same loop the browser runs) or a checkpoint.
+
+    python -m emdm.sample --model emdm-t2m-web --text "a person walks forward" --frames 120 --out out/walk
+    python -m emdm.sample --model emdm-a2m-web --action walk --seed 3 --out out/a
+    python -m emdm.sample --model emdm-t2m-web --uncond --steps 4 --out out/u
+    python -m emdm.sample --ckpt runs/t2m/ckpt.pt --text "..." --out out/x      # PyTorch weights (EMA)
+
+Writes <out>.npy (joints, (frames, 22, 3) metres; (n, frames, 22, 3) with --num > 1), <out>.features.npy
+(de-normalised 263-d) and <out>.bvh (one per sample). The loop is docs/ARCHITECTURE.md "Sampling":
+x_T ~ N(0, I); per step: fresh z, x0 = G(x, z, c, time[k], mask) (with guidance s ≠ 1 one batched call
+[c, 0] with the same x and z, x0 = x0_u + s·(x0_c − x0_u)), x = coef1·x0 + coef2·x + sigma·ε. Random
+draws come from numpy's default_rng(seed) in the order x_T, then per step z, then ε. Models trained with
+``--objective diffusion`` are sampled with DDIM (η = 0, z = 0) on the same time grid.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from emdm.model.schedule import make_schedule
+
+StepFn = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+
+
+class SampleError(ValueError):
+    pass
+
+
+def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10, guidance: float = 1.0,
+                    seed: int = 0, num: int = 1, z_dim: int = 64, feature_dim: int = 263,
+                    objective: str = "ddgan") -> np.ndarray:
+    """Normalised x̂_0 features (num, frames, 263). ``cond`` (C,) — all zeros = unconditional."""
+    if frames < 1:
+        raise SampleError(f"frames must be ≥ 1, got {frames}")
+    sch = make_schedule(steps)
+    rng = np.random.default_rng(seed)
+    cond = np.asarray(cond, np.float32)
+    use_cfg = guidance != 1.0 and bool(np.any(cond != 0))
+    c = np.repeat(cond[None], num, 0)
+    if use_cfg:
+        c = np.concatenate([c, np.zeros_like(c)])
+    x = rng.standard_normal((num, frames, feature_dim), dtype=np.float32)
+    for k in range(steps - 1, -1, -1):
+        z = rng.standard_normal((num, z_dim), dtype=np.float32)
+        if objective == "diffusion":
+            z = np.zeros_like(z)
+        xin, zin = (np.concatenate([x, x]), np.concatenate([z, z])) if use_cfg else (x, z)
+        bsz = xin.shape[0]
+        t = np.full((bsz,), sch.time[k], np.float32)
+        mask = np.ones((bsz, frames), np.float32)
+        x0 = np.asarray(step(xin, zin, c, t, mask), np.float32)
+        if use_cfg:
+            x0 = x0[num:] + np.float32(guidance) * (x0[:num] - x0[num:])
+        if objective == "diffusion":     # DDIM, η = 0
+            eps = (x - np.float32(sch.a_cum[k + 1]) * x0) / np.float32(sch.s_cum[k + 1])
+            x = (np.float32(sch.a_cum[k]) * x0 + np.float32(sch.s_cum[k]) * eps) if k > 0 else x0
+        else:
+            x = np.float32(sch.coef1[k]) * x0 + np.float32(sch.coef2[k]) * x
+            if sch.sigma[k] > 0:
+                x = x + np.float32(sch.sigma[k]) * rng.standard_normal(x.shape, dtype=np.float32)
+    return x.astype(np.float32)
+
+
+def onnx_step(path: Path | str, threads: int = 1) -> StepFn:
+    from emdm.export import ort_session
+
+    sess = ort_session(path, threads)
+
+    def step(x, z, c, t, mask):
+        return sess.run(["x0"], {"x_t": x, "z": z, "cond": c, "t": t, "mask": mask})[0]
+    return step
+
+
+def torch_step(G) -> StepFn:
+    import torch
+
+    def step(x, z, c, t, mask):
+        with torch.no_grad():
+            return G(*(torch.from_numpy(np.ascontiguousarray(a)) for a in (x, z, c, t, mask))).numpy()
+    return step
+
+
+def make_condition(spec: dict, text: str | None, action: str | None, uncond: bool) -> np.ndarray:
+    """The condition vector for a model's ``condition`` spec (manifest format)."""
+    dim = int(spec["dim"])
+    given = sum(v is not None and v is not False for v in (text, action)) + int(bool(uncond))
+    if given != 1:
+        raise SampleError("give exactly one of --text, --action, --uncond")
+    if uncond:
+        return np.zeros(dim, np.float32)
+    if spec["type"] == "text":
+        if text is None:
+            raise SampleError("this is a text model: use --text or --uncond")
+        from emdm.text import encode_texts
+
+        emb = np.asarray(encode_texts([text], encoder_id=spec["encoder"]), np.float32)[0]
+        if emb.shape != (dim,):
+            raise SampleError(f"text encoder {spec['encoder']} gave {emb.shape}, model expects ({dim},)")
+        return emb
+    if action is None:
+        raise SampleError("this is an action model: use --action LABEL (or its index) or --uncond")
+    labels = list(spec["labels"])
+    if action in labels:
+        idx = labels.index(action)
+    elif action.isdigit() and int(action) < len(labels):
+        idx = int(action)
+    else:
+        raise SampleError(f"unknown action {action!r}; labels: {', '.join(labels)}")
+    c = np.zeros(dim, np.float32)
+    c[idx] = 1.0
+    return c
+
+
+def denormalise(x: np.ndarray, mean: np.ndarray, std: np.ndarray) -> np.ndarray:
+    return x * std + mean
+
+
+def read_meanstd(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    arr = np.fromfile(path, dtype="<f4")
+    if arr.shape != (526,):
+        raise SampleError(f"{path}: expected 526 float32 values (mean[263], std[263]), got {arr.shape[0]}")
+    return arr[:263], arr[263:]
+
+
+def load_model(args) -> tuple[StepFn, dict, np.ndarray, np.ndarray]:
+    """(step function, model entry (manifest-like), mean, std)."""
+    if args.ckpt is not None:
+        from emdm.export import load_generator
+
+        G, meta, _ = load_generator(args.ckpt)
+        entry = {"condition": meta["condition"], "objective": meta.get("objective", "ddgan"), "zDim": G.z_dim,
+                 "guidance": 2.5, "defaultSteps": 10, "maxFrames": G.max_frames}
+        return torch_step(G), entry, np.array(meta["mean"], np.float32), np.array(meta["std"], np.float32)
+    from emdm import manifest as mf
+
+    man = mf.load(args.models_dir)
+    if args.model not in man["models"]:
+        raise SampleError(f"{Path(args.models_dir) / mf.MANIFEST_NAME}: no model {args.model!r} "
+                          f"(have: {', '.join(man['models']) or 'none'})")
+    entry = man["models"][args.model]
+    onnx_file = entry["onnx"] if args.variant in (None, "fp32") else entry["variants"][args.variant]
+    mean, std = read_meanstd(Path(args.models_dir) / entry["meanStd"])
+    return onnx_step(Path(args.models_dir) / onnx_file, args.threads), entry, mean, std
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from emdm import paths
+
+    p = argparse.ArgumentParser(prog="python -m emdm.sample", description=__doc__.split("\n\n")[0])
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--model", help="model name in the manifest (e.g. emdm-t2m-web)")
+    src.add_argument("--ckpt", type=Path, help="an emdm.train checkpoint (EMA weights)")
+    p.add_argument("--models-dir", type=Path, default=paths.MODELS_DIR)
+    p.add_argument("--variant", default=None, help="fp32 (default) or a manifest variant such as int8")
+    p.add_argument("--text")
+    p.add_argument("--action")
+    p.add_argument("--uncond", action="store_true")
+    p.add_argument("--steps", type=int, default=None, help="denoising steps (default: the model's defaultSteps)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--frames", type=int, default=120, help="length in frames at 20 fps (≤ 196)")
+    p.add_argument("--guidance", type=float, default=None, help="classifier-free guidance scale (default: model's)")
+    p.add_argument("--num", type=int, default=1, help="number of samples")
+    p.add_argument("--threads", type=int, default=1)
+    p.add_argument("--out", type=Path, required=True, help="output path prefix (.npy, .features.npy, .bvh)")
+    p.add_argument("--no-bvh", action="store_true")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    from emdm.motion.features import recover_joints
+
+    a = build_parser().parse_args(argv)
+    step, entry, mean, std = load_model(a)
+    max_frames = int(entry.get("maxFrames", 196))
+    if not 1 <= a.frames <= max_frames:
+        raise SampleError(f"--frames must be in 1..{max_frames}, got {a.frames}")
+    steps = a.steps or int(entry.get("defaultSteps", 10))
+    supported = entry.get("supportedSteps")
+    if supported and steps not in supported:
+        print(f"warning: {steps} steps is not among the model's supportedSteps {supported}", file=sys.stderr)
+    cond = make_condition(entry["condition"], a.text, a.action, a.uncond)
+    guidance = float(entry.get("guidance", 2.5)) if a.guidance is None else a.guidance
+    x = sample_features(step, cond, a.frames, steps, guidance, a.seed, a.num, int(entry.get("zDim", 64)),
+                        objective=entry.get("objective", "ddgan"))
+    feats = denormalise(x, mean, std)
+    joints = np.stack([recover_joints(f) for f in feats]).astype(np.float32)
+    a.out.parent.mkdir(parents=True, exist_ok=True)
+    np.save(a.out.with_suffix(".npy"), joints[0] if a.num == 1 else joints)
+    np.save(a.out.with_suffix(".features.npy"), feats[0] if a.num == 1 else feats)
+    written = [a.out.with_suffix(".npy")]
+    if not a.no_bvh:
+        from emdm.mocap.bvh_writer import write_bvh
+
+        for i in range(a.num):
+            path = a.out.with_suffix(".bvh") if a.num == 1 else a.out.with_name(f"{a.out.name}_{i}.bvh")
+            written.append(write_bvh(joints[i], path))
+    print("wrote " + ", ".join(map(str, written)))
+    return 0
+
+
+if __name__ == "__main__":
+    try:
+        raise SystemExit(main())
+    except SampleError as e:
+        print(f"error: {e}", file=sys.stderr)
+        raise SystemExit(2)

@@ -1,0 +1,59 @@
+import numpy as np
+import pytest
+import torch
+
+from emdm import paths
+from emdm.model.geometry import geometric_losses, recover_joints
+from emdm.motion.features import extract_features, recover_joints as recover_np
+from model_synth_data import synth_clip
+
+
+def test_torch_recovery_equals_numpy_on_a_motion():
+    joints = synth_clip(80, 2, np.random.default_rng(1))          # walking while turning
+    feats = extract_features(joints)
+    got = recover_joints(torch.from_numpy(feats).double()[None])[0].numpy()
+    np.testing.assert_allclose(got, recover_np(feats), atol=1e-9)
+    np.testing.assert_allclose(got, joints[:-1], atol=1e-4)       # and it is the original motion
+
+
+def test_torch_recovery_equals_numpy_on_arbitrary_features_batched():
+    f = np.random.default_rng(0).normal(size=(3, 40, 263)) * 0.4
+    got = recover_joints(torch.from_numpy(f))
+    np.testing.assert_allclose(got.numpy(), np.stack([recover_np(x) for x in f]), atol=1e-12)
+
+
+def test_real_dataset_clip_recovers_its_joints():
+    root = paths.DATASET_DIR
+    if not (root / "train.txt").exists():
+        pytest.skip(f"{root}: prepared dataset absent (run `python -m emdm.data.prepare`)")
+    cid = (root / "train.txt").read_text().split()[0]
+    feats = np.load(root / "new_joint_vecs" / f"{cid}.npy")
+    joints = np.load(root / "new_joints" / f"{cid}.npy")
+    got = recover_joints(torch.from_numpy(feats).double()[None])[0].numpy()
+    np.testing.assert_allclose(got, joints[: len(feats)], atol=2e-3)
+
+
+def test_geometric_losses_vanish_for_the_truth_and_have_gradients():
+    feats = torch.from_numpy(extract_features(synth_clip(60, 0, np.random.default_rng(2))))[None].float()
+    mask = torch.ones(1, feats.shape[1])
+    zero = geometric_losses(feats, feats, mask)
+    assert float(zero["pos"]) < 1e-10 and float(zero["vel"]) < 1e-10
+    # the truth's feet move less than the contact threshold (0.002 m² per frame) on contact frames
+    assert 0 <= float(zero["foot"]) < 0.002 / 3
+    pred = (feats + 0.05 * torch.randn_like(feats)).requires_grad_(True)
+    losses = geometric_losses(pred, feats, mask)
+    assert float(losses["pos"]) > 0 and float(losses["vel"]) > 0 and float(losses["foot"]) > float(zero["foot"])
+    sum(losses.values()).backward()
+    assert torch.isfinite(pred.grad).all() and pred.grad.abs().sum() > 0
+
+
+def test_padding_is_ignored_by_the_losses():
+    feats = torch.from_numpy(extract_features(synth_clip(60, 0, np.random.default_rng(3))))[None].float()
+    mask = torch.ones(1, feats.shape[1])
+    mask[:, 40:] = 0
+    pred = feats.clone()
+    pred[:, 41:] += 10.0                    # garbage only in the padding (frame 40 is the first pad frame,
+    losses = geometric_losses(pred, feats, mask)   # its velocity pair with frame 39 is masked too)
+    truth = geometric_losses(feats, feats, mask)
+    for k in ("pos", "vel", "foot"):
+        assert abs(float(losses[k]) - float(truth[k])) < 1e-10, k
