@@ -8,7 +8,8 @@
  *     frames on both sides, so there are no pops.
  *  3. Legs follow: a moved ankle re-solves its knee with two-bone IK (hip fixed, thigh and shin
  *     lengths of that frame kept, bending in the original knee's plane); the ball-of-foot joint is
- *     then placed at its original distance from the ankle, towards its pinned target.
+ *     then placed at its original distance from the ankle, towards its pinned target; step 1 is
+ *     repeated at the end (vertical lifts only).
  */
 import { type V3, add, dot, norm, normalize, scale, sub } from './math3';
 
@@ -76,11 +77,14 @@ export function cleanupFootContacts(
   const put = (f: number, j: number, p: V3) => out.set(p, (f * J + j) * 3);
 
   // 1. floor
-  for (let f = 0; f < frames; f++) {
-    let low = Infinity;
-    for (const j of rig.footJoints) low = Math.min(low, out[(f * J + j) * 3 + 1]);
-    if (low < 0) for (let j = 0; j < J; j++) out[(f * J + j) * 3 + 1] -= low;
-  }
+  const floor = () => {
+    for (let f = 0; f < frames; f++) {
+      let low = Infinity;
+      for (const j of rig.footJoints) low = Math.min(low, out[(f * J + j) * 3 + 1]);
+      if (low < 0) for (let j = 0; j < J; j++) out[(f * J + j) * 3 + 1] -= low;
+    }
+  };
+  floor();
 
   // 2. pinned targets per foot joint: target[f] and weight[f] in [0, 1]
   const targets = rig.footJoints.map((j, c) => {
@@ -127,6 +131,7 @@ export function cleanupFootContacts(
       if (ank.wgt[f] > 0 || ball.wgt[f] > 0) put(f, ball.j, add(A, scale(normalize(sub(Bt, A), sub(B0, A0)), footLen)));
     }
   }
+  floor(); // a re-placed ball of foot can dip below y = 0: lift again (vertical only: no skating)
   return out;
 }
 
