@@ -508,6 +508,17 @@ class Trainer:
             bar.close()
         if logf:
             logf.close()
+        self.check_replicas()
+
+    def check_replicas(self) -> None:
+        """DDP: every rank must hold identical generator weights (gradients are averaged each step)."""
+        if self.dist.world == 1:
+            return
+        sums = self.dist.gather(float(sum(p.double().sum() for p in self.G.parameters())))
+        if max(sums) - min(sums) > 1e-6 * max(1.0, abs(sums[0])):
+            raise RuntimeError(f"DDP replicas diverged: generator weight sums per rank {sums}")
+        if self.dist.main:
+            print(f"DDP: {self.dist.world} replicas in sync (weight sum {sums[0]:.6f})", file=sys.stderr)
 
 
 def main(argv: list[str] | None = None) -> int:
