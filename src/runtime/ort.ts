@@ -101,20 +101,43 @@ export interface OrtSession {
   release(): Promise<void>;
 }
 
-const sessionCache = new Map<string, Promise<OrtSession>>();
+interface CacheEntry {
+  session: Promise<OrtSession>;
+  refs: number;
+}
+const sessionCache = new Map<string, CacheEntry>();
 
 /**
  * Create (or reuse) a session for model bytes. `key` identifies the bytes (e.g. path + sha256).
+ * Each call takes a reference; `release()` drops it and frees the session with the last one.
  * Errors name the key and what went wrong.
  */
-export function getSession(key: string, bytes: ArrayBuffer | Uint8Array, backend: Backend, cfg: RuntimeConfig = {}): Promise<OrtSession> {
+export async function getSession(key: string, bytes: ArrayBuffer | Uint8Array, backend: Backend, cfg: RuntimeConfig = {}): Promise<OrtSession> {
   const cacheKey = `${backend}|${key}`;
-  const hit = sessionCache.get(cacheKey);
-  if (hit) return hit;
-  const p = createSession(key, bytes, backend, cfg);
-  sessionCache.set(cacheKey, p);
-  p.catch(() => sessionCache.delete(cacheKey));
-  return p;
+  let entry = sessionCache.get(cacheKey);
+  if (!entry) {
+    entry = { session: createSession(key, bytes, backend, cfg), refs: 0 };
+    sessionCache.set(cacheKey, entry);
+    entry.session.catch(() => sessionCache.delete(cacheKey));
+  } else if (cfg.threads !== undefined && backend === 'wasm' && configuredThreads !== null && cfg.threads !== configuredThreads) {
+    throw new Error(`runtime: ONNX Runtime already initialised with ${configuredThreads} WASM thread(s); ${cfg.threads} requested`);
+  }
+  const e = entry;
+  const base = await e.session;
+  e.refs++;
+  let mine = true;
+  return {
+    ...base,
+    run: base.run,
+    async release() {
+      if (!mine) return;
+      mine = false;
+      if (--e.refs <= 0 && sessionCache.get(cacheKey) === e) {
+        sessionCache.delete(cacheKey);
+        await base.release();
+      }
+    },
+  };
 }
 
 async function createSession(key: string, bytes: ArrayBuffer | Uint8Array, backend: Backend, cfg: RuntimeConfig): Promise<OrtSession> {
@@ -152,7 +175,6 @@ async function createSession(key: string, bytes: ArrayBuffer | Uint8Array, backe
     async release() {
       if (released) return;
       released = true;
-      sessionCache.delete(`${backend}|${key}`);
       await session.release();
     },
   };

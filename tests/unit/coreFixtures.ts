@@ -2,6 +2,7 @@
 import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
+import type { NoiseSource } from '../../src/sampler/sampler';
 
 export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
 export const PARITY_DIR = path.join(ROOT, 'tests', 'fixtures', 'parity');
@@ -81,3 +82,19 @@ export function randomPoseQuats(frames: number, J: number, seed: number, amp = 0
   }
   return q;
 }
+
+/** Noise supplied from the fixture, checking the documented draw order as it goes. */
+export function fixtureNoise(fx: FixtureCase): NoiseSource & { calls: string[] } {
+  const calls: string[] = [];
+  return {
+    calls,
+    normals(n, what, k) {
+      const key = what === 'xT' ? 'x_T' : `${what}_${k}`;
+      calls.push(key);
+      const a = fx.get(key);
+      if (a.length !== n) throw new Error(`fixture ${key}: ${a.length} values, sampler asked for ${n}`);
+      return a;
+    },
+  };
+}
+

@@ -5,10 +5,10 @@ import path from 'node:path';
 import { describe, expect, it } from 'vitest';
 import { getSession } from '../../src/runtime/ort';
 import { IncompatibleModelError, stepFunction } from '../../src/runtime/stepModel';
-import { type NoiseSource, sample, type StepFn } from '../../src/sampler/sampler';
+import { sample, type StepFn } from '../../src/sampler/sampler';
 import { scheduleFromEntry } from '../../src/sampler/schedule';
 import { SeededRandom } from '../../src/sampler/rng';
-import { type FixtureCase, PARITY_DIR, loadCase, maxAbsDiff } from './coreFixtures';
+import { PARITY_DIR, fixtureNoise, loadCase, maxAbsDiff } from './coreFixtures';
 
 const tiny = loadCase('tiny');
 const D = 263;
@@ -20,21 +20,6 @@ async function tinyStep(): Promise<StepFn> {
   const bytes = fs.readFileSync(path.join(PARITY_DIR, 'tiny-step.onnx'));
   const session = await getSession('tests/fixtures/parity/tiny-step.onnx', bytes, 'wasm', { threads: 1 });
   return stepFunction(session, { featureDim: D, zDim: Z, condDim: C }, 'tiny-step.onnx');
-}
-
-/** Noise supplied from the fixture, checking the documented draw order as it goes. */
-export function fixtureNoise(fx: FixtureCase): NoiseSource & { calls: string[] } {
-  const calls: string[] = [];
-  return {
-    calls,
-    normals(n, what, k) {
-      const key = what === 'xT' ? 'x_T' : `${what}_${k}`;
-      calls.push(key);
-      const a = fx.get(key);
-      if (a.length !== n) throw new Error(`fixture ${key}: ${a.length} values, sampler asked for ${n}`);
-      return a;
-    },
-  };
 }
 
 describe('runtime + sampler on the tiny step model', () => {

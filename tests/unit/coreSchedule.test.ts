@@ -41,7 +41,8 @@ describe('schedule', () => {
   it('matches every schedule the shipped manifest declares', (ctx) => {
     const p = path.join(MODELS_DIR, 'manifest.json');
     const manifest = fs.existsSync(p) ? JSON.parse(fs.readFileSync(p, 'utf8')) : null;
-    const models = Object.entries((manifest?.models ?? {}) as Record<string, { supportedSteps: number[]; schedules?: Record<string, Record<string, number[]>> }>);
+    type Entry = { supportedSteps: number[]; schedules?: Record<string, { time: number[]; coef1: number[]; coef2: number[]; sigma: number[] }> };
+    const models = Object.entries((manifest?.models ?? {}) as Record<string, Entry>);
     if (!models.length) return ctx.skip('no models in public/models/manifest.json yet');
     for (const [name, entry] of models) {
       for (const [T, sched] of Object.entries(entry.schedules ?? {})) {

@@ -1,0 +1,234 @@
+/**
+ * createGenerator: text / action / nothing → 3-D motion, the public entry point of the library
+ * (docs/ARCHITECTURE.md "TypeScript library"). Wires the manifest (verified downloads), the text
+ * encoder, the ONNX step model (src/runtime), the sampler (src/sampler) and decoding (src/motion).
+ */
+import { type Manifest, type ModelEntry, ModelFileError, fetchVerified } from './manifest';
+import { cleanupFootContacts, contactsFromFeatures } from './motion/footContact';
+import { denormalize, parseMeanStd, recoverJoints } from './motion/recover';
+import { smoothJoints } from './motion/smooth';
+import type { Motion } from './motion/types';
+import { type Backend, type BackendRequest, type OrtSession, getSession, resolveBackend } from './runtime/ort';
+import { IncompatibleModelError, stepFunction } from './runtime/stepModel';
+import { SeededRandom } from './sampler/rng';
+import { type NoiseSource, type StepFn, sample } from './sampler/sampler';
+import { scheduleFor } from './sampler/schedule';
+import { type TextEncoder, createTextEncoder } from './text';
+
+export type Condition =
+  | { type: 'text'; text: string }
+  | { type: 'action'; label: number }
+  | { type: 'none' }
+  /** a ready condition vector (e.g. an embedding computed elsewhere); zero = unconditional */
+  | { type: 'vector'; vector: Float32Array };
+
+export interface GenerateOptions {
+  condition: Condition;
+  /** motion length in frames at 20 fps (1 … maxFrames) */
+  frames: number;
+  /** denoising steps: one of the model's supportedSteps */
+  steps: number;
+  /** classifier-free guidance scale (1 = off) */
+  guidance: number;
+  /** uint32 seed: the same seed gives bit-identical output in Node and the browser (same backend) */
+  seed: number;
+  signal?: AbortSignal;
+  onStep?: (done: number, total: number) => void;
+  /** Gaussian temporal smoothing of the joints (σ = 1 frame); default false */
+  smooth?: boolean;
+  /** pin feet the model marks in contact and keep them above the floor; default false */
+  footCleanup?: boolean;
+  /** replace the seeded noise (tests: reproduce a Python run with its noise) */
+  noise?: NoiseSource;
+}
+
+export type { Motion };
+
+export interface GenerateResult {
+  motion: Motion;
+  timings: { encodeMs: number; stepMs: number[]; decodeMs: number; totalMs: number; backend: Backend; threads: number };
+  modelCalls: number;
+}
+
+export interface Generator {
+  readonly modelName: string;
+  readonly backend: Backend;
+  readonly threads: number;
+  readonly entry: ModelEntry;
+  generate(o: GenerateOptions): Promise<GenerateResult>;
+  dispose(): Promise<void>;
+}
+
+export interface GeneratorOptions {
+  manifest: Manifest;
+  baseUrl: string;
+  model: string;
+  backend?: BackendRequest;
+  threads?: number;
+  /** a variant key of the model entry (e.g. 'int8') instead of the fp32 `onnx` file */
+  variant?: string;
+  /** where ORT's wasm is served (browser); default `<BASE_URL>ort/` */
+  wasmPaths?: string;
+  onDownload?: (loaded: number, total: number) => void;
+  /** reuse an already created text encoder (else one is created on the first text prompt) */
+  textEncoder?: TextEncoder;
+}
+
+const now = () => performance.now();
+
+function modelEntry(manifest: Manifest, name: string): ModelEntry {
+  const entry = manifest.models[name];
+  if (!entry) {
+    const have = Object.keys(manifest.models);
+    throw new ModelFileError('manifest.json', 'missing', `field 'models.${name}' not found (models: ${have.length ? have.join(', ') : 'none'})`);
+  }
+  for (const k of ['featureDim', 'zDim', 'maxFrames', 'fps'] as const) {
+    if (!Number.isInteger(entry[k]) || entry[k] <= 0) {
+      throw new ModelFileError('manifest.json', 'incompatible', `field 'models.${name}.${k}' must be a positive integer`);
+    }
+  }
+  if (!entry.condition || !Number.isInteger(entry.condition.dim)) {
+    throw new ModelFileError('manifest.json', 'incompatible', `field 'models.${name}.condition.dim' must be an integer`);
+  }
+  return entry;
+}
+
+export async function createGenerator(opts: GeneratorOptions): Promise<Generator> {
+  const { manifest, baseUrl, model } = opts;
+  const entry = modelEntry(manifest, model);
+  const onnxPath = opts.variant ? entry.variants?.[opts.variant] : entry.onnx;
+  if (!onnxPath) {
+    throw new ModelFileError('manifest.json', 'missing', `models.${model}.variants has no '${opts.variant}' (variants: ${Object.keys(entry.variants ?? {}).join(', ') || 'none'})`);
+  }
+  const D = entry.featureDim;
+  const C = entry.condition.dim;
+
+  // downloads: model + mean/std, one combined progress
+  const sizes = [onnxPath, entry.meanStd].map((p) => manifest.files[p]?.bytes ?? 0);
+  const loaded = [0, 0];
+  const progress = (i: number) => (l: number) => {
+    loaded[i] = l;
+    opts.onDownload?.(loaded[0] + loaded[1], sizes[0] + sizes[1]);
+  };
+  const [bytes, msBuf] = await Promise.all([
+    fetchVerified(baseUrl, manifest, onnxPath, progress(0)),
+    fetchVerified(baseUrl, manifest, entry.meanStd, progress(1)),
+  ]);
+  const { mean, std } = parseMeanStd(msBuf, D, entry.meanStd);
+
+  let backend = await resolveBackend(opts.backend ?? 'auto');
+  const key = `${onnxPath}#${manifest.files[onnxPath].sha256}`;
+  const cfg = { threads: opts.threads, wasmPaths: opts.wasmPaths };
+  let session: OrtSession;
+  try {
+    session = await getSession(key, bytes, backend, cfg);
+  } catch (e) {
+    if (backend !== 'webgpu' || opts.backend === 'webgpu') throw new ModelFileError(onnxPath, 'incompatible', (e as Error).message);
+    backend = 'wasm'; // auto: WebGPU could not run this model, fall back to WASM
+    session = await getSession(key, bytes, backend, cfg);
+  }
+  let step: StepFn;
+  try {
+    step = stepFunction(session, { featureDim: D, zDim: entry.zDim, condDim: C }, onnxPath);
+    // warm-up + shape check on a 2-frame input (also compiles kernels before the first prompt)
+    await step({ x: new Float32Array(2 * D), z: new Float32Array(entry.zDim), cond: new Float32Array(C), t: Float32Array.of(0.5), mask: new Float32Array(2).fill(1), batch: 1, frames: 2 });
+  } catch (e) {
+    await session.release();
+    if (e instanceof IncompatibleModelError) throw new ModelFileError(onnxPath, 'incompatible', e.message.replace(`${onnxPath}: `, ''));
+    throw new ModelFileError(onnxPath, 'incompatible', `the step model does not run with the manifest's shapes (featureDim ${D}, zDim ${entry.zDim}, condition dim ${C}): ${(e as Error).message}`);
+  }
+
+  let encoder: Promise<TextEncoder> | null = opts.textEncoder ? Promise.resolve(opts.textEncoder) : null;
+  let queue: Promise<unknown> = Promise.resolve();
+  let disposed = false;
+
+  async function conditionVector(c: Condition): Promise<Float32Array> {
+    if (!c || typeof c !== 'object') throw new TypeError(`generate: condition must be {type: 'text'|'action'|'none'|'vector', ...}`);
+    switch (c.type) {
+      case 'none':
+        return new Float32Array(C);
+      case 'vector':
+        if (c.vector.length !== C) throw new RangeError(`generate: condition vector has ${c.vector.length} values, model ${model} expects ${C}`);
+        return Float32Array.from(c.vector);
+      case 'action': {
+        if (entry.condition.type !== 'action') throw new Error(`generate: model ${model} is a ${entry.condition.type} model; it takes no action label`);
+        const labels = entry.condition.labels;
+        if (!Number.isInteger(c.label) || c.label < 0 || c.label >= labels.length) {
+          throw new RangeError(`generate: action label ${c.label} out of range 0…${labels.length - 1} (${labels.join(', ')})`);
+        }
+        const v = new Float32Array(C);
+        v[c.label] = 1;
+        return v;
+      }
+      case 'text': {
+        if (entry.condition.type !== 'text') throw new Error(`generate: model ${model} is a ${entry.condition.type} model; it takes no text prompt`);
+        if (typeof c.text !== 'string' || !c.text.trim()) throw new Error('generate: the text prompt is empty');
+        const encId = entry.condition.encoder;
+        encoder ??= createTextEncoder(manifest, baseUrl, encId);
+        let enc: TextEncoder;
+        try {
+          enc = await encoder;
+        } catch (e) {
+          encoder = null;
+          throw e;
+        }
+        const v = await enc.encode(c.text);
+        if (v.length !== C) throw new Error(`generate: text encoder ${enc.id} gives ${v.length}-d vectors, model ${model} expects ${C}`);
+        return v;
+      }
+      default:
+        throw new TypeError(`generate: unknown condition type ${(c as { type: unknown }).type}`);
+    }
+  }
+
+  async function run(o: GenerateOptions): Promise<GenerateResult> {
+    if (disposed) throw new Error(`generator for ${model} was disposed`);
+    const t0 = now();
+    if (!Number.isInteger(o.frames) || o.frames < 1 || o.frames > entry.maxFrames) {
+      throw new RangeError(`generate: frames must be an integer in 1…${entry.maxFrames}, got ${o.frames}`);
+    }
+    if (!Number.isFinite(o.guidance) || o.guidance < 0) throw new RangeError(`generate: guidance must be a finite number ≥ 0, got ${o.guidance}`);
+    const schedule = scheduleFor(entry, o.steps, model);
+    const noise = o.noise ?? new SeededRandom(o.seed);
+    const cond = await conditionVector(o.condition);
+    const t1 = now();
+    const r = await sample({
+      step, schedule, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance, signal: o.signal, onStep: o.onStep,
+    });
+    const t2 = now();
+    const features = denormalize(r.x, mean, std);
+    let joints = recoverJoints(features, o.frames, D);
+    if (o.smooth) joints = smoothJoints(joints, o.frames, 1);
+    if (o.footCleanup) {
+      joints = cleanupFootContacts(joints, o.frames, contactsFromFeatures(features, o.frames, D), {
+        parents: manifest.skeleton.parents,
+        footJoints: manifest.skeleton.footJoints,
+      });
+    }
+    const t3 = now();
+    return {
+      motion: { frames: o.frames, fps: entry.fps, joints, features },
+      timings: { encodeMs: t1 - t0, stepMs: r.stepMs, decodeMs: t3 - t2, totalMs: t3 - t0, backend, threads: session.threads },
+      modelCalls: r.modelCalls,
+    };
+  }
+
+  return {
+    modelName: model,
+    backend,
+    threads: session.threads,
+    entry,
+    generate(o) {
+      // one generation at a time per generator: ORT sessions are not re-entrant
+      const p = queue.then(() => run(o));
+      queue = p.catch(() => undefined);
+      return p;
+    },
+    async dispose() {
+      if (disposed) return;
+      disposed = true;
+      await queue;
+      await session.release();
+    },
+  };
+}

@@ -1,0 +1,20 @@
+// Public surface of the EMDM-in-the-browser library (docs/ARCHITECTURE.md "TypeScript library").
+export { createGenerator } from './generate';
+export type { Condition, GenerateOptions, GenerateResult, Generator, GeneratorOptions, Motion } from './generate';
+export { loadManifest, fetchVerified, ModelFileError } from './manifest';
+export type { Manifest, ModelEntry, Skeleton } from './manifest';
+export { createTextEncoder } from './text';
+export type { TextEncoder } from './text';
+export { solveIK, forwardKinematics } from './motion/ik';
+export type { IKResult, SkeletonLike } from './motion/ik';
+export { recoverJoints, denormalize } from './motion/recover';
+export { smoothJoints } from './motion/smooth';
+export { cleanupFootContacts, contactsFromFeatures, footSkate } from './motion/footContact';
+export { writeBVH } from './export/bvh';
+export { SeededRandom } from './sampler/rng';
+export { computeSchedule, scheduleFor } from './sampler/schedule';
+export type { Schedule } from './sampler/schedule';
+export { AbortError } from './sampler/sampler';
+export type { NoiseSource } from './sampler/sampler';
+export { resolveBackend, webgpuAvailable } from './runtime/ort';
+export type { Backend, BackendRequest } from './runtime/ort';

@@ -1,0 +1,145 @@
+// createGenerator end to end in Node (ORT-web WASM): on a temporary models folder holding the
+// tiny step model, and on the shipped models (parity with the Python fixtures) when present.
+import crypto from 'node:crypto';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { afterAll, describe, expect, it } from 'vitest';
+import { createGenerator } from '../../src/generate';
+import { type Manifest, ModelFileError, loadManifest } from '../../src/manifest';
+import { computeSchedule } from '../../src/sampler/schedule';
+import { getSession } from '../../src/runtime/ort';
+import { stepFunction } from '../../src/runtime/stepModel';
+import { MODELS_DIR, PARITY_DIR, fixtureExists, fixtureNoise, loadCase, maxAbsDiff, maxJointDist } from './coreFixtures';
+
+const sha = (b: Buffer) => crypto.createHash('sha256').update(b).digest('hex');
+const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-gen-'));
+afterAll(() => fs.rmSync(tmp, { recursive: true, force: true }));
+
+/** A models folder with the tiny step model as an 8-action model (mean 0, std 1 except the height). */
+function tinyModels(): { dir: string; manifest: Manifest } {
+  const onnx = fs.readFileSync(path.join(PARITY_DIR, 'tiny-step.onnx'));
+  const ms = new Float32Array(2 * 263);
+  ms.fill(1, 263);
+  ms[3] = 0.9; // mean root height
+  const msBuf = Buffer.from(ms.buffer);
+  const real = JSON.parse(fs.readFileSync(path.join(MODELS_DIR, 'manifest.json'), 'utf8'));
+  const s = computeSchedule(4);
+  const manifest = {
+    schema: 1,
+    skeleton: real.skeleton,
+    textEncoders: {},
+    models: {
+      tiny: {
+        task: 'action', condition: { type: 'action', labels: ['a', 'b', 'c', 'd', 'e', 'f', 'g', 'h'], dim: 8 },
+        onnx: 'tiny.onnx', meanStd: 'tiny.meanstd.f32', zDim: 64, featureDim: 263, fps: 20, maxFrames: 196, guidance: 2.5,
+        defaultSteps: 4, supportedSteps: [2, 4],
+        schedules: { '4': { time: [...s.time], coef1: [...s.coef1], coef2: [...s.coef2], sigma: [...s.sigma] } },
+        files: ['tiny.onnx', 'tiny.meanstd.f32'],
+      },
+    },
+    files: { 'tiny.onnx': { bytes: onnx.length, sha256: sha(onnx) }, 'tiny.meanstd.f32': { bytes: msBuf.length, sha256: sha(msBuf) } },
+  };
+  const dir = fs.mkdtempSync(path.join(tmp, 'models-'));
+  fs.writeFileSync(path.join(dir, 'tiny.onnx'), onnx);
+  fs.writeFileSync(path.join(dir, 'tiny.meanstd.f32'), msBuf);
+  fs.writeFileSync(path.join(dir, 'manifest.json'), JSON.stringify(manifest));
+  return { dir: dir + '/', manifest: manifest as unknown as Manifest };
+}
+
+describe('createGenerator on the tiny model', () => {
+  it('generates a motion with timings; same seed is bit-identical; progress per step', async () => {
+    const { dir } = tinyModels();
+    const manifest = await loadManifest(dir);
+    const downloads: number[] = [];
+    const gen = await createGenerator({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1, onDownload: (l) => downloads.push(l) });
+    expect(gen.backend).toBe('wasm');
+    expect(downloads.at(-1)).toBe(manifest.files['tiny.onnx'].bytes + manifest.files['tiny.meanstd.f32'].bytes);
+    const steps: number[] = [];
+    const o = { condition: { type: 'action' as const, label: 2 }, frames: 30, steps: 4, guidance: 2.5, seed: 123, onStep: (d: number) => steps.push(d) };
+    const a = await gen.generate(o);
+    const b = await gen.generate({ ...o, onStep: undefined });
+    expect(steps).toEqual([1, 2, 3, 4]);
+    expect(a.motion.frames).toBe(30);
+    expect(a.motion.fps).toBe(20);
+    expect(a.motion.joints.length).toBe(30 * 22 * 3);
+    expect(a.motion.features.length).toBe(30 * 263);
+    expect(a.modelCalls).toBe(4);
+    expect(a.timings.stepMs).toHaveLength(4);
+    expect(a.timings.totalMs).toBeGreaterThan(0);
+    expect(Buffer.from(a.motion.joints.buffer).equals(Buffer.from(b.motion.joints.buffer))).toBe(true);
+    const c = await gen.generate({ ...o, seed: 124 });
+    expect(maxAbsDiff(a.motion.features, c.motion.features)).toBeGreaterThan(1e-3);
+    await gen.dispose();
+  });
+
+  it('rejects bad requests with clear errors', async () => {
+    const { dir, manifest } = tinyModels();
+    const gen = await createGenerator({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
+    const o = { condition: { type: 'none' as const }, frames: 30, steps: 4, guidance: 1, seed: 1 };
+    await expect(gen.generate({ ...o, steps: 3 })).rejects.toThrow(/3 steps not supported \(supportedSteps = \[2, 4\]\)/);
+    await expect(gen.generate({ ...o, frames: 197 })).rejects.toThrow(/frames must be an integer in 1…196/);
+    await expect(gen.generate({ ...o, condition: { type: 'action', label: 8 } })).rejects.toThrow(/action label 8 out of range 0…7/);
+    await expect(gen.generate({ ...o, condition: { type: 'text', text: 'walk' } })).rejects.toThrow(/is a action model; it takes no text prompt/);
+    await expect(gen.generate({ ...o, seed: -3 })).rejects.toThrow(/seed must be an integer/);
+    const ctrl = new AbortController();
+    ctrl.abort();
+    await expect(gen.generate({ ...o, signal: ctrl.signal })).rejects.toThrow(/cancelled after 0 of 4 steps/);
+    await gen.dispose();
+  });
+
+  it('refuses a corrupt or missing model file, naming it', async () => {
+    const { dir, manifest } = tinyModels();
+    fs.writeFileSync(path.join(dir, 'tiny.onnx'), Buffer.from('not a model'));
+    await expect(createGenerator({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(ModelFileError);
+    await expect(createGenerator({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(/tiny\.onnx: size 11 bytes differs/);
+    fs.rmSync(path.join(dir, 'tiny.onnx'));
+    await expect(createGenerator({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(/tiny\.onnx: not found/);
+    await expect(createGenerator({ manifest, baseUrl: dir, model: 'nope', backend: 'wasm', threads: 1 })).rejects.toThrow(/models\.nope' not found \(models: tiny\)/);
+  });
+
+  it('refuses a model whose shapes do not match the manifest (incompatible)', async () => {
+    const { dir, manifest } = tinyModels();
+    const bad = structuredClone(manifest);
+    bad.models.tiny.condition = { type: 'action', labels: ['a', 'b'], dim: 2 };
+    await expect(createGenerator({ manifest: bad, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toMatchObject({
+      name: 'ModelFileError', reason: 'incompatible', path: 'tiny.onnx',
+    });
+  });
+});
+
+describe('parity with Python on the shipped models', () => {
+  const manifestPath = path.join(MODELS_DIR, 'manifest.json');
+  const models = fs.existsSync(manifestPath) ? Object.keys(JSON.parse(fs.readFileSync(manifestPath, 'utf8')).models ?? {}) : [];
+  if (!models.length) it.skip('no shipped models in public/models/manifest.json yet', () => {});
+  for (const name of models) {
+    it(`${name}: one step and a whole run equal Python within 1e-4 (features) and 1 mm (joints)`, async (ctx) => {
+      if (!fixtureExists(`model-${name}`)) return ctx.skip(`tests/fixtures/parity/model-${name}.json absent: run \`.venv/bin/python -m emdm.fixtures\``);
+      const fx = loadCase(`model-${name}`);
+      const manifest = await loadManifest(MODELS_DIR + '/');
+      const entry = manifest.models[name];
+      if (manifest.files[entry.onnx].sha256 !== fx.meta.sha256) {
+        return ctx.skip(`fixture model-${name} was made from another ${entry.onnx} (sha256 differs): re-run \`.venv/bin/python -m emdm.fixtures\``);
+      }
+      const L = fx.meta.frames;
+      // one step (x_t, z, c, t → x0̂)
+      const bytes = fs.readFileSync(path.join(MODELS_DIR, entry.onnx));
+      const session = await getSession(`${entry.onnx}#${fx.meta.sha256}`, bytes, 'wasm', { threads: 1 });
+      const step = stepFunction(session, { featureDim: entry.featureDim, zDim: entry.zDim, condDim: entry.condition.dim }, entry.onnx);
+      const x0 = await step({
+        x: fx.get('step_x_t'), z: fx.get('step_z'), cond: fx.get('step_cond'), t: fx.get('step_t'), mask: new Float32Array(L).fill(1), batch: 1, frames: L,
+      });
+      expect(maxAbsDiff(x0, fx.get('step_x0'))).toBeLessThan(1e-4);
+      await session.release();
+      const gen = await createGenerator({ manifest, baseUrl: MODELS_DIR + '/', model: name, backend: 'wasm', threads: 1 });
+      // whole run with the fixture's noise and condition vector
+      const r = await gen.generate({
+        condition: { type: 'vector', vector: fx.get('cond') }, frames: L, steps: fx.meta.steps as number, guidance: fx.meta.guidance as number,
+        seed: 0, noise: fixtureNoise(fx),
+      });
+      expect(maxAbsDiff(r.motion.features, fx.get('features'))).toBeLessThan(1e-4);
+      expect(maxJointDist(r.motion.joints, fx.get('joints'))).toBeLessThan(1e-3);
+      await gen.dispose();
+    });
+  }
+});
