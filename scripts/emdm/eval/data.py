@@ -4,6 +4,7 @@ of the HumanML3D layout) and ``emdm.text`` (the one sentence encoder); nothing i
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -50,8 +51,10 @@ def load_mean_std(root: Path | str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def caption_embeddings(split: EvalSplit, encoder_id: str = TEXT_ENCODER,
-                       cache_dir: Path | str = CACHE_DIR) -> list[np.ndarray]:
-    """Per clip, an (n_captions, dim) array of its caption embeddings (cached on disk by content)."""
+                       cache_dir: Path | str | None = None) -> list[np.ndarray]:
+    """Per clip, an (n_captions, dim) array of its caption embeddings (cached on disk by content in
+    ``cache_dir``, default ``$EMDM_EVAL_CACHE`` or runs/eval/cache)."""
+    cache_dir = cache_dir or os.environ.get("EMDM_EVAL_CACHE") or CACHE_DIR
     uniq: dict[str, int] = {}
     per_clip = [np.array([uniq.setdefault(c, len(uniq)) for c in caps], dtype=np.int64) for caps in split.captions]
     if "" in uniq:

@@ -1,0 +1,193 @@
+"""Run one evaluation and write its result JSON (read by ``python -m emdm.eval.report``).
+
+    python -m emdm.eval.evaluate text   --source real                       # real-vs-real row
+    python -m emdm.eval.evaluate text   --ckpt runs/t2m/ckpt.pt --steps 10  # a trained model
+    python -m emdm.eval.evaluate action --ckpt runs/a2m/ckpt.pt --steps 10
+    python -m emdm.eval.evaluate timing --model runs/t2m/ckpt.pt=1,2,4,10 --model runs/ddim/ckpt.pt=10,50,100
+
+Defaults: dataset ``data/dataset``, split ``test``, evaluators ``runs/eval/{matcher,classifier}.pt``,
+20 repeats, output ``docs/results/json/<task>-<variant>-<steps>.json``. On a shared CPU prefix with
+``nice -n 19``; ``--threads`` (default 1) sets torch's threads.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import re
+import sys
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from emdm.eval import data as evdata
+from emdm.eval import evaluators as E
+from emdm.eval.protocol import Conditions, RealSource, evaluate_action, evaluate_text
+from emdm.eval.report import RESULTS_DIR, SCHEMA
+from emdm.paths import DATASET_DIR, RUNS_DIR
+
+
+def hardware() -> str:
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    gpu = f", GPU {torch.cuda.get_device_name(0)}" if torch.cuda.is_available() else ""
+    return f"{cpu} ({torch.get_num_threads()} torch thread(s)){gpu}"
+
+
+def dataset_info(root: Path, split: str) -> dict:
+    counts = {}
+    for s in ("train", "val", "test"):
+        f = root / f"{s}.txt"
+        if f.exists():
+            counts[s] = sum(1 for line in f.read_text().splitlines() if line.strip())
+    desc = ", ".join(f"{v} {k}" for k, v in counts.items()) + " clip ids"
+    meta = root / "metadata.csv"
+    if meta.exists():
+        import csv
+
+        with open(meta, newline="") as fh:
+            sources = sorted({row.get("source", "?") for row in csv.DictReader(fh)})
+        desc += f"; sources: {', '.join(sources)}"
+    return {"name": root.name, "split": split, "description": desc, "ids": counts}
+
+
+def slug(*parts) -> str:
+    return re.sub(r"[^a-z0-9]+", "-", "-".join(str(p) for p in parts if p is not None).lower()).strip("-")
+
+
+def write_result(result: dict, out: Path) -> Path:
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_suffix(".tmp")
+    tmp.write_text(json.dumps(result, indent=1))
+    tmp.replace(out)
+    return out
+
+
+def _evaluator_info(model, path: Path) -> dict:
+    meta = getattr(model, "meta", {})
+    cfg = meta.get("config", {})
+    return {"path": str(path), "train_items": meta.get("train_items"), "minutes": meta.get("minutes"),
+            "summary": f"{type(model).__name__} trained on {meta.get('train_items', '?')} train clips for "
+                       f"{cfg.get('epochs', '?')} epochs ({meta.get('minutes', 0) or 0:.1f} min)"}
+
+
+def run_quality(a) -> Path:
+    test = evdata.load_split(a.dataset, a.split, max_items=a.max_items or None,
+                             require_action=a.task == "action")
+    if a.source == "real":
+        source = RealSource(test, info={"variant": "real"})
+    else:
+        from emdm.eval.sources import ModelSource
+
+        source = ModelSource(a.ckpt, steps=a.steps, guidance=a.guidance, batch_size=a.batch, name=a.name or "")
+        if source.task != a.task:
+            raise SystemExit(f"error: {a.ckpt} is a {source.task} model, not {a.task}")
+    if a.name:
+        source.name = a.name
+    t0 = time.time()
+    if a.task == "text":
+        path = a.matcher
+        ev = E.load(path, "matcher")
+        caps = evdata.caption_embeddings(test)
+        res = evaluate_text(ev, test, caps, source, repeats=a.repeats, seed=a.seed, mm_texts=a.mm_texts,
+                            mm_repeats=a.mm_repeats, plaus_n=a.plaus_n)
+    else:
+        path = a.classifier
+        ev = E.load(path, "classifier")
+        res = evaluate_action(ev, test, source, repeats=a.repeats, seed=a.seed, plaus_n=a.plaus_n)
+    result = {"schema": SCHEMA, "name": source.name, "kind": source.kind, "info": source.info,
+              "dataset": dataset_info(Path(a.dataset), a.split), "hardware": hardware(),
+              "evaluator": _evaluator_info(ev, path), "minutes": (time.time() - t0) / 60,
+              "created": datetime.now(timezone.utc).isoformat(timespec="seconds"), **res}
+    out = a.out or RESULTS_DIR / "json" / (slug(a.task, source.info.get("variant"), source.info.get("steps")) + ".json")
+    return write_result(result, out)
+
+
+def run_timing(a) -> Path:
+    from emdm.eval.sources import ModelSource
+
+    rows = []
+    for spec in a.model:
+        if "=" not in spec:
+            raise SystemExit(f"error: --model {spec!r}: expected CKPT=STEPS[,STEPS...]")
+        ckpt, steps = spec.rsplit("=", 1)
+        for T in [int(s) for s in steps.split(",")]:
+            src = ModelSource(Path(ckpt), steps=T, guidance=a.guidance, batch_size=1)
+            if src.task == "text":
+                from emdm.text import encode_texts
+
+                cond = Conditions(lengths=np.array([a.frames]), text_emb=encode_texts([a.prompt]))
+            else:
+                cond = Conditions(lengths=np.array([a.frames]), labels=np.array([0]))
+            src.generate(cond, 0)                                  # warm-up
+            ms = []
+            for r in range(a.runs):
+                t0 = time.perf_counter()
+                src.generate(cond, r + 1)
+                ms.append((time.perf_counter() - t0) * 1000)
+            rows.append({"variant": src.info["variant"], "sampler": src.info["sampler"], "steps": T,
+                         "frames": a.frames, "ms_per_motion": ms, "guidance": a.guidance, "batch": 1,
+                         "checkpoint": ckpt, "preset": src.info["preset"]})
+            print(f"{src.name}: {np.mean(ms):.1f} ms / motion, {np.mean(ms) / a.frames:.3f} ms / frame", flush=True)
+    result = {"schema": SCHEMA, "task": "timing", "runtime": a.runtime, "hardware": hardware(),
+              "note": "PyTorch eager, batch 1 (with guidance: one batched call of 2), one warm-up run",
+              "created": datetime.now(timezone.utc).isoformat(timespec="seconds"), "rows": rows}
+    return write_result(result, a.out or RESULTS_DIR / "json" / f"timing-{a.runtime}.json")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="python -m emdm.eval.evaluate", description=__doc__.split("\n\n")[0])
+    sub = ap.add_subparsers(dest="task", required=True)
+    for task in ("text", "action"):
+        p = sub.add_parser(task)
+        src = p.add_mutually_exclusive_group(required=True)
+        src.add_argument("--source", choices=["real"])
+        src.add_argument("--ckpt", type=Path)
+        p.add_argument("--steps", type=int, default=10)
+        p.add_argument("--guidance", type=float, default=2.5)
+        p.add_argument("--name", default=None, help="row label (default from the checkpoint's flags)")
+        p.add_argument("--dataset", type=Path, default=DATASET_DIR)
+        p.add_argument("--split", default="test")
+        p.add_argument("--max-items", type=int, default=0, help="evaluate at most this many clips (0 = all)")
+        p.add_argument("--repeats", type=int, default=20)
+        p.add_argument("--seed", type=int, default=0)
+        p.add_argument("--plaus-n", type=int, default=200)
+        p.add_argument("--batch", type=int, default=64)
+        p.add_argument("--matcher", type=Path, default=RUNS_DIR / "eval" / "matcher.pt")
+        p.add_argument("--classifier", type=Path, default=RUNS_DIR / "eval" / "classifier.pt")
+        p.add_argument("--mm-texts", type=int, default=100)
+        p.add_argument("--mm-repeats", type=int, default=30)
+        p.add_argument("--threads", type=int, default=1)
+        p.add_argument("--out", type=Path, default=None)
+    p = sub.add_parser("timing")
+    p.add_argument("--model", action="append", required=True, help="CKPT=STEPS[,STEPS...] (repeatable)")
+    p.add_argument("--frames", type=int, default=196)
+    p.add_argument("--runs", type=int, default=5)
+    p.add_argument("--guidance", type=float, default=2.5)
+    p.add_argument("--prompt", default="a person walks forward and waves")
+    p.add_argument("--runtime", default="python-cpu")
+    p.add_argument("--threads", type=int, default=1)
+    p.add_argument("--out", type=Path, default=None)
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    a = build_parser().parse_args(argv)
+    torch.set_num_threads(a.threads)
+    out = run_timing(a) if a.task == "timing" else run_quality(a)
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

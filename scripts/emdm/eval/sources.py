@@ -1,0 +1,129 @@
+"""Motion sources for the protocols: a trained model, sampled by ``emdm.sample.sample_features`` (the
+one sampling loop the project has; DDIM for ``--objective diffusion`` checkpoints).
+
+``sample_features`` takes one condition vector and one length per call. To evaluate hundreds of
+different captions/lengths without a Python loop per motion, ``batched_features`` calls it once per
+batch with a step-function wrapper that substitutes each row's own condition and padding mask into
+the batched call: the contract of docs/ARCHITECTURE.md says the batch is ``[c, 0]`` under guidance
+and G never attends padded frames, so this is the documented loop run on a padded batch, each
+motion then cropped to its length.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from emdm.eval.protocol import Conditions
+
+DEFAULT_GUIDANCE = 2.5
+
+
+def variant_of(meta: dict) -> str:
+    """The comparison a checkpoint belongs to, from its training flags."""
+    args = meta.get("args", {})
+    if meta.get("objective") == "diffusion":
+        return "diffusion"
+    geo = float(args.get("geo_weight", 100.0))
+    d_cond = bool(args.get("d_cond", True))
+    if d_cond:
+        return "emdm" if geo > 0 else "ddgan-geo0"
+    return "ddgan-nodcond" if geo > 0 else "ddgan-naive"
+
+
+def batched_features(step, conds: np.ndarray, lengths: np.ndarray, *, steps: int, guidance: float, seed: int,
+                     objective: str = "ddgan", z_dim: int = 64) -> list[np.ndarray]:
+    """Normalised x̂_0 for B rows with their own condition (B, C) and length (B,), via
+    ``emdm.sample.sample_features`` on one padded batch; returns B arrays (length_i, 263)."""
+    from emdm.sample import sample_features
+
+    conds = np.asarray(conds, np.float32)
+    lengths = np.asarray(lengths, np.int64)
+    b = len(lengths)
+    if conds.shape[0] != b:
+        raise ValueError(f"batched_features: {conds.shape[0]} conditions for {b} lengths")
+    frames = int(lengths.max())
+    mask = (np.arange(frames)[None, :] < lengths[:, None]).astype(np.float32)
+    any_cond = bool(np.any(conds != 0))
+
+    def row_step(x, z, c, t, m):
+        rows = x.shape[0]
+        if rows == 2 * b:                     # guidance: [c, 0] with the same x and z
+            c = np.concatenate([conds, np.zeros_like(conds)])
+            m = np.concatenate([mask, mask])
+        elif rows == b:
+            c, m = conds, mask
+        else:
+            raise RuntimeError(f"sample_features called the step with batch {rows}, expected {b} or {2 * b}")
+        return step(x, z, c, t, m)
+
+    # a non-zero stand-in makes sample_features apply guidance; the wrapper swaps in the real rows
+    stand_in = np.ones(conds.shape[1], np.float32) if any_cond else np.zeros(conds.shape[1], np.float32)
+    x = sample_features(row_step, stand_in, frames, steps, guidance if any_cond else 1.0, seed, b, z_dim,
+                        objective=objective)
+    return [x[i, : lengths[i]] for i in range(b)]
+
+
+@dataclass
+class ModelSource:
+    """A generator checkpoint (EMA weights) sampled with ``steps`` steps and guidance."""
+    ckpt: Path
+    steps: int = 10
+    guidance: float = DEFAULT_GUIDANCE
+    batch_size: int = 64
+    name: str = ""
+    kind: str = "model"
+    info: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        from emdm.export import load_generator
+        from emdm.sample import torch_step
+
+        self.G, self.meta, summary = load_generator(self.ckpt)
+        self.step = torch_step(self.G)
+        self.objective = self.meta.get("objective", "ddgan")
+        self.task = self.meta["task"]
+        self.mean = np.asarray(self.meta["mean"], np.float32)
+        self.std = np.asarray(self.meta["std"], np.float32)
+        variant = variant_of(self.meta)
+        sampler = "DDIM" if self.objective == "diffusion" else "DDGAN"
+        if not self.name:
+            label = {"emdm": "EMDM", "diffusion": "Diffusion + DDIM", "ddgan-naive": "Naive DDGAN",
+                     "ddgan-nodcond": "DDGAN, D w/o cond", "ddgan-geo0": "DDGAN, R = 0"}[variant]
+            self.name = f"{label} ({self.steps} steps)"
+        self.info = {"variant": variant, "sampler": sampler, "steps": self.steps, "guidance": self.guidance,
+                     "checkpoint": str(self.ckpt), "train_steps": summary["steps"],
+                     "train_wall_min": round(summary["wall_s"] / 60, 1), "device": self.meta.get("device"),
+                     "preset": self.meta["generator"]["preset"], "dataset": self.meta.get("dataset"),
+                     "geo_weight": self.meta.get("args", {}).get("geo_weight"),
+                     "d_cond": self.meta.get("args", {}).get("d_cond"), **self.info}
+
+    def conditions_of(self, cond: Conditions) -> np.ndarray:
+        spec = self.meta["condition"]
+        if spec["type"] == "text":
+            if cond.text_emb is None:
+                raise ValueError(f"{self.ckpt}: a text model needs text conditions")
+            if cond.text_emb.shape[1] != spec["dim"]:
+                raise ValueError(f"{self.ckpt}: model expects {spec['dim']}-d text embeddings "
+                                 f"({spec.get('encoder')}), got {cond.text_emb.shape[1]}")
+            return cond.text_emb.astype(np.float32)
+        if cond.labels is None:
+            raise ValueError(f"{self.ckpt}: an action model needs action labels")
+        onehot = np.zeros((len(cond.labels), spec["dim"]), np.float32)
+        onehot[np.arange(len(cond.labels)), cond.labels] = 1.0
+        return onehot
+
+    def generate(self, cond: Conditions, seed: int) -> list[np.ndarray]:
+        c = self.conditions_of(cond)
+        lengths = np.minimum(cond.lengths, self.G.max_frames)
+        order = np.argsort(lengths, kind="stable")            # similar lengths per batch: less padding
+        out: list[np.ndarray | None] = [None] * len(lengths)
+        for s in range(0, len(order), self.batch_size):
+            idx = order[s:s + self.batch_size]
+            xs = batched_features(self.step, c[idx], lengths[idx], steps=self.steps, guidance=self.guidance,
+                                  seed=seed * 100003 + s, objective=self.objective, z_dim=self.G.z_dim)
+            for i, x in zip(idx, xs):
+                out[i] = x * self.std + self.mean
+        return out  # type: ignore[return-value]
