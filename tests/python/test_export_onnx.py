@@ -1,0 +1,84 @@
+"""ONNX export of one denoising step: parity with PyTorch, dynamic batch/length, variants, manifest."""
+
+import json
+
+import numpy as np
+import onnx
+import pytest
+
+from emdm.export import PARITY_CASES, export_onnx, load_generator, main as export_main, parity
+from emdm.model.schedule import make_schedule
+from emdm.sample import read_meanstd
+from emdm.train import main as train_main
+from model_synth_data import write_synthetic_dataset
+
+TINY = ["--preset", "tiny", "--d-width", "32", "--batch", "4", "--threads", "1", "--no-progress"]
+
+
+@pytest.fixture(scope="module")
+def checkpoint(tmp_path_factory):
+    ds = write_synthetic_dataset(tmp_path_factory.mktemp("ds"), n_clips=12)
+    out = tmp_path_factory.mktemp("run")
+    train_main(["--data", str(ds), "--task", "action", "--out", str(out), "--steps", "3", *TINY])
+    return out / "ckpt.pt"
+
+
+@pytest.fixture(scope="module")
+def exported(checkpoint, tmp_path_factory):
+    models = tmp_path_factory.mktemp("models")
+    assert export_main(["--ckpt", str(checkpoint), "--name", "emdm-a2m-test", "--out", str(models)]) == 0
+    return models
+
+
+def test_onnx_inputs_outputs_and_dynamic_axes(exported):
+    m = onnx.load(str(exported / "emdm-a2m-test.onnx"))
+    assert m.opset_import[0].version == 18
+    dims = {i.name: [d.dim_param or d.dim_value for d in i.type.tensor_type.shape.dim] for i in m.graph.input}
+    assert list(dims) == ["x_t", "z", "cond", "t", "mask"]
+    assert dims["x_t"][2] == 263 and dims["z"][1] == 64 and dims["cond"][1] == 3
+    assert isinstance(dims["x_t"][0], str) and isinstance(dims["x_t"][1], str)      # batch, frames dynamic
+    assert dims["mask"] == dims["x_t"][:2] and dims["t"] == dims["x_t"][:1]
+    assert [o.name for o in m.graph.output] == ["x0"]
+    ops = {n.op_type for n in m.graph.node}
+    assert "Selu" not in ops and "Elu" in ops                                        # WebGPU has Elu, not Selu
+
+
+def test_parity_with_pytorch_on_several_batches_and_lengths(checkpoint, exported):
+    G, _, _ = load_generator(checkpoint)
+    errs = parity(G, exported / "emdm-a2m-test.onnx")
+    assert set(errs) == {f"{b}x{n}" for b, n in PARITY_CASES}
+    assert max(errs.values()) <= 1e-4, errs
+
+
+def test_int8_variant_and_meanstd_and_manifest(checkpoint, exported):
+    man = json.loads((exported / "manifest.json").read_text())
+    e = man["models"]["emdm-a2m-test"]
+    assert e["task"] == "action" and e["condition"]["labels"] == ["walk", "wave", "turn"]
+    assert e["variants"] == {"int8": "emdm-a2m-test.int8.onnx"}
+    assert (exported / "emdm-a2m-test.int8.onnx").stat().st_size < (exported / "emdm-a2m-test.onnx").stat().st_size
+    assert e["variantRelErr"]["int8"] < 0.5
+    for f in e["files"]:
+        assert man["files"][f]["bytes"] == (exported / f).stat().st_size
+    sch = make_schedule(10)
+    np.testing.assert_allclose(e["schedules"]["10"]["coef1"], sch.coef1, atol=1e-8)
+    np.testing.assert_allclose(e["schedules"]["10"]["sigma"], sch.sigma, atol=1e-8)
+    assert e["supportedSteps"] == [1, 2, 4, 5, 8, 10] and e["defaultSteps"] == 10
+    assert e["training"]["steps"] == 3
+    _, meta, _ = load_generator(checkpoint)
+    mean, std = read_meanstd(exported / e["meanStd"])
+    np.testing.assert_allclose(mean, meta["mean"], rtol=1e-6)
+    np.testing.assert_allclose(std, meta["std"], rtol=1e-6)
+
+
+def test_missing_checkpoint_is_named(tmp_path):
+    from emdm.export import ExportError
+
+    with pytest.raises(ExportError, match="nope.pt"):
+        load_generator(tmp_path / "nope.pt")
+
+
+def test_export_keeps_batch_one_and_long_inputs_working(checkpoint, tmp_path):
+    G, _, _ = load_generator(checkpoint)
+    path = export_onnx(G, tmp_path / "g.onnx")
+    errs = parity(G, path, cases=((1, 196), (5, 3)))
+    assert max(errs.values()) <= 1e-4
