@@ -20,3 +20,10 @@ export function emdmClipIds(ids: readonly number[], eotId: number, context = CLI
   while (out.length < paddedLength) out.push(CLIP_PAD_ID);
   return out;
 }
+
+/** Cut `ids` ([CLS/SOT] … [SEP/EOT]) to at most `max` ids, keeping the final special token (as HF tokenizers do). */
+export function truncateKeepingEnd(ids: readonly number[], max: number): number[] {
+  if (max < 2) throw new RangeError(`truncateKeepingEnd: max must be >= 2, got ${max}`);
+  if (ids.length <= max) return ids.slice();
+  return [...ids.slice(0, max - 1), ids[ids.length - 1]];
+}

@@ -6,7 +6,7 @@
  * Python computes the same vectors from the same files (scripts/emdm/text).
  */
 import { fetchVerified, joinUrl, ModelFileError, type Manifest, type TextEncoderEntry } from '../manifest';
-import { emdmClipIds } from './clipTokens';
+import { emdmClipIds, truncateKeepingEnd } from './clipTokens';
 import { l2Normalize, meanPool } from './pooling';
 import { isNodeRuntime, loadTransformers, provideVerifiedFile } from './transformersEnv';
 
@@ -98,14 +98,21 @@ export async function createTextEncoder(manifest: Manifest, baseUrl: string, id:
       dim: entry.dim,
       async encode(text: string): Promise<Float32Array> {
         const t = checkText(id, text);
-        const inputs = tokenizer(t, { truncation: true, max_length: maxTokens });
+        // transformers.js truncates AFTER adding [SEP] (and so drops it); HF tokenizers, which Python
+        // uses, keep it. Truncate here exactly like Python does.
+        const ids = truncateKeepingEnd(tokenizer.encode(t), maxTokens);
+        const n = ids.length;
+        const inputs = {
+          input_ids: new tf.Tensor('int64', BigInt64Array.from(ids, (x) => BigInt(x)), [1, n]),
+          attention_mask: new tf.Tensor('int64', new BigInt64Array(n).fill(1n), [1, n]),
+          token_type_ids: new tf.Tensor('int64', new BigInt64Array(n), [1, n]),
+        };
         const out = await model(inputs);
         const hidden = (out.last_hidden_state ?? out.token_embeddings) as { data: Float32Array; dims: number[] } | undefined;
         if (!hidden) throw new TextEncoderError(id, `model output has no last_hidden_state (outputs: ${Object.keys(out).join(', ')})`);
         const [, tokens, dim] = hidden.dims;
         if (dim !== entry.dim) throw new TextEncoderError(id, `model gives ${dim}-d token vectors, manifest says dim ${entry.dim}`);
-        const mask = (inputs.attention_mask as { data: BigInt64Array }).data;
-        const v = meanPool(hidden.data, tokens, dim, mask);
+        const v = meanPool(hidden.data, tokens, dim);
         return entry.normalize === false ? v : l2Normalize(v);
       },
     };

@@ -49,15 +49,13 @@ def test_similar_captions_are_closer_than_unrelated_ones(enc):
     assert float(a @ b) > float(a @ c) + 0.3
 
 
-def test_batching_modes(enc):
-    texts = ["a person walks", "a man kicks with the right leg", "a person walks"]
-    one = enc.encode(texts)
-    # batch_size=1 is exactly the browser's per-prompt computation: order-independent, repeatable
+def test_vectors_do_not_depend_on_batching(enc):
+    texts = ["a person walks", "a man kicks with the right leg", "a person walks", "a woman waves"]
+    one = np.stack([enc.encode([t])[0] for t in texts])   # the browser encodes one prompt at a time
     np.testing.assert_array_equal(one[0], one[2])
-    np.testing.assert_array_equal(enc.encode([texts[1]])[0], one[1])
     many = enc.encode(texts, batch_size=64)
-    assert (one * many).sum(1).min() > 0.98
-    assert encode_texts(texts).shape == (3, 384)
+    np.testing.assert_allclose(many, one, atol=1e-5)
+    assert encode_texts(texts).shape == (4, 384)
 
 
 def test_int8_file_is_close_to_the_pytorch_weights(enc):
@@ -66,7 +64,7 @@ def test_int8_file_is_close_to_the_pytorch_weights(enc):
 
     ref = torch_reference(source_dir(), CHECK_SENTENCES)
     got = enc.encode(CHECK_SENTENCES)
-    assert (ref * got).sum(1).min() > 0.99
+    assert (ref * got).sum(1).min() > 0.999
 
 
 @pytest.mark.parametrize("text", ["", "   ", fx.LONG_PROMPT, "a person 🕺 dances 💃🏽", "شخص يمشي إلى الأمام",

@@ -74,7 +74,7 @@ def load_encoder(encoder_id: str = DEFAULT_ENCODER, *, models_dir: Path | str | 
     return enc
 
 
-def encode_texts(texts: Sequence[str], encoder_id: str = DEFAULT_ENCODER, batch_size: int = 1,
+def encode_texts(texts: Sequence[str], encoder_id: str = DEFAULT_ENCODER, batch_size: int = 64,
                  **load_kwargs) -> np.ndarray:
     """Embed texts with a (cached) encoder: float32 [N, dim]."""
     return load_encoder(encoder_id, **load_kwargs).encode(texts, batch_size=batch_size)

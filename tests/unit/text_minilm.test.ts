@@ -1,0 +1,52 @@
+// The shipped MiniLM through transformers.js (Node) agrees with Python on the same ONNX file,
+// and hostile prompts give a vector or a clear error.
+import { beforeAll, describe, expect, test } from 'vitest';
+import fs from 'node:fs';
+import path from 'node:path';
+import { loadManifest } from '../../src/manifest';
+import { cosine, createTextEncoder, type TextEncoder, TextEncoderError } from '../../src/text';
+
+const MODELS = path.resolve(__dirname, '../../public/models') + '/';
+const FIXTURE = JSON.parse(fs.readFileSync(path.resolve(__dirname, '../fixtures/text/minilm_vectors.json'), 'utf8')) as {
+  prompts: string[];
+  vectors: number[][];
+  dim: number;
+};
+let enc: TextEncoder;
+
+beforeAll(async () => {
+  enc = await createTextEncoder(await loadManifest(MODELS), MODELS);
+});
+
+describe('all-MiniLM-L6-v2 (transformers.js, Node)', () => {
+  test('is the shipped 384-d encoder', () => {
+    expect(enc.id).toBe('all-MiniLM-L6-v2');
+    expect(enc.dim).toBe(384);
+  });
+
+  test.each(FIXTURE.prompts.map((p, i) => [i, p.length > 60 ? `${p.slice(0, 40)}… (${p.length} chars)` : JSON.stringify(p)]))(
+    'prompt %i %s: cosine to Python >= 0.999, unit length',
+    async (i) => {
+      const v = await enc.encode(FIXTURE.prompts[i as number]);
+      expect(v).toBeInstanceOf(Float32Array);
+      expect(v.length).toBe(FIXTURE.dim);
+      expect(v.every(Number.isFinite)).toBe(true);
+      expect(Math.hypot(...v)).toBeCloseTo(1, 5);
+      expect(cosine(v, FIXTURE.vectors[i as number])).toBeGreaterThanOrEqual(0.999);
+    },
+  );
+
+  test('similar captions are closer than unrelated ones', async () => {
+    const [a, b, c] = await Promise.all(
+      ['a person walks forward slowly', 'someone is walking ahead at a slow pace', 'the stock market fell sharply today'].map((t) => enc.encode(t)),
+    );
+    expect(cosine(a, b)).toBeGreaterThan(cosine(a, c) + 0.3);
+  });
+
+  test('non-string and absurdly long input give a clear error, the encoder keeps working', async () => {
+    await expect(enc.encode(undefined as unknown as string)).rejects.toThrow(TextEncoderError);
+    await expect(enc.encode(42 as unknown as string)).rejects.toThrow(/expects a string, got number/);
+    await expect(enc.encode('x'.repeat(100_001))).rejects.toThrow(/at most 100000/);
+    expect((await enc.encode('a person walks')).length).toBe(384);
+  });
+});
