@@ -37,7 +37,7 @@ L_HIP, R_HIP, L_SHOULDER, R_SHOULDER = 1, 2, 16, 17
 
 FPS = 20
 MAX_FRAMES = 196
-MIN_FRAMES = 40
+MIN_FRAMES = 16   # shortest take kept by emdm.data.prepare (0.8 s; HDM05 has many 1-repetition clips)
 FEATURE_DIM = 263
 
 # Offsets from the parent joint in the rest T-pose (metres). Left joints have x > 0.
