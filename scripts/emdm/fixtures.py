@@ -105,10 +105,15 @@ def reference_sample(sess, x_T: np.ndarray, zs: list[np.ndarray], epss: list[np.
 
 
 def draw_noise(rng: np.random.Generator, steps: int, frames: int, dim: int, z_dim: int, sched):
-    x_T = rng.standard_normal((frames, dim)).astype(np.float32)
-    zs = [rng.standard_normal(z_dim).astype(np.float32) for _ in range(steps)]
-    epss = [rng.standard_normal((frames, dim)).astype(np.float32) if sched.sigma[k] != 0 else None
-            for k in range(steps)]
+    """Noise in emdm.sample's order and dtype (x_T, then per step k = T-1..0: z, then eps when
+    sigma[k] > 0), so a fixture run equals ``emdm.sample.sample_features`` with the same rng."""
+    x_T = rng.standard_normal((1, frames, dim), dtype=np.float32)[0]
+    zs: list = [None] * steps
+    epss: list = [None] * steps
+    for k in range(steps - 1, -1, -1):
+        zs[k] = rng.standard_normal((1, z_dim), dtype=np.float32)[0]
+        if sched.sigma[k] > 0:
+            epss[k] = rng.standard_normal((1, frames, dim), dtype=np.float32)[0]
     return x_T, zs, epss
 
 
@@ -193,11 +198,16 @@ def make_tiny(out_dir: Path) -> dict[str, Any]:
 # ---------------------------------------------------------------------------------------------
 # recover_joints on a real clip
 
+RAW_CLIP = ("bandai-namco-motion/dataset/Bandai-Namco-Research-Motiondataset-2/data/"
+            "dataset-2_walk-turn-left_normal_001.bvh")
+
+
 def real_clip_features(max_frames: int = 120) -> tuple[np.ndarray, str]:
-    """Features of a real clip: the prepared dataset (data/dataset/new_joint_vecs) first."""
+    """Features of a real clip: from the prepared dataset (data/dataset/new_joint_vecs, the clip
+    that turns and travels most among the first 200), else one Bandai walk-turn-left take from
+    data/raw (unpacked by ``emdm.data.prepare``), run through mocap -> retarget -> features."""
     vec_dir = paths.DATASET_DIR / "new_joint_vecs"
     files = sorted(vec_dir.glob("*.npy")) if vec_dir.is_dir() else []
-    # prefer a clip that turns and travels, so heading integration is exercised
     best = None
     for f in files[:200]:
         feats = np.load(f)
@@ -206,10 +216,20 @@ def real_clip_features(max_frames: int = 120) -> tuple[np.ndarray, str]:
         score = abs(float(feats[:, 0].sum())) + float(np.abs(feats[:, 1:3]).sum()) * 0.05
         if best is None or score > best[0]:
             best = (score, f, feats)
-    if best is None:
-        raise FileNotFoundError(f"{vec_dir}: no prepared clips; run `python -m emdm.data.prepare` first")
-    _, f, feats = best
-    return feats[:max_frames].astype(np.float32), f"{paths.DATASET_DIR.name}/new_joint_vecs/{f.name}"
+    if best is not None:
+        _, f, feats = best
+        return feats[:max_frames].astype(np.float32), f"{paths.DATASET_DIR.name}/new_joint_vecs/{f.name}"
+    raw = paths.DATA_DIR / "raw" / RAW_CLIP
+    if not raw.is_file():
+        raise FileNotFoundError(f"{vec_dir}: no prepared clips and {raw} absent; run `python -m emdm.data.prepare` first")
+    from emdm.mocap.jointmap import load_joint_map
+    from emdm.mocap.load import load_bvh_clip
+    from emdm.motion.features import extract_features
+    from emdm.motion.retarget import normalize_clip, prepare_take
+
+    clip = load_bvh_clip(raw, load_joint_map("bandai"))
+    joints = normalize_clip(prepare_take(clip.joints, clip.fps))[: max_frames + 1]
+    return extract_features(joints), f"data/raw/{RAW_CLIP}"
 
 
 def make_recover(out_dir: Path) -> dict[str, Any]:
@@ -280,15 +300,22 @@ def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[s
     step_z = rng.standard_normal((1, Z)).astype(np.float32)
     step_t = np.array([sched.time[steps // 2]], np.float32)
     step_x0 = run_step(sess, step_x, step_z, cond[None], step_t)
-    x_T, zs, epss = draw_noise(rng, steps, L, D, Z, sched)
+    seed = 1000 + len(name)
+    x_T, zs, epss = draw_noise(np.random.default_rng(seed), steps, L, D, Z, sched)
     x = reference_sample(sess, x_T, zs, epss, cond, guidance, sched)
+    # the fixture run must be what the Python pipeline itself samples with this seed
+    from emdm.sample import onnx_step, sample_features
+
+    x_py = sample_features(onnx_step(onnx_path), cond, L, steps=steps, guidance=guidance, seed=seed, z_dim=Z, feature_dim=D)[0]
+    if np.max(np.abs(x_py - x)) > 1e-4:
+        raise AssertionError(f"fixtures: reference_sample differs from emdm.sample.sample_features by {np.max(np.abs(x_py - x)):.2e}")
     feats = (x * std + mean).astype(np.float32)
     joints = recover_joints(feats).astype(np.float32)
     arrays = {"step_x_t": step_x, "step_z": step_z, "step_cond": cond[None], "step_t": step_t, "step_x0": step_x0,
               "cond": cond, **noise_arrays(x_T, zs, epss), "final_x": x, "features": feats, "joints": joints}
     case = f"model-{name}"
     meta = {"model": name, "onnx": onnx_rel, "sha256": meta_file["sha256"], "frames": L, "featureDim": D, "zDim": Z,
-            "condDim": C, "condition": cond_desc, "steps": steps, "guidance": guidance, "schedule": schedule_meta(sched)}
+            "condDim": C, "condition": cond_desc, "seed": seed, "steps": steps, "guidance": guidance, "schedule": schedule_meta(sched)}
     write_case(out_dir, case, meta, arrays)
     return {"case": case, "model": name, "sha256": meta_file["sha256"]}
 

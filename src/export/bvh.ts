@@ -1,7 +1,8 @@
 /**
  * BVH export of a motion on the reference skeleton.
  *
- * - Hierarchy: the manifest skeleton (22 SMPL-order joints, rest T-pose offsets), in CENTIMETRES
+ * - Hierarchy: the manifest skeleton (22 SMPL-order joints, rest T-pose offsets; the children of
+ *   pelvis and spine3 at the motion's own mean offsets, see solveIK), in CENTIMETRES
  *   (the usual BVH unit; import at scale 0.01 for metres). Root OFFSET is 0 0 0 and its position
  *   channels carry the pelvis's world position, so readers that add or ignore the root offset agree.
  * - Rotations: local joint rotations from `solveIK` (twist from body planes), written as Euler
@@ -71,7 +72,7 @@ export function writeBVH(motion: Motion, skeleton: SkeletonLike, opts: { fps?: 2
   const walk = (j: number, depth: number) => {
     order.push(j);
     const ind = '  '.repeat(depth);
-    const o = j === root ? [0, 0, 0] : skeleton.offsets[j];
+    const o = j === root ? [0, 0, 0] : ik.offsets[j];
     lines.push(`${ind}${j === root ? 'ROOT' : 'JOINT'} ${skeleton.joints[j]}`, `${ind}{`);
     lines.push(`${ind}  OFFSET ${o.map((v) => num(v * CM, 4)).join(' ')}`);
     lines.push(`${ind}  CHANNELS ${j === root ? '6 Xposition Yposition Zposition ' : '3 '}Zrotation Xrotation Yrotation`);

@@ -20,9 +20,14 @@
  * Leaves (feet, head, wrists) keep the parent's rotation (local identity).
  *
  * Output: rootPos = world position of joint 0 per frame; quats = local rotations (x,y,z,w) relative
- * to the parent, in the rest frame of `skeleton.offsets` (rest = T-pose, all rotations identity).
- * `forwardKinematics(solveIK(j))` reproduces j to within the bone-length differences between j and
- * the skeleton (see tests/unit/coreIk.test.ts for the measured error).
+ * to the parent, in the rest frame of `skeleton.offsets` (rest = T-pose, all rotations identity);
+ * offsets = the skeleton's offsets, except for the children of the two multi-child joints (pelvis:
+ * hips + spine1; spine3: neck + collars), which get the motion's own mean offset in the parent's
+ * frame. Our retargeted data keep each bone's direction from the source skeleton, so the pelvis and
+ * chest "triangles" differ from the reference rest pose by a few centimetres (6.8 cm at the hips on
+ * a Bandai clip); with the adapted offsets `forwardKinematics(rootPos, quats, offsets)` reproduces
+ * the joints (measured in tests/unit/coreIk.test.ts). A rig should place its bones at `offsets`.
+ * Pass `{ adaptOffsets: false }` to keep the reference skeleton exactly.
  */
 import {
   type M3, type Q4, type V3, IDENTITY, add, alignFrames, cross, dot, matFromQuat, mulMM, mulMV, mulTM, mulTV, norm,
@@ -44,6 +49,8 @@ type Name = (typeof NAMES)[number];
 export interface IKResult {
   rootPos: Float32Array; // frames × 3
   quats: Float32Array; // frames × 22 × 4 (x, y, z, w), local
+  /** per-joint offsets from the parent (rest pose) that go with these rotations, metres */
+  offsets: number[][];
 }
 
 function indexer(skeleton: SkeletonLike): (n: Name) => number {
@@ -71,20 +78,48 @@ function bendAxis(a: V3, b: V3, c: V3, ref: V3): V3 {
   return normalize(add(scale(nh, wgt), scale(normalize(ref), 1 - wgt)), ref);
 }
 
-export function solveIK(joints: Float32Array, frames: number, skeleton: SkeletonLike): IKResult {
+/** Mean offsets, in the parent's frame, of the children of pelvis and spine3 (see solveIK). */
+function adaptedOffsets(joints: Float32Array, frames: number, skeleton: SkeletonLike, I: (n: Name) => number): V3[] {
+  const J = skeleton.joints.length;
+  const off = skeleton.offsets.map((o) => v3(o));
+  const out = off.map((o) => [...o] as V3);
+  const groups: [Name, Name, Name, Name, Name, Name[]][] = [
+    // parent, frame primary a→b, frame secondary c−d, children to adapt
+    ['pelvis', 'r_hip', 'l_hip', 'spine1', 'pelvis', ['l_hip', 'r_hip', 'spine1']],
+    ['spine3', 'spine3', 'neck', 'l_collar', 'r_collar', ['neck', 'l_collar', 'r_collar']],
+  ];
+  for (const [parent, a, b, c, d, kids] of groups) {
+    const sums = kids.map(() => [0, 0, 0] as V3);
+    const P = (f: number, n: Name): V3 => v3(joints, (f * J + I(n)) * 3);
+    for (let f = 0; f < frames; f++) {
+      const G = parent === 'pelvis'
+        ? alignFrames(sub(off[I('l_hip')], off[I('r_hip')]), off[I('spine1')], sub(P(f, b), P(f, a)), sub(P(f, c), P(f, d)))
+        : alignFrames(off[I('neck')], sub(off[I('l_collar')], off[I('r_collar')]), sub(P(f, b), P(f, a)), sub(P(f, c), P(f, d)));
+      kids.forEach((k, i) => (sums[i] = add(sums[i], mulTV(G, sub(P(f, k), P(f, parent))))));
+    }
+    kids.forEach((k, i) => {
+      const m = scale(sums[i], 1 / frames);
+      if (m.every(Number.isFinite) && norm(m) > 1e-6) out[I(k)] = m;
+    });
+  }
+  return out;
+}
+
+export function solveIK(joints: Float32Array, frames: number, skeleton: SkeletonLike, opts: { adaptOffsets?: boolean } = {}): IKResult {
   const J = skeleton.joints.length;
   if (joints.length !== frames * J * 3) throw new RangeError(`solveIK: joints has ${joints.length} values, expected frames (${frames}) × ${J} × 3`);
   const I = indexer(skeleton);
   const par = skeleton.parents;
-  const off = skeleton.offsets.map((o) => v3(o));
+  const rest = skeleton.offsets.map((o) => v3(o)); // defines the rest frames (rotation = identity)
+  const off = opts.adaptOffsets === false || frames === 0 ? rest : adaptedOffsets(joints, frames, skeleton, I); // FK offsets
   const X: V3 = [1, 0, 0];
   const Y: V3 = [0, 1, 0];
-  const restAcrossHip = sub(off[I('l_hip')], off[I('r_hip')]);
+  const restAcrossHip = sub(rest[I('l_hip')], rest[I('r_hip')]);
   // Rest flexion axes: the rest limb's own bend normal when it is visibly bent, else the
   // anatomical default (knees flex about +X; elbows about −Y (left) / +Y (right) in the T-pose).
   const restAxis = (a: Name, b: Name, dflt: V3): V3 => {
-    const n = cross(off[I(a)], off[I(b)]);
-    const sin = norm(n) / Math.max(norm(off[I(a)]) * norm(off[I(b)]), 1e-12);
+    const n = cross(rest[I(a)], rest[I(b)]);
+    const sin = norm(n) / Math.max(norm(rest[I(a)]) * norm(rest[I(b)]), 1e-12);
     if (sin < 0.03) return dflt;
     const nh = normalize(n);
     return dot(nh, dflt) < 0 ? scale(nh, -1) : nh;
@@ -109,7 +144,7 @@ export function solveIK(joints: Float32Array, frames: number, skeleton: Skeleton
     const hipAcross = sub(P(I('l_hip')), P(I('r_hip')));
     // collars are rigid with the chest (shoulders are not: they move with the collar rotation)
     const chestAcross = sub(P(I('l_collar')), P(I('r_collar')));
-    const restChestAcross = sub(off[I('l_collar')], off[I('r_collar')]);
+    const restChestAcross = sub(rest[I('l_collar')], rest[I('r_collar')]);
 
     const limbAxis = (key: string, parent: number, a: number, b: number, c: number, rest: V3): V3 => {
       const prev = prevAxisLocal.get(key);
@@ -127,56 +162,56 @@ export function solveIK(joints: Float32Array, frames: number, skeleton: Skeleton
       const toChild = (c: Name) => sub(P(I(c)), Q[j]);
       switch (name) {
         case 'pelvis':
-          set(j, alignFrames(restAcrossHip, off[I('spine1')], hipAcross, sub(P(I('spine1')), Q[j])));
+          set(j, alignFrames(restAcrossHip, rest[I('spine1')], hipAcross, sub(P(I('spine1')), Q[j])));
           break;
         case 'spine1':
-          set(j, alignFrames(off[I('spine2')], X, toChild('spine2'), mix(hipAcross, chestAcross, 2 / 3)));
+          set(j, alignFrames(rest[I('spine2')], X, toChild('spine2'), mix(hipAcross, chestAcross, 2 / 3)));
           break;
         case 'spine2':
-          set(j, alignFrames(off[I('spine3')], X, toChild('spine3'), mix(hipAcross, chestAcross, 1 / 3)));
+          set(j, alignFrames(rest[I('spine3')], X, toChild('spine3'), mix(hipAcross, chestAcross, 1 / 3)));
           break;
         case 'spine3':
-          set(j, alignFrames(off[I('neck')], restChestAcross, toChild('neck'), chestAcross));
+          set(j, alignFrames(rest[I('neck')], restChestAcross, toChild('neck'), chestAcross));
           break;
         case 'neck':
-          set(j, alignFrames(off[I('head')], X, toChild('head'), mulMV(Gp, X)));
+          set(j, alignFrames(rest[I('head')], X, toChild('head'), mulMV(Gp, X)));
           break;
         case 'l_collar':
         case 'r_collar': {
           const s = name[0] as 'l' | 'r';
-          set(j, alignFrames(off[I(`${s}_shoulder`)], Y, toChild(`${s}_shoulder`), mulMV(Gp, Y)));
+          set(j, alignFrames(rest[I(`${s}_shoulder`)], Y, toChild(`${s}_shoulder`), mulMV(Gp, Y)));
           break;
         }
         case 'l_hip':
         case 'r_hip': {
           const s = name[0] as 'l' | 'r';
           const axis = limbAxis(`${s}_leg`, p, j, I(`${s}_knee`), I(`${s}_ankle`), legAxisRest[s]);
-          set(j, alignFrames(off[I(`${s}_knee`)], legAxisRest[s], toChild(`${s}_knee`), axis));
+          set(j, alignFrames(rest[I(`${s}_knee`)], legAxisRest[s], toChild(`${s}_knee`), axis));
           break;
         }
         case 'l_knee':
         case 'r_knee': {
           const s = name[0] as 'l' | 'r';
-          set(j, alignFrames(off[I(`${s}_ankle`)], legAxisRest[s], toChild(`${s}_ankle`), mulMV(Gp, legAxisRest[s])));
+          set(j, alignFrames(rest[I(`${s}_ankle`)], legAxisRest[s], toChild(`${s}_ankle`), mulMV(Gp, legAxisRest[s])));
           break;
         }
         case 'l_ankle':
         case 'r_ankle': {
           const s = name[0] as 'l' | 'r';
-          set(j, alignFrames(off[I(`${s}_foot`)], legAxisRest[s], toChild(`${s}_foot`), mulMV(Gp, legAxisRest[s])));
+          set(j, alignFrames(rest[I(`${s}_foot`)], legAxisRest[s], toChild(`${s}_foot`), mulMV(Gp, legAxisRest[s])));
           break;
         }
         case 'l_shoulder':
         case 'r_shoulder': {
           const s = name[0] as 'l' | 'r';
           const axis = limbAxis(`${s}_arm`, p, j, I(`${s}_elbow`), I(`${s}_wrist`), armAxisRest[s]);
-          set(j, alignFrames(off[I(`${s}_elbow`)], armAxisRest[s], toChild(`${s}_elbow`), axis));
+          set(j, alignFrames(rest[I(`${s}_elbow`)], armAxisRest[s], toChild(`${s}_elbow`), axis));
           break;
         }
         case 'l_elbow':
         case 'r_elbow': {
           const s = name[0] as 'l' | 'r';
-          set(j, alignFrames(off[I(`${s}_wrist`)], armAxisRest[s], toChild(`${s}_wrist`), mulMV(Gp, armAxisRest[s])));
+          set(j, alignFrames(rest[I(`${s}_wrist`)], armAxisRest[s], toChild(`${s}_wrist`), mulMV(Gp, armAxisRest[s])));
           break;
         }
         default: // leaves: feet, head, wrists
@@ -191,11 +226,11 @@ export function solveIK(joints: Float32Array, frames: number, skeleton: Skeleton
     }
     rootPos.set(P(0), f * 3);
   }
-  return { rootPos, quats };
+  return { rootPos, quats, offsets: off.map((o) => [...o]) };
 }
 
 /** Joint world positions (frames × J × 3) from root positions and local rotations on `skeleton`. */
-export function forwardKinematics(rootPos: Float32Array, quats: Float32Array, frames: number, skeleton: SkeletonLike): Float32Array {
+export function forwardKinematics(rootPos: Float32Array, quats: Float32Array, frames: number, skeleton: SkeletonLike, offsets: number[][] = skeleton.offsets): Float32Array {
   const J = skeleton.joints.length;
   if (rootPos.length !== frames * 3 || quats.length !== frames * J * 4) {
     throw new RangeError(`forwardKinematics: expected rootPos ${frames}×3 and quats ${frames}×${J}×4, got ${rootPos.length} and ${quats.length}`);
@@ -211,7 +246,7 @@ export function forwardKinematics(rootPos: Float32Array, quats: Float32Array, fr
         Q[j] = v3(rootPos, f * 3);
         G[j] = R;
       } else {
-        Q[j] = add(Q[p], mulMV(G[p], v3(skeleton.offsets[j])));
+        Q[j] = add(Q[p], mulMV(G[p], v3(offsets[j])));
         G[j] = mulMM(G[p], R);
       }
       out.set(Q[j], (f * J + j) * 3);
