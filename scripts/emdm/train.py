@@ -73,6 +73,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--cond-drop", type=float, default=0.1, help="probability of the zero (unconditional) condition")
     p.add_argument("--supported-steps", default=",".join(map(str, SUPPORTED_STEPS)))
     p.add_argument("--min-frames", type=int, default=40)
+    p.add_argument("--random-crop", type=float, default=0.0,
+                   help="probability of training on a random sub-window (≥ --min-frames) of a clip; teaches short "
+                        "lengths and saves compute")
     p.add_argument("--limit", type=int, default=None, help="use at most this many clips (smoke tests)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--threads", type=int, default=None, help="torch CPU threads per process")
@@ -264,6 +267,14 @@ class Trainer:
         keep = (torch.rand(b, device=self.device) >= self.args.cond_drop).float()
         return c * keep[:, None]
 
+    def crop(self, m: np.ndarray) -> np.ndarray:
+        a = self.args
+        if a.random_crop <= 0 or len(m) <= a.min_frames or float(torch.rand(())) >= a.random_crop:
+            return m
+        n = int(torch.randint(a.min_frames, len(m) + 1, ()))
+        s = int(torch.randint(0, len(m) - n + 1, ()))
+        return m[s:s + n]
+
     # -- diffusion pairs ------------------------------------------------------------------------------
     def pairs(self, x0: torch.Tensor, mask: torch.Tensor):
         b = x0.shape[0]
@@ -311,7 +322,7 @@ class Trainer:
     def train_step(self) -> dict[str, float]:
         a = self.args
         idx = self.batcher.next()
-        x0_np, mask_np = collate([self.ms.motions[i] for i in idx])
+        x0_np, mask_np = collate([self.crop(self.ms.motions[i]) for i in idx])
         x0 = torch.from_numpy(x0_np).to(self.device)
         mask = torch.from_numpy(mask_np).to(self.device)
         c = self.conditions(idx)

@@ -62,7 +62,7 @@ def test_baseline_flags_train(dataset, tmp_path, flags):
 
 def test_resume_is_exact(dataset, tmp_path):
     straight, split = tmp_path / "a", tmp_path / "b"
-    common = ["--data", str(dataset), "--task", "action", "--steps", "6", *TINY]
+    common = ["--data", str(dataset), "--task", "action", "--steps", "6", "--random-crop", "0.5", *TINY]
     train_main([*common, "--out", str(straight)])
     train_main([*common, "--out", str(split), "--stop-at", "3"])
     assert torch.load(split / "ckpt.pt", weights_only=False)["step"] == 3
