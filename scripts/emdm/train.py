@@ -76,6 +76,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--random-crop", type=float, default=0.0,
                    help="probability of training on a random sub-window (≥ --min-frames) of a clip; teaches short "
                         "lengths and saves compute")
+    p.add_argument("--crop-min", type=int, default=40, help="shortest random sub-window (frames)")
     p.add_argument("--limit", type=int, default=None, help="use at most this many clips (smoke tests)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--threads", type=int, default=None, help="torch CPU threads per process")
@@ -269,9 +270,9 @@ class Trainer:
 
     def crop(self, m: np.ndarray) -> np.ndarray:
         a = self.args
-        if a.random_crop <= 0 or len(m) <= a.min_frames or float(torch.rand(())) >= a.random_crop:
+        if a.random_crop <= 0 or len(m) <= a.crop_min or float(torch.rand(())) >= a.random_crop:
             return m
-        n = int(torch.randint(a.min_frames, len(m) + 1, ()))
+        n = int(torch.randint(a.crop_min, len(m) + 1, ()))
         s = int(torch.randint(0, len(m) - n + 1, ()))
         return m[s:s + n]
 

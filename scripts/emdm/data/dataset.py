@@ -190,7 +190,8 @@ def cached_text_embeddings(captions: list[str], encoder_id: str, cache_dir: Path
             return emb
     from emdm.text import encode_texts
 
-    emb = np.asarray(encode_texts(captions, encoder_id=encoder_id), dtype=np.float32)
+    # batch_size 1: exactly what the browser computes (int8 dynamic quantisation scales per call)
+    emb = np.asarray(encode_texts(captions, encoder_id=encoder_id, batch_size=1), dtype=np.float32)
     if emb.shape[0] != len(captions):
         raise RuntimeError(f"text encoder {encoder_id}: {emb.shape[0]} embeddings for {len(captions)} captions")
     cache_dir.mkdir(parents=True, exist_ok=True)
