@@ -1,0 +1,214 @@
+// Bad input and faults on the demo page: each behaves as the issue states, and the page stays usable.
+import { createHash } from 'node:crypto';
+import { expect, test, type Page, type Route } from '@playwright/test';
+import { watchPage } from './helpers';
+
+const PROMPT = 'a person walks forward';
+
+/**
+ * A valid step model (inputs x_t, z, cond, t, mask; output x0) that returns NaN everywhere:
+ * x0 = x_t * NaN. Built with onnx.helper (opset 18, 218 bytes):
+ *   Mul(['x_t', 'nan'], ['x0']) with a scalar float initializer 'nan'.
+ */
+const NAN_STEP_MODEL = Buffer.from(
+  'CAgSCGVtZG0tZTJlOsUBChMKA3hfdAoDbmFuEgJ4MCIDTXVsEghuYW5fc3RlcCoNEAEiBAAAwH9CA25hblocCgN4X3QSFQoTCAESDwoDEgFCCgMSAUwKAwiHAloUCgF6Eg8KDQgBEgkKAxIBQgoCCEBaGAoEY29uZBIQCg4IARIKCgMSAUIKAxIBQ1oQCgF0EgsKCQgBEgUKAxIBQloYCgRtYXNrEhAKDggBEgoKAxIBQgoDEgFMYhsKAngwEhUKEwgBEg8KAxIBQgoDEgFMCgMIhwJCBAoAEBI=',
+  'base64',
+);
+
+interface ModelInfo { task: string; onnx: string; variants?: Record<string, string>; condition: { labels?: string[] } }
+
+async function readManifest(page: Page): Promise<{ models: Record<string, ModelInfo>; files: Record<string, { bytes: number; sha256: string }> }> {
+  const r = await page.request.get('/models/manifest.json');
+  return r.json();
+}
+
+function onnxFiles(m: ModelInfo): string[] {
+  return [m.onnx, ...Object.values(m.variants ?? {})];
+}
+
+async function open(page: Page, query = 'noauto=1&backend=wasm'): Promise<void> {
+  await page.goto(`/?${query}`);
+  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+}
+
+test.describe('demo page: bad input', () => {
+  test('empty prompt: Generate is disabled with a hint', async ({ page }) => {
+    await open(page);
+    await page.locator('#prompt').fill('   ');
+    await expect(page.locator('#generate')).toBeDisabled();
+    await expect(page.locator('#prompt-hint')).toContainText('Type a prompt');
+    await page.locator('#prompt').press('Enter');
+    expect(await page.evaluate(() => window.emdm.counters.requests)).toBe(0);
+    await page.locator('#prompt').fill(PROMPT);
+    await expect(page.locator('#generate')).toBeEnabled();
+  });
+
+  test('overlong prompt: a notice says it was truncated, and only the first 300 characters are used', async ({ page }) => {
+    await open(page);
+    const long = `${PROMPT} `.repeat(30); // 690 characters
+    await page.locator('#prompt').fill(long);
+    await expect(page.locator('#prompt-hint')).toContainText('Too long');
+    await page.locator('#seconds').fill('1');
+    await page.locator('#steps').fill('0');
+    await page.locator('#generate').click();
+    await expect(page.locator('.notice.warn')).toContainText('only the first 300');
+    await page.waitForFunction(() => window.emdm.counters.generations === 1, null, { timeout: 120_000 });
+    expect((await page.locator('#prompt').inputValue()).length).toBe(300);
+  });
+
+  test('HTML in the prompt is shown as text, never interpreted', async ({ page }) => {
+    const watch = watchPage(page);
+    await open(page);
+    const evil = '<img src=x onerror="window.__pwned=1"><b>bold</b> a person jumps';
+    const r = await page.evaluate((t) => window.emdm.generate({ mode: 'text', text: t, seconds: 1, steps: 1 }), evil);
+    expect(r.frames).toBe(20);
+    await expect(page.locator('#caption')).toContainText(evil);
+    expect(await page.locator('#caption img, #caption b').count()).toBe(0);
+    expect(await page.evaluate(() => (window as { __pwned?: number }).__pwned)).toBeUndefined();
+    expect(await page.evaluate(() => window.emdm.cspViolations)).toEqual([]);
+    watch.assertClean();
+  });
+
+  test('out-of-range URL values are clamped with a notice', async ({ page }) => {
+    await open(page, 'noauto=1&backend=wasm&mode=dance&steps=7&seconds=30&guidance=-3&seed=-5&text=a%20person%20runs');
+    const notices = (await page.evaluate(() => window.emdm.notices())).map((n) => n.text).join('\n');
+    expect(notices).toContain("mode='dance'");
+    expect(notices).toContain('steps=7');
+    expect(notices).toContain('seconds=30');
+    expect(notices).toContain('guidance=-3');
+    expect(notices).toContain('seed=-5');
+    await expect(page.locator('#seconds-out')).toHaveText('9.8 s');
+    await expect(page.locator('#guidance-out')).toHaveText('1.0');
+    expect(await page.locator('#seed').inputValue()).toBe('0');
+    expect(await page.locator('#prompt').inputValue()).toBe('a person runs');
+    const steps = Number(await page.locator('#steps-out').textContent());
+    const m = await readManifest(page);
+    const text = Object.values(m.models).find((x) => x.task === 'text') as unknown as { supportedSteps: number[] };
+    expect(text.supportedSteps).toContain(steps);
+    expect(new URL(page.url()).searchParams.get('seconds')).toBe('9.8'); // the URL now holds the clamped state
+  });
+
+  test('repeated clicks: the newest request wins, older ones are cancelled', async ({ page }) => {
+    await open(page);
+    const out = await page.evaluate(async (t) => {
+      const seeds = [11, 22, 33];
+      const settled = await Promise.allSettled(seeds.map((seed) => window.emdm.generate({ mode: 'text', text: t, seed, seconds: 2, steps: 2 })));
+      return settled.map((s) => (s.status === 'fulfilled' ? { ok: true, seed: s.value.state.seed } : { ok: false, name: (s.reason as Error).name }));
+    }, PROMPT);
+    expect(out[2]).toEqual({ ok: true, seed: 33 });
+    expect(out.slice(0, 2).every((o) => !o.ok && o.name === 'AbortError')).toBe(true);
+    const c = await page.evaluate(() => window.emdm.counters);
+    expect(c.cancelled).toBe(2);
+    expect(c.generations).toBe(1);
+    await expect(page.locator('#caption')).toContainText('seed 33');
+    // The button stays clickable while busy; three quick clicks end with one finished generation.
+    await page.locator('#seconds').fill('2');
+    for (let i = 0; i < 3; i++) await page.locator('#generate').click();
+    await page.waitForFunction(() => window.emdm.counters.generations === 2 && !document.querySelector('#generate')!.classList.contains('busy'),
+      null, { timeout: 120_000 });
+    const c2 = await page.evaluate(() => window.emdm.counters);
+    expect(c2.requests).toBe(6);
+    expect(c2.cancelled + c2.generations).toBe(6);
+  });
+
+  test('no leak over 100 generations (JS heap after GC)', async ({ page }) => {
+    test.setTimeout(600_000);
+    await open(page);
+    const cdp = await page.context().newCDPSession(page);
+    const heap = async () => {
+      await cdp.send('HeapProfiler.collectGarbage');
+      return (await cdp.send('Runtime.getHeapUsage')).usedSize;
+    };
+    await page.evaluate((t) => window.emdm.generate({ mode: 'text', text: t, seconds: 1, steps: 1, seed: 1 }), PROMPT);
+    const before = await heap();
+    const n = await page.evaluate(async (t) => {
+      let done = 0;
+      for (let i = 0; i < 100; i++) {
+        await window.emdm.generate({ mode: 'text', text: t, seconds: 1 + (i % 3), steps: 1, seed: i });
+        done++;
+      }
+      return done;
+    }, PROMPT);
+    const after = await heap();
+    expect(n).toBe(100);
+    console.log(`JS heap: ${(before / 2 ** 20).toFixed(1)} MB before, ${(after / 2 ** 20).toFixed(1)} MB after 100 generations`);
+    expect(after - before).toBeLessThan(8 * 2 ** 20);
+  });
+});
+
+test.describe('demo page: faults', () => {
+  test('a missing model file: a clear panel, and the rest of the page stays usable', async ({ page }) => {
+    const m = await readManifest(page);
+    const [name, text] = Object.entries(m.models).find(([, x]) => x.task === 'text')!;
+    for (const f of onnxFiles(text)) await page.route(`**/models/${f}`, (r: Route) => r.fulfill({ status: 404, body: 'not found' }));
+    await open(page);
+    await expect(page.locator('#error-panel')).toBeVisible();
+    await expect(page.locator('#error-title')).toContainText(name);
+    await expect(page.locator('#error-reason')).toContainText(/missing|could not be downloaded/);
+    await expect(page.locator('#mode-text')).toBeDisabled();
+    const action = Object.values(m.models).find((x) => x.task === 'action');
+    test.skip(!action, 'no action model is shipped, so no other mode can be shown working');
+    await expect(page.locator('#mode-action')).toHaveAttribute('aria-selected', 'true');
+    const r = await page.evaluate(() => window.emdm.generate({ mode: 'action', seconds: 1, steps: 1 }));
+    expect(r.frames).toBe(20);
+  });
+
+  test('a model whose sha256 differs from the manifest is refused with the reason', async ({ page }) => {
+    const m = await readManifest(page);
+    const [name, text] = Object.entries(m.models).find(([, x]) => x.task === 'text')!;
+    for (const f of onnxFiles(text)) {
+      await page.route(`**/models/${f}`, async (r: Route) => {
+        const res = await r.fetch();
+        const body = Buffer.from(await res.body());
+        body[body.length >> 1] ^= 0xff;
+        await r.fulfill({ response: res, body });
+      });
+    }
+    await open(page);
+    await expect(page.locator('#error-panel')).toBeVisible();
+    await expect(page.locator('#error-title')).toContainText(name);
+    await expect(page.locator('#error-reason')).toContainText('checksum');
+    expect(await page.evaluate(() => window.emdm.error)).toMatch(/sha256/i);
+  });
+
+  test('NaN from the model: an error, and the character keeps its last good motion', async ({ page }) => {
+    const m = await readManifest(page);
+    const action = Object.values(m.models).find((x) => x.task === 'action');
+    test.skip(!action, 'needs an action model to swap for a NaN model while the text model stays good');
+    const sha = createHash('sha256').update(NAN_STEP_MODEL).digest('hex');
+    const files = onnxFiles(action!);
+    await page.route('**/models/manifest.json', async (r: Route) => {
+      const res = await r.fetch();
+      const doc = await res.json();
+      for (const f of files) doc.files[f] = { bytes: NAN_STEP_MODEL.length, sha256: sha };
+      await r.fulfill({ response: res, body: JSON.stringify(doc) });
+    });
+    for (const f of files) await page.route(`**/models/${f}`, (r: Route) => r.fulfill({ status: 200, body: NAN_STEP_MODEL, contentType: 'application/octet-stream' }));
+    await open(page);
+    const good = await page.evaluate((t) => window.emdm.generate({ mode: 'text', text: t, seconds: 2, steps: 2, seed: 5 }), PROMPT);
+    const err = await page.evaluate(async () => {
+      try {
+        await window.emdm.generate({ mode: 'action', seconds: 1, steps: 1 });
+        return 'no error';
+      } catch (e) {
+        return (e as Error).message;
+      }
+    });
+    expect(err).toMatch(/NaN|non-finite/i);
+    await expect(page.locator('.notice.error')).toContainText(/non-finite|NaN/i);
+    const c = await page.evaluate(() => window.emdm.counters);
+    expect(c.generations).toBe(1);
+    expect(c.errors).toBe(1);
+    await expect(page.locator('#caption')).toContainText(PROMPT); // still showing the good motion
+    expect(await page.locator('#time').textContent()).toContain(`/ ${((good.frames - 1) / good.fps).toFixed(1)} s`);
+  });
+
+  test('WebGPU unavailable: falls back to WASM and says so', async ({ page }) => {
+    await page.addInitScript(() => Object.defineProperty(Navigator.prototype, 'gpu', { get: () => undefined, configurable: true }));
+    await open(page, 'noauto=1'); // backend=auto
+    expect(await page.evaluate(() => window.emdm.backend)).toBe('wasm');
+    const notices = (await page.evaluate(() => window.emdm.notices())).map((n) => n.text).join('\n');
+    expect(notices).toMatch(/WebGPU is not available.*WebAssembly/);
+    await expect(page.locator('#status-text')).toContainText('WASM');
+  });
+});

@@ -1,0 +1,408 @@
+// The demo page: type a prompt (or pick an action, or nothing), watch the skinned character move.
+// Wiring only: models come from src/ (createGenerator, solveIK, writeBVH), the character from
+// src/character, the controls/URL/panels/downloads from web/ui.
+import { Quaternion, Vector3 } from 'three';
+import { applyPose, createCharacter } from '../src/character/character';
+import { MotionPlayer, type PoseTrack } from '../src/character/player';
+import { writeBVH } from '../src/export/bvh';
+import type { GenerateResult } from '../src/generate';
+import { loadManifest, ModelFileError, type Manifest } from '../src/manifest';
+import { solveIK } from '../src/motion/ik';
+import { Controls } from './ui/controls';
+import { byId, formatBytes, formatMs, saveBlob } from './ui/dom';
+import { fileStem, motionToGLB, motionToJSON } from './ui/downloads';
+import { Engine, isAbort, modelForMode, pickModels } from './ui/engine';
+import { examplePrompts } from './ui/examples';
+import { ErrorPanel, Notices } from './ui/notices';
+import { PlaybackBar } from './ui/playback';
+import { Stage } from './ui/stage';
+import {
+  framesFor, MAX_PROMPT_CHARS, parseState, randomSeed, stateToSearch, truncatePrompt, type PageState, type StateLimits,
+} from './ui/state';
+import { emptyCounters, type EmdmTestApi, type GenerateRequest, type GenerateResponse } from './ui/testapi';
+
+const MODELS_URL = `${import.meta.env.BASE_URL}models/`;
+
+/** Thrown when the model's output contains NaN/Infinity: the character keeps its last good motion. */
+class BadMotionError extends Error {
+  constructor(what: string) {
+    super(`the model returned non-finite numbers (${what}); the character keeps its last good motion`);
+    this.name = 'BadMotionError';
+  }
+}
+
+function firstNonFinite(a: ArrayLike<number>): number {
+  for (let i = 0; i < a.length; i++) if (!Number.isFinite(a[i])) return i;
+  return -1;
+}
+
+function describe(e: unknown): string {
+  return e instanceof Error ? e.message : String(e);
+}
+
+interface Shown {
+  state: PageState;
+  result: GenerateResult;
+  track: PoseTrack;
+  label: string;
+}
+
+// ---------------------------------------------------------------- status line
+const statusDot = byId('status-dot');
+const statusText = byId('status-text');
+const downloadBar = byId('download-bar');
+const downloadFill = byId('download-fill');
+function setStatus(kind: 'loading' | 'ready' | 'error', text: string): void {
+  statusDot.className = `dot ${kind}`;
+  statusText.textContent = text;
+}
+
+// ---------------------------------------------------------------- test API (installed first)
+let resolveReady!: () => void;
+const readyPromise = new Promise<void>((r) => (resolveReady = r));
+const notices = new Notices();
+const errorPanel = new ErrorPanel();
+const fpsTimes: number[] = [];
+const api: EmdmTestApi = {
+  ready: false,
+  state: 'loading',
+  error: '',
+  whenReady: () => readyPromise,
+  generate: () => Promise.reject(new Error('window.emdm.generate: the page is still loading (await window.emdm.whenReady())')),
+  counters: emptyCounters(),
+  backend: '',
+  notices: () => notices.log.slice(),
+  cspViolations: [],
+  playbackFps() {
+    if (fpsTimes.length < 2) return 0;
+    return ((fpsTimes.length - 1) * 1000) / (fpsTimes[fpsTimes.length - 1] - fpsTimes[0]);
+  },
+  heapBytes() {
+    const m = (performance as { memory?: { usedJSHeapSize: number } }).memory;
+    return m ? m.usedJSHeapSize : null;
+  },
+  seek: () => undefined,
+  frame: () => -1,
+  startup: { manifestMs: NaN, readyMs: NaN },
+};
+window.emdm = api;
+document.addEventListener('securitypolicyviolation', (e) => {
+  api.cspViolations.push(`${e.violatedDirective}: ${e.blockedURI || 'inline'} (${e.sourceFile}:${e.lineNumber})`);
+});
+
+function finishStartup(state: 'ready' | 'error', error = ''): void {
+  api.state = state;
+  api.error = error;
+  api.ready = true;
+  api.startup.readyMs = performance.now();
+  resolveReady();
+}
+
+// ---------------------------------------------------------------- scene
+const stage = new Stage(byId('scene', HTMLCanvasElement));
+const player = new MotionPlayer();
+const playback = new PlaybackBar(player);
+
+async function main(): Promise<void> {
+  let manifest: Manifest;
+  try {
+    manifest = await loadManifest(MODELS_URL);
+    api.startup.manifestMs = performance.now();
+  } catch (e) {
+    setStatus('error', 'Models unavailable');
+    errorPanel.show('The model list could not be loaded', describe(e),
+      'The page needs public/models/manifest.json and the files it lists (run `make demo`).');
+    finishStartup('error', describe(e));
+    return;
+  }
+  const skeleton = manifest.skeleton;
+  const character = createCharacter(skeleton);
+  stage.add(character.object);
+  restPose(character.bones, skeleton.offsets[0]);
+
+  const models = pickModels(manifest);
+  const base = models.text ?? models.action;
+  if (!base) {
+    setStatus('error', 'No motion model');
+    errorPanel.show('No motion model is shipped', 'public/models/manifest.json lists no text or action model.',
+      'Export one with `python -m emdm.export` (see README).');
+    startLoop(character.bones);
+    finishStartup('error', 'manifest lists no models');
+    return;
+  }
+  const limits: StateLimits = {
+    supportedSteps: [...base.entry.supportedSteps].sort((a, b) => a - b),
+    defaultSteps: base.entry.defaultSteps,
+    defaultGuidance: base.entry.guidance,
+    actions: models.action && models.action.entry.condition.type === 'action' ? models.action.entry.condition.labels : [],
+    fps: base.entry.fps,
+    maxFrames: Math.min(base.entry.maxFrames, skeleton.maxFrames),
+    defaultText: '',
+  };
+  const examples = examplePrompts(manifest, models.text?.name ?? null, limits.actions);
+  limits.defaultText = examples[0] ?? '';
+  const parsed = parseState(location.search, limits, randomSeed());
+  for (const n of parsed.notices) notices.show('warn', n, 14000);
+
+  let shown: Shown | null = null;
+  const engine = new Engine(manifest, MODELS_URL, parsed.state.backend, {
+    download(model, loaded, total) {
+      downloadBar.hidden = loaded >= total;
+      downloadFill.style.width = `${total > 0 ? (100 * loaded) / total : 0}%`;
+      setStatus('loading', `Downloading ${model}: ${formatBytes(loaded)} / ${formatBytes(total)}`);
+    },
+    fallback(model, reason) {
+      notices.show('info', `${reason}: ${model} runs on WebAssembly (CPU) instead.`, 12000);
+    },
+  });
+
+  const controls = new Controls(limits, examples, {
+    generate: () => void generate(controls.read()).catch(() => undefined),
+    change: (s) => history.replaceState(null, '', stateToSearch(s)),
+  });
+  controls.set(parsed.state);
+  if (!models.action) controls.setModeAvailable('action', 'No action model is shipped with this demo');
+  if (!models.text) {
+    controls.setModeAvailable('text', 'No text model is shipped with this demo');
+    controls.setModeAvailable('random', 'No text model is shipped with this demo');
+    if (parsed.state.mode !== 'action') controls.setMode('action');
+  }
+  history.replaceState(null, '', stateToSearch(controls.read()));
+
+  // ------------------------------------------------------------ progress + timings
+  const progress = byId('progress');
+  const progressFill = byId('progress-fill');
+  const progressText = byId('progress-text');
+  const showProgress = (fraction: number, text: string) => {
+    progress.hidden = false;
+    progressFill.style.width = `${Math.round(fraction * 100)}%`;
+    progressText.textContent = text;
+  };
+  const showTimings = (r: GenerateResult, ikMs: number) => {
+    const t = r.timings;
+    const mean = t.stepMs.length ? t.stepMs.reduce((a, b) => a + b, 0) / t.stepMs.length : NaN;
+    byId('t-encode').textContent = formatMs(t.encodeMs);
+    byId('t-step').textContent = `${formatMs(mean)} × ${t.stepMs.length}`;
+    byId('t-decode').textContent = formatMs(t.decodeMs + ikMs);
+    byId('t-total').textContent = formatMs(t.totalMs + ikMs);
+    byId('t-backend').textContent = `${t.backend === 'webgpu' ? 'WebGPU' : 'WASM'} · ${t.threads} thread${t.threads === 1 ? '' : 's'}`;
+    byId('t-calls').textContent = String(r.modelCalls);
+    byId('timings').hidden = false;
+  };
+  const caption = byId('caption');
+  const showCaption = (s: PageState, label: string) => {
+    caption.replaceChildren();
+    const main = document.createElement('span');
+    main.textContent = s.mode === 'text' ? `“${label}”` : label;
+    const small = document.createElement('small');
+    small.textContent = `${s.mode} · seed ${s.seed} · ${s.steps} step${s.steps === 1 ? '' : 's'} · ${s.seconds.toFixed(1)} s`;
+    caption.append(main, small);
+  };
+
+  // ------------------------------------------------------------ generation (newest request wins)
+  async function generate(requested: PageState): Promise<GenerateResponse> {
+    const s = { ...requested };
+    api.counters.requests++;
+    const choice = modelForMode(models, s.mode);
+    if (!choice) throw new Error(`no ${s.mode} model is shipped with this demo`);
+    if (s.mode === 'text') {
+      const cut = truncatePrompt(s.text);
+      if (cut.truncated) {
+        notices.show('warn', `Your prompt was longer than ${MAX_PROMPT_CHARS} characters: only the first ${MAX_PROMPT_CHARS} are used.`);
+        s.text = cut.text;
+        controls.set(s);
+      }
+      if (s.text.trim() === '') throw new Error('the prompt is empty: type what the character should do');
+    }
+    if (s.mode === 'action' && !limits.actions.includes(s.action)) throw new Error(`unknown action '${s.action}'`);
+    const frames = framesFor(s.seconds, limits);
+    const label = s.mode === 'text' ? s.text.trim() : s.mode === 'action' ? s.action.replace(/[_-]+/g, ' ') : 'Random motion';
+    controls.setBusy(true);
+    showProgress(0, 'Starting…');
+    try {
+      const out = await engine.run(async (signal) => {
+        const gen = await engine.load(choice.name);
+        api.backend = gen.backend;
+        if (signal.aborted) throw signal.reason;
+        showProgress(0, s.mode === 'text' ? 'Encoding the prompt…' : 'Sampling…');
+        const condition =
+          s.mode === 'text' ? { type: 'text' as const, text: s.text }
+            : s.mode === 'action' ? { type: 'action' as const, label: limits.actions.indexOf(s.action) }
+              : { type: 'none' as const };
+        const result = await gen.generate({
+          condition, frames, steps: s.steps, guidance: s.guidance, seed: s.seed, signal, smooth: true, footCleanup: true,
+          onStep(done, total) {
+            api.counters.stepsRun++;
+            showProgress(done / total, `Denoising step ${done} / ${total}`);
+          },
+        });
+        const t0 = performance.now();
+        const bad = firstNonFinite(result.motion.joints);
+        if (bad >= 0) throw new BadMotionError(`joint value ${bad} of ${result.motion.joints.length} is ${result.motion.joints[bad]}`);
+        const ik = solveIK(result.motion.joints, result.motion.frames, skeleton);
+        const badQ = firstNonFinite(ik.quats);
+        if (badQ >= 0 || firstNonFinite(ik.rootPos) >= 0) throw new BadMotionError('the solved joint rotations');
+        return { result, ik, ikMs: performance.now() - t0 };
+      });
+      const { result, ik, ikMs } = out;
+      const track: PoseTrack = { frames: result.motion.frames, fps: result.motion.fps, joints: skeleton.joints.length, rootPos: ik.rootPos, quats: ik.quats };
+      player.setTrack(track);
+      player.playing = true;
+      stage.setPath(ik.rootPos, track.frames);
+      stage.snapTo(ik.rootPos);
+      shown = { state: s, result, track, label };
+      showCaption(s, label);
+      showTimings(result, ikMs);
+      for (const id of ['dl-bvh', 'dl-glb', 'dl-json']) byId(id, HTMLButtonElement).disabled = false;
+      history.replaceState(null, '', stateToSearch(s));
+      api.counters.generations++;
+      api.counters.modelCalls += result.modelCalls;
+      setStatus('ready', `Ready · ${result.timings.backend === 'webgpu' ? 'WebGPU' : 'WASM'} · ${result.timings.threads} thread${result.timings.threads === 1 ? '' : 's'}`);
+      return {
+        state: s, frames: track.frames, fps: track.fps, joints: Array.from(result.motion.joints),
+        timings: { ...result.timings, stepMs: [...result.timings.stepMs], ikMs },
+        modelCalls: result.modelCalls,
+      };
+    } catch (e) {
+      if (isAbort(e)) {
+        api.counters.cancelled++;
+      } else {
+        api.counters.errors++;
+        reportError(e, choice.name);
+      }
+      throw e;
+    } finally {
+      if (!engine.busy) {
+        controls.setBusy(false);
+        progress.hidden = true;
+      }
+    }
+  }
+
+  function reportError(e: unknown, model: string): void {
+    if (e instanceof ModelFileError) {
+      const why = e.reason === 'sha256' ? 'its checksum does not match the manifest (corrupt or replaced file)'
+        : e.reason === 'missing' ? 'the file is missing' : e.reason === 'incompatible' ? 'the file is not a compatible model' : 'it could not be downloaded';
+      errorPanel.show(`The model ${model} cannot be used`, `${e.path}: ${why}.`, `Details: ${e.message}`);
+    } else if (e instanceof BadMotionError) {
+      notices.show('error', `Generation failed: ${e.message}.`);
+    } else {
+      notices.show('error', `Generation failed: ${describe(e)}`);
+    }
+  }
+
+  // ------------------------------------------------------------ downloads
+  const guard = (fn: (s: Shown) => Promise<void> | void) => async () => {
+    if (!shown) return;
+    try {
+      await fn(shown);
+    } catch (e) {
+      notices.show('error', `Download failed: ${describe(e)}`);
+    }
+  };
+  byId('dl-bvh').addEventListener('click', guard((s) => {
+    const text = writeBVH(s.result.motion, skeleton, { fps: 20 });
+    saveBlob(new Blob([text], { type: 'text/plain' }), `${fileStem(s.label, s.state.seed)}.bvh`);
+  }));
+  byId('dl-glb').addEventListener('click', guard(async (s) => {
+    const glb = await motionToGLB(skeleton, s.track);
+    saveBlob(new Blob([glb], { type: 'model/gltf-binary' }), `${fileStem(s.label, s.state.seed)}.glb`);
+  }));
+  byId('dl-json').addEventListener('click', guard((s) => {
+    const json = motionToJSON(skeleton, s.result.motion.joints, s.result.motion.frames, s.result.motion.fps, {
+      model: modelForMode(models, s.state.mode)?.name, mode: s.state.mode, text: s.state.mode === 'text' ? s.state.text : undefined,
+      action: s.state.mode === 'action' ? s.state.action : undefined, steps: s.state.steps, guidance: s.state.guidance, seed: s.state.seed,
+    });
+    saveBlob(new Blob([json], { type: 'application/json' }), `${fileStem(s.label, s.state.seed)}.json`);
+  }));
+
+  // ------------------------------------------------------------ test API
+  api.generate = (req: GenerateRequest = {}) => {
+    const s: PageState = { ...controls.read() };
+    if (req.mode !== undefined) s.mode = req.mode;
+    if (req.text !== undefined) s.text = req.text;
+    if (req.action !== undefined) s.action = req.action;
+    if (req.steps !== undefined) s.steps = req.steps;
+    if (req.seconds !== undefined) s.seconds = req.seconds;
+    if (req.guidance !== undefined) s.guidance = req.guidance;
+    if (req.seed !== undefined) s.seed = req.seed;
+    if (!limits.supportedSteps.includes(s.steps)) return Promise.reject(new RangeError(`steps ${s.steps} is not one of ${limits.supportedSteps.join(', ')}`));
+    controls.set(s);
+    return generate(s);
+  };
+  api.seek = (time: number, play = false) => {
+    player.seek(time);
+    player.playing = play;
+  };
+  api.frame = () => (player.track ? player.frame : -1);
+
+  startLoop(character.bones);
+
+  // ------------------------------------------------------------ cold start: load the first model
+  const first = modelForMode(models, controls.read().mode) ?? base;
+  setStatus('loading', `Loading ${first.name}…`);
+  try {
+    const gen = await engine.load(first.name);
+    api.backend = gen.backend;
+    setStatus('ready', `Ready · ${gen.backend === 'webgpu' ? 'WebGPU' : 'WASM'}`);
+    downloadBar.hidden = true;
+    controls.setReady(true);
+    finishStartup('ready');
+  } catch (e) {
+    downloadBar.hidden = true;
+    reportError(e, first.name);
+    setStatus('error', `${first.name} unavailable`);
+    const other = first === models.text ? models.action : models.text;
+    if (first === models.text) {
+      controls.setModeAvailable('text', `The text model failed to load: ${describe(e)}`);
+      controls.setModeAvailable('random', `The text model failed to load: ${describe(e)}`);
+    } else {
+      controls.setModeAvailable('action', `The action model failed to load: ${describe(e)}`);
+    }
+    if (other) controls.setMode(other === models.action ? 'action' : 'text');
+    controls.setReady(true);
+    finishStartup('ready', describe(e));
+    return;
+  }
+  // Show something right away: the motion the URL (or the defaults) describe.
+  if (!new URLSearchParams(location.search).has('noauto')) void generate(controls.read()).catch(() => undefined);
+}
+
+/** Arms relaxed down (A-pose) until the first motion arrives. */
+function restPose(bones: import('three').Bone[], pelvis: number[]): void {
+  const quats = new Float32Array(bones.length * 4);
+  for (let j = 0; j < bones.length; j++) quats[j * 4 + 3] = 1;
+  const set = (name: string, axis: Vector3, angle: number) => {
+    const j = bones.findIndex((b) => b.name === name);
+    if (j >= 0) new Quaternion().setFromAxisAngle(axis, angle).toArray(quats as unknown as number[], j * 4);
+  };
+  set('l_shoulder', new Vector3(0, 0, 1), -1.2);
+  set('r_shoulder', new Vector3(0, 0, 1), 1.2);
+  set('l_elbow', new Vector3(0, 1, 0), -0.15);
+  set('r_elbow', new Vector3(0, 1, 0), 0.15);
+  applyPose(bones, pelvis, quats);
+}
+
+function startLoop(bones: import('three').Bone[]): void {
+  let last = performance.now();
+  const tick = (now: number) => {
+    const dt = Math.min(0.1, Math.max(0, (now - last) / 1000));
+    last = now;
+    if (player.track) {
+      player.update(dt);
+      applyPose(bones, player.root, player.quats);
+      playback.sync();
+    }
+    stage.frame(dt, player.track ? player.root : null);
+    fpsTimes.push(now);
+    while (fpsTimes.length > 2 && now - fpsTimes[0] > 2000) fpsTimes.shift();
+    requestAnimationFrame(tick);
+  };
+  requestAnimationFrame(tick);
+}
+
+main().catch((e) => {
+  setStatus('error', 'The page failed to start');
+  errorPanel.show('The page failed to start', describe(e));
+  finishStartup('error', describe(e));
+});

@@ -1,0 +1,136 @@
+// The 3-D stage: renderer, lights with soft shadows, a floor with a grid that fades into the fog, a
+// camera that follows the character's root and can be orbited, and the root's path on the floor.
+import {
+  ACESFilmicToneMapping, BufferAttribute, BufferGeometry, CircleGeometry, Color, DirectionalLight, Fog,
+  GridHelper, HemisphereLight, Line, LineBasicMaterial, Mesh, MeshStandardMaterial, PCFShadowMap,
+  PerspectiveCamera, Scene, SRGBColorSpace, Vector3, WebGLRenderer, type Object3D,
+} from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+
+const BG = 0x161b26;
+
+export class Stage {
+  readonly renderer: WebGLRenderer;
+  readonly scene = new Scene();
+  readonly camera = new PerspectiveCamera(38, 1, 0.05, 200);
+  readonly controls: OrbitControls;
+  private readonly sun: DirectionalLight;
+  private readonly path: Line;
+  private readonly pathGeometry = new BufferGeometry();
+  private readonly follow = new Vector3(0, 0.9, 0);
+  private readonly tmp = new Vector3();
+
+  constructor(readonly canvas: HTMLCanvasElement) {
+    this.renderer = new WebGLRenderer({ canvas, antialias: true, powerPreference: 'high-performance', preserveDrawingBuffer: false });
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+    this.renderer.outputColorSpace = SRGBColorSpace;
+    this.renderer.toneMapping = ACESFilmicToneMapping;
+    this.renderer.toneMappingExposure = 1.05;
+    this.renderer.shadowMap.enabled = true;
+    this.renderer.shadowMap.type = PCFShadowMap;
+
+    this.scene.background = new Color(BG);
+    this.scene.fog = new Fog(BG, 9, 26);
+
+    const hemi = new HemisphereLight(0xdfe8ff, 0x3a3128, 1.5);
+    this.scene.add(hemi);
+    this.sun = new DirectionalLight(0xfff3e2, 2.6);
+    this.sun.position.set(3, 6, 4);
+    this.sun.castShadow = true;
+    this.sun.shadow.mapSize.set(2048, 2048);
+    this.sun.shadow.camera.left = -3;
+    this.sun.shadow.camera.right = 3;
+    this.sun.shadow.camera.top = 3;
+    this.sun.shadow.camera.bottom = -3;
+    this.sun.shadow.camera.near = 0.5;
+    this.sun.shadow.camera.far = 20;
+    this.sun.shadow.bias = -0.0004;
+    this.sun.shadow.normalBias = 0.02;
+    this.sun.shadow.radius = 4;
+    this.scene.add(this.sun, this.sun.target);
+    const rim = new DirectionalLight(0x88aaff, 0.9);
+    rim.position.set(-4, 3, -5);
+    this.scene.add(rim);
+
+    const floor = new Mesh(new CircleGeometry(40, 96), new MeshStandardMaterial({ color: 0x242b38, roughness: 0.92, metalness: 0 }));
+    floor.rotation.x = -Math.PI / 2;
+    floor.receiveShadow = true;
+    floor.name = 'floor';
+    this.scene.add(floor);
+    const grid = new GridHelper(80, 160, 0x4a5670, 0x323a4b);
+    grid.position.y = 0.001;
+    (grid.material as LineBasicMaterial).transparent = true;
+    (grid.material as LineBasicMaterial).opacity = 0.55;
+    this.scene.add(grid);
+
+    this.pathGeometry.setAttribute('position', new BufferAttribute(new Float32Array(3), 3));
+    this.path = new Line(this.pathGeometry, new LineBasicMaterial({ color: 0x6f9bff, transparent: true, opacity: 0.7 }));
+    this.path.frustumCulled = false;
+    this.scene.add(this.path);
+
+    this.camera.position.set(2.6, 1.7, 4.2);
+    this.controls = new OrbitControls(this.camera, canvas);
+    this.controls.target.copy(this.follow);
+    this.controls.enableDamping = true;
+    this.controls.dampingFactor = 0.08;
+    this.controls.minDistance = 1.2;
+    this.controls.maxDistance = 14;
+    this.controls.maxPolarAngle = Math.PI * 0.495;
+    this.controls.update();
+  }
+
+  add(o: Object3D): void {
+    this.scene.add(o);
+  }
+
+  /** Draw the root's ground path (frames × 3 positions, y ignored). */
+  setPath(rootPos: Float32Array, frames: number): void {
+    const pts = new Float32Array(frames * 3);
+    for (let i = 0; i < frames; i++) {
+      pts[i * 3] = rootPos[i * 3];
+      pts[i * 3 + 1] = 0.004;
+      pts[i * 3 + 2] = rootPos[i * 3 + 2];
+    }
+    this.pathGeometry.setAttribute('position', new BufferAttribute(pts, 3));
+    this.pathGeometry.setDrawRange(0, frames);
+    this.pathGeometry.computeBoundingSphere();
+  }
+
+  /** Move the orbit target (and the camera with it) smoothly towards the root, then render. */
+  frame(dt: number, root: ArrayLike<number> | null): void {
+    if (root) {
+      this.tmp.set(root[0], 0.9, root[2]);
+      const k = 1 - Math.exp(-dt * 3);
+      const delta = this.tmp.sub(this.follow).multiplyScalar(k);
+      this.follow.add(delta);
+      this.controls.target.add(delta);
+      this.camera.position.add(delta);
+      this.sun.position.set(this.follow.x + 3, 6, this.follow.z + 4);
+      this.sun.target.position.set(this.follow.x, 0, this.follow.z);
+    }
+    this.controls.update();
+    this.resize();
+    this.renderer.render(this.scene, this.camera);
+  }
+
+  /** Snap the follow point to the root (used when a new motion starts far away). */
+  snapTo(root: ArrayLike<number>): void {
+    const d = new Vector3(root[0], 0.9, root[2]).sub(this.follow);
+    this.follow.add(d);
+    this.controls.target.add(d);
+    this.camera.position.add(d);
+  }
+
+  private resize(): void {
+    const c = this.canvas;
+    const w = c.clientWidth;
+    const h = c.clientHeight;
+    if (w === 0 || h === 0) return;
+    const pr = this.renderer.getPixelRatio();
+    if (c.width !== Math.floor(w * pr) || c.height !== Math.floor(h * pr)) {
+      this.renderer.setSize(w, h, false);
+      this.camera.aspect = w / h;
+      this.camera.updateProjectionMatrix();
+    }
+  }
+}

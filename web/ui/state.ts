@@ -1,0 +1,159 @@
+// The page state (everything that determines a motion) and its URL form. Pure functions: parsing
+// clamps out-of-range or malformed values to the nearest valid one and says what it changed, so a
+// shared link always reproduces a motion and a bad link never breaks the page.
+
+export type Mode = 'text' | 'action' | 'random';
+export type BackendChoice = 'auto' | 'wasm' | 'webgpu';
+
+export interface PageState {
+  mode: Mode;
+  text: string;
+  action: string;          // action label ('' when the model has none)
+  steps: number;           // one of the supported step counts
+  seconds: number;         // motion length, MIN_SECONDS..MAX_SECONDS in 0.05 s (one 20 fps frame)
+  guidance: number;        // classifier-free guidance scale
+  seed: number;            // uint32
+  backend: BackendChoice;
+}
+
+/** What the loaded models allow (from the manifest). */
+export interface StateLimits {
+  supportedSteps: number[];
+  defaultSteps: number;
+  defaultGuidance: number;
+  actions: string[];
+  fps: number;
+  maxFrames: number;
+  defaultText: string;
+}
+
+export const MIN_SECONDS = 1;
+export const MAX_SECONDS = 9.8;
+export const DEFAULT_SECONDS = 6;
+export const MIN_GUIDANCE = 1;
+export const MAX_GUIDANCE = 6;
+/** Longer prompts are cut here (MiniLM reads at most 128 word pieces; ~300 characters stay well inside). */
+export const MAX_PROMPT_CHARS = 300;
+export const MAX_SEED = 0xffffffff;
+
+export interface Parsed {
+  state: PageState;
+  notices: string[];
+}
+
+export function defaultState(l: StateLimits, seed: number): PageState {
+  return {
+    mode: 'text',
+    text: l.defaultText,
+    action: l.actions[0] ?? '',
+    steps: l.defaultSteps,
+    seconds: DEFAULT_SECONDS,
+    guidance: l.defaultGuidance,
+    seed: seed >>> 0,
+    backend: 'auto',
+  };
+}
+
+/** Frames for a length in seconds (at least 2, at most maxFrames). */
+export function framesFor(seconds: number, l: Pick<StateLimits, 'fps' | 'maxFrames'>): number {
+  return Math.max(2, Math.min(l.maxFrames, Math.round(seconds * l.fps)));
+}
+
+/** The supported step count nearest to n (ties go to the larger count). */
+export function nearestSteps(n: number, supported: number[]): number {
+  let best = supported[0];
+  for (const s of supported) {
+    if (Math.abs(s - n) < Math.abs(best - n) || (Math.abs(s - n) === Math.abs(best - n) && s > best)) best = s;
+  }
+  return best;
+}
+
+/** Cut a prompt to MAX_PROMPT_CHARS (on a code-point boundary); `truncated` says whether it was cut. */
+export function truncatePrompt(text: string): { text: string; truncated: boolean } {
+  const chars = Array.from(text);
+  if (chars.length <= MAX_PROMPT_CHARS) return { text, truncated: false };
+  return { text: chars.slice(0, MAX_PROMPT_CHARS).join(''), truncated: true };
+}
+
+const round = (x: number, step: number) => Math.round(x / step) * step;
+const fmt = (x: number) => String(Number(x.toFixed(3)));
+
+/** Parse a query string (e.g. location.search) against the model limits. */
+export function parseState(search: string, l: StateLimits, fallbackSeed: number): Parsed {
+  const q = new URLSearchParams(search);
+  const s = defaultState(l, fallbackSeed);
+  const notices: string[] = [];
+
+  const mode = q.get('mode');
+  if (mode !== null) {
+    if (mode === 'text' || mode === 'action' || mode === 'random') s.mode = mode;
+    else notices.push(`URL mode='${mode}' is not text, action or random; using text.`);
+  }
+  const text = q.get('text');
+  if (text !== null) {
+    const t = truncatePrompt(text);
+    s.text = t.text;
+    if (t.truncated) notices.push(`URL text was longer than ${MAX_PROMPT_CHARS} characters; it was cut.`);
+  }
+  const action = q.get('action');
+  if (action !== null) {
+    if (l.actions.includes(action)) s.action = action;
+    else if (l.actions.length) notices.push(`URL action='${action}' is not an action the model knows; using '${s.action}'.`);
+  }
+  const num = (name: string, apply: (v: number) => void) => {
+    const raw = q.get(name);
+    if (raw === null) return;
+    const v = Number(raw);
+    if (raw.trim() === '' || !Number.isFinite(v)) notices.push(`URL ${name}='${raw}' is not a number; ignored.`);
+    else apply(v);
+  };
+  num('steps', (v) => {
+    const n = nearestSteps(v, l.supportedSteps);
+    if (n !== v) notices.push(`URL steps=${fmt(v)} is not supported (choices: ${l.supportedSteps.join(', ')}); using ${n}.`);
+    s.steps = n;
+  });
+  num('seconds', (v) => {
+    const c = round(Math.min(MAX_SECONDS, Math.max(MIN_SECONDS, v)), 0.05);
+    if (Math.abs(c - v) > 1e-9 && (v < MIN_SECONDS || v > MAX_SECONDS)) {
+      notices.push(`URL seconds=${fmt(v)} is outside ${MIN_SECONDS}–${MAX_SECONDS} s; using ${fmt(c)}.`);
+    }
+    s.seconds = Number(c.toFixed(2));
+  });
+  num('guidance', (v) => {
+    const c = Math.min(MAX_GUIDANCE, Math.max(MIN_GUIDANCE, v));
+    if (c !== v) notices.push(`URL guidance=${fmt(v)} is outside ${MIN_GUIDANCE}–${MAX_GUIDANCE}; using ${fmt(c)}.`);
+    s.guidance = Number(c.toFixed(2));
+  });
+  num('seed', (v) => {
+    const c = Math.min(MAX_SEED, Math.max(0, Math.trunc(v)));
+    if (c !== v) notices.push(`URL seed=${fmt(v)} must be a whole number 0–${MAX_SEED}; using ${c}.`);
+    s.seed = c;
+  });
+  const backend = q.get('backend');
+  if (backend !== null) {
+    if (backend === 'auto' || backend === 'wasm' || backend === 'webgpu') s.backend = backend;
+    else notices.push(`URL backend='${backend}' is not auto, wasm or webgpu; using auto.`);
+  }
+  return { state: s, notices };
+}
+
+/** The query string for a state (only what determines the motion, plus a non-default backend). */
+export function stateToSearch(s: PageState): string {
+  const q = new URLSearchParams();
+  q.set('mode', s.mode);
+  if (s.mode === 'text') q.set('text', s.text);
+  if (s.mode === 'action') q.set('action', s.action);
+  q.set('steps', String(s.steps));
+  q.set('seconds', String(s.seconds));
+  if (s.mode !== 'random') q.set('guidance', String(s.guidance));
+  q.set('seed', String(s.seed >>> 0));
+  if (s.backend !== 'auto') q.set('backend', s.backend);
+  return `?${q.toString()}`;
+}
+
+/** A fresh random uint32 seed. */
+export function randomSeed(): number {
+  const a = new Uint32Array(1);
+  crypto.getRandomValues(a);
+  return a[0];
+}

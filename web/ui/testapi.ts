@@ -1,0 +1,73 @@
+// `window.emdm`: the page's test API (used by the Playwright suites and by anyone scripting the demo).
+import type { Mode, PageState } from './state';
+
+export interface GenerateRequest {
+  mode?: Mode;
+  text?: string;
+  action?: string;
+  steps?: number;
+  seconds?: number;
+  guidance?: number;
+  seed?: number;
+}
+
+export interface GenerateResponse {
+  state: PageState;
+  frames: number;
+  fps: number;
+  /** frames × 22 × 3 joint positions, metres */
+  joints: number[];
+  timings: { encodeMs: number; stepMs: number[]; decodeMs: number; ikMs: number; totalMs: number; backend: string; threads: number };
+  modelCalls: number;
+}
+
+export interface Counters {
+  /** generations requested (UI or API) */
+  requests: number;
+  /** generations that finished and are on screen */
+  generations: number;
+  /** generations cancelled because a newer one started */
+  cancelled: number;
+  /** generations that failed (bad model output, load errors) */
+  errors: number;
+  /** ONNX step-model calls of finished generations (a guided step batches both passes in one call) */
+  modelCalls: number;
+  /** denoising steps run, including those of cancelled generations */
+  stepsRun: number;
+}
+
+export interface EmdmTestApi {
+  ready: boolean;
+  state: 'loading' | 'ready' | 'error';
+  /** why the page (or a model) could not load, '' when fine */
+  error: string;
+  whenReady(): Promise<void>;
+  generate(req?: GenerateRequest): Promise<GenerateResponse>;
+  counters: Counters;
+  /** backend in use once a model is loaded */
+  backend: string;
+  /** notices shown so far */
+  notices(): Array<{ kind: string; text: string }>;
+  /** CSP violations reported by the browser (must stay empty) */
+  cspViolations: string[];
+  /** frames drawn per second over the last ~2 s */
+  playbackFps(): number;
+  /** Chromium's performance.memory.usedJSHeapSize, or null elsewhere */
+  heapBytes(): number | null;
+  /** playback control for tests: pause at a time (seconds) */
+  seek(time: number, play?: boolean): void;
+  /** index of the frame on screen (fractional), -1 before the first motion */
+  frame(): number;
+  /** timings of the cold start, ms since navigation start */
+  startup: { manifestMs: number; readyMs: number };
+}
+
+declare global {
+  interface Window {
+    emdm: EmdmTestApi;
+  }
+}
+
+export function emptyCounters(): Counters {
+  return { requests: 0, generations: 0, cancelled: 0, errors: 0, modelCalls: 0, stepsRun: 0 };
+}
