@@ -192,6 +192,10 @@ def make_tiny(out_dir: Path) -> dict[str, Any]:
     meta = {"model": "tiny-step.onnx", "frames": L, "featureDim": D, "zDim": Z, "condDim": C,
             "steps": sched.steps, "guidance": 2.5, "schedule": schedule_meta(sched)}
     write_case(out_dir, "tiny", meta, arrays)
+    # mean/std file in the manifest layout (float32 LE mean[263] then std[263]) for the browser harness
+    ms = np.concatenate([np.zeros(D, "<f4"), np.ones(D, "<f4")])
+    ms[3] = 0.9
+    (out_dir / "tiny.meanstd.f32").write_bytes(ms.astype("<f4").tobytes())
     return {"case": "tiny", "model": "tiny-step.onnx"}
 
 

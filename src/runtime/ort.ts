@@ -30,9 +30,12 @@ let wasmOrt: Promise<Ort> | null = null;
 let webgpuOrt: Promise<Ort> | null = null;
 let configuredThreads: number | null = null;
 
+/** `<BASE_URL>ort/` as an absolute URL (an origin-less path makes Vite's dev server rewrite ORT's
+ * dynamic import of the .mjs in public/ and refuse it). */
 function defaultWasmPaths(): string {
   const base = (import.meta as unknown as { env?: { BASE_URL?: string } }).env?.BASE_URL ?? '/';
-  return `${base.endsWith('/') ? base : base + '/'}ort/`;
+  const rel = `${base.endsWith('/') ? base : base + '/'}ort/`;
+  return typeof location !== 'undefined' ? new URL(rel, location.href).href : rel;
 }
 
 /** The thread count used when none is requested. */

@@ -1,0 +1,98 @@
+// The TypeScript core in headless Chromium (web/harness/) against the same code in Node:
+// same seed → bit-identical features and joints, twice in the browser and equal to Node
+// (both run ORT-web's WASM build, single-threaded here), and the seeded RNG agrees bit for bit.
+import fs from 'node:fs';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+import crypto from 'node:crypto';
+import { expect, test, type Page } from '@playwright/test';
+import { createGenerator, type GenerateOptions } from '../../src/generate';
+import { type Manifest, loadManifest } from '../../src/manifest';
+import { SeededRandom } from '../../src/sampler/rng';
+import { computeSchedule } from '../../src/sampler/schedule';
+import { watchExternalRequests, watchPage } from './helpers';
+
+const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
+const PARITY = path.join(ROOT, 'tests', 'fixtures', 'parity');
+const MODELS = path.join(ROOT, 'public', 'models') + '/';
+
+const sha = (a: Float32Array) => crypto.createHash('sha256').update(new Uint8Array(a.buffer, a.byteOffset, a.byteLength)).digest('hex');
+const file = (p: string) => fs.readFileSync(p);
+
+/** The harness's tiny model manifest, built the same way in Node (files from tests/fixtures/parity). */
+async function tinyNode(): Promise<{ manifest: Manifest; baseUrl: string }> {
+  const onnx = file(path.join(PARITY, 'tiny-step.onnx'));
+  const ms = file(path.join(PARITY, 'tiny.meanstd.f32'));
+  const real = await loadManifest(MODELS);
+  const s = computeSchedule(4);
+  const h = (b: Buffer) => crypto.createHash('sha256').update(b).digest('hex');
+  const manifest = {
+    schema: 1, skeleton: real.skeleton, textEncoders: {},
+    models: { tiny: {
+      task: 'action', condition: { type: 'action', labels: ['a', 'b', 'c', 'd', 'e', 'f', 'g', 'h'], dim: 8 },
+      onnx: 'tiny-step.onnx', meanStd: 'tiny.meanstd.f32', zDim: 64, featureDim: 263, fps: 20, maxFrames: 196, guidance: 2.5,
+      defaultSteps: 4, supportedSteps: [2, 4],
+      schedules: { '4': { time: [...s.time], coef1: [...s.coef1], coef2: [...s.coef2], sigma: [...s.sigma] } },
+      files: ['tiny-step.onnx', 'tiny.meanstd.f32'],
+    } },
+    files: { 'tiny-step.onnx': { bytes: onnx.length, sha256: h(onnx) }, 'tiny.meanstd.f32': { bytes: ms.length, sha256: h(ms) } },
+  } as unknown as Manifest;
+  return { manifest, baseUrl: PARITY + '/' };
+}
+
+interface Req { model: string; condition: GenerateOptions['condition']; frames: number; steps: number; guidance: number; seed: number }
+
+async function nodeRun(req: Req) {
+  const { manifest, baseUrl } = req.model === 'tiny' ? await tinyNode() : { manifest: await loadManifest(MODELS), baseUrl: MODELS };
+  const gen = await createGenerator({ manifest, baseUrl, model: req.model, backend: 'wasm', threads: 1 });
+  try {
+    const r = await gen.generate(req);
+    return { featuresSha256: sha(r.motion.features), jointsSha256: sha(r.motion.joints) };
+  } finally {
+    await gen.dispose();
+  }
+}
+
+async function openHarness(page: Page): Promise<void> {
+  await page.goto('/harness/?threads=1&backend=wasm');
+  await page.waitForFunction(() => window.coreHarness?.ready === true, null, { timeout: 120_000 });
+}
+
+function shippedRequests(): Req[] {
+  const p = path.join(MODELS, 'manifest.json');
+  const models = fs.existsSync(p) ? (JSON.parse(fs.readFileSync(p, 'utf8')).models ?? {}) : {};
+  const out: Req[] = [];
+  for (const [name, e] of Object.entries(models as Record<string, { condition: { type: string }; defaultSteps: number; guidance: number }>)) {
+    const condition: GenerateOptions['condition'] = e.condition.type === 'action' ? { type: 'action', label: 0 } : e.condition.type === 'text' ? { type: 'text', text: 'a person walks forward and waves' } : { type: 'none' };
+    out.push({ model: name, condition, frames: 60, steps: e.defaultSteps, guidance: e.guidance, seed: 7 });
+    out.push({ model: name, condition: { type: 'none' }, frames: 40, steps: e.defaultSteps, guidance: 1, seed: 8 });
+  }
+  return out;
+}
+
+test.describe('core determinism: Chromium == Node', () => {
+  test('the seeded RNG gives the same float32 normals in both', async ({ page }) => {
+    await openHarness(page);
+    const browser = await page.evaluate(() => window.coreHarness.rng(42, 1000));
+    expect(browser).toEqual(Array.from(new SeededRandom(42).normals(1000)));
+  });
+
+  const cases: Req[] = [{ model: 'tiny', condition: { type: 'action', label: 2 }, frames: 30, steps: 4, guidance: 2.5, seed: 123 }, ...shippedRequests()];
+  for (const req of cases) {
+    test(`${req.model} ${req.condition.type} seed ${req.seed}: bit-identical twice in Chromium and equal to Node`, async ({ page, baseURL }) => {
+      const watch = watchPage(page);
+      const external = watchExternalRequests(page, baseURL!);
+      await openHarness(page);
+      const a = await page.evaluate((r) => window.coreHarness.generate(r), req);
+      const b = await page.evaluate((r) => window.coreHarness.generate(r), req);
+      expect(a.timings.backend).toBe('wasm');
+      expect(b.featuresSha256).toBe(a.featuresSha256);
+      expect(b.jointsSha256).toBe(a.jointsSha256);
+      const n = await nodeRun(req);
+      expect(a.featuresSha256, 'features: Chromium vs Node').toBe(n.featuresSha256);
+      expect(a.jointsSha256, 'joints: Chromium vs Node').toBe(n.jointsSha256);
+      expect(external).toEqual([]);
+      watch.assertClean();
+    });
+  }
+});

@@ -1,0 +1,119 @@
+// Core harness page: runs the TypeScript core in the browser exactly as in Node, for the
+// determinism spec (tests/e2e/core-determinism.spec.ts) and the browser benchmark
+// (scripts/bench/core-bench.mjs). Exposes window.coreHarness; no UI.
+import { type Generator, type GenerateOptions, createGenerator } from '../../src/generate';
+import { type Manifest, loadManifest, sha256Hex } from '../../src/manifest';
+import { SeededRandom } from '../../src/sampler/rng';
+import { computeSchedule } from '../../src/sampler/schedule';
+import tinyMeanStdUrl from '../../tests/fixtures/parity/tiny.meanstd.f32?url&no-inline';
+import tinyOnnxUrl from '../../tests/fixtures/parity/tiny-step.onnx?url&no-inline';
+
+const params = new URLSearchParams(location.search);
+const threads = params.has('threads') ? Number(params.get('threads')) : undefined;
+const backend = (params.get('backend') ?? 'wasm') as 'wasm' | 'webgpu' | 'auto';
+const MODELS = `${import.meta.env.BASE_URL}models/`;
+
+export interface HarnessRequest {
+  /** 'tiny' (the parity fixture's tiny step model) or a shipped model name */
+  model: string;
+  condition: GenerateOptions['condition'];
+  frames: number;
+  steps: number;
+  guidance: number;
+  seed: number;
+}
+
+const dirOf = (u: string) => u.slice(0, u.lastIndexOf('/') + 1);
+const baseOf = (u: string) => u.slice(u.lastIndexOf('/') + 1);
+
+/** An in-memory manifest for the tiny fixture model (an 8-label action model). */
+async function tinyManifest(): Promise<{ manifest: Manifest; baseUrl: string }> {
+  if (dirOf(tinyOnnxUrl) !== dirOf(tinyMeanStdUrl)) throw new Error('harness: tiny fixture files are served from different folders');
+  const [onnx, ms] = await Promise.all([tinyOnnxUrl, tinyMeanStdUrl].map(async (u) => new Uint8Array(await (await fetch(u)).arrayBuffer())));
+  const real = await loadManifest(MODELS);
+  const s = computeSchedule(4);
+  const manifest = {
+    schema: 1,
+    skeleton: real.skeleton,
+    textEncoders: {},
+    models: {
+      tiny: {
+        task: 'action', condition: { type: 'action', labels: ['a', 'b', 'c', 'd', 'e', 'f', 'g', 'h'], dim: 8 },
+        onnx: baseOf(tinyOnnxUrl), meanStd: baseOf(tinyMeanStdUrl), zDim: 64, featureDim: 263, fps: 20, maxFrames: 196,
+        guidance: 2.5, defaultSteps: 4, supportedSteps: [2, 4],
+        schedules: { '4': { time: [...s.time], coef1: [...s.coef1], coef2: [...s.coef2], sigma: [...s.sigma] } },
+        files: [baseOf(tinyOnnxUrl), baseOf(tinyMeanStdUrl)],
+      },
+    },
+    files: {
+      [baseOf(tinyOnnxUrl)]: { bytes: onnx.byteLength, sha256: await sha256Hex(onnx) },
+      [baseOf(tinyMeanStdUrl)]: { bytes: ms.byteLength, sha256: await sha256Hex(ms) },
+    },
+  } as unknown as Manifest;
+  return { manifest, baseUrl: dirOf(tinyOnnxUrl) };
+}
+
+const generators = new Map<string, Promise<Generator>>();
+function generatorFor(model: string): Promise<Generator> {
+  let g = generators.get(model);
+  if (!g) {
+    g = (async () => {
+      const { manifest, baseUrl } = model === 'tiny' ? await tinyManifest() : { manifest: await loadManifest(MODELS), baseUrl: MODELS };
+      return createGenerator({ manifest, baseUrl, model, backend, threads });
+    })();
+    generators.set(model, g);
+    g.catch(() => generators.delete(model));
+  }
+  return g;
+}
+
+const hex = (a: Float32Array) => sha256Hex(new Uint8Array(a.buffer, a.byteOffset, a.byteLength));
+
+const harness = {
+  info() {
+    return { crossOriginIsolated: globalThis.crossOriginIsolated === true, requestedThreads: threads ?? null, backend, hardwareConcurrency: navigator.hardwareConcurrency };
+  },
+  /** First n seeded normals (float32), to compare the RNG bit for bit with Node. */
+  rng(seed: number, n: number): number[] {
+    return Array.from(new SeededRandom(seed).normals(n));
+  },
+  async generate(req: HarnessRequest) {
+    const gen = await generatorFor(req.model);
+    const r = await gen.generate({ condition: req.condition, frames: req.frames, steps: req.steps, guidance: req.guidance, seed: req.seed });
+    return {
+      featuresSha256: await hex(r.motion.features),
+      jointsSha256: await hex(r.motion.joints),
+      joints: Array.from(r.motion.joints.subarray(0, 66)),
+      modelCalls: r.modelCalls,
+      timings: r.timings,
+    };
+  },
+  /** ms per step and per motion at each step count (after one warm-up generation). */
+  async bench(req: { model: string; condition: GenerateOptions['condition']; frames: number; stepCounts: number[]; guidance: number; reps: number }) {
+    const gen = await generatorFor(req.model);
+    const out: { steps: number; msPerStep: number; msPerMotion: number; modelCalls: number }[] = [];
+    await gen.generate({ condition: req.condition, frames: req.frames, steps: req.stepCounts[0], guidance: req.guidance, seed: 1 });
+    for (const steps of req.stepCounts) {
+      const totals: number[] = [];
+      const perStep: number[] = [];
+      let calls = 0;
+      for (let i = 0; i < req.reps; i++) {
+        const r = await gen.generate({ condition: req.condition, frames: req.frames, steps, guidance: req.guidance, seed: 100 + i });
+        totals.push(r.timings.totalMs);
+        perStep.push(...r.timings.stepMs);
+        calls = r.modelCalls;
+      }
+      const median = (a: number[]) => [...a].sort((x, y) => x - y)[Math.floor(a.length / 2)];
+      out.push({ steps, msPerStep: median(perStep), msPerMotion: median(totals), modelCalls: calls });
+    }
+    return { backend: gen.backend, threads: gen.threads, results: out };
+  },
+};
+
+declare global {
+  interface Window {
+    coreHarness: typeof harness & { ready: boolean };
+  }
+}
+window.coreHarness = Object.assign(harness, { ready: true });
+document.getElementById('status')!.textContent = `ready (${JSON.stringify(harness.info())})`;
