@@ -7,11 +7,15 @@ export function watchPage(page: Page): { errors: string[]; logs: string[]; asser
   const logs: string[] = [];
   page.on('pageerror', (e) => errors.push(`pageerror: ${e.message}`));
   page.on('console', (m) => {
-    const line = `${m.type()}: ${m.text()}`;
+    const where = m.location()?.url;
+    const line = `${m.type()}: ${m.text()}${where ? ` (${where})` : ''}`;
     logs.push(line);
     if (m.type() === 'error') errors.push(line);
   });
   page.on('requestfailed', (r) => errors.push(`requestfailed: ${r.url()} ${r.failure()?.errorText ?? ''}`));
+  page.on('response', (r) => {
+    if (r.status() >= 400) errors.push(`HTTP ${r.status()}: ${r.url()}`);
+  });
   return {
     errors,
     logs,
