@@ -64,3 +64,47 @@ def test_action_model_rejected_for_text(world):
     with pytest.raises(SystemExit, match="is a text model, not action"):
         evaluate.main(["action", "--ckpt", str(root / "run" / "ckpt.pt"), "--dataset", str(ds), "--repeats", "1",
                        "--classifier", str(root / "c.pt")])
+
+
+def test_shipped_onnx_source_generates_what_the_checkpoint_does(world):
+    """--model (the exported ONNX step through onnxruntime, as shipped) and --ckpt (PyTorch) make
+    the same motions for the same conditions and seed."""
+    import numpy as np
+
+    from emdm import export
+    from emdm.eval.protocol import Conditions
+    from emdm.eval.sources import ModelSource
+
+    root, ds = world
+    models = root / "models"
+    export.main(["--ckpt", str(root / "run" / "ckpt.pt"), "--name", "tiny-t2m", "--out", str(models), "--variants", ""])
+    onnx_src = ModelSource(model="tiny-t2m", models_dir=models, steps=2)
+    pt_src = ModelSource(ckpt=root / "run" / "ckpt.pt", steps=2)
+    assert onnx_src.info["variant"] == pt_src.info["variant"] == "emdm"
+    assert onnx_src.info["train_steps"] == pt_src.info["train_steps"] == 2
+    rng = np.random.default_rng(0)
+    emb = rng.normal(size=(5, pt_src.cond_spec["dim"])).astype(np.float32)
+    cond = Conditions(lengths=np.array([40, 52, 47, 60, 41]), text_emb=emb)
+    a, b = onnx_src.generate(cond, 3), pt_src.generate(cond, 3)
+    assert [m.shape for m in a] == [(n, 263) for n in cond.lengths]
+    for x, y in zip(a, b):
+        np.testing.assert_allclose(x, y, atol=2e-3 * float(np.abs(y).max()))
+    with pytest.raises(ValueError, match="has no variant 'int8'"):
+        ModelSource(model="tiny-t2m", models_dir=models, onnx_variant="int8")
+
+
+def test_max_items_is_a_seeded_random_subset_of_raw_features(world):
+    import numpy as np
+
+    from emdm.eval import data as evdata
+
+    _, ds = world
+    full = evdata.load_split(ds, "test")
+    sub = evdata.load_split(ds, "test", max_items=10)
+    assert len(sub) == 10 and sub.names == evdata.load_split(ds, "test", max_items=10).names
+    assert sub.names != full.names[:10]
+    i = full.names.index(sub.names[3])
+    np.testing.assert_allclose(sub.motions[3], full.motions[i])
+    # raw = the file on disk (the reader's normalisation is undone)
+    on_disk = np.load(ds / "new_joint_vecs" / f"{sub.names[3]}.npy")
+    np.testing.assert_allclose(sub.motions[3], on_disk[: len(sub.motions[3])], atol=1e-4)

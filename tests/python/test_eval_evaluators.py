@@ -100,3 +100,14 @@ def test_bad_motion_input_is_named():
     bad[17, 5] = np.inf
     with pytest.raises(ValueError, match="motion 0: non-finite feature at frame 17"):
         E.pad_motions([bad])
+
+
+def test_length_batches_cover_each_clip_once_with_little_padding():
+    rng = np.random.default_rng(0)
+    lengths = rng.integers(40, 197, size=1000)
+    batches = E.length_batches(lengths, 64, np.random.default_rng(1))
+    flat = np.concatenate(batches)
+    assert len(flat) == len(set(flat.tolist())) and len(flat) >= 1000 - 64
+    assert all(len(b) == 64 for b in batches)
+    waste = np.mean([1 - lengths[b].mean() / lengths[b].max() for b in batches])
+    assert waste < 0.1                                   # random batches waste ~35 %

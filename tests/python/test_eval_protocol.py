@@ -90,7 +90,7 @@ def test_text_protocol_ranks_real_above_mismatched_and_collapsed(matcher):
 def test_action_protocol_accuracy_and_collapse():
     rng = np.random.default_rng(0)
     train, _ = _split(256, 2, labels=rng.integers(0, 4, 256))
-    clf = E.train_classifier(train.motions, train.actions, 4, MEAN, STD, E.TrainConfig(**{**CFG.__dict__, "epochs": 6}))
+    clf = E.train_classifier(train.motions, train.actions, 4, MEAN, STD, E.TrainConfig(**{**CFG.__dict__, "epochs": 10}))
     test, _ = _split(96, 3, labels=rng.integers(0, 4, 96))
     real = evaluate_action(clf, test, RealSource(test), repeats=2, plaus_n=0, log=lambda s: None)
     coll = evaluate_action(clf, test, Collapsed(test), repeats=2, plaus_n=0, log=lambda s: None)

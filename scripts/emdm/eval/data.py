@@ -37,13 +37,20 @@ class EvalSplit:
         return np.array([len(m) for m in self.motions], dtype=np.int64)
 
 
-def load_split(root: Path | str, split: str, *, max_items: int | None = None,
+def load_split(root: Path | str, split: str, *, max_items: int | None = None, subset_seed: int = 0,
                require_action: bool = False) -> EvalSplit:
-    """A split of the dataset with raw features (the dataset reader normalises; undone here)."""
-    ms = ds.load_split(root, split, limit=max_items, require_action=require_action)
-    raw = [(m * ms.std + ms.mean).astype(np.float32) for m in ms.motions]
-    return EvalSplit(root=Path(root), split=split, names=list(ms.names), motions=raw, captions=ms.captions,
-                     actions=ms.actions, action_labels=list(ms.action_labels), mean=ms.mean, std=ms.std)
+    """A split of the dataset with raw features (the dataset reader normalises; undone here).
+
+    ``max_items`` keeps a seeded random subset (in split order), not the first clips: split files
+    are sorted by id, so their head is one source and one action."""
+    ms = ds.load_split(root, split, require_action=require_action)
+    keep = np.arange(len(ms))
+    if max_items is not None and max_items < len(ms):
+        keep = np.sort(np.random.default_rng(subset_seed).choice(len(ms), max_items, replace=False))
+    raw = [(ms.motions[i] * ms.std + ms.mean).astype(np.float32) for i in keep]
+    return EvalSplit(root=Path(root), split=split, names=[ms.names[i] for i in keep], motions=raw,
+                     captions=[ms.captions[i] for i in keep], actions=ms.actions[keep],
+                     action_labels=list(ms.action_labels), mean=ms.mean, std=ms.std)
 
 
 def load_mean_std(root: Path | str) -> tuple[np.ndarray, np.ndarray]:

@@ -89,9 +89,10 @@ def run_quality(a) -> Path:
     else:
         from emdm.eval.sources import ModelSource
 
-        source = ModelSource(a.ckpt, steps=a.steps, guidance=a.guidance, batch_size=a.batch, name=a.name or "")
+        source = ModelSource(ckpt=a.ckpt, model=a.model, onnx_variant=a.variant, models_dir=a.models_dir, steps=a.steps, guidance=a.guidance,
+                             batch_size=a.batch, threads=a.threads, name=a.name or "")
         if source.task != a.task:
-            raise SystemExit(f"error: {a.ckpt} is a {source.task} model, not {a.task}")
+            raise SystemExit(f"error: {a.ckpt or a.model} is a {source.task} model, not {a.task}")
     if a.name:
         source.name = a.name
     t0 = time.time()
@@ -122,7 +123,8 @@ def run_timing(a) -> Path:
             raise SystemExit(f"error: --model {spec!r}: expected CKPT=STEPS[,STEPS...]")
         ckpt, steps = spec.rsplit("=", 1)
         for T in [int(s) for s in steps.split(",")]:
-            src = ModelSource(Path(ckpt), steps=T, guidance=a.guidance, batch_size=1)
+            where = {"ckpt": Path(ckpt)} if Path(ckpt).suffix == ".pt" else {"model": ckpt}
+            src = ModelSource(**where, steps=T, guidance=a.guidance, batch_size=1, threads=a.threads)
             if src.task == "text":
                 from emdm.text import encode_texts
 
@@ -137,10 +139,10 @@ def run_timing(a) -> Path:
                 ms.append((time.perf_counter() - t0) * 1000)
             rows.append({"variant": src.info["variant"], "sampler": src.info["sampler"], "steps": T,
                          "frames": a.frames, "ms_per_motion": ms, "guidance": a.guidance, "batch": 1,
-                         "checkpoint": ckpt, "preset": src.info["preset"]})
+                         "source": ckpt, "engine": src.info["runtime"], "preset": src.info["preset"]})
             print(f"{src.name}: {np.mean(ms):.1f} ms / motion, {np.mean(ms) / a.frames:.3f} ms / frame", flush=True)
     result = {"schema": SCHEMA, "task": "timing", "runtime": a.runtime, "hardware": hardware(),
-              "note": "PyTorch eager, batch 1 (with guidance: one batched call of 2), one warm-up run",
+              "note": "batch 1 (with guidance: one batched call of 2), one warm-up run; emdm.sample loop",
               "created": datetime.now(timezone.utc).isoformat(timespec="seconds"), "rows": rows}
     return write_result(result, a.out or RESULTS_DIR / "json" / f"timing-{a.runtime}.json")
 
@@ -152,7 +154,10 @@ def build_parser() -> argparse.ArgumentParser:
         p = sub.add_parser(task)
         src = p.add_mutually_exclusive_group(required=True)
         src.add_argument("--source", choices=["real"])
-        src.add_argument("--ckpt", type=Path)
+        src.add_argument("--ckpt", type=Path, help="an emdm.train checkpoint (PyTorch, EMA weights)")
+        src.add_argument("--model", help="a shipped model of public/models/manifest.json (ONNX Runtime)")
+        p.add_argument("--models-dir", type=Path, default=None, help="with --model: folder of manifest.json")
+        p.add_argument("--variant", default=None, help="with --model: fp32 (default) or a manifest variant, e.g. int8")
         p.add_argument("--steps", type=int, default=10)
         p.add_argument("--guidance", type=float, default=2.5)
         p.add_argument("--name", default=None, help="row label (default from the checkpoint's flags)")
@@ -170,7 +175,8 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--threads", type=int, default=1)
         p.add_argument("--out", type=Path, default=None)
     p = sub.add_parser("timing")
-    p.add_argument("--model", action="append", required=True, help="CKPT=STEPS[,STEPS...] (repeatable)")
+    p.add_argument("--model", action="append", required=True,
+                   help="CKPT=STEPS[,STEPS...] or MANIFEST_MODEL=STEPS[,...] (repeatable)")
     p.add_argument("--frames", type=int, default=196)
     p.add_argument("--runs", type=int, default=5)
     p.add_argument("--guidance", type=float, default=2.5)

@@ -213,6 +213,21 @@ def matching_loss(text: torch.Tensor, motion: torch.Tensor, scale: torch.Tensor,
     return 0.5 * (F.cross_entropy(logits, target) + F.cross_entropy(logits.T, target))
 
 
+def length_batches(lengths: np.ndarray, batch: int, rng: np.random.Generator, bucket: int = 8) -> list[np.ndarray]:
+    """One epoch of index batches of similar lengths (less padding, so less compute): shuffle, sort
+    chunks of ``batch * bucket`` clips by length, cut into batches, shuffle the batches. A final
+    incomplete batch is dropped (contrastive batches need their negatives)."""
+    perm = rng.permutation(len(lengths))
+    out = []
+    for s in range(0, len(perm), batch * bucket):
+        chunk = perm[s:s + batch * bucket]
+        chunk = chunk[np.argsort(np.asarray(lengths)[chunk], kind="stable")]
+        out += [chunk[i:i + batch] for i in range(0, len(chunk) - batch + 1, batch)]
+    if not out:                              # fewer clips than one batch: one smaller batch
+        out = [perm]
+    return [out[i] for i in rng.permutation(len(out))]
+
+
 def _crop(m: np.ndarray, rng: np.random.Generator, min_frac: float) -> np.ndarray:
     n = m.shape[0]
     keep = int(rng.integers(max(DOWNSAMPLE, int(math.ceil(n * min_frac))), n + 1))
@@ -238,14 +253,13 @@ def train_matcher(motions: Sequence[np.ndarray], text_emb: Sequence[np.ndarray],
     rng = np.random.default_rng(cfg.seed)
     model = MatchingModel(mean, std, caps[0].shape[1], cfg.hidden, cfg.emb_dim, cfg.dropout)
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
-    n_batches = max(1, len(motions) // cfg.batch_size)
+    lens = np.array([len(m) for m in motions])
+    n_batches = len(length_batches(lens, cfg.batch_size, np.random.default_rng(0)))
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=cfg.epochs * n_batches, eta_min=cfg.lr * 0.05)
     t0 = time.time()
     for epoch in range(cfg.epochs):
-        order = rng.permutation(len(motions))
         losses = []
-        for b in range(n_batches):
-            idx = order[b * cfg.batch_size:(b + 1) * cfg.batch_size]
+        for idx in length_batches(lens, cfg.batch_size, rng):
             raw, lengths = pad_motions([motions[i] for i in idx])
             t_raw = torch.from_numpy(np.stack([caps[i][rng.integers(len(caps[i]))] for i in idx]))
             neg = (F.normalize(t_raw, dim=-1) @ F.normalize(t_raw, dim=-1).T) < cfg.duplicate_cos
@@ -284,14 +298,13 @@ def train_classifier(motions: Sequence[np.ndarray], labels, num_classes: int, me
     counts = np.bincount(labels, minlength=num_classes).astype(np.float32)
     weight = torch.from_numpy(np.where(counts > 0, counts.sum() / np.maximum(counts, 1) / num_classes, 0.0)).float()
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
-    n_batches = max(1, len(motions) // cfg.batch_size)
+    lens = np.array([len(m) for m in motions])
+    n_batches = len(length_batches(lens, cfg.batch_size, np.random.default_rng(0)))
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=cfg.epochs * n_batches, eta_min=cfg.lr * 0.05)
     t0 = time.time()
     for epoch in range(cfg.epochs):
-        order = rng.permutation(len(motions))
         losses = []
-        for b in range(n_batches):
-            idx = order[b * cfg.batch_size:(b + 1) * cfg.batch_size]
+        for idx in length_batches(lens, cfg.batch_size, rng):
             raw, lengths = pad_motions([_crop(motions[i], rng, cfg.min_crop) for i in idx])
             logits, _ = model(raw, lengths)
             loss = F.cross_entropy(logits, torch.from_numpy(labels[idx]), weight=weight)

@@ -68,62 +68,104 @@ def batched_features(step, conds: np.ndarray, lengths: np.ndarray, *, steps: int
 
 @dataclass
 class ModelSource:
-    """A generator checkpoint (EMA weights) sampled with ``steps`` steps and guidance."""
-    ckpt: Path
+    """A trained generator sampled with ``steps`` steps and guidance: either an ``emdm.train``
+    checkpoint (``ckpt``, EMA weights through PyTorch) or a shipped model of the manifest (``model``,
+    its ONNX step file through onnxruntime, ``onnx_variant`` e.g. "int8" — what the browser runs)."""
+    ckpt: Path | None = None
+    model: str | None = None
+    onnx_variant: str | None = None
+    models_dir: Path | None = None           # default public/models
     steps: int = 10
     guidance: float = DEFAULT_GUIDANCE
     batch_size: int = 64
+    threads: int = 1
     name: str = ""
     kind: str = "model"
     info: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        from emdm.export import load_generator
-        from emdm.sample import torch_step
-
-        self.G, self.meta, summary = load_generator(self.ckpt)
-        self.step = torch_step(self.G)
-        self.objective = self.meta.get("objective", "ddgan")
-        self.task = self.meta["task"]
-        self.mean = np.asarray(self.meta["mean"], np.float32)
-        self.std = np.asarray(self.meta["std"], np.float32)
-        variant = variant_of(self.meta)
+        if (self.ckpt is None) == (self.model is None):
+            raise ValueError("ModelSource: give exactly one of ckpt= or model=")
+        if self.ckpt is not None:
+            self._from_checkpoint(Path(self.ckpt))
+        else:
+            self._from_manifest(self.model)
+        variant = variant_of({"objective": self.objective, "args": self.flags})
         sampler = "DDIM" if self.objective == "diffusion" else "DDGAN"
         if not self.name:
             label = {"emdm": "EMDM", "diffusion": "Diffusion + DDIM", "ddgan-naive": "Naive DDGAN",
                      "ddgan-nodcond": "DDGAN, D w/o cond", "ddgan-geo0": "DDGAN, R = 0"}[variant]
             self.name = f"{label} ({self.steps} steps)"
         self.info = {"variant": variant, "sampler": sampler, "steps": self.steps, "guidance": self.guidance,
-                     "checkpoint": str(self.ckpt), "train_steps": summary["steps"],
-                     "train_wall_min": round(summary["wall_s"] / 60, 1), "device": self.meta.get("device"),
-                     "preset": self.meta["generator"]["preset"], "dataset": self.meta.get("dataset"),
-                     "geo_weight": self.meta.get("args", {}).get("geo_weight"),
-                     "d_cond": self.meta.get("args", {}).get("d_cond"), **self.info}
+                     "geo_weight": self.flags.get("geo_weight"), "d_cond": self.flags.get("d_cond"),
+                     **self.origin, **self.info}
+
+    def _from_checkpoint(self, ckpt: Path) -> None:
+        from emdm.export import load_generator
+        from emdm.sample import torch_step
+
+        G, meta, summary = load_generator(ckpt)
+        self.step = torch_step(G)
+        self.task, self.objective, self.cond_spec = meta["task"], meta.get("objective", "ddgan"), meta["condition"]
+        self.mean, self.std = np.asarray(meta["mean"], np.float32), np.asarray(meta["std"], np.float32)
+        self.z_dim, self.max_frames = G.z_dim, G.max_frames
+        self.flags = meta.get("args", {})
+        self.origin = {"checkpoint": str(ckpt), "runtime": "pytorch", "train_steps": summary["steps"],
+                       "train_wall_min": round(summary["wall_s"] / 60, 1), "device": meta.get("device"),
+                       "preset": meta["generator"]["preset"], "dataset": meta.get("dataset")}
+
+    def _from_manifest(self, name: str) -> None:
+        from emdm import manifest as mf
+        from emdm.paths import MODELS_DIR
+        from emdm.sample import onnx_step, read_meanstd
+
+        models_dir = Path(self.models_dir or MODELS_DIR)
+        man = mf.load(models_dir)
+        if name not in man["models"]:
+            raise ValueError(f"{models_dir / mf.MANIFEST_NAME}: no model {name!r} (have: {', '.join(man['models'])})")
+        e = man["models"][name]
+        if self.onnx_variant in (None, "fp32"):
+            onnx_file = e["onnx"]
+        elif self.onnx_variant in e.get("variants", {}):
+            onnx_file = e["variants"][self.onnx_variant]
+        else:
+            raise ValueError(f"{models_dir / mf.MANIFEST_NAME}: model {name!r} has no variant {self.onnx_variant!r} "
+                             f"(have: fp32, {', '.join(e.get('variants', {}))})")
+        self.step = onnx_step(models_dir / onnx_file, self.threads)
+        self.task, self.objective, self.cond_spec = e["task"], e.get("objective", "ddgan"), e["condition"]
+        self.mean, self.std = read_meanstd(models_dir / e["meanStd"])
+        self.z_dim, self.max_frames = int(e.get("zDim", 64)), int(e.get("maxFrames", 196))
+        tr = e.get("training", {})
+        self.flags = {**tr.get("flags", {})}
+        self.origin = {"model": name, "onnx": onnx_file, "runtime": "onnxruntime", "train_steps": tr.get("steps"),
+                       "train_wall_min": round(tr.get("wallSeconds", 0) / 60, 1), "device": tr.get("device"),
+                       "preset": e.get("preset"), "dataset": tr.get("dataset")}
 
     def conditions_of(self, cond: Conditions) -> np.ndarray:
-        spec = self.meta["condition"]
+        spec = self.cond_spec
+        who = self.ckpt or self.model
         if spec["type"] == "text":
             if cond.text_emb is None:
-                raise ValueError(f"{self.ckpt}: a text model needs text conditions")
+                raise ValueError(f"{who}: a text model needs text conditions")
             if cond.text_emb.shape[1] != spec["dim"]:
-                raise ValueError(f"{self.ckpt}: model expects {spec['dim']}-d text embeddings "
+                raise ValueError(f"{who}: model expects {spec['dim']}-d text embeddings "
                                  f"({spec.get('encoder')}), got {cond.text_emb.shape[1]}")
             return cond.text_emb.astype(np.float32)
         if cond.labels is None:
-            raise ValueError(f"{self.ckpt}: an action model needs action labels")
+            raise ValueError(f"{who}: an action model needs action labels")
         onehot = np.zeros((len(cond.labels), spec["dim"]), np.float32)
         onehot[np.arange(len(cond.labels)), cond.labels] = 1.0
         return onehot
 
     def generate(self, cond: Conditions, seed: int) -> list[np.ndarray]:
         c = self.conditions_of(cond)
-        lengths = np.minimum(cond.lengths, self.G.max_frames)
+        lengths = np.minimum(cond.lengths, self.max_frames)
         order = np.argsort(lengths, kind="stable")            # similar lengths per batch: less padding
         out: list[np.ndarray | None] = [None] * len(lengths)
         for s in range(0, len(order), self.batch_size):
             idx = order[s:s + self.batch_size]
             xs = batched_features(self.step, c[idx], lengths[idx], steps=self.steps, guidance=self.guidance,
-                                  seed=seed * 100003 + s, objective=self.objective, z_dim=self.G.z_dim)
+                                  seed=seed * 100003 + s, objective=self.objective, z_dim=self.z_dim)
             for i, x in zip(idx, xs):
                 out[i] = x * self.std + self.mean
         return out  # type: ignore[return-value]
