@@ -129,7 +129,7 @@ async function runBrowser() {
   const { createServer } = await import('vite');
   const { chromium } = await import('playwright-core');
   const port = Number(opt('port', '5191'));
-  const server = await createServer({ configFile: path.join(ROOT, 'vite.config.ts'), server: { port, strictPort: true, hmr: false, ws: false }, logLevel: 'error' });
+  const server = await createServer({ configFile: path.join(ROOT, 'vite.config.ts'), server: { port, strictPort: true, hmr: false }, logLevel: 'error' });
   await server.listen();
   const browser = await chromium.launch({
     executablePath: process.env.CHROMIUM_PATH ?? '/usr/bin/chromium',
