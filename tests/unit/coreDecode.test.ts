@@ -1,9 +1,11 @@
+import fs from 'node:fs';
+import path from 'node:path';
 import { describe, expect, it } from 'vitest';
 import { cleanupFootContacts, contactsFromFeatures, footSkate } from '../../src/motion/footContact';
 import { forwardKinematics } from '../../src/motion/ik';
 import { denormalize, parseMeanStd, recoverJoints } from '../../src/motion/recover';
 import { smoothJoints } from '../../src/motion/smooth';
-import { fixtureExists, loadCase, manifestSkeleton, maxJointDist, randomPoseQuats } from './coreFixtures';
+import { ROOT, fixtureExists, loadCase, manifestSkeleton, maxJointDist, randomPoseQuats } from './coreFixtures';
 
 const sk = manifestSkeleton();
 const J = 22;
@@ -14,6 +16,14 @@ describe('recover joints (port of emdm.motion.features.recover_joints)', () => {
     const fx = loadCase('recover');
     const joints = recoverJoints(fx.get('features'), fx.meta.frames);
     expect(maxJointDist(joints, fx.get('joints'))).toBeLessThan(1e-5);
+  });
+
+  it('equals the data engineer\'s committed fixture (tests/fixtures/data/recover_joints.json) within 1e-5 m', () => {
+    const p = path.join(ROOT, 'tests', 'fixtures', 'data', 'recover_joints.json');
+    const fx = JSON.parse(fs.readFileSync(p, 'utf8')) as { features: number[][]; joints: number[][][] };
+    const frames = fx.features.length;
+    const joints = recoverJoints(Float32Array.from(fx.features.flat()), frames);
+    expect(maxJointDist(joints, fx.joints.flat(2))).toBeLessThan(1e-5);
   });
 
   it('integrates heading and root velocity (a quarter turn while walking forward)', () => {
