@@ -36,7 +36,11 @@ class BVH:
 
     @property
     def fps(self) -> float:
-        return 1.0 / self.frame_time
+        """1 / Frame Time, snapped to the nearest integer when within 0.01 % (files write 1/30 s
+        as 0.0333333, which would otherwise lose the last frame when resampling)."""
+        f = 1.0 / self.frame_time
+        r = round(f)
+        return float(r) if r > 0 and abs(f - r) < 1e-4 * f else f
 
     @property
     def num_frames(self) -> int:
