@@ -87,6 +87,10 @@ function modelEntry(manifest: Manifest, name: string): ModelEntry {
       throw new ModelFileError('manifest.json', 'incompatible', `field 'models.${name}.${k}' must be a positive integer`);
     }
   }
+  const objective = (entry as { objective?: unknown }).objective ?? 'ddgan';
+  if (objective !== 'ddgan') {
+    throw new ModelFileError('manifest.json', 'incompatible', `field 'models.${name}.objective' is ${JSON.stringify(objective)}; the browser sampler runs DDGAN models only`);
+  }
   if (!entry.condition || !Number.isInteger(entry.condition.dim)) {
     throw new ModelFileError('manifest.json', 'incompatible', `field 'models.${name}.condition.dim' must be an integer`);
   }
@@ -116,27 +120,45 @@ export async function createGenerator(opts: GeneratorOptions): Promise<Generator
   ]);
   const { mean, std } = parseMeanStd(msBuf, D, entry.meanStd);
 
-  let backend = await resolveBackend(opts.backend ?? 'auto');
   const key = `${onnxPath}#${manifest.files[onnxPath].sha256}`;
   const cfg = { threads: opts.threads, wasmPaths: opts.wasmPaths };
-  let session: OrtSession;
-  try {
-    session = await getSession(key, bytes, backend, cfg);
-  } catch (e) {
-    if (backend !== 'webgpu' || opts.backend === 'webgpu') throw new ModelFileError(onnxPath, 'incompatible', (e as Error).message);
-    backend = 'wasm'; // auto: WebGPU could not run this model, fall back to WASM
-    session = await getSession(key, bytes, backend, cfg);
+  const warmUp = (st: StepFn) =>
+    // a 2-frame call: checks the shapes and compiles kernels before the first prompt
+    st({ x: new Float32Array(2 * D), z: new Float32Array(entry.zDim), cond: new Float32Array(C), t: Float32Array.of(0.5), mask: new Float32Array(2).fill(1), batch: 1, frames: 2 });
+
+  /** Session + checked step function on one backend. On WASM every failure is the model's fault
+   * (ModelFileError 'incompatible'); on WebGPU it is a plain Error (a backend problem). */
+  async function open(b: Backend): Promise<{ session: OrtSession; step: StepFn }> {
+    let session: OrtSession;
+    try {
+      session = await getSession(key, bytes, b, cfg);
+    } catch (e) {
+      if (b === 'webgpu') throw e;
+      throw new ModelFileError(onnxPath!, 'incompatible', (e as Error).message);
+    }
+    try {
+      const st = stepFunction(session, { featureDim: D, zDim: entry.zDim, condDim: C }, onnxPath!);
+      await warmUp(st);
+      return { session, step: st };
+    } catch (e) {
+      await session.release();
+      if (e instanceof IncompatibleModelError) throw new ModelFileError(onnxPath!, 'incompatible', e.message.replace(`${onnxPath}: `, ''));
+      if (b === 'webgpu') throw new Error(`runtime: ${onnxPath} does not run on WebGPU: ${(e as Error).message}`, { cause: e });
+      throw new ModelFileError(onnxPath!, 'incompatible', `the step model does not run with the manifest's shapes (featureDim ${D}, zDim ${entry.zDim}, condition dim ${C}): ${(e as Error).message}`);
+    }
   }
-  let step: StepFn;
+
+  let backend = await resolveBackend(opts.backend ?? 'auto');
+  let opened: { session: OrtSession; step: StepFn };
   try {
-    step = stepFunction(session, { featureDim: D, zDim: entry.zDim, condDim: C }, onnxPath);
-    // warm-up + shape check on a 2-frame input (also compiles kernels before the first prompt)
-    await step({ x: new Float32Array(2 * D), z: new Float32Array(entry.zDim), cond: new Float32Array(C), t: Float32Array.of(0.5), mask: new Float32Array(2).fill(1), batch: 1, frames: 2 });
+    opened = await open(backend);
   } catch (e) {
-    await session.release();
-    if (e instanceof IncompatibleModelError) throw new ModelFileError(onnxPath, 'incompatible', e.message.replace(`${onnxPath}: `, ''));
-    throw new ModelFileError(onnxPath, 'incompatible', `the step model does not run with the manifest's shapes (featureDim ${D}, zDim ${entry.zDim}, condition dim ${C}): ${(e as Error).message}`);
+    // 'auto': WebGPU could not run this model → WASM (a broken file fails there too, with its name)
+    if (backend !== 'webgpu' || opts.backend === 'webgpu' || e instanceof ModelFileError) throw e;
+    backend = 'wasm';
+    opened = await open(backend);
   }
+  const { session, step } = opened;
 
   let encoder: Promise<TextEncoder> | null = opts.textEncoder ? Promise.resolve(opts.textEncoder) : null;
   let queue: Promise<unknown> = Promise.resolve();
