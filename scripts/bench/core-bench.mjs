@@ -7,6 +7,7 @@
 //   node scripts/bench/core-bench.mjs                      # all shipped models, steps 1,2,4,10
 //   node scripts/bench/core-bench.mjs --models emdm-t2m-web --steps 4,10 --reps 3 --threads 1,2
 //   node scripts/bench/core-bench.mjs --no-browser         # Node only
+//   node scripts/bench/core-bench.mjs --variant int8       # the models' int8 variant
 //
 // Each (environment, thread count) runs in a fresh process / page: ORT's thread count is global.
 // Timings are medians over --reps generations after one warm-up; "motion" = encode + all steps
@@ -33,6 +34,7 @@ const stepCounts = list(opt('steps', '1,2,4,10')).map(Number);
 const threadsList = list(opt('threads', '1,2')).map(Number);
 const frames = Number(opt('frames', '196'));
 const reps = Number(opt('reps', '3'));
+const variant = opt('variant', undefined); // e.g. int8 (a key of the model's `variants`)
 const FPS = 20;
 
 function conditionFor(entry) {
@@ -58,7 +60,7 @@ async function nodeWorker() {
       let baseUrl = path.join(ROOT, 'public', 'models') + '/';
       if (model === 'tiny') ({ manifest, baseUrl } = await tinyManifest(manifest, computeSchedule));
       const entry = manifest.models[model];
-      const gen = await createGenerator({ manifest, baseUrl, model, backend: 'wasm', threads });
+      const gen = await createGenerator({ manifest, baseUrl, model, variant, backend: 'wasm', threads });
       const condition = conditionFor(entry);
       const steps = stepCounts.filter((s) => entry.supportedSteps.includes(s));
       await gen.generate({ condition, frames, steps: steps[0], guidance: entry.guidance, seed: 1 });
@@ -75,7 +77,7 @@ async function nodeWorker() {
         }
         results.push({ steps: s, msPerStep: median(per), msPerMotion: median(totals), modelCalls: calls });
       }
-      out.push({ env: 'node', model, threads: gen.threads, guidance: entry.guidance, results });
+      out.push({ env: 'node', model: variant ? `${model}:${variant}` : model, threads: gen.threads, guidance: entry.guidance, results });
       await gen.dispose();
     }
     process.stdout.write('BENCH ' + JSON.stringify(out) + '\n');
@@ -112,7 +114,7 @@ const median = (a) => [...a].sort((x, y) => x - y)[Math.floor(a.length / 2)];
 
 function runNode(threads) {
   return new Promise((resolve, reject) => {
-    const child = spawn(process.execPath, [fileURLToPath(import.meta.url), '--worker', 'node', '--threads', String(threads), '--models', models.join(','), '--steps', stepCounts.join(','), '--frames', String(frames), '--reps', String(reps)], { stdio: ['ignore', 'pipe', 'inherit'] });
+    const child = spawn(process.execPath, [fileURLToPath(import.meta.url), '--worker', 'node', '--threads', String(threads), '--models', models.join(','), '--steps', stepCounts.join(','), '--frames', String(frames), '--reps', String(reps), ...(variant ? ['--variant', variant] : [])], { stdio: ['ignore', 'pipe', 'inherit'] });
     let buf = '';
     child.stdout.on('data', (d) => (buf += d));
     child.on('exit', (code) => {
@@ -145,13 +147,10 @@ async function runBrowser() {
       await page.waitForFunction(() => window.coreHarness?.ready === true, null, { timeout: 120_000 });
       const info = await page.evaluate(() => window.coreHarness.info());
       for (const model of models) {
-        if (model === 'tiny' && stepCounts.some((s) => ![2, 4].includes(s))) {
-          // the harness's tiny manifest declares steps 2 and 4 only
-        }
         const entry = model === 'tiny' ? { guidance: 2.5, supportedSteps: [2, 4], condition: { type: 'action' } } : JSON.parse(fs.readFileSync(manifestPath, 'utf8')).models[model];
         const steps = stepCounts.filter((s) => entry.supportedSteps.includes(s));
-        const r = await page.evaluate((req) => window.coreHarness.bench(req), { model, condition: conditionFor(entry), frames, stepCounts: steps, guidance: entry.guidance, reps });
-        out.push({ env: `chromium${info.crossOriginIsolated ? '' : ' (not isolated)'}`, model, threads: r.threads, guidance: entry.guidance, results: r.results });
+        const r = await page.evaluate((req) => window.coreHarness.bench(req), { model, variant, condition: conditionFor(entry), frames, stepCounts: steps, guidance: entry.guidance, reps });
+        out.push({ env: `chromium${info.crossOriginIsolated ? '' : ' (not isolated)'}`, model: variant ? `${model}:${variant}` : model, threads: r.threads, guidance: entry.guidance, results: r.results });
       }
       if (errors.length) throw new Error(`harness page errors: ${errors.join('; ')}`);
       await page.close();

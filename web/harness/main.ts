@@ -54,15 +54,16 @@ async function tinyManifest(): Promise<{ manifest: Manifest; baseUrl: string }> 
 }
 
 const generators = new Map<string, Promise<Generator>>();
-function generatorFor(model: string): Promise<Generator> {
-  let g = generators.get(model);
+function generatorFor(model: string, variant?: string): Promise<Generator> {
+  const key = `${model}|${variant ?? ''}`;
+  let g = generators.get(key);
   if (!g) {
     g = (async () => {
       const { manifest, baseUrl } = model === 'tiny' ? await tinyManifest() : { manifest: await loadManifest(MODELS), baseUrl: MODELS };
-      return createGenerator({ manifest, baseUrl, model, backend, threads });
+      return createGenerator({ manifest, baseUrl, model, variant, backend, threads });
     })();
-    generators.set(model, g);
-    g.catch(() => generators.delete(model));
+    generators.set(key, g);
+    g.catch(() => generators.delete(key));
   }
   return g;
 }
@@ -89,8 +90,8 @@ const harness = {
     };
   },
   /** ms per step and per motion at each step count (after one warm-up generation). */
-  async bench(req: { model: string; condition: GenerateOptions['condition']; frames: number; stepCounts: number[]; guidance: number; reps: number }) {
-    const gen = await generatorFor(req.model);
+  async bench(req: { model: string; variant?: string; condition: GenerateOptions['condition']; frames: number; stepCounts: number[]; guidance: number; reps: number }) {
+    const gen = await generatorFor(req.model, req.variant);
     const out: { steps: number; msPerStep: number; msPerMotion: number; modelCalls: number }[] = [];
     await gen.generate({ condition: req.condition, frames: req.frames, steps: req.stepCounts[0], guidance: req.guidance, seed: 1 });
     for (const steps of req.stepCounts) {
