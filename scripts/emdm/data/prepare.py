@@ -192,6 +192,7 @@ def write_dataset(results: list[dict], tmp: Path, split_of: dict[str, str], info
 
 def publish(tmp: Path, out: Path) -> None:
     """Rename the finished temp folder onto ``out`` (replacing an older dataset)."""
+    os.chmod(tmp, 0o755)  # mkdtemp makes it private
     if out.exists():
         old = out.with_name(f".{out.name}.old-{os.getpid()}")
         os.replace(out, old)

@@ -33,6 +33,7 @@ def unpack_archive(archive: Path, dest_root: Path | None = None) -> Path:
                     raise ValueError(f"{archive}: refusing unsafe member {member.name!r}")
             tar.extractall(tmp)
         (tmp / MARKER).write_text(f"{archive.name}\n")
+        os.chmod(tmp, 0o755)  # mkdtemp makes it private
         if dest.exists():
             shutil.rmtree(dest)
         os.replace(tmp, dest)
