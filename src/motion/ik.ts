@@ -21,9 +21,9 @@
  *
  * Output: rootPos = world position of joint 0 per frame; quats = local rotations (x,y,z,w) relative
  * to the parent, in the rest frame of `skeleton.offsets` (rest = T-pose, all rotations identity);
- * offsets = the skeleton's offsets, except for the children of the two multi-child joints (pelvis:
- * hips + spine1; spine3: neck + collars), which get the motion's own mean offset in the parent's
- * frame. Our retargeted data keep each bone's direction from the source skeleton, so the pelvis and
+ * offsets = the rest offsets that go with the rotations: the children of the two multi-child
+ * joints (pelvis: hips + spine1; spine3: neck + collars) get the motion's own mean offset in the
+ * parent's frame, every other bone its reference direction at the motion's mean bone length. Our retargeted data keep each bone's direction from the source skeleton, so the pelvis and
  * chest "triangles" differ from the reference rest pose by a few centimetres (6.8 cm at the hips on
  * a Bandai clip); with the adapted offsets `forwardKinematics(rootPos, quats, offsets)` reproduces
  * the joints (measured in tests/unit/coreIk.test.ts). A rig should place its bones at `offsets`.
@@ -102,6 +102,16 @@ function adaptedOffsets(joints: Float32Array, frames: number, skeleton: Skeleton
       if (m.every(Number.isFinite) && norm(m) > 1e-6) out[I(k)] = m;
     });
   }
+  // every other bone keeps its reference direction at the motion's mean length
+  const adapted = new Set(groups.flatMap((g) => g[5].map((n) => I(n))));
+  skeleton.parents.forEach((p, j) => {
+    if (p < 0 || adapted.has(j)) return;
+    let sum = 0;
+    for (let f = 0; f < frames; f++) sum += norm(sub(v3(joints, (f * J + j) * 3), v3(joints, (f * J + p) * 3)));
+    const len = sum / frames;
+    const ref = norm(off[j]);
+    if (Number.isFinite(len) && len > 1e-6 && ref > 1e-9) out[j] = scale(off[j], len / ref);
+  });
   return out;
 }
 

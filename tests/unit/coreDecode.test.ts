@@ -5,7 +5,7 @@ import { cleanupFootContacts, contactsFromFeatures, footSkate } from '../../src/
 import { forwardKinematics } from '../../src/motion/ik';
 import { denormalize, parseMeanStd, recoverJoints } from '../../src/motion/recover';
 import { smoothJoints } from '../../src/motion/smooth';
-import { ROOT, fixtureExists, loadCase, manifestSkeleton, maxJointDist, randomPoseQuats } from './coreFixtures';
+import { ROOT, fixtureExists, loadCase, modelFixtures, manifestSkeleton, maxJointDist, randomPoseQuats } from './coreFixtures';
 
 const sk = manifestSkeleton();
 const J = 22;
@@ -101,7 +101,7 @@ describe('smoothing and foot-contact clean-up', () => {
   });
 
   it('reduces skating on a generated motion (model fixture)', (ctx) => {
-    const name = ['model-emdm-t2m-web', 'model-emdm-a2m-web'].find(fixtureExists);
+    const name = modelFixtures()[0];
     if (!name) return ctx.skip('no model parity fixture yet: run `python -m emdm.fixtures` once models are shipped');
     const fx = loadCase(name);
     const frames = fx.meta.frames;

@@ -5,8 +5,10 @@ import { fileURLToPath } from 'node:url';
 import type { NoiseSource } from '../../src/sampler/sampler';
 
 export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
-export const PARITY_DIR = path.join(ROOT, 'tests', 'fixtures', 'parity');
-export const MODELS_DIR = path.join(ROOT, 'public', 'models');
+// overridable to check another export, e.g. `python -m emdm.fixtures --models-dir D --out P`, then
+// EMDM_MODELS_DIR=D EMDM_PARITY_DIR=P npx vitest run tests/unit/coreGenerate.test.ts
+export const PARITY_DIR = process.env.EMDM_PARITY_DIR ?? path.join(ROOT, 'tests', 'fixtures', 'parity');
+export const MODELS_DIR = process.env.EMDM_MODELS_DIR ?? path.join(ROOT, 'public', 'models');
 
 export interface FixtureCase {
   meta: Record<string, unknown> & { frames: number; schedule?: { time: number[]; coef1: number[]; coef2: number[]; sigma: number[] } };
@@ -17,6 +19,13 @@ export interface FixtureCase {
 
 export function fixtureExists(name: string): boolean {
   return fs.existsSync(path.join(PARITY_DIR, `${name}.json`));
+}
+
+/** Names of the model parity cases present (model-<name>), from index.json. */
+export function modelFixtures(): string[] {
+  const p = path.join(PARITY_DIR, 'index.json');
+  if (!fs.existsSync(p)) return [];
+  return Object.keys(JSON.parse(fs.readFileSync(p, 'utf8')).cases ?? {}).filter((k) => k.startsWith('model-') && fixtureExists(k));
 }
 
 export function loadCase(name: string): FixtureCase {

@@ -1,6 +1,6 @@
 import { describe, expect, it } from 'vitest';
 import { forwardKinematics, solveIK } from '../../src/motion/ik';
-import { fixtureExists, loadCase, manifestSkeleton, maxJointDist, randomPoseQuats } from './coreFixtures';
+import { fixtureExists, loadCase, manifestSkeleton, maxJointDist, modelFixtures, randomPoseQuats } from './coreFixtures';
 
 const sk = manifestSkeleton();
 const J = sk.joints.length;
@@ -103,4 +103,16 @@ describe('IK (joints → root + local quaternions with twist from body planes)',
     expect(errRef).toBeGreaterThan(0.01);
     expect(err).toBeLessThan(0.01);
   });
+
+  const generated = modelFixtures();
+  if (!generated.length) it.skip('FK(IK(joints)) on generated motions: no model parity fixtures yet (run `python -m emdm.fixtures`)', () => {});
+  for (const name of generated) {
+    it(`FK(IK(joints)) is within 1 cm on a generated motion (${name})`, () => {
+      const fx = loadCase(name);
+      const joints = fx.get('joints');
+      const frames = fx.meta.frames;
+      const ik = solveIK(joints, frames, sk);
+      expect(maxJointDist(forwardKinematics(ik.rootPos, ik.quats, frames, sk, ik.offsets), joints)).toBeLessThan(0.01);
+    });
+  }
 });
