@@ -27,7 +27,9 @@ const opt = (name, dflt) => {
 const flag = (name) => args.includes(`--${name}`);
 const list = (s) => s.split(',').filter(Boolean);
 
-const manifestPath = path.join(ROOT, 'public', 'models', 'manifest.json');
+// --models-dir: another models folder (Node only; the browser harness serves public/models/)
+const MODELS_DIR = path.resolve(opt('models-dir', path.join(ROOT, 'public', 'models')));
+const manifestPath = path.join(MODELS_DIR, 'manifest.json');
 const shipped = fs.existsSync(manifestPath) ? Object.keys(JSON.parse(fs.readFileSync(manifestPath, 'utf8')).models ?? {}) : [];
 const models = list(opt('models', shipped.join(',') || 'tiny'));
 const stepCounts = list(opt('steps', '1,2,4,10')).map(Number);
@@ -56,8 +58,8 @@ async function nodeWorker() {
     const { computeSchedule } = await server.ssrLoadModule(path.join(ROOT, 'src/sampler/schedule.ts'));
     const out = [];
     for (const model of models) {
-      let manifest = await loadManifest(path.join(ROOT, 'public', 'models') + '/');
-      let baseUrl = path.join(ROOT, 'public', 'models') + '/';
+      let manifest = await loadManifest(MODELS_DIR + '/');
+      let baseUrl = MODELS_DIR + '/';
       if (model === 'tiny') ({ manifest, baseUrl } = await tinyManifest(manifest, computeSchedule));
       const entry = manifest.models[model];
       const gen = await createGenerator({ manifest, baseUrl, model, variant, backend: 'wasm', threads });
@@ -114,7 +116,7 @@ const median = (a) => [...a].sort((x, y) => x - y)[Math.floor(a.length / 2)];
 
 function runNode(threads) {
   return new Promise((resolve, reject) => {
-    const child = spawn(process.execPath, [fileURLToPath(import.meta.url), '--worker', 'node', '--threads', String(threads), '--models', models.join(','), '--steps', stepCounts.join(','), '--frames', String(frames), '--reps', String(reps), ...(variant ? ['--variant', variant] : [])], { stdio: ['ignore', 'pipe', 'inherit'] });
+    const child = spawn(process.execPath, [fileURLToPath(import.meta.url), '--worker', 'node', '--threads', String(threads), '--models', models.join(','), '--steps', stepCounts.join(','), '--frames', String(frames), '--reps', String(reps), '--models-dir', MODELS_DIR, ...(variant ? ['--variant', variant] : [])], { stdio: ['ignore', 'pipe', 'inherit'] });
     let buf = '';
     child.stdout.on('data', (d) => (buf += d));
     child.on('exit', (code) => {
