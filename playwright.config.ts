@@ -1,9 +1,16 @@
 // Playwright (tests/e2e/*.spec.ts) on Debian's /usr/bin/chromium (`npx playwright install` cannot
 // download browsers here). The web server is the BUILT site served by `vite preview` with the
 // COOP/COEP headers (see vite.config.ts), on its own port so a running `make demo` does not clash.
+import { createHash } from 'node:crypto';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
 import { defineConfig } from '@playwright/test';
 
-export const E2E_PORT = Number(process.env.E2E_PORT ?? 4173);
+// One port per checkout (4200..4999, from its path), so two clones testing at once do not collide;
+// E2E_PORT overrides it.
+const ROOT = path.dirname(fileURLToPath(import.meta.url));
+const PATH_PORT = 4200 + (createHash('sha256').update(ROOT).digest().readUInt16BE(0) % 800);
+export const E2E_PORT = Number(process.env.E2E_PORT ?? PATH_PORT);
 const CHROMIUM = process.env.CHROMIUM_PATH ?? '/usr/bin/chromium';
 
 export default defineConfig({
