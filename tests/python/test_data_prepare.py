@@ -90,10 +90,11 @@ def test_user_folder_becomes_a_humanml3d_dataset(tmp_path, capsys):
     assert sum(map(len, ids.values())) == 8 and len(ids["test"]) >= 2
 
 
-def test_strict_fails_on_the_first_bad_file_and_writes_nothing(tmp_path):
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_strict_fails_on_the_first_bad_file_and_writes_nothing(tmp_path, workers):
     root, jm = _user_folder(tmp_path, bad=True)
     with pytest.raises(MocapFormatError) as e:
-        _run(tmp_path, root, jm, "--strict")
+        _run(tmp_path, root, jm, "--strict", "--workers", workers)
     assert "broken.bvh:4" in str(e.value)
     assert not (tmp_path / "ds").exists()
     assert not list(tmp_path.glob(".ds.tmp-*")), "the temp folder is removed"

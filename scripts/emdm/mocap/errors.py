@@ -12,3 +12,6 @@ class MocapFormatError(ValueError):
         self.message = message
         where = f"{self.path}:{line}" if line is not None else self.path
         super().__init__(f"{where}: {message}")
+
+    def __reduce__(self):  # picklable, so worker processes can report it
+        return (type(self), (self.path, self.line, self.message))
