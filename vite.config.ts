@@ -8,7 +8,7 @@
 import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { defineConfig } from 'vite';
+import { defineConfig, type Plugin } from 'vite';
 // @ts-expect-error -- plain ESM build script without type declarations
 import { copyOrt } from './scripts/build/copy-ort.mjs';
 
@@ -38,11 +38,37 @@ export function pageInputs(webDir: string = WEB): Record<string, string> {
 
 copyOrt(ROOT);
 
+/**
+ * Dev server only: ORT loads its wasm glue with a runtime `import(wasmPaths + 'ort-wasm-*.mjs')`.
+ * Vite's dev server rewrites such imports (`?import`) and refuses to serve public/ files as
+ * modules, so answer /ort/* and /ort-tfjs/* straight from public/ before Vite's transforms.
+ * (The production build serves public/ files as-is, so nothing is needed there.)
+ */
+function serveOrtRaw(): Plugin {
+  return {
+    name: 'emdm-serve-ort-raw',
+    apply: 'serve',
+    configureServer(server) {
+      server.middlewares.use((req, res, next) => {
+        const url = (req.url ?? '').split('?')[0];
+        const m = /^\/(ort|ort-tfjs)\/(ort-wasm-[\w.-]+\.(mjs|wasm))$/.exec(url);
+        if (!m) return next();
+        const file = path.join(ROOT, 'public', m[1], m[2]);
+        if (!fs.existsSync(file)) return next();
+        res.setHeader('Content-Type', m[3] === 'mjs' ? 'text/javascript' : 'application/wasm');
+        for (const [k, v] of Object.entries(CROSS_ORIGIN_ISOLATION_HEADERS)) res.setHeader(k, v);
+        fs.createReadStream(file).pipe(res);
+      });
+    },
+  };
+}
+
 const inputs = pageInputs();
 
 export default defineConfig({
   root: WEB,
   publicDir: path.join(ROOT, 'public'),
+  plugins: [serveOrtRaw()],
   build: {
     outDir: path.join(ROOT, 'dist'),
     emptyOutDir: true,
