@@ -66,18 +66,26 @@ def test_action_model_rejected_for_text(world):
                        "--classifier", str(root / "c.pt")])
 
 
-def test_shipped_onnx_source_generates_what_the_checkpoint_does(world):
+@pytest.fixture(scope="module")
+def exported(world):
+    from emdm import export
+
+    root, _ = world
+    models = root / "models"
+    export.main(["--ckpt", str(root / "run" / "ckpt.pt"), "--name", "tiny-t2m", "--out", str(models), "--variants", ""])
+    return models
+
+
+def test_shipped_onnx_source_generates_what_the_checkpoint_does(world, exported):
     """--model (the exported ONNX step through onnxruntime, as shipped) and --ckpt (PyTorch) make
     the same motions for the same conditions and seed."""
     import numpy as np
 
-    from emdm import export
     from emdm.eval.protocol import Conditions
     from emdm.eval.sources import ModelSource
 
     root, ds = world
-    models = root / "models"
-    export.main(["--ckpt", str(root / "run" / "ckpt.pt"), "--name", "tiny-t2m", "--out", str(models), "--variants", ""])
+    models = exported
     onnx_src = ModelSource(model="tiny-t2m", models_dir=models, steps=2)
     pt_src = ModelSource(ckpt=root / "run" / "ckpt.pt", steps=2)
     assert onnx_src.info["variant"] == pt_src.info["variant"] == "emdm"
@@ -108,3 +116,25 @@ def test_max_items_is_a_seeded_random_subset_of_raw_features(world):
     # raw = the file on disk (the reader's normalisation is undone)
     on_disk = np.load(ds / "new_joint_vecs" / f"{sub.names[3]}.npy")
     np.testing.assert_allclose(sub.motions[3], on_disk[: len(sub.motions[3])], atol=1e-4)
+
+
+def test_browser_benchmark_json_becomes_timing_rows(world, exported, tmp_path):
+    from emdm.eval import evaluate, report
+
+    bench = {"frames": 196, "reps": 3, "rows": [
+        {"env": "chromium", "model": "tiny-t2m", "threads": 1, "guidance": 2.5,
+         "results": [{"steps": 1, "modelCalls": 1, "msPerStep": 50.0, "msPerMotion": 60.0},
+                     {"steps": 2, "modelCalls": 2, "msPerStep": 50.0, "msPerMotion": 110.0}]},
+        {"env": "node", "model": "tiny-t2m", "threads": 2, "guidance": 2.5,
+         "results": [{"steps": 2, "modelCalls": 2, "msPerStep": 40.0, "msPerMotion": 90.0}]}]}
+    (tmp_path / "bench.json").write_text(json.dumps(bench))
+    evaluate.main(["import-bench", str(tmp_path / "bench.json"), "--models-dir", str(exported),
+                   "--out-dir", str(tmp_path / "json")])
+    rows = report.timing_rows(report.load_results(tmp_path / "json"))
+    chromium = sorted((r["steps"], r["ms_per_frame"]) for r in rows if r["runtime"] == "browser-wasm")
+    assert chromium == [(1, 60.0 / 196), (2, 110.0 / 196)]
+    assert {r["variant"] for r in rows} == {"emdm"} and {r["runtime"] for r in rows} == {"browser-wasm", "node-wasm"}
+    bench["rows"][0]["model"] = "nope"
+    (tmp_path / "bench.json").write_text(json.dumps(bench))
+    with pytest.raises(SystemExit, match=r"rows\[0\].model 'nope' is not in the manifest"):
+        evaluate.main(["import-bench", str(tmp_path / "bench.json"), "--models-dir", str(exported)])

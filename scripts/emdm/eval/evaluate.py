@@ -139,12 +139,60 @@ def run_timing(a) -> Path:
                 ms.append((time.perf_counter() - t0) * 1000)
             rows.append({"variant": src.info["variant"], "sampler": src.info["sampler"], "steps": T,
                          "frames": a.frames, "ms_per_motion": ms, "guidance": a.guidance, "batch": 1,
+                         "threads": a.threads,
                          "source": ckpt, "engine": src.info["runtime"], "preset": src.info["preset"]})
             print(f"{src.name}: {np.mean(ms):.1f} ms / motion, {np.mean(ms) / a.frames:.3f} ms / frame", flush=True)
     result = {"schema": SCHEMA, "task": "timing", "runtime": a.runtime, "hardware": hardware(),
               "note": "batch 1 (with guidance: one batched call of 2), one warm-up run; emdm.sample loop",
               "created": datetime.now(timezone.utc).isoformat(timespec="seconds"), "rows": rows}
     return write_result(result, a.out or RESULTS_DIR / "json" / f"timing-{a.runtime}.json")
+
+
+def import_bench(a) -> Path:
+    """Convert the TypeScript core benchmark's JSON (``node scripts/bench/core-bench.mjs --json F``:
+    {frames, reps, rows: [{env, model, threads, guidance, results: [{steps, msPerMotion, ...}]}]})
+    into timing JSON: runtime ``browser-wasm`` (Chromium rows) or ``node-wasm``; the variant of each
+    model comes from its manifest entry's training flags."""
+    from emdm import manifest as mf
+    from emdm.eval.sources import variant_of
+    from emdm.paths import MODELS_DIR
+
+    src = Path(a.bench)
+    try:
+        bench = json.loads(src.read_text())
+        frames = int(bench["frames"])
+        rows_in = bench["rows"]
+    except (OSError, json.JSONDecodeError, KeyError, TypeError, ValueError) as e:
+        raise SystemExit(f"error: {src}: not a core-bench JSON ({e})")
+    models = mf.load(a.models_dir or MODELS_DIR)["models"]
+    by_runtime: dict[str, list[dict]] = {}
+    for i, r in enumerate(rows_in):
+        name = r["model"].split(":")[0]
+        if name not in models:
+            raise SystemExit(f"error: {src}: rows[{i}].model {name!r} is not in the manifest")
+        e = models[name]
+        flags = e.get("training", {}).get("flags", {})
+        runtime = "browser-wasm" if str(r["env"]).startswith("chromium") else "node-wasm"
+        if a.threads_filter and int(r["threads"]) != a.threads_filter:
+            continue
+        for x in r["results"]:
+            by_runtime.setdefault(runtime, []).append({
+                "variant": variant_of({"objective": e.get("objective", "ddgan"), "args": flags}),
+                "sampler": "DDIM" if e.get("objective") == "diffusion" else "DDGAN", "steps": int(x["steps"]),
+                "frames": frames, "ms_per_motion": [float(x["msPerMotion"])], "guidance": r.get("guidance"),
+                "threads": int(r["threads"]), "env": r["env"], "source": r["model"],
+                "model_calls": x.get("modelCalls")})
+    written = []
+    for runtime, rows in by_runtime.items():
+        result = {"schema": SCHEMA, "task": "timing", "runtime": runtime,
+                  "hardware": f"{hardware()}; {rows[0]['env']}, ORT-web WASM, {rows[0]['threads']} thread(s)",
+                  "note": f"median of {bench.get('reps', '?')} runs from {src.name} (scripts/bench/core-bench.mjs): "
+                          "text encoding + all steps + decode",
+                  "created": datetime.now(timezone.utc).isoformat(timespec="seconds"), "rows": rows}
+        written.append(write_result(result, (a.out_dir or RESULTS_DIR / "json") / f"timing-{runtime}.json"))
+    if not written:
+        raise SystemExit(f"error: {src}: no rows")
+    return written[-1]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -184,13 +232,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--runtime", default="python-cpu")
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--out", type=Path, default=None)
+    p = sub.add_parser("import-bench", help="timing JSON from scripts/bench/core-bench.mjs --json output")
+    p.add_argument("bench", type=Path)
+    p.add_argument("--models-dir", type=Path, default=None)
+    p.add_argument("--threads-filter", type=int, default=0, help="keep only rows with this thread count (0 = all)")
+    p.add_argument("--out-dir", type=Path, default=None)
+    p.add_argument("--threads", type=int, default=1)
     return ap
 
 
 def main(argv: list[str] | None = None) -> int:
     a = build_parser().parse_args(argv)
     torch.set_num_threads(a.threads)
-    out = run_timing(a) if a.task == "timing" else run_quality(a)
+    if a.task == "timing":
+        out = run_timing(a)
+    elif a.task == "import-bench":
+        out = import_bench(a)
+    else:
+        out = run_quality(a)
     print(f"wrote {out}")
     return 0
 

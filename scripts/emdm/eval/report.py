@@ -139,10 +139,14 @@ def action_table(results: list[dict]) -> str:
 
 
 def plausibility_table(results: list[dict]) -> str:
-    rows = []
+    rows, seen = [], set()
     for r in sorted((r for r in results if r["task"] in ("text", "action") and r.get("plausibility")),
-                    key=lambda r: (r["task"], _sort_key(r))):
+                    key=lambda r: (r["task"] != "text", _sort_key(r))):
         p = r["plausibility"]
+        key = (r["name"], json.dumps(p, sort_keys=True))
+        if key in seen:                 # e.g. the real clips measured by both the text and action runs
+            continue
+        seen.add(key)
         n = len(p.get("penetration_mm", []))
         rows.append([r["name"], r["task"], "–" if _steps(r) is None else str(_steps(r)), str(n),
                      fmt(p.get("penetration_mm"), 1), fmt(p.get("floating_mm"), 1), fmt(p.get("skate_cm_s"), 1),
@@ -168,25 +172,25 @@ def timing_rows(results: list[dict]) -> list[dict]:
 
 
 def timing_table(results: list[dict]) -> tuple[str, list[str]]:
-    """The table and the headline ratios (diffusion time / EMDM time, same runtime, per frame)."""
+    """The table and the headline ratios (diffusion time / EMDM time per frame, same runtime and
+    thread count; the EMDM reference is its 10-step row, else its first)."""
     flat = timing_rows(results)
     rows, ratios = [], []
-    for runtime in sorted({f["runtime"] for f in flat}):
-        group = sorted((f for f in flat if f["runtime"] == runtime),
-                       key=lambda f: (VARIANT_ORDER.index(f["variant"]) if f["variant"] in VARIANT_ORDER else 99, f["steps"]))
+    order = lambda f: (VARIANT_ORDER.index(f["variant"]) if f["variant"] in VARIANT_ORDER else 99, f["steps"])  # noqa: E731
+    for runtime, threads in sorted({(f["runtime"], f.get("threads", 1)) for f in flat}):
+        group = sorted((f for f in flat if f["runtime"] == runtime and f.get("threads", 1) == threads), key=order)
         emdm = {f["steps"]: f for f in group if f["variant"] == "emdm"}
         ref = emdm.get(10) or (next(iter(emdm.values())) if emdm else None)
         for f in group:
             ratio = f"{f['ms_per_frame'] / ref['ms_per_frame']:.2f}×" if ref else "–"
-            rows.append([runtime, VARIANT_LABEL.get(f["variant"], f["variant"]), str(f["steps"]), str(f["frames"]),
-                         f"{f['ms']:.1f}", f"{f['ms_per_frame']:.3f}", ratio, str(f["runs"]), f["hardware"]])
-        if ref:
-            for f in group:
-                if f["variant"] == "diffusion":
-                    ratios.append(f"{runtime}: diffusion + DDIM at {f['steps']} steps takes "
-                                  f"{f['ms_per_frame'] / ref['ms_per_frame']:.1f}× the time per frame of EMDM at "
-                                  f"{ref['steps']} steps ({f['ms_per_frame']:.3f} vs {ref['ms_per_frame']:.3f} ms).")
-    table = _table(["Runtime", "Method", "Steps", "Frames", "ms / motion", "ms / frame", "× EMDM", "Runs",
+            rows.append([runtime, VARIANT_LABEL.get(f["variant"], f["variant"]), str(f["steps"]), str(threads),
+                         str(f["frames"]), f"{f['ms']:.1f}", f"{f['ms_per_frame']:.3f}", ratio, str(f["runs"]),
+                         f["hardware"]])
+            if ref and f["variant"] == "diffusion":
+                ratios.append(f"{runtime}, {threads} thread(s): diffusion + DDIM at {f['steps']} steps takes "
+                              f"{f['ms_per_frame'] / ref['ms_per_frame']:.1f}× the time per frame of EMDM at "
+                              f"{ref['steps']} steps ({f['ms_per_frame']:.3f} vs {ref['ms_per_frame']:.3f} ms).")
+    table = _table(["Runtime", "Method", "Steps", "Threads", "Frames", "ms / motion", "ms / frame", "× EMDM", "Runs",
                     "Hardware"], rows)
     return table, ratios
 
