@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from emdm.eval.data import TEXT_ENCODER
 from emdm.eval.protocol import Conditions
 
 DEFAULT_GUIDANCE = 2.5
@@ -145,8 +146,15 @@ class ModelSource:
         spec = self.cond_spec
         who = self.ckpt or self.model
         if spec["type"] == "text":
-            if cond.text_emb is None:
+            if cond.text_emb is None and cond.texts is None:
                 raise ValueError(f"{who}: a text model needs text conditions")
+            encoder = spec.get("encoder", TEXT_ENCODER)
+            if encoder != TEXT_ENCODER or cond.text_emb is None:   # the model reads another encoder's vectors
+                if cond.texts is None:
+                    raise ValueError(f"{who}: model conditions on {encoder!r}; the captions' text is needed")
+                from emdm.text import encode_texts
+
+                return np.asarray(encode_texts(cond.texts, encoder_id=encoder), np.float32)
             if cond.text_emb.shape[1] != spec["dim"]:
                 raise ValueError(f"{who}: model expects {spec['dim']}-d text embeddings "
                                  f"({spec.get('encoder')}), got {cond.text_emb.shape[1]}")
