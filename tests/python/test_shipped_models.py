@@ -1,0 +1,104 @@
+"""Sanity checks on the models shipped in public/models (the files the browser downloads).
+
+Each model generates with the exact browser loop (emdm.sample) from its ONNX file and mean/std:
+no NaN, bone lengths close to the reference skeleton, feet on the floor on contact frames, different
+seeds give different motions and the same seed gives the same motion.
+"""
+
+import numpy as np
+import pytest
+
+from emdm import manifest as mf
+from emdm import paths
+from emdm import skeleton as sk
+from emdm.motion.features import recover_joints
+from emdm.sample import denormalise, make_condition, onnx_step, read_meanstd, sample_features
+
+MODELS = ["emdm-t2m-web", "emdm-a2m-web"]
+FRAMES = 120
+FOOT_BALLS = (10, 11)                  # l_foot, r_foot: at floor height (y = 0) in the rest pose
+FOOT_CONTACT = {10: 260, 11: 262}      # their contact channels
+
+
+def shipped(name: str) -> dict:
+    try:
+        man = mf.load(paths.MODELS_DIR)
+    except mf.ManifestError as e:
+        pytest.skip(f"no manifest: {e}")
+    if name not in man["models"]:
+        pytest.skip(f"{name} not shipped yet in {paths.MODELS_DIR / mf.MANIFEST_NAME}")
+    return man["models"][name]
+
+
+def condition(entry: dict) -> np.ndarray:
+    if entry["condition"]["type"] == "text":
+        return make_condition(entry["condition"], "a person walks forward", None, False)
+    return make_condition(entry["condition"], None, "walk", False)
+
+
+@pytest.fixture(scope="module", params=MODELS)
+def generated(request):
+    entry = shipped(request.param)
+    step = onnx_step(paths.MODELS_DIR / entry["onnx"], threads=1)
+    mean, std = read_meanstd(paths.MODELS_DIR / entry["meanStd"])
+    c = condition(entry)
+
+    def run(seed: int, cond=c) -> tuple[np.ndarray, np.ndarray]:
+        x = sample_features(step, cond, FRAMES, entry["defaultSteps"], entry["guidance"], seed, 1, entry["zDim"])
+        feats = denormalise(x[0], mean, std)
+        return feats, recover_joints(feats)
+
+    return request.param, entry, run, c
+
+
+def test_manifest_files_match(generated):
+    name, entry, _, _ = generated
+    problems = [p for p in mf.verify(paths.MODELS_DIR) if any(f in p for f in entry["files"])]
+    assert not problems, problems
+    assert entry["training"]["steps"] > 0
+
+
+def test_no_nan_and_right_shape(generated):
+    _, _, run, _ = generated
+    feats, joints = run(0)
+    assert feats.shape == (FRAMES, 263) and joints.shape == (FRAMES, 22, 3)
+    assert np.isfinite(feats).all() and np.isfinite(joints).all()
+
+
+def test_bone_lengths_match_the_reference_skeleton(generated):
+    _, _, run, _ = generated
+    ref = np.linalg.norm(sk.REFERENCE_OFFSETS[1:], axis=1)
+    for seed in (0, 1):
+        _, joints = run(seed)
+        bones = np.linalg.norm(joints[:, 1:] - joints[:, sk.PARENTS[1:]], axis=-1)      # (F, 21)
+        rel = np.median(np.abs(bones / ref - 1.0), axis=0)
+        worst = int(np.argmax(rel)) + 1
+        assert rel.max() <= 0.05, f"seed {seed}: bone to {sk.JOINT_NAMES[worst]} off by {rel.max():.1%} (median)"
+
+
+def test_feet_on_the_floor_on_contact_frames(generated):
+    _, _, run, _ = generated
+    heights = []
+    for seed in (0, 1):
+        feats, joints = run(seed)
+        for j, ch in FOOT_CONTACT.items():
+            heights.append(joints[feats[:, ch] > 0.5, j, 1])
+    h = np.abs(np.concatenate(heights))
+    assert h.size > 0, "the model never predicts a foot contact"
+    assert np.median(h) <= 0.05 and np.mean(h <= 0.05) >= 0.8, \
+        f"foot height on contact frames: median {np.median(h):.3f} m, {np.mean(h <= 0.05):.0%} within 5 cm"
+
+
+def test_seeds_differ_and_repeat(generated):
+    _, _, run, _ = generated
+    _, a = run(3)
+    _, b = run(3)
+    _, c = run(4)
+    np.testing.assert_array_equal(a, b)
+    assert np.abs(a - c).mean() > 0.01          # more than 1 cm on average
+
+
+def test_unconditional_generation_works(generated):
+    _, entry, run, c = generated
+    feats, joints = run(0, np.zeros_like(c))
+    assert np.isfinite(joints).all()
