@@ -138,3 +138,20 @@ def test_browser_benchmark_json_becomes_timing_rows(world, exported, tmp_path):
     (tmp_path / "bench.json").write_text(json.dumps(bench))
     with pytest.raises(SystemExit, match=r"rows\[0\].model 'nope' is not in the manifest"):
         evaluate.main(["import-bench", str(tmp_path / "bench.json"), "--models-dir", str(exported)])
+
+
+def test_suite_plans_every_row_of_the_comparisons(monkeypatch):
+    from emdm.eval import suite
+
+    cmds = []
+    monkeypatch.setattr(suite.evaluate, "main", lambda argv: cmds.append(argv))
+    monkeypatch.setattr(suite.report, "main", lambda argv=None: 0)
+    suite.main(["--text", "t.pt", "--action", "emdm-a2m-web", "--diffusion", "d.pt", "--naive", "n.pt",
+                "--repeats", "2", "--timing-runs", "1"])
+    rows = [(c[0], c[2] if c[1] in ("--ckpt", "--model", "--source") else None,
+             c[c.index("--steps") + 1] if "--steps" in c else None) for c in cmds if c[0] != "timing"]
+    assert ("text", "real", None) in rows and ("action", "real", None) in rows
+    assert {("text", "d.pt", s) for s in ("10", "50", "100")} <= set(rows)
+    assert ("text", "t.pt", "10") in rows and ("text", "n.pt", "10") in rows and ("action", "emdm-a2m-web", "10") in rows
+    timing = next(c for c in cmds if c[0] == "timing")
+    assert "t.pt=1,2,4,5,8,10" in timing and "d.pt=10,50,100" in timing

@@ -75,10 +75,13 @@ def write_result(result: dict, out: Path) -> Path:
 
 def _evaluator_info(model, path: Path) -> dict:
     meta = getattr(model, "meta", {})
-    cfg = meta.get("config", {})
+    final = meta.get("final", {})
+    val = ", ".join(f"{k} {v:.3f}" for k, v in final.items() if k.startswith("val_"))
     return {"path": str(path), "train_items": meta.get("train_items"), "minutes": meta.get("minutes"),
-            "summary": f"{type(model).__name__} trained on {meta.get('train_items', '?')} train clips for "
-                       f"{cfg.get('epochs', '?')} epochs ({meta.get('minutes', 0) or 0:.1f} min)"}
+            "epochs_run": meta.get("epochs_run"), "config": meta.get("config"), "final": final,
+            "summary": f"{type(model).__name__} (hidden {model.config['hidden']}) trained on "
+                       f"{meta.get('train_items', '?')} train clips for {meta.get('epochs_run', '?')} epochs "
+                       f"({meta.get('minutes', 0) or 0:.1f} min{'; val ' + val if val else ''})"}
 
 
 def run_quality(a) -> Path:

@@ -382,7 +382,10 @@ def _main(argv: list[str] | None = None) -> int:
     log_path.parent.mkdir(parents=True, exist_ok=True)
     logf = open(log_path, "w")
 
+    history: list[dict] = []
+
     def log(row: dict) -> None:
+        history.append(row)
         logf.write(json.dumps(row) + "\n")
         logf.flush()
         print(" ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()), flush=True)
@@ -410,6 +413,8 @@ def _main(argv: list[str] | None = None) -> int:
         model = train_classifier(train.motions, labels, len(vocab), train.mean, train.std, cfg, val=vpair, log=log)
         meta["labels"] = vocab
     meta["minutes"] = (time.time() - t0) / 60
+    meta["epochs_run"] = len(history)
+    meta["final"] = history[-1] if history else {}
     save(model, out, meta)
     print(f"wrote {out} ({meta['minutes']:.1f} min); log {log_path}")
     return 0
