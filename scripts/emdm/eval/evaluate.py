@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import re
 import sys
@@ -41,7 +42,7 @@ def hardware() -> str:
     except OSError:
         pass
     gpu = f", GPU {torch.cuda.get_device_name(0)}" if torch.cuda.is_available() else ""
-    return f"{cpu} ({torch.get_num_threads()} torch thread(s)){gpu}"
+    return f"{cpu}, {os.cpu_count()} cores shared ({torch.get_num_threads()} torch thread(s)){gpu}"
 
 
 def dataset_info(root: Path, split: str) -> dict:
@@ -76,7 +77,7 @@ def write_result(result: dict, out: Path) -> Path:
 def _evaluator_info(model, path: Path) -> dict:
     meta = getattr(model, "meta", {})
     final = meta.get("final", {})
-    val = ", ".join(f"{k} {v:.3f}" for k, v in final.items() if k.startswith("val_"))
+    val = ", ".join(f"{k[4:]} {v:.3f}" for k, v in final.items() if k.startswith("val_"))
     return {"path": str(path), "train_items": meta.get("train_items"), "minutes": meta.get("minutes"),
             "epochs_run": meta.get("epochs_run"), "config": meta.get("config"), "final": final,
             "summary": f"{type(model).__name__} (hidden {model.config['hidden']}) trained on "

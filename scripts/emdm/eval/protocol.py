@@ -11,7 +11,9 @@ Action-to-motion (ACTOR): one motion per test clip with the clip's label and len
   classifier, FID against the real test clips, Diversity (200 pairs), Multimodality (20 pairs per label).
 Real-vs-real row: the real test clips themselves, with FID between two random halves of the test set
   (a noise floor of the FID estimate; with identical sets it would be exactly 0) and no MultiModality.
-Plausibility: ``plaus_n`` motions (default 200) of the first repeat, joints from ``recover_joints``.
+Plausibility: ``plaus_n`` motions (default 200) of the first repeat, for a seeded random choice of test
+  clips that is the same for every source (so real and generated rows measure the same conditions);
+  joints from ``recover_joints``.
 """
 
 from __future__ import annotations
@@ -89,6 +91,13 @@ def plausibility_rows(motions: Sequence[np.ndarray]) -> dict[str, list[float]]:
     return {k: v.tolist() for k, v in batch_plausibility(joints_of(motions), FPS).items()}
 
 
+def plausibility_subset(n: int, plaus_n: int, seed: int) -> np.ndarray:
+    """The clips whose motions are checked for plausibility: a seeded random subset, in order."""
+    if plaus_n >= n:
+        return np.arange(n)
+    return np.sort(np.random.default_rng([seed, 7]).choice(n, plaus_n, replace=False))
+
+
 def _fid_real_halves(real_emb: np.ndarray, rng: np.random.Generator) -> float:
     perm = rng.permutation(len(real_emb))
     h = len(perm) // 2
@@ -134,7 +143,7 @@ def evaluate_text(matcher: E.MatchingModel, test: EvalSplit, caption_emb: Sequen
             mm_emb = E.embed_motions(matcher, mm_motions).reshape(len(sel), mm_repeats, -1)
             out["multimodality"].append(M.multimodality(mm_emb, min(M.MULTIMODALITY_PAIRS_T2M, mm_repeats), rng=rng))
         if r == 0 and plaus_n > 0:
-            plaus = plausibility_rows(motions[:plaus_n])
+            plaus = plausibility_rows([motions[i] for i in plausibility_subset(n, plaus_n, seed)])
         log(f"[{source.name}] repeat {r + 1}/{repeats}: " +
             " ".join(f"{k}={v[-1]:.4f}" for k, v in out.items() if v))
     return {"task": "text", "n": n, "repeats": repeats, "seed": seed, "metrics": out, "plausibility": plaus,
@@ -169,7 +178,7 @@ def evaluate_action(classifier: E.ActionClassifier, test: EvalSplit, source: Sou
         out["multimodality"].append(M.multimodality_by_label(feats[mm_rows], labels[mm_rows],
                                                              M.MULTIMODALITY_PAIRS_A2M, rng=rng))
         if r == 0 and plaus_n > 0:
-            plaus = plausibility_rows(motions[:plaus_n])
+            plaus = plausibility_rows([motions[i] for i in plausibility_subset(len(motions), plaus_n, seed)])
         log(f"[{source.name}] repeat {r + 1}/{repeats}: " + " ".join(f"{k}={v[-1]:.4f}" for k, v in out.items()))
     return {"task": "action", "n": int(keep.size), "repeats": repeats, "seed": seed, "metrics": out,
             "plausibility": plaus, "diversity_pairs": div_pairs, "generate_seconds": gen_seconds}

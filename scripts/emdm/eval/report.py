@@ -285,7 +285,7 @@ def missing(results: list[dict]) -> list[str]:
 def _describe(results: list[dict]) -> list[str]:
     lines = []
     seen = set()
-    for r in results:
+    for r in sorted(results, key=lambda r: r["task"] != "text"):
         if r["task"] == "timing":
             continue
         d = r.get("dataset", {})
@@ -294,7 +294,8 @@ def _describe(results: list[dict]) -> list[str]:
             continue
         seen.add(key)
         lines.append(f"- {r['task']}: dataset `{d.get('name', '?')}` ({d.get('description', '')}), split "
-                     f"`{d.get('split', '?')}`, {r.get('n', '?')} clips evaluated; evaluator: {r.get('evaluator', {}).get('summary', '?')}")
+                     f"`{d.get('split', '?')}`, {r.get('n', '?')} clips evaluated (≥ 40 frames); evaluator: "
+                     f"{r.get('evaluator', {}).get('summary', '?')}")
     hw = sorted({r.get("hardware", "?") for r in results})
     if hw:
         lines.append("- hardware: " + "; ".join(hw))
