@@ -112,6 +112,7 @@ def run_quality(a) -> Path:
         res = evaluate_action(ev, test, source, repeats=a.repeats, seed=a.seed, plaus_n=a.plaus_n)
     result = {"schema": SCHEMA, "name": source.name, "kind": source.kind, "info": source.info,
               "dataset": dataset_info(Path(a.dataset), a.split), "hardware": hardware(),
+              "load_avg_1min_end": os.getloadavg()[0],
               "evaluator": _evaluator_info(ev, path), "minutes": (time.time() - t0) / 60,
               "created": datetime.now(timezone.utc).isoformat(timespec="seconds"), **res}
     out = a.out or RESULTS_DIR / "json" / (slug(a.task, source.info.get("variant"), source.info.get("steps")) + ".json")
@@ -122,6 +123,7 @@ def run_timing(a) -> Path:
     from emdm.eval.sources import ModelSource
 
     rows = []
+    load_before = os.getloadavg()[0]
     for spec in a.model:
         if "=" not in spec:
             raise SystemExit(f"error: --model {spec!r}: expected CKPT=STEPS[,STEPS...]")
@@ -147,6 +149,7 @@ def run_timing(a) -> Path:
                          "source": ckpt, "engine": src.info["runtime"], "preset": src.info["preset"]})
             print(f"{src.name}: {np.mean(ms):.1f} ms / motion, {np.mean(ms) / a.frames:.3f} ms / frame", flush=True)
     result = {"schema": SCHEMA, "task": "timing", "runtime": a.runtime, "hardware": hardware(),
+              "load_avg_1min": [load_before, os.getloadavg()[0]],
               "note": "batch 1 (with guidance: one batched call of 2), one warm-up run; emdm.sample loop",
               "created": datetime.now(timezone.utc).isoformat(timespec="seconds"), "rows": rows}
     return write_result(result, a.out or RESULTS_DIR / "json" / f"timing-{a.runtime}.json")

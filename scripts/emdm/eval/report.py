@@ -166,7 +166,10 @@ def timing_rows(results: list[dict]) -> list[dict]:
                 if k not in row:
                     raise ReportError(f"{r['_file']}: rows[{i}] misses field {k!r}")
             ms = float(np.mean(row["ms_per_motion"]))
-            flat.append({**row, "runtime": r["runtime"], "hardware": r.get("hardware", "?"),
+            hw = r.get("hardware", "?")
+            if "load_avg_1min" in r:
+                hw += f"; load avg {r['load_avg_1min'][0]:.1f}→{r['load_avg_1min'][1]:.1f}"
+            flat.append({**row, "runtime": r["runtime"], "hardware": hw,
                          "ms": ms, "ms_per_frame": ms / row["frames"], "runs": len(row["ms_per_motion"])})
     return flat
 
