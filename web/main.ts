@@ -22,6 +22,8 @@ import {
 import { emptyCounters, type EmdmTestApi, type GenerateRequest, type GenerateResponse } from './ui/testapi';
 
 const MODELS_URL = `${import.meta.env.BASE_URL}models/`;
+/** `?noauto` (tests): do not generate a first motion on load. Read before the URL is rewritten. */
+const AUTO_GENERATE = !new URLSearchParams(location.search).has('noauto');
 
 /** Thrown when the model's output contains NaN/Infinity: the character keeps its last good motion. */
 class BadMotionError extends Error {
@@ -365,7 +367,7 @@ async function main(): Promise<void> {
     return;
   }
   // Show something right away: the motion the URL (or the defaults) describe.
-  if (!new URLSearchParams(location.search).has('noauto')) void generate(controls.read()).catch(() => undefined);
+  if (AUTO_GENERATE) void generate(controls.read()).catch(() => undefined);
 }
 
 /** Arms relaxed down (A-pose) until the first motion arrives. */
