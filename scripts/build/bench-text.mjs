@@ -5,8 +5,10 @@
 // plus the sizes of the shipped files. Usage: node scripts/build/bench-text.mjs [--prompts N] [--skip-browser]
 import fs from 'node:fs';
 import path from 'node:path';
-import { fileURLToPath } from 'node:url';
-import { createServer } from 'vite';
+import os from 'node:os';
+import { execFileSync } from 'node:child_process';
+import { fileURLToPath, pathToFileURL } from 'node:url';
+import { build } from 'vite';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
 const args = process.argv.slice(2);
@@ -29,14 +31,20 @@ function stats(ms) {
 }
 
 async function benchNode() {
-  const vite = await createServer({ configFile: false, root: ROOT, logLevel: 'error', server: { middlewareMode: true, hmr: false }, appType: 'custom', optimizeDeps: { noDiscovery: true } });
+  // Bundle src/ for Node (dependencies stay external, imported natively) the way an app would ship it.
+  // inside node_modules/ so the bundle's bare imports resolve to the project's packages
+  const outDir = path.join(ROOT, 'node_modules/.cache/emdm-bench-text');
   try {
-    const { loadManifest } = await vite.ssrLoadModule('/src/manifest.ts');
-    const { createTextEncoder } = await vite.ssrLoadModule('/src/text/index.ts');
-    const { loadTransformers } = await vite.ssrLoadModule('/src/text/transformersEnv.ts');
+    await build({
+      configFile: false, root: ROOT, logLevel: 'error',
+      build: { ssr: true, outDir, emptyOutDir: true, target: 'node20',
+        rollupOptions: { input: { manifest: path.join(ROOT, 'src/manifest.ts'), text: path.join(ROOT, 'src/text/index.ts') } } },
+    });
     const ti = performance.now();
-    await loadTransformers();
+    await import('@huggingface/transformers');
     const importMs = performance.now() - ti;
+    const { loadManifest } = await import(pathToFileURL(path.join(outDir, 'manifest.js')).href);
+    const { createTextEncoder } = await import(pathToFileURL(path.join(outDir, 'text.js')).href);
     const base = path.join(ROOT, 'public/models') + '/';
     const t0 = performance.now();
     const enc = await createTextEncoder(await loadManifest(base), base);
@@ -52,8 +60,35 @@ async function benchNode() {
     }
     console.log(`node     (transformers.js, onnxruntime-node): import ${importMs.toFixed(0)} ms, load (verify + session) ${loadMs.toFixed(0)} ms, first prompt ${firstMs.toFixed(1)} ms, ${N} prompts: ${stats(ms)}`);
   } finally {
-    await vite.close();
+    fs.rmSync(outDir, { recursive: true, force: true });
   }
+}
+
+/** Baseline in the same run: Python onnxruntime (native) on the same file, one prompt per call. */
+function benchPython() {
+  const py = path.join(ROOT, '.venv/bin/python');
+  if (!fs.existsSync(py)) return console.log('python   skipped: no .venv (run `make setup`)');
+  const code = `
+import json, sys, time
+t0 = time.perf_counter()
+from emdm.text import load_encoder
+enc = load_encoder()
+load = (time.perf_counter() - t0) * 1000
+t = time.perf_counter(); enc.encode(["a person walks"]); first = (time.perf_counter() - t) * 1000
+ms = []
+for p in json.loads(sys.argv[1]):
+    t = time.perf_counter(); enc.encode([p]); ms.append((time.perf_counter() - t) * 1000)
+print(json.dumps({"load": load, "first": first, "ms": ms}))`;
+  const r = JSON.parse(execFileSync(py, ['-c', code, JSON.stringify(prompts)], { cwd: ROOT, encoding: 'utf8' }).trim().split('\n').pop());
+  console.log(`python   (onnxruntime native, baseline): import + load ${r.load.toFixed(0)} ms, first prompt ${r.first.toFixed(1)} ms, ${N} prompts: ${stats(r.ms)}`);
+  return r.ms;
+}
+
+async function sha256Time() {
+  const buf = fs.readFileSync(path.join(ROOT, 'public/models/text/all-MiniLM-L6-v2/onnx/model_quantized.onnx'));
+  const t = performance.now();
+  await crypto.subtle.digest('SHA-256', buf);
+  return performance.now() - t;
 }
 
 async function benchBrowser() {
@@ -89,5 +124,9 @@ for (const [id, e] of Object.entries(manifest.textEncoders)) {
   const total = e.files.reduce((s, f) => s + manifest.files[f].bytes, 0);
   console.log(`files    ${id}: ${sizes.join(', ')}; total ${(total / 1e6).toFixed(1)} MB`);
 }
+console.log(`machine  ${os.cpus().length} cores, load average ${os.loadavg().map((x) => x.toFixed(1)).join(' ')} (figures scale with contention)`);
+console.log(`sha256   of the 23 MB ONNX file (Node WebCrypto): ${(await sha256Time()).toFixed(0)} ms`);
+benchPython();
 await benchNode();
 if (!SKIP_BROWSER) await benchBrowser();
+console.log(`machine  load average after: ${os.loadavg().map((x) => x.toFixed(1)).join(' ')}`);
