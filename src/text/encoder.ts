@@ -79,8 +79,35 @@ function entryFor(manifest: Manifest, id: string): TextEncoderEntry {
   return entry;
 }
 
-/** Load the encoder `id` (default: the shipped MiniLM) named by the manifest under `baseUrl`. */
-export async function createTextEncoder(manifest: Manifest, baseUrl: string, id: string = DEFAULT_TEXT_ENCODER, opts: TextEncoderOptions = {}): Promise<TextEncoder> {
+const loaded = new Map<string, Promise<TextEncoder>>();
+
+/**
+ * Load the encoder `id` (default: the shipped MiniLM) named by the manifest under `baseUrl`.
+ * Loads are shared: asking again for the same files (same folder, same sha256s) returns the same
+ * encoder instead of a second copy of the model; a failed load is forgotten, so a retry loads anew.
+ */
+export function createTextEncoder(manifest: Manifest, baseUrl: string, id: string = DEFAULT_TEXT_ENCODER, opts: TextEncoderOptions = {}): Promise<TextEncoder> {
+  let key: string;
+  try {
+    const entry = entryFor(manifest, id);
+    key = [baseUrl, id, ...entry.files.map((f) => `${f}:${manifest.files[f]?.sha256 ?? '?'}`)].join('|');
+  } catch (e) {
+    return Promise.reject(e);
+  }
+  let p = loaded.get(key);
+  if (!p) {
+    p = load(manifest, baseUrl, id, opts);
+    loaded.set(key, p);
+    p.catch(() => loaded.delete(key));
+  } else if (opts.onDownload) {
+    const total = manifest.textEncoders[id].files.reduce((s, f) => s + (manifest.files[f]?.bytes ?? 0), 0);
+    const cb = opts.onDownload;
+    void p.then(() => cb(total, total), () => undefined);
+  }
+  return p;
+}
+
+async function load(manifest: Manifest, baseUrl: string, id: string, opts: TextEncoderOptions): Promise<TextEncoder> {
   const entry = entryFor(manifest, id);
   const root = modelRoot(baseUrl, entry.dir);
   const [tf] = await Promise.all([loadTransformers(opts.wasmPaths), prefetch(manifest, baseUrl, entry, root, opts.onDownload)]);

@@ -50,3 +50,14 @@ describe('all-MiniLM-L6-v2 (transformers.js, Node)', () => {
     expect((await enc.encode('a person walks')).length).toBe(384);
   });
 });
+
+describe('loading', () => {
+  test('asking twice for the same encoder shares one loaded model', async () => {
+    const m = await loadManifest(MODELS);
+    const again = await createTextEncoder(m, MODELS);
+    expect(again).toBe(enc);
+  });
+  test('an unknown id names the known ones', async () => {
+    await expect(createTextEncoder(await loadManifest(MODELS), MODELS, 'nope')).rejects.toThrow(/no textEncoders entry 'nope' \(known: .*all-MiniLM-L6-v2/);
+  });
+});
