@@ -347,11 +347,20 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
     miss = missing(results)
     out += ["## Not measured yet", ""]
     out += ([f"- {m}" for m in miss] if miss else ["- nothing: every row of the seed's comparisons is measured"]) + [""]
-    out += ["## Regenerate", "", "```",
-            "python -m emdm.eval.evaluators matcher      # train the evaluators (once)",
+    out += ["## Regenerate", "",
+            "The baselines are trained with the project's training code and flags (same backbone, data and "
+            "budget as the EMDM run they are compared with), then the suite measures every row:", "", "```",
+            "python -m emdm.eval.evaluators matcher       # the evaluators (once; runs/eval/*.pt)",
             "python -m emdm.eval.evaluators classifier",
-            "python -m emdm.eval.evaluate text --source real            # and --checkpoint runs/<model>/ckpt.pt",
-            "python -m emdm.eval.report                  # this file + docs/results/*.png", "```", ""]
+            "python -m emdm.train --task text --objective diffusion --out runs/t2m-diffusion   # Tab. D2 baseline",
+            "python -m emdm.train --task text --geo-weight 0 --no-d-cond --out runs/t2m-naive  # Tab. D3",
+            "python -m emdm.train --task text --no-d-cond --out runs/t2m-nodcond                # Tab. D4",
+            "python -m emdm.eval.suite --text runs/t2m-web/ckpt.pt --action runs/a2m-web/ckpt.pt \\",
+            "    --diffusion runs/t2m-diffusion/ckpt.pt --naive runs/t2m-naive/ckpt.pt --nodcond runs/t2m-nodcond/ckpt.pt",
+            "node scripts/bench/core-bench.mjs --json bench.json && python -m emdm.eval.evaluate import-bench bench.json",
+            "python -m emdm.eval.report                   # this file + docs/results/*.png from docs/results/json/",
+            "```", "",
+            "(add the EMDM run's other training flags to each baseline command so that only the named flag differs)", ""]
     return "\n".join(out)
 
 
