@@ -2,6 +2,7 @@
 // Wiring only: models come from src/ (createGenerator, solveIK, writeBVH), the character from
 // src/character, the controls/URL/panels/downloads from web/ui.
 import { Quaternion, Vector3 } from 'three';
+import { HEAD_PITCH } from '../src/character/body';
 import { applyPose, createCharacter } from '../src/character/character';
 import { MotionPlayer, type PoseTrack } from '../src/character/player';
 import { writeBVH } from '../src/export/bvh';
@@ -382,6 +383,7 @@ function restPose(bones: import('three').Bone[], pelvis: number[]): void {
   set('r_shoulder', new Vector3(0, 0, 1), 1.2);
   set('l_elbow', new Vector3(0, 1, 0), -0.15);
   set('r_elbow', new Vector3(0, 1, 0), 0.15);
+  set('neck', new Vector3(1, 0, 0), -HEAD_PITCH); // the head geometry is pitched for the data's neck angle
   applyPose(bones, pelvis, quats);
 }
 

@@ -31,6 +31,8 @@ const PANTS = 0x2b3242;
 const SKIN = 0xe3c4a8;
 const SHOE = 0xf1f1ee;
 const EYES = 0x1a2030;
+/** Forward pitch of the head geometry about the neck joint, radians (see bodyParts). */
+export const HEAD_PITCH = (20 * Math.PI) / 180;
 
 /** Standard joint names the body expects (SMPL order names used by the manifest). */
 const NAMES = [
@@ -69,12 +71,18 @@ export function bodyParts(s: RigSkeleton): BodyPart[] {
     joints: [P('spine1'), P('spine2'), P('spine3')], blend: 0.05, color: SHIRT });
   add({ name: 'neck', a: P('neck').add(new Vector3(0, -0.03, 0)), b: P('head'), r0: 0.05, r1: 0.045, side: X, sx: 1, sz: 1,
     bones: [J('spine3'), J('neck'), J('head')], joints: [P('neck'), P('head')], blend: 0.025, color: SKIN });
+  // The head is modelled pitched forward by HEAD_PITCH about the neck joint. The training data place
+  // the head joint 10–20° further back than the reference offset (neck→head leans 9° forward in the
+  // Bandai clips, 12° HDM05, 19° CMU, vs 33° in the reference skeleton), so IK tilts the neck back by
+  // about that much in every generated motion; with this pitch the face looks level in them.
+  const pivot = P('neck');
+  const pitch = (v: Vector3) => v.sub(pivot).applyAxisAngle(X, HEAD_PITCH).add(pivot);
   const skull = P('head');
-  add({ name: 'head', a: skull.clone().add(new Vector3(0, 0.045, 0.005)), b: skull.clone().add(new Vector3(0, 0.115, -0.005)),
+  add({ name: 'head', a: pitch(skull.clone().add(new Vector3(0, 0.045, 0.005))), b: pitch(skull.clone().add(new Vector3(0, 0.115, -0.005))),
     r0: 0.095, r1: 0.095, side: X, sx: 0.86, sz: 1.05, bones: [J('head')], joints: [], color: SKIN });
   for (const sx of [-1, 1]) {
-    add({ name: sx < 0 ? 'r-eye' : 'l-eye', a: skull.clone().add(new Vector3(0.034 * sx, 0.088, 0.083)),
-      b: skull.clone().add(new Vector3(0.034 * sx, 0.07, 0.083)), r0: 0.013, r1: 0.013, side: X, sx: 1, sz: 0.6,
+    add({ name: sx < 0 ? 'r-eye' : 'l-eye', a: pitch(skull.clone().add(new Vector3(0.034 * sx, 0.088, 0.083))),
+      b: pitch(skull.clone().add(new Vector3(0.034 * sx, 0.07, 0.083))), r0: 0.013, r1: 0.013, side: X, sx: 1, sz: 0.6,
       bones: [J('head')], joints: [], color: EYES });
   }
 

@@ -68,7 +68,7 @@ export class Stage {
     this.path.frustumCulled = false;
     this.scene.add(this.path);
 
-    this.camera.position.set(2.6, 1.7, 4.2);
+    this.camera.position.set(2.2, 1.5, 3.6);
     this.controls = new OrbitControls(this.camera, canvas);
     this.controls.target.copy(this.follow);
     this.controls.enableDamping = true;
