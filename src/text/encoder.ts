@@ -70,6 +70,16 @@ async function prefetch(manifest: Manifest, baseUrl: string, entry: TextEncoderE
   );
 }
 
+/** Run calls one at a time (an ORT-web session must not run twice at once); a failure does not block later calls. */
+function serialised(fn: (text: string) => Promise<Float32Array>): (text: string) => Promise<Float32Array> {
+  let tail: Promise<unknown> = Promise.resolve();
+  return (text: string) => {
+    const run = tail.then(() => fn(text));
+    tail = run.catch(() => undefined);
+    return run;
+  };
+}
+
 function entryFor(manifest: Manifest, id: string): TextEncoderEntry {
   const entry = manifest.textEncoders[id];
   if (!entry) {
@@ -123,7 +133,7 @@ async function load(manifest: Manifest, baseUrl: string, id: string, opts: TextE
     return {
       id,
       dim: entry.dim,
-      async encode(text: string): Promise<Float32Array> {
+      encode: serialised(async (text: string): Promise<Float32Array> => {
         const t = checkText(id, text);
         // transformers.js truncates AFTER adding [SEP] (and so drops it); HF tokenizers, which Python
         // uses, keep it. Truncate here exactly like Python does.
@@ -141,7 +151,7 @@ async function load(manifest: Manifest, baseUrl: string, id: string, opts: TextE
         if (dim !== entry.dim) throw new TextEncoderError(id, `model gives ${dim}-d token vectors, manifest says dim ${entry.dim}`);
         const v = meanPool(hidden.data, tokens, dim);
         return entry.normalize === false ? v : l2Normalize(v);
-      },
+      }),
     };
   }
   if (entry.kind === 'clip') {
@@ -155,7 +165,7 @@ async function load(manifest: Manifest, baseUrl: string, id: string, opts: TextE
     return {
       id,
       dim: entry.dim,
-      async encode(text: string): Promise<Float32Array> {
+      encode: serialised(async (text: string): Promise<Float32Array> => {
         const t = checkText(id, text);
         const ids = emdmClipIds(tokenizeClip(tokenizer, t), eot);
         const input_ids = new tf.Tensor('int64', BigInt64Array.from(ids, (x) => BigInt(x)), [1, ids.length]);
@@ -165,7 +175,7 @@ async function load(manifest: Manifest, baseUrl: string, id: string, opts: TextE
         if (emb.data.length !== entry.dim) throw new TextEncoderError(id, `model gives ${emb.data.length}-d vectors, manifest says dim ${entry.dim}`);
         const v = Float32Array.from(emb.data);
         return entry.normalize ? l2Normalize(v) : v;
-      },
+      }),
     };
   }
   throw new ModelFileError('manifest.json', 'incompatible', `textEncoders.${id}.kind is '${String((entry as { kind: unknown }).kind)}', expected 'minilm' or 'clip'`);

@@ -60,6 +60,11 @@ test('MiniLM in Chromium matches Python (cosine >= 0.999) and handles hostile pr
   const err = await page.evaluate(() => window.textPage.encode(7 as unknown as string).then(() => 'ok', (e: Error) => e.message));
   expect(err).toMatch(/expects a string, got number/);
   expect((await page.evaluate(() => window.textPage.encode('still works'))).vector).toHaveLength(384);
+  // concurrent prompts (e.g. repeated clicks) are queued, each gets its own vector
+  const many = await page.evaluate(() => Promise.all(['walk', 'run', 'jump', 'walk'].map((t) => window.textPage.encode(t))));
+  expect(many.map((r) => r.vector.length)).toEqual([384, 384, 384, 384]);
+  expect(cosine(many[0].vector, many[3].vector)).toBeGreaterThan(0.99999);
+  expect(cosine(many[0].vector, many[1].vector)).toBeLessThan(0.99);
   expect(external, 'requests left the test server (CDN?)').toEqual([]);
   watch.assertClean();
 });
