@@ -3,6 +3,7 @@
 // (scripts/bench/core-bench.mjs). Exposes window.coreHarness; no UI.
 import { type Generator, type GenerateOptions, createGenerator } from '../../src/generate';
 import { type Manifest, loadManifest, sha256Hex } from '../../src/manifest';
+import { createTextEncoder } from '../../src/text';
 import { SeededRandom } from '../../src/sampler/rng';
 import { computeSchedule } from '../../src/sampler/schedule';
 import tinyMeanStdUrl from '../../tests/fixtures/parity/tiny.meanstd.f32?url&no-inline';
@@ -77,6 +78,12 @@ const harness = {
   /** First n seeded normals (float32), to compare the RNG bit for bit with Node. */
   rng(seed: number, n: number): number[] {
     return Array.from(new SeededRandom(seed).normals(n));
+  },
+  /** The text encoder's embedding of a prompt (to compare Node and Chromium bit for bit). */
+  async encode(text: string, encoderId?: string) {
+    const enc = await createTextEncoder(await loadManifest(MODELS), MODELS, encoderId);
+    const v = await enc.encode(text);
+    return { sha256: await hex(v), values: Array.from(v) };
   },
   async generate(req: HarnessRequest) {
     const gen = await generatorFor(req.model);
