@@ -11,7 +11,7 @@
  *     then placed at its original distance from the ankle, towards its pinned target; step 1 is
  *     repeated at the end (vertical lifts only).
  */
-import { type V3, add, dot, norm, normalize, scale, sub } from './math3';
+import { type V3, add, norm, normalize, scale, sub, twoBoneIK } from './math3';
 
 export interface FootRig {
   parents: number[];
@@ -46,20 +46,8 @@ function runs(contact: (f: number) => boolean, frames: number): [number, number]
   return out;
 }
 
-/** Two-bone IK: knee position for hip H reaching target A with lengths l1, l2, bending towards pole K. */
-export function solveKnee(H: V3, A: V3, K: V3, l1: number, l2: number): { knee: V3; ankle: V3 } {
-  const v = sub(A, H);
-  const d0 = norm(v);
-  const dir = normalize(v, [0, -1, 0]);
-  const d = Math.min(Math.max(d0, Math.abs(l1 - l2) + 1e-6), l1 + l2 - 1e-6);
-  const a = (l1 * l1 - l2 * l2 + d * d) / (2 * d);
-  const h = Math.sqrt(Math.max(0, l1 * l1 - a * a));
-  const kp = sub(K, H);
-  let pole = sub(kp, scale(dir, dot(kp, dir)));
-  if (norm(pole) < 1e-9) pole = [0, 0, 1];
-  const knee = add(add(H, scale(dir, a)), scale(normalize(pole), h));
-  return { knee, ankle: add(H, scale(dir, d)) };
-}
+/** Two-bone IK (hip, target ankle, pole knee, thigh and shin lengths) → knee and reached ankle. */
+export const solveKnee = twoBoneIK;
 
 export function cleanupFootContacts(
   joints: Float32Array,

@@ -123,3 +123,23 @@ export function slerp(a: Q4, b: Q4, t: number): Q4 {
   const n = Math.hypot(q[0], q[1], q[2], q[3]);
   return [q[0] / n, q[1] / n, q[2] / n, q[3] / n];
 }
+
+/**
+ * Two-bone IK: the middle joint for a root `a` reaching `target` with bone lengths l1, l2, bending
+ * towards the pole `pole` (e.g. the observed knee). When the target is out of reach (too far or
+ * too near) the chain reaches as far as it can along the same direction; `end` is where it ends.
+ */
+export function twoBoneIK(a: V3, target: V3, pole: V3, l1: number, l2: number): { knee: V3; ankle: V3 } {
+  const v = sub(target, a);
+  const d0 = norm(v);
+  const dir = normalize(v, [0, -1, 0]);
+  const d = Math.min(Math.max(d0, Math.abs(l1 - l2), 1e-9), l1 + l2); // out of reach: straight
+  const x = (l1 * l1 - l2 * l2 + d * d) / (2 * d);
+  const h = Math.sqrt(Math.max(0, l1 * l1 - x * x));
+  const kp = sub(pole, a);
+  let side = sub(kp, scale(dir, dot(kp, dir)));
+  if (norm(side) < 1e-9) side = Math.abs(dir[2]) < 0.9 ? [0, 0, 1] : [1, 0, 0];
+  side = sub(side, scale(dir, dot(side, dir)));
+  const knee = add(add(a, scale(dir, x)), scale(normalize(side), h));
+  return { knee, ankle: add(a, scale(dir, d)) };
+}
