@@ -10,7 +10,7 @@
 //   node scripts/bench/core-bench.mjs --variant int8       # the models' int8 variant
 //
 // Each (environment, thread count) runs in a fresh process / page: ORT's thread count is global.
-// Timings are medians over --reps generations after one warm-up; "motion" = encode + all steps
+// Timings are medians over --reps generations after two warm-up generations; "motion" = encode + all steps
 // (guided: one batched call per step) + decode. Without shipped models it benchmarks the tiny
 // fixture model (tests/fixtures/parity/tiny-step.onnx) so the command itself can be checked.
 import { spawn } from 'node:child_process';
@@ -27,7 +27,7 @@ const opt = (name, dflt) => {
 const flag = (name) => args.includes(`--${name}`);
 const list = (s) => s.split(',').filter(Boolean);
 
-// --models-dir: another models folder (Node only; the browser harness serves public/models/)
+// --models-dir: another models folder (served to the browser harness at /bench-models/)
 const MODELS_DIR = path.resolve(opt('models-dir', path.join(ROOT, 'public', 'models')));
 const manifestPath = path.join(MODELS_DIR, 'manifest.json');
 const shipped = fs.existsSync(manifestPath) ? Object.keys(JSON.parse(fs.readFileSync(manifestPath, 'utf8')).models ?? {}) : [];
@@ -65,7 +65,8 @@ async function nodeWorker() {
       const gen = await createGenerator({ manifest, baseUrl, model, variant, backend: 'wasm', threads });
       const condition = conditionFor(entry);
       const steps = stepCounts.filter((s) => entry.supportedSteps.includes(s));
-      await gen.generate({ condition, frames, steps: steps[0], guidance: entry.guidance, seed: 1 });
+      // warm-up: V8 tiers WASM up (Liftoff → TurboFan) over the first runs
+      for (let i = 0; i < 2; i++) await gen.generate({ condition, frames, steps: Math.max(...steps), guidance: entry.guidance, seed: 1 });
       const results = [];
       for (const s of steps) {
         const totals = [];
@@ -133,7 +134,21 @@ async function runBrowser() {
   const { createServer } = await import('vite');
   const { chromium } = await import('playwright-core');
   const port = Number(opt('port', '5191'));
-  const server = await createServer({ configFile: path.join(ROOT, 'vite.config.ts'), server: { port, strictPort: true, hmr: false }, logLevel: 'error' });
+  // serve --models-dir at /bench-models/ so the harness can load a folder outside public/
+  const serveModels = {
+    name: 'bench-models',
+    configureServer(srv) {
+      srv.middlewares.use('/bench-models', (req, res, next) => {
+        const rel = decodeURIComponent((req.url ?? '/').split('?')[0]).replace(/^\/+/, '');
+        const file = path.join(MODELS_DIR, rel);
+        if (!file.startsWith(MODELS_DIR) || !fs.existsSync(file) || !fs.statSync(file).isFile()) return next();
+        res.setHeader('Content-Length', fs.statSync(file).size);
+        res.setHeader('Cross-Origin-Resource-Policy', 'same-origin');
+        fs.createReadStream(file).pipe(res);
+      });
+    },
+  };
+  const server = await createServer({ configFile: path.join(ROOT, 'vite.config.ts'), server: { port, strictPort: true, hmr: false }, logLevel: 'error', plugins: [serveModels] });
   await server.listen();
   const browser = await chromium.launch({
     executablePath: process.env.CHROMIUM_PATH ?? '/usr/bin/chromium',
@@ -145,7 +160,7 @@ async function runBrowser() {
       const page = await browser.newPage();
       const errors = [];
       page.on('pageerror', (e) => errors.push(e.message));
-      await page.goto(`http://127.0.0.1:${port}/harness/?threads=${threads}&backend=wasm`);
+      await page.goto(`http://127.0.0.1:${port}/harness/?threads=${threads}&backend=wasm&models=/bench-models/`);
       await page.waitForFunction(() => window.coreHarness?.ready === true, null, { timeout: 120_000 });
       const info = await page.evaluate(() => window.coreHarness.info());
       for (const model of models) {

@@ -12,7 +12,8 @@ import tinyOnnxUrl from '../../tests/fixtures/parity/tiny-step.onnx?url&no-inlin
 const params = new URLSearchParams(location.search);
 const threads = params.has('threads') ? Number(params.get('threads')) : undefined;
 const backend = (params.get('backend') ?? 'wasm') as 'wasm' | 'webgpu' | 'auto';
-const MODELS = `${import.meta.env.BASE_URL}models/`;
+// ?models=<url> points the harness at another models folder (the benchmark serves one at /bench-models/)
+const MODELS = params.get('models') ?? `${import.meta.env.BASE_URL}models/`;
 
 export interface HarnessRequest {
   /** 'tiny' (the parity fixture's tiny step model) or a shipped model name */
@@ -96,11 +97,12 @@ const harness = {
       timings: r.timings,
     };
   },
-  /** ms per step and per motion at each step count (after one warm-up generation). */
+  /** ms per step and per motion at each step count (after two warm-up generations). */
   async bench(req: { model: string; variant?: string; condition: GenerateOptions['condition']; frames: number; stepCounts: number[]; guidance: number; reps: number }) {
     const gen = await generatorFor(req.model, req.variant);
     const out: { steps: number; msPerStep: number; msPerMotion: number; modelCalls: number }[] = [];
-    await gen.generate({ condition: req.condition, frames: req.frames, steps: req.stepCounts[0], guidance: req.guidance, seed: 1 });
+    // warm-up: V8 tiers WASM up (Liftoff → TurboFan) over the first runs
+    for (let i = 0; i < 2; i++) await gen.generate({ condition: req.condition, frames: req.frames, steps: Math.max(...req.stepCounts), guidance: req.guidance, seed: 1 });
     for (const steps of req.stepCounts) {
       const totals: number[] = [];
       const perStep: number[] = [];
