@@ -55,8 +55,8 @@ async function nodeRun(req: Req) {
   }
 }
 
-async function openHarness(page: Page): Promise<void> {
-  await page.goto('/harness/?threads=1&backend=wasm');
+async function openHarness(page: Page, threads = 1): Promise<void> {
+  await page.goto(`/harness/?threads=${threads}&backend=wasm`);
   await page.waitForFunction(() => window.coreHarness?.ready === true, null, { timeout: 120_000 });
 }
 
@@ -112,4 +112,16 @@ test.describe('core determinism: Chromium == Node', () => {
       watch.assertClean();
     });
   }
+
+  test('2 WASM threads give the same bits as 1 thread (cross-origin isolated page)', async ({ page }) => {
+    const req = shippedRequests().find((r) => r.condition.type !== 'text') ?? cases[0];
+    await openHarness(page, 2);
+    const info = await page.evaluate(() => window.coreHarness.info());
+    expect(info.crossOriginIsolated, 'COOP/COEP headers missing: ORT cannot use threads').toBe(true);
+    const two = await page.evaluate((r) => window.coreHarness.generate(r), req);
+    expect(two.timings.threads).toBe(2);
+    const one = await nodeRun(req);
+    expect(two.featuresSha256).toBe(one.featuresSha256);
+    expect(two.jointsSha256).toBe(one.jointsSha256);
+  });
 });
