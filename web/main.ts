@@ -85,6 +85,7 @@ const api: EmdmTestApi = {
     return m ? m.usedJSHeapSize : null;
   },
   seek: () => undefined,
+  playback: () => ({ time: player.time, playing: player.playing, speed: player.speed, duration: player.duration }),
   frame: () => -1,
   startup: { manifestMs: NaN, readyMs: NaN },
 };

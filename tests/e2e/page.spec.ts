@@ -96,6 +96,20 @@ test.describe('demo page', () => {
     const f0 = await page.evaluate(() => window.emdm.frame());
     await page.waitForTimeout(600);
     expect(await page.evaluate(() => window.emdm.frame())).toBeGreaterThan(f0 + 3);
+    // Play/pause, scrubber and speed.
+    await page.locator('#play').click();
+    expect((await page.evaluate(() => window.emdm.playback())).playing).toBe(false);
+    await page.locator('#scrub').fill('0.5');
+    const pb = await page.evaluate(() => window.emdm.playback());
+    expect(pb.time).toBeCloseTo(pb.duration / 2, 2);
+    await page.waitForTimeout(300);
+    expect((await page.evaluate(() => window.emdm.playback())).time).toBe(pb.time);
+    await page.locator('#speed').selectOption('2');
+    await page.locator('#scene').click();
+    await page.keyboard.press('Space');
+    const pb2 = await page.evaluate(() => window.emdm.playback());
+    expect(pb2.speed).toBe(2);
+    expect(pb2.playing).toBe(true);
     fs.writeFileSync(test.info().outputPath('demo.png'), await page.screenshot());
     expect(await page.evaluate(() => window.emdm.cspViolations)).toEqual([]);
     watch.assertClean();

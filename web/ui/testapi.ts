@@ -56,6 +56,8 @@ export interface EmdmTestApi {
   heapBytes(): number | null;
   /** playback control for tests: pause at a time (seconds) */
   seek(time: number, play?: boolean): void;
+  /** the playback clock: seconds, playing, speed, duration */
+  playback(): { time: number; playing: boolean; speed: number; duration: number };
   /** index of the frame on screen (fractional), -1 before the first motion */
   frame(): number;
   /** timings of the cold start, ms since navigation start */
