@@ -233,13 +233,22 @@ async function main(): Promise<void> {
           s.mode === 'text' ? { type: 'text' as const, text: s.text }
             : s.mode === 'action' ? { type: 'action' as const, label: limits.actions.indexOf(s.action) }
               : { type: 'none' as const };
-        const result = await gen.generate({
+        const opts = {
           condition, frames, steps: s.steps, guidance: s.guidance, seed: s.seed, signal, smooth: true, footCleanup: true,
-          onStep(done, total) {
+          onStep(done: number, total: number) {
             api.counters.stepsRun++;
             showProgress(done / total, `Denoising step ${done} / ${total}`);
           },
-        });
+        };
+        let result: GenerateResult;
+        try {
+          result = await gen.generate(opts);
+        } catch (e) {
+          if (isAbort(e) || gen.backend !== 'webgpu') throw e;
+          const wasm = await engine.reloadOnWasm(choice.name, describe(e));
+          api.backend = wasm.backend;
+          result = await wasm.generate(opts);
+        }
         const t0 = performance.now();
         const bad = firstNonFinite(result.motion.joints);
         if (bad >= 0) throw new BadMotionError(`joint value ${bad} of ${result.motion.joints.length} is ${result.motion.joints[bad]}`);

@@ -97,9 +97,23 @@ export class Engine {
 
   private readonly encoders = new Map<string, Promise<TextEncoder>>();
 
-  private async create(model: string): Promise<Generator> {
+  /**
+   * WebGPU failed while generating: say so, drop the WebGPU generator and load the model on WASM
+   * (every later generation of this model runs there).
+   */
+  async reloadOnWasm(model: string, reason: string): Promise<Generator> {
+    this.events.fallback(model, `WebGPU failed while generating (${reason})`);
+    const old = this.generators.get(model);
+    old?.then((g) => g.dispose()).catch(() => undefined);
+    const g = this.create(model, 'wasm');
+    this.generators.set(model, g);
+    g.catch(() => this.generators.delete(model));
+    return g;
+  }
+
+  private async create(model: string, backend?: 'wasm'): Promise<Generator> {
     const enc = this.encoderFor(model);
-    const gen = this.createStep(model, enc.encoder);
+    const gen = this.createStep(model, enc.encoder, backend);
     // Both must load; if either fails, the model is unusable (the error names the file).
     const [g] = await Promise.all([gen, enc.ready]).catch(async (e) => {
       gen.then((g) => g.dispose()).catch(() => undefined);
@@ -108,11 +122,11 @@ export class Engine {
     return g;
   }
 
-  private async createStep(model: string, textEncoder?: TextEncoder): Promise<Generator> {
+  private async createStep(model: string, textEncoder?: TextEncoder, force?: 'wasm'): Promise<Generator> {
     const onDownload = this.progress(`model:${model}`, model);
     const common = { manifest: this.manifest, baseUrl: this.baseUrl, model, onDownload, textEncoder };
     const hasGpu = typeof navigator !== 'undefined' && 'gpu' in navigator && !!(navigator as { gpu?: unknown }).gpu;
-    if (this.backend === 'wasm') return createGenerator({ ...common, backend: 'wasm' });
+    if (this.backend === 'wasm' || force === 'wasm') return createGenerator({ ...common, backend: 'wasm' });
     if (!hasGpu) {
       this.events.fallback(model, 'WebGPU is not available in this browser');
       return createGenerator({ ...common, backend: 'wasm' });

@@ -8,6 +8,7 @@ import {
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
 const BG = 0x161b26;
+const MAX_PATH_FRAMES = 1024;
 
 export class Stage {
   readonly renderer: WebGLRenderer;
@@ -63,7 +64,9 @@ export class Stage {
     (grid.material as LineBasicMaterial).opacity = 0.55;
     this.scene.add(grid);
 
-    this.pathGeometry.setAttribute('position', new BufferAttribute(new Float32Array(3), 3));
+    // One buffer for the longest motion, updated in place (replacing attributes would leak GPU buffers).
+    this.pathGeometry.setAttribute('position', new BufferAttribute(new Float32Array(MAX_PATH_FRAMES * 3), 3));
+    this.pathGeometry.setDrawRange(0, 0);
     this.path = new Line(this.pathGeometry, new LineBasicMaterial({ color: 0x6f9bff, transparent: true, opacity: 0.7 }));
     this.path.frustumCulled = false;
     this.scene.add(this.path);
@@ -85,15 +88,16 @@ export class Stage {
 
   /** Draw the root's ground path (frames × 3 positions, y ignored). */
   setPath(rootPos: Float32Array, frames: number): void {
-    const pts = new Float32Array(frames * 3);
-    for (let i = 0; i < frames; i++) {
+    const attr = this.pathGeometry.getAttribute('position') as BufferAttribute;
+    const n = Math.min(frames, MAX_PATH_FRAMES);
+    const pts = attr.array as Float32Array;
+    for (let i = 0; i < n; i++) {
       pts[i * 3] = rootPos[i * 3];
       pts[i * 3 + 1] = 0.004;
       pts[i * 3 + 2] = rootPos[i * 3 + 2];
     }
-    this.pathGeometry.setAttribute('position', new BufferAttribute(pts, 3));
-    this.pathGeometry.setDrawRange(0, frames);
-    this.pathGeometry.computeBoundingSphere();
+    attr.needsUpdate = true;
+    this.pathGeometry.setDrawRange(0, n);
   }
 
   /** Move the orbit target (and the camera with it) smoothly towards the root, then render. */
