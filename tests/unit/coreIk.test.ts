@@ -108,9 +108,9 @@ describe('IK (joints → root + local quaternions with twist from body planes)',
   if (!generated.length) it.skip('FK(IK(joints)) on generated motions: no model parity fixtures yet (run `python -m emdm.fixtures`)', () => {});
   for (const name of generated) {
     it(`FK(IK(joints)) is within 1 cm on a generated motion (${name})`, () => {
-      // Generated joints are not a rigid skeleton: bone lengths jitter by a few mm per frame and
-      // the differences add up along the arm chains, so the bar is on the 95th percentile and
-      // the mean of the per-joint distance (the worst joint is reported in the issue note).
+      // Generated joints are not a rigid skeleton: bone lengths vary over a motion (the first
+      // shipped models: forearm length range ≈ 4 cm), which no rigid rig can follow, so the bar
+      // is on the 95th percentile and the mean of the per-joint distance.
       const fx = loadCase(name);
       const joints = fx.get('joints');
       const frames = fx.meta.frames;
@@ -122,6 +122,9 @@ describe('IK (joints → root + local quaternions with twist from body planes)',
       expect(d[Math.floor(0.95 * d.length)], '95th percentile').toBeLessThan(0.01);
       expect(d.reduce((a, b) => a + b, 0) / d.length, 'mean').toBeLessThan(0.005);
       expect(d[d.length - 1], 'worst joint').toBeLessThan(0.05);
+      // what remains is the motion's own non-rigidity: on its rigid version FK(IK(·)) is exact
+      const ik2 = solveIK(fk, frames, { ...sk, offsets: ik.offsets });
+      expect(maxJointDist(forwardKinematics(ik2.rootPos, ik2.quats, frames, sk, ik2.offsets), fk)).toBeLessThan(1e-3);
     });
   }
 });
