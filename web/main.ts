@@ -86,6 +86,7 @@ const api: EmdmTestApi = {
   },
   seek: () => undefined,
   playback: () => ({ time: player.time, playing: player.playing, speed: player.speed, duration: player.duration }),
+  quality: () => stage.quality,
   frame: () => -1,
   startup: { manifestMs: NaN, readyMs: NaN },
 };
@@ -104,6 +105,8 @@ function finishStartup(state: 'ready' | 'error', error = ''): void {
 
 // ---------------------------------------------------------------- scene
 const stage = new Stage(byId('scene', HTMLCanvasElement));
+// `?quality=high` keeps full resolution and shadows even when frames are slow (screenshots).
+stage.adaptive = new URLSearchParams(location.search).get('quality') !== 'high';
 const player = new MotionPlayer();
 const playback = new PlaybackBar(player);
 

@@ -19,7 +19,7 @@ const median = (xs: number[]) => [...xs].sort((a, b) => a - b)[Math.floor(xs.len
 
 test('demo screenshot (test artefact; docs/screenshot.png with UPDATE_SCREENSHOT=1)', async ({ page }) => {
   await page.setViewportSize({ width: 1440, height: 900 });
-  await ready(page, `noauto=1&backend=wasm`);
+  await ready(page, `noauto=1&backend=wasm&quality=high`);
   await page.evaluate((t) => window.emdm.generate({ mode: 'text', text: t, seconds: 6, seed: 3 }), PROMPT);
   await page.evaluate(() => window.emdm.seek(2.2));
   await page.waitForTimeout(1500); // camera follow settles
@@ -54,6 +54,7 @@ test('benchmark: cold start, 196-frame latency, playback fps, heap over 100 gene
   await page.evaluate(() => window.emdm.seek(0, true));
   await page.waitForTimeout(5000);
   const fps = await page.evaluate(() => window.emdm.playbackFps());
+  const quality = await page.evaluate(() => window.emdm.quality());
 
   // Heap after 100 generations at the defaults (196 frames, default steps), after GC.
   const cdp = await page.context().newCDPSession(page);
@@ -75,7 +76,7 @@ test('benchmark: cold start, 196-frame latency, playback fps, heap over 100 gene
     generate196: { steps: info.steps, medianTotalMs: Math.round(total), medianStepMs: Math.round(step),
       medianEncodeMs: Math.round(median(runs.map((r) => r.encodeMs))), threads: runs[0].threads,
       realTimeFactor: Number((9.8 / (total / 1000)).toFixed(2)) },
-    playbackFps: Number(fps.toFixed(1)),
+    playbackFps: Number(fps.toFixed(1)), renderQuality: quality,
     heap: { beforeMB: Number((heap0 / 2 ** 20).toFixed(1)), after100MB: Number((heap100 / 2 ** 20).toFixed(1)), wallSeconds: Math.round(wall100) },
   };
   console.log(JSON.stringify(figures, null, 1));

@@ -71,7 +71,7 @@ test.describe('demo page', () => {
   test('a typed prompt generates on Enter, the character moves, and timings are shown', async ({ page }) => {
     const watch = watchPage(page);
     await page.setViewportSize({ width: 1280, height: 800 });
-    await openReady(page);
+    await openReady(page, 'noauto=1&backend=wasm&quality=high'); // fixed resolution: frames compare like for like
     await page.locator('#prompt').fill(PROMPT);
     await page.locator('#prompt').press('Enter');
     await page.waitForFunction(() => window.emdm.counters.generations === 1, null, { timeout: 120_000 });

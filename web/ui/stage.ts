@@ -19,6 +19,10 @@ export class Stage {
   private readonly path: Line;
   private readonly pathGeometry = new BufferGeometry();
   private readonly follow = new Vector3(0, 0.9, 0);
+  /** Adaptive resolution: smoothed frame time (s) and how long it has been too slow. */
+  private frameTime = 1 / 60;
+  private slowFor = 0;
+  adaptive = true;
   private readonly tmp = new Vector3();
 
   constructor(readonly canvas: HTMLCanvasElement) {
@@ -102,6 +106,7 @@ export class Stage {
 
   /** Move the orbit target (and the camera with it) smoothly towards the root, then render. */
   frame(dt: number, root: ArrayLike<number> | null): void {
+    if (this.adaptive) this.adapt(dt);
     if (root) {
       this.tmp.set(root[0], 0.9, root[2]);
       const k = 1 - Math.exp(-dt * 3);
@@ -123,6 +128,33 @@ export class Stage {
     this.follow.add(d);
     this.controls.target.add(d);
     this.camera.position.add(d);
+  }
+
+  /**
+   * Software WebGL (no GPU) can take hundreds of ms per frame at full resolution: when frames stay
+   * slower than ~30 fps for 1.5 s, lower the pixel ratio step by step (to 0.5), then drop shadows.
+   */
+  private adapt(dt: number): void {
+    if (dt <= 0) return;
+    this.frameTime += (dt - this.frameTime) * 0.1;
+    this.slowFor = this.frameTime > 1 / 30 ? this.slowFor + dt : 0;
+    if (this.slowFor < 1.5) return;
+    this.slowFor = 0;
+    this.frameTime = 1 / 60;
+    const pr = this.renderer.getPixelRatio();
+    if (pr > 0.5) this.renderer.setPixelRatio(Math.max(0.5, pr * 0.7));
+    else if (this.renderer.shadowMap.enabled) {
+      this.renderer.shadowMap.enabled = false;
+      this.scene.traverse((o) => {
+        const m = (o as { material?: { needsUpdate: boolean } }).material;
+        if (m) m.needsUpdate = true;
+      });
+    }
+  }
+
+  /** Current quality (for the test API / diagnostics). */
+  get quality(): { pixelRatio: number; shadows: boolean } {
+    return { pixelRatio: this.renderer.getPixelRatio(), shadows: this.renderer.shadowMap.enabled };
   }
 
   private resize(): void {

@@ -58,6 +58,8 @@ export interface EmdmTestApi {
   seek(time: number, play?: boolean): void;
   /** the playback clock: seconds, playing, speed, duration */
   playback(): { time: number; playing: boolean; speed: number; duration: number };
+  /** rendering quality now (lowered automatically when frames are slow, unless ?quality=high) */
+  quality(): { pixelRatio: number; shadows: boolean };
   /** index of the frame on screen (fractional), -1 before the first motion */
   frame(): number;
   /** timings of the cold start, ms since navigation start */
