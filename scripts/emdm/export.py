@@ -124,18 +124,31 @@ def make_int8(src: Path, dst: Path) -> Path:
     return dst
 
 
-def make_fp16(src: Path, dst: Path) -> Path:
-    """fp16 weights and compute with float32 inputs/outputs (keep_io_types)."""
+def make_fp16(src: Path, dst: Path, min_elements: int = 1024) -> Path:
+    """Half the download: large float32 weights stored as float16 and cast back to float32 in the graph
+    (compute stays float32, so every backend runs it; ORT folds the casts at load time)."""
     import onnx
-    from onnxscript import ir  # noqa: F401  (ensures onnxscript is present for the float16 converter below)
+    from onnx import TensorProto, helper, numpy_helper
 
     model = onnx.load(str(src))
-    try:
-        from onnxconverter_common import float16 as f16      # optional dependency
-        model16 = f16.convert_float_to_float16(model, keep_io_types=True)
-    except ImportError as e:
-        raise ExportError("fp16 variant needs onnxconverter-common (not installed); use --variants int8") from e
-    onnx.save(model16, str(dst))
+    g = model.graph
+    casts, keep = [], []
+    for init in g.initializer:
+        if init.data_type == TensorProto.FLOAT and int(np.prod(init.dims)) >= min_elements:
+            arr = numpy_helper.to_array(init).astype(np.float16)
+            half = numpy_helper.from_array(arr, init.name + "__fp16")
+            keep.append(half)
+            casts.append(helper.make_node("Cast", [half.name], [init.name], to=TensorProto.FLOAT,
+                                          name=init.name + "__cast"))
+        else:
+            keep.append(init)
+    del g.initializer[:]
+    g.initializer.extend(keep)
+    nodes = list(g.node)
+    del g.node[:]
+    g.node.extend(casts + nodes)
+    onnx.checker.check_model(model)
+    onnx.save(model, str(dst), save_as_external_data=False)
     return dst
 
 
@@ -198,8 +211,10 @@ def manifest_entry(name: str, meta: dict, summary: dict, files: dict[str, str], 
         "training": {"steps": summary["steps"], "wallSeconds": round(summary["wall_s"], 1),
                      "dataset": meta["dataset"], "clips": meta.get("clips"), "device": meta["device"],
                      "batch": meta.get("batch"), "losses": summary["losses"],
-                     "flags": {k: meta["args"].get(k) for k in ("geo_weight", "lambda_geo", "lr_g", "lr_d", "ema",
-                                                                "d_cond", "d_width", "cond_drop", "objective")}},
+                     "flags": {k: meta["args"].get(k) for k in ("geo_weight", "lambda_geo", "w_pos", "w_vel", "w_foot",
+                                                                "lr_g", "lr_d", "lr_min", "warmup", "ema", "d_cond",
+                                                                "d_width", "cond_drop", "random_crop", "min_frames",
+                                                                "objective", "steps")}},
         "files": sorted(files.values()),
     }
     entry.update(extra)
@@ -214,7 +229,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--name", required=True, help="model name, e.g. emdm-t2m-web (file stem and manifest key)")
     p.add_argument("--out", type=Path, default=paths.MODELS_DIR, help="models folder (holds manifest.json)")
     p.add_argument("--weights", default="G_ema", choices=["G_ema", "G"])
-    p.add_argument("--variants", default="int8", help="comma list of int8, fp16 (empty for none)")
+    p.add_argument("--variants", default="int8,fp16", help="comma list of int8, fp16 (empty for none)")
     p.add_argument("--tolerance", type=float, default=1e-4)
     p.add_argument("--no-manifest", action="store_true")
     p.add_argument("--bench", action="store_true", help="also time one step (196 frames) on ORT CPU, 1 and 2 threads")

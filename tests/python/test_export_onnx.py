@@ -54,9 +54,11 @@ def test_int8_variant_and_meanstd_and_manifest(checkpoint, exported):
     man = json.loads((exported / "manifest.json").read_text())
     e = man["models"]["emdm-a2m-test"]
     assert e["task"] == "action" and e["condition"]["labels"] == ["walk", "wave", "turn"]
-    assert e["variants"] == {"int8": "emdm-a2m-test.int8.onnx"}
-    assert (exported / "emdm-a2m-test.int8.onnx").stat().st_size < (exported / "emdm-a2m-test.onnx").stat().st_size
-    assert e["variantRelErr"]["int8"] < 0.5
+    assert e["variants"] == {"int8": "emdm-a2m-test.int8.onnx", "fp16": "emdm-a2m-test.fp16.onnx"}
+    full = (exported / "emdm-a2m-test.onnx").stat().st_size
+    assert (exported / "emdm-a2m-test.int8.onnx").stat().st_size < 0.5 * full
+    assert (exported / "emdm-a2m-test.fp16.onnx").stat().st_size < 0.75 * full
+    assert e["variantRelErr"]["int8"] < 0.5 and e["variantRelErr"]["fp16"] < 0.02
     for f in e["files"]:
         assert man["files"][f]["bytes"] == (exported / f).stat().st_size
     sch = make_schedule(10)
