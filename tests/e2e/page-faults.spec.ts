@@ -32,19 +32,35 @@ async function open(page: Page, query = 'noauto=1&backend=wasm'): Promise<void> 
 }
 
 test.describe('demo page: bad input', () => {
-  test('empty prompt: Generate is disabled with a hint', async ({ page }) => {
+  // One page for the whole group (loading the models is the slow part); counters are compared as deltas.
+  test.describe.configure({ mode: 'serial' });
+  let page: Page;
+  let watch: ReturnType<typeof watchPage>;
+  const counters = () => page.evaluate(() => ({ ...window.emdm.counters }));
+  test.beforeAll(async ({ browser }) => {
+    test.setTimeout(300_000);
+    page = await browser.newPage();
+    watch = watchPage(page);
     await open(page);
+  });
+  test.afterAll(async () => {
+    await page?.close();
+  });
+
+  test('empty prompt: Generate is disabled with a hint', async () => {
+    const c0 = await counters();
     await page.locator('#prompt').fill('   ');
     await expect(page.locator('#generate')).toBeDisabled();
     await expect(page.locator('#prompt-hint')).toContainText('Type a prompt');
     await page.locator('#prompt').press('Enter');
-    expect(await page.evaluate(() => window.emdm.counters.requests)).toBe(0);
+    await page.waitForTimeout(200);
+    expect((await counters()).requests).toBe(c0.requests);
     await page.locator('#prompt').fill(PROMPT);
     await expect(page.locator('#generate')).toBeEnabled();
   });
 
-  test('overlong prompt: a notice says it was truncated, and only the first 300 characters are used', async ({ page }) => {
-    await open(page);
+  test('overlong prompt: a notice says it was truncated, and only the first 300 characters are used', async () => {
+    const c0 = await counters();
     const long = `${PROMPT} `.repeat(30); // 690 characters
     await page.locator('#prompt').fill(long);
     await expect(page.locator('#prompt-hint')).toContainText('Too long');
@@ -52,13 +68,11 @@ test.describe('demo page: bad input', () => {
     await page.locator('#steps').fill('0');
     await page.locator('#generate').click();
     await expect(page.locator('.notice.warn')).toContainText('only the first 300');
-    await page.waitForFunction(() => window.emdm.counters.generations === 1, null, { timeout: 120_000 });
+    await page.waitForFunction((n) => window.emdm.counters.generations === n + 1, c0.generations, { timeout: 120_000 });
     expect((await page.locator('#prompt').inputValue()).length).toBe(300);
   });
 
-  test('HTML in the prompt is shown as text, never interpreted', async ({ page }) => {
-    const watch = watchPage(page);
-    await open(page);
+  test('HTML in the prompt is shown as text, never interpreted', async () => {
     const evil = '<img src=x onerror="window.__pwned=1"><b>bold</b> a person jumps';
     const r = await page.evaluate((t) => window.emdm.generate({ mode: 'text', text: t, seconds: 1, steps: 1 }), evil);
     expect(r.frames).toBe(20);
@@ -69,27 +83,8 @@ test.describe('demo page: bad input', () => {
     watch.assertClean();
   });
 
-  test('out-of-range URL values are clamped with a notice', async ({ page }) => {
-    await open(page, 'noauto=1&backend=wasm&mode=dance&steps=7&seconds=30&guidance=-3&seed=-5&text=a%20person%20runs');
-    const notices = (await page.evaluate(() => window.emdm.notices())).map((n) => n.text).join('\n');
-    expect(notices).toContain("mode='dance'");
-    expect(notices).toContain('steps=7');
-    expect(notices).toContain('seconds=30');
-    expect(notices).toContain('guidance=-3');
-    expect(notices).toContain('seed=-5');
-    await expect(page.locator('#seconds-out')).toHaveText('9.8 s');
-    await expect(page.locator('#guidance-out')).toHaveText('1.0');
-    expect(await page.locator('#seed').inputValue()).toBe('0');
-    expect(await page.locator('#prompt').inputValue()).toBe('a person runs');
-    const steps = Number(await page.locator('#steps-out').textContent());
-    const m = await readManifest(page);
-    const text = Object.values(m.models).find((x) => x.task === 'text') as unknown as { supportedSteps: number[] };
-    expect(text.supportedSteps).toContain(steps);
-    expect(new URL(page.url()).searchParams.get('seconds')).toBe('9.8'); // the URL now holds the clamped state
-  });
-
-  test('repeated clicks: the newest request wins, older ones are cancelled', async ({ page }) => {
-    await open(page);
+  test('repeated clicks: the newest request wins, older ones are cancelled', async () => {
+    const c0 = await counters();
     const out = await page.evaluate(async (t) => {
       const seeds = [11, 22, 33];
       const settled = await Promise.allSettled(seeds.map((seed) => window.emdm.generate({ mode: 'text', text: t, seed, seconds: 2, steps: 2 })));
@@ -97,9 +92,9 @@ test.describe('demo page: bad input', () => {
     }, PROMPT);
     expect(out[2]).toEqual({ ok: true, seed: 33 });
     expect(out.slice(0, 2).every((o) => !o.ok && o.name === 'AbortError')).toBe(true);
-    const c = await page.evaluate(() => window.emdm.counters);
-    expect(c.cancelled).toBe(2);
-    expect(c.generations).toBe(1);
+    const c1 = await counters();
+    expect(c1.cancelled - c0.cancelled).toBe(2);
+    expect(c1.generations - c0.generations).toBe(1);
     await expect(page.locator('#caption')).toContainText('seed 33');
     // The button stays clickable while busy; three clicks in a row end with one finished generation.
     await page.locator('#seconds').fill('2');
@@ -107,16 +102,15 @@ test.describe('demo page: bad input', () => {
       const b = document.querySelector<HTMLButtonElement>('#generate')!;
       for (let i = 0; i < 3; i++) b.click();
     });
-    await page.waitForFunction(() => window.emdm.counters.requests === 6 && !document.querySelector('#generate')!.classList.contains('busy'),
-      null, { timeout: 120_000 });
-    const c2 = await page.evaluate(() => window.emdm.counters);
-    expect(c2.cancelled).toBe(4);
-    expect(c2.generations).toBe(2);
+    await page.waitForFunction((n) => window.emdm.counters.requests === n + 3 && !document.querySelector('#generate')!.classList.contains('busy'),
+      c1.requests, { timeout: 120_000 });
+    const c2 = await counters();
+    expect(c2.cancelled - c1.cancelled).toBe(2);
+    expect(c2.generations - c1.generations).toBe(1);
   });
 
-  test('no leak over 100 generations (JS heap after GC)', async ({ page }) => {
+  test('no leak over 100 generations (JS heap after GC)', async () => {
     test.setTimeout(600_000);
-    await open(page);
     const cdp = await page.context().newCDPSession(page);
     const heap = async () => {
       await cdp.send('HeapProfiler.collectGarbage');
@@ -136,6 +130,28 @@ test.describe('demo page: bad input', () => {
     expect(n).toBe(100);
     console.log(`JS heap: ${(before / 2 ** 20).toFixed(1)} MB before, ${(after / 2 ** 20).toFixed(1)} MB after 100 generations`);
     expect(after - before).toBeLessThan(8 * 2 ** 20);
+  });
+
+  test('out-of-range URL values are clamped with a notice', async ({ page: fresh }) => {
+    // The controls are set from the URL as soon as the manifest is read (no need to wait for the models).
+    await fresh.goto('/?noauto=1&backend=wasm&mode=dance&steps=7&seconds=30&guidance=-3&seed=-5&text=a%20person%20runs');
+    await fresh.waitForFunction(() => (window.emdm?.notices().length ?? 0) >= 5, null, { timeout: 60_000 });
+    const notices = (await fresh.evaluate(() => window.emdm.notices())).map((n) => n.text).join('\n');
+    expect(notices).toContain("mode='dance'");
+    expect(notices).toContain('steps=7');
+    expect(notices).toContain('seconds=30');
+    expect(notices).toContain('guidance=-3');
+    expect(notices).toContain('seed=-5');
+    await expect(fresh.locator('.notice.warn').first()).toBeVisible();
+    await expect(fresh.locator('#seconds-out')).toHaveText('9.8 s');
+    await expect(fresh.locator('#guidance-out')).toHaveText('1.0');
+    expect(await fresh.locator('#seed').inputValue()).toBe('0');
+    expect(await fresh.locator('#prompt').inputValue()).toBe('a person runs');
+    const steps = Number(await fresh.locator('#steps-out').textContent());
+    const m = await readManifest(fresh);
+    const text = Object.values(m.models).find((x) => x.task === 'text') as unknown as { supportedSteps: number[] };
+    expect(text.supportedSteps).toContain(steps);
+    expect(new URL(fresh.url()).searchParams.get('seconds')).toBe('9.8'); // the URL now holds the clamped state
   });
 });
 

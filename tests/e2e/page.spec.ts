@@ -68,13 +68,27 @@ test.describe('demo page', () => {
     watch.assertClean();
   });
 
-  test('a typed prompt generates on Enter, the character moves, and timings are shown', async ({ page }) => {
-    const watch = watchPage(page);
-    await page.setViewportSize({ width: 1280, height: 800 });
+});
+
+test.describe('demo page: generating', () => {
+  // One page for the group (loading the models is the slow part); counters are compared as deltas.
+  test.describe.configure({ mode: 'serial' });
+  let page: Page;
+  test.beforeAll(async ({ browser }) => {
+    test.setTimeout(300_000);
+    page = await browser.newPage({ viewport: { width: 1280, height: 800 } });
     await openReady(page, 'noauto=1&backend=wasm&quality=high'); // fixed resolution: frames compare like for like
+  });
+  test.afterAll(async () => {
+    await page?.close();
+  });
+
+  test('a typed prompt generates on Enter, the character moves, and timings are shown', async () => {
+    const watch = watchPage(page);
+    const g0 = await page.evaluate(() => window.emdm.counters.generations);
     await page.locator('#prompt').fill(PROMPT);
     await page.locator('#prompt').press('Enter');
-    await page.waitForFunction(() => window.emdm.counters.generations === 1, null, { timeout: 120_000 });
+    await page.waitForFunction((n) => window.emdm.counters.generations === n + 1, g0, { timeout: 120_000 });
     await expect(page.locator('#caption')).toContainText(PROMPT);
     await expect(page.locator('#timings')).toBeVisible();
     await expect(page.locator('#t-backend')).toContainText('WASM');
@@ -115,8 +129,7 @@ test.describe('demo page', () => {
     watch.assertClean();
   });
 
-  test('same seed gives the same joints; another seed another motion', async ({ page }) => {
-    await openReady(page);
+  test('same seed gives the same joints; another seed another motion', async () => {
     const run = (seed: number) => page.evaluate(([s, t]) => window.emdm.generate({ mode: 'text', text: t, seed: s, seconds: 2, steps: 2 }), [seed, PROMPT] as const);
     const a = await run(1234);
     const b = await run(1234);
@@ -128,8 +141,7 @@ test.describe('demo page', () => {
     expect(diff).toBeGreaterThan(0.01);
   });
 
-  test('the steps slider changes the number of model calls', async ({ page }) => {
-    await openReady(page);
+  test('the steps slider changes the number of model calls', async () => {
     const models = await manifestModels(page);
     const text = Object.values(models).find((m) => m.task === 'text')!;
     const steps = [...text.supportedSteps].sort((x, y) => x - y);
@@ -149,8 +161,7 @@ test.describe('demo page', () => {
     expect(calls).toEqual([steps[0], steps[steps.length - 1]]);
   });
 
-  test('BVH, glTF and joints JSON downloads parse with the right frame count', async ({ page }) => {
-    await openReady(page);
+  test('BVH, glTF and joints JSON downloads parse with the right frame count', async () => {
     const r = await page.evaluate((t) => window.emdm.generate({ mode: 'text', text: t, seconds: 3, steps: 2, seed: 7 }), PROMPT);
     expect(r.frames).toBe(60);
     const grab = async (id: string) => {
@@ -189,8 +200,7 @@ test.describe('demo page', () => {
     expect(doc.positions[5][3][1]).toBeCloseTo(r.joints[(5 * 22 + 3) * 3 + 1], 3);
   });
 
-  test('a URL reproduces the motion it names', async ({ page }) => {
-    await openReady(page);
+  test('a URL reproduces the motion it names', async () => {
     const a = await page.evaluate((t) => window.emdm.generate({ mode: 'text', text: t, seconds: 2, steps: 2, seed: 4242, guidance: 3 }), PROMPT);
     const link = page.url();
     expect(new URL(link).searchParams.get('seed')).toBe('4242');

@@ -10,7 +10,7 @@ function isStringList(v: unknown): v is string[] {
 }
 
 /** Actions that make good first examples, in this order when the model knows them. */
-const PREFERRED = ['walk', 'run', 'wave-right-hand', 'kick', 'dance', 'jump', 'squat', 'bow', 'raise-both-hands', 'punch'];
+const PREFERRED = ['walk', 'run', 'wave-right-hand', 'kick', 'dance', 'bow', 'squat', 'raise-both-hands', 'punch', 'jump'];
 
 /** Third person singular of an English verb ('walk' → 'walks', 'punch' → 'punches'). */
 function thirdPerson(verb: string): string {
