@@ -106,6 +106,7 @@ def save(manifest: dict[str, Any], models_dir: Path | str = DEFAULT_MODELS_DIR) 
     try:
         with os.fdopen(fd, "w") as f:
             f.write(text)
+        os.chmod(tmp, 0o644)  # mkstemp creates 0600; the manifest is a public, served file
         os.replace(tmp, models_dir / MANIFEST_NAME)
     except BaseException:
         if os.path.exists(tmp):
