@@ -206,16 +206,20 @@ def plot_fid_vs_steps(results: list[dict], path: Path) -> bool:
     import matplotlib.pyplot as plt
 
     series: dict[str, list[tuple[int, float, float]]] = {}
-    real = None
+    reals: dict[int, float] = {}
+    model_n = None
     for r in results:
         if r["task"] != "text" or "fid" not in r["metrics"]:
             continue
         m, h = mean_ci95(r["metrics"]["fid"])
         v = r["info"].get("variant")
         if r["kind"] == "real":
-            real = m
+            reals[r.get("n", 0)] = m
         elif _steps(r) is not None:
             series.setdefault(v, []).append((_steps(r), m, h))
+            model_n = r.get("n", model_n)
+    # the real-vs-real floor measured on the same number of clips as the models, when there is one
+    real = reals.get(model_n, next(iter(reals.values()), None)) if reals else None
     if not series:
         return False
     fig, ax = plt.subplots(figsize=(6, 4), dpi=120)
