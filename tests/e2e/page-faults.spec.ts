@@ -135,6 +135,7 @@ test.describe('demo page: bad input', () => {
   test('out-of-range URL values are clamped with a notice', async ({ page: fresh }) => {
     // The controls are set from the URL as soon as the manifest is read (no need to wait for the models).
     await fresh.goto('/?noauto=1&backend=wasm&mode=dance&steps=7&seconds=30&guidance=-3&seed=-5&text=a%20person%20runs');
+    await expect(fresh.locator('.notice.warn').first()).toBeVisible({ timeout: 60_000 }); // shown for 14 s
     await fresh.waitForFunction(() => (window.emdm?.notices().length ?? 0) >= 5, null, { timeout: 60_000 });
     const notices = (await fresh.evaluate(() => window.emdm.notices())).map((n) => n.text).join('\n');
     expect(notices).toContain("mode='dance'");
@@ -142,7 +143,6 @@ test.describe('demo page: bad input', () => {
     expect(notices).toContain('seconds=30');
     expect(notices).toContain('guidance=-3');
     expect(notices).toContain('seed=-5');
-    await expect(fresh.locator('.notice.warn').first()).toBeVisible();
     await expect(fresh.locator('#seconds-out')).toHaveText('9.8 s');
     await expect(fresh.locator('#guidance-out')).toHaveText('1.0');
     expect(await fresh.locator('#seed').inputValue()).toBe('0');
