@@ -200,6 +200,16 @@ def timing_table(results: list[dict]) -> tuple[str, list[str]]:
 
 # ----------------------------------------------------------------------------- plots
 
+def _step_axis(ax, steps) -> None:
+    """Log-scaled x axis labelled with the step counts themselves (1, 2, 10, 100), not powers of ten."""
+    from matplotlib.ticker import FixedLocator, NullFormatter, ScalarFormatter
+
+    ax.set_xscale("log")
+    ax.xaxis.set_major_locator(FixedLocator(sorted(set(steps))))
+    ax.xaxis.set_major_formatter(ScalarFormatter())
+    ax.xaxis.set_minor_formatter(NullFormatter())
+
+
 def plot_fid_vs_steps(results: list[dict], path: Path) -> bool:
     import matplotlib
     matplotlib.use("Agg")
@@ -229,7 +239,7 @@ def plot_fid_vs_steps(results: list[dict], path: Path) -> bool:
                     label=VARIANT_LABEL.get(v, v))
     if real is not None:
         ax.axhline(real, color="gray", ls="--", label="real vs real")
-    ax.set_xscale("log")
+    _step_axis(ax, [p[0] for pts in series.values() for p in pts])
     ax.set_xlabel("sampling steps")
     ax.set_ylabel("FID (matcher features) ↓")
     ax.set_title("Text-to-motion FID vs steps (test split, ±95%)")
@@ -254,8 +264,13 @@ def plot_time_vs_steps(results: list[dict], path: Path) -> bool:
     for key in sorted({(f["runtime"], f["variant"]) for f in flat}):
         pts = sorted((f["steps"], f["ms_per_frame"]) for f in flat if (f["runtime"], f["variant"]) == key)
         ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", label=f"{key[0]}: {VARIANT_LABEL.get(key[1], key[1])}")
-    ax.set_xscale("log")
+    _step_axis(ax, [f["steps"] for f in flat])
+    from matplotlib.ticker import LogLocator, NullFormatter, ScalarFormatter
+
     ax.set_yscale("log")
+    ax.yaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    ax.yaxis.set_major_formatter(ScalarFormatter())
+    ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("sampling steps")
     ax.set_ylabel("time per frame (ms)")
     ax.set_title("Generation time per frame vs steps")
