@@ -182,19 +182,22 @@ def import_bench(a) -> Path:
         runtime = "browser-wasm" if str(r["env"]).startswith("chromium") else "node-wasm"
         if a.threads_filter and int(r["threads"]) != a.threads_filter:
             continue
+        if a.only_model and name != a.only_model:
+            continue
         for x in r["results"]:
             by_runtime.setdefault(runtime, []).append({
                 "variant": variant_of({"objective": e.get("objective", "ddgan"), "args": flags}),
                 "sampler": "DDIM" if e.get("objective") == "diffusion" else "DDGAN", "steps": int(x["steps"]),
                 "frames": frames, "ms_per_motion": [float(x["msPerMotion"])], "guidance": r.get("guidance"),
-                "threads": int(r["threads"]), "env": r["env"], "source": r["model"],
+                "threads": int(r["threads"]), "env": r["env"], "source": r["model"], "reps": bench.get("reps"),
                 "model_calls": x.get("modelCalls")})
     written = []
     for runtime, rows in by_runtime.items():
         result = {"schema": SCHEMA, "task": "timing", "runtime": runtime,
-                  "hardware": f"{hardware()}; {rows[0]['env']}, ORT-web WASM, {rows[0]['threads']} thread(s)",
+                  "hardware": f"{hardware().split(' (')[0]}; {rows[0]['env']}, ORT-web WASM",
                   "note": f"median of {bench.get('reps', '?')} runs from {src.name} (scripts/bench/core-bench.mjs): "
                           "text encoding + all steps + decode",
+                  "load_avg_1min": [a.load_avg, a.load_avg] if a.load_avg else None,
                   "created": datetime.now(timezone.utc).isoformat(timespec="seconds"), "rows": rows}
         written.append(write_result(result, (a.out_dir or RESULTS_DIR / "json") / f"timing-{runtime}.json"))
     if not written:
@@ -243,6 +246,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("bench", type=Path)
     p.add_argument("--models-dir", type=Path, default=None)
     p.add_argument("--threads-filter", type=int, default=0, help="keep only rows with this thread count (0 = all)")
+    p.add_argument("--load-avg", type=float, default=0.0, help="the machine's load average during the benchmark, if known")
+    p.add_argument("--only-model", default=None, help="keep only rows of this manifest model (e.g. emdm-t2m-web)")
     p.add_argument("--out-dir", type=Path, default=None)
     p.add_argument("--threads", type=int, default=1)
     return ap

@@ -167,10 +167,11 @@ def timing_rows(results: list[dict]) -> list[dict]:
                     raise ReportError(f"{r['_file']}: rows[{i}] misses field {k!r}")
             ms = float(np.mean(row["ms_per_motion"]))
             hw = r.get("hardware", "?")
-            if "load_avg_1min" in r:
+            if r.get("load_avg_1min"):
                 hw += f"; load avg {r['load_avg_1min'][0]:.1f}→{r['load_avg_1min'][1]:.1f}"
             flat.append({**row, "runtime": r["runtime"], "hardware": hw,
-                         "ms": ms, "ms_per_frame": ms / row["frames"], "runs": len(row["ms_per_motion"])})
+                         "ms": ms, "ms_per_frame": ms / row["frames"],
+                         "runs": row.get("reps") or len(row["ms_per_motion"])})
     return flat
 
 
@@ -261,9 +262,11 @@ def plot_time_vs_steps(results: list[dict], path: Path) -> bool:
     if not flat:
         return False
     fig, ax = plt.subplots(figsize=(6, 4), dpi=120)
-    for key in sorted({(f["runtime"], f["variant"]) for f in flat}):
-        pts = sorted((f["steps"], f["ms_per_frame"]) for f in flat if (f["runtime"], f["variant"]) == key)
-        ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", label=f"{key[0]}: {VARIANT_LABEL.get(key[1], key[1])}")
+    for key in sorted({(f["runtime"], f.get("threads", 1), f["variant"]) for f in flat}):
+        pts = sorted((f["steps"], f["ms_per_frame"]) for f in flat
+                     if (f["runtime"], f.get("threads", 1), f["variant"]) == key)
+        ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o",
+                label=f"{key[0]} ({key[1]} thr): {VARIANT_LABEL.get(key[2], key[2])}")
     _step_axis(ax, [f["steps"] for f in flat])
     from matplotlib.ticker import LogLocator, NullFormatter, ScalarFormatter
 
