@@ -41,6 +41,7 @@ def test_report_tables_carry_the_numbers_of_the_json_files(tmp_path):
     assert f"{m:.3f} ±{h:.3f}" in md                     # EMDM's FID with its interval
     assert "0.520 ±" in md                                # R-precision top-1 mean
     assert "10.0×" in md and "2.000" in md                # DDIM-100 / EMDM-10 per frame; 392/196 ms
+    assert "text, EMDM, 96 clips × 3 repeat(s): R-precision top-1 0.520 (real 0.520), FID 0.500 (real 0.020)" in md
     assert "Tab. D3: naive DDGAN" in md                   # not measured → listed
     assert "Tab. D2: diffusion + DDIM at 10 steps" not in md.split("## Not measured yet")[1]
     assert "timing: Diffusion (same transformer) + DDIM on gpu" in md
