@@ -179,10 +179,20 @@ def caption_table(ms: MotionSet) -> tuple[list[str], list[np.ndarray]]:
     return list(uniq), per_clip
 
 
+def _encoder_file_sha256(encoder_id: str) -> str:
+    """sha256 of the encoder's ONNX file as listed in the shipped manifest ('' if it is not listed)."""
+    from emdm import manifest
+
+    m = manifest.load(missing_ok=True)
+    onnx = m.get("textEncoders", {}).get(encoder_id, {}).get("onnx")
+    return m.get("files", {}).get(onnx, {}).get("sha256", "") if onnx else ""
+
+
 def cached_text_embeddings(captions: list[str], encoder_id: str, cache_dir: Path | str) -> np.ndarray:
     """Embed captions with ``emdm.text.encode_texts`` (the shipped ONNX encoder), cached on disk by content."""
     cache_dir = Path(cache_dir)
-    key = hashlib.sha256(("\n".join(captions) + "\0" + encoder_id).encode()).hexdigest()[:16]
+    # the key covers the encoder's shipped ONNX file too, so re-exporting the encoder invalidates the cache
+    key = hashlib.sha256(("\n".join(captions) + "\0" + encoder_id + "\0" + _encoder_file_sha256(encoder_id)).encode()).hexdigest()[:16]
     path = cache_dir / f"text-{encoder_id}-{key}.npy"
     if path.exists():
         emb = np.load(path)
