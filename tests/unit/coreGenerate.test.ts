@@ -7,9 +7,9 @@ import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
 import { createGenerator } from '../../src/generate';
 import { type Manifest, ModelFileError, loadManifest } from '../../src/manifest';
-import { computeSchedule } from '../../src/sampler/schedule';
 import { getSession } from '../../src/runtime/ort';
 import { stepFunction } from '../../src/runtime/stepModel';
+import { buildTinyManifest } from '../fixtures/parity/tinyManifest';
 import { MODELS_DIR, PARITY_DIR, fixtureExists, fixtureNoise, loadCase, maxAbsDiff, maxJointDist } from './coreFixtures';
 
 const sha = (b: Buffer) => crypto.createHash('sha256').update(b).digest('hex');
@@ -24,27 +24,16 @@ function tinyModels(): { dir: string; manifest: Manifest } {
   ms[3] = 0.9; // mean root height
   const msBuf = Buffer.from(ms.buffer);
   const real = JSON.parse(fs.readFileSync(path.join(MODELS_DIR, 'manifest.json'), 'utf8'));
-  const s = computeSchedule(4);
-  const manifest = {
-    schema: 1,
-    skeleton: real.skeleton,
-    textEncoders: {},
-    models: {
-      tiny: {
-        task: 'action', condition: { type: 'action', labels: ['a', 'b', 'c', 'd', 'e', 'f', 'g', 'h'], dim: 8 },
-        onnx: 'tiny.onnx', meanStd: 'tiny.meanstd.f32', zDim: 64, featureDim: 263, fps: 20, maxFrames: 196, guidance: 2.5,
-        defaultSteps: 4, supportedSteps: [2, 4],
-        schedules: { '4': { time: [...s.time], coef1: [...s.coef1], coef2: [...s.coef2], sigma: [...s.sigma] } },
-        files: ['tiny.onnx', 'tiny.meanstd.f32'],
-      },
-    },
-    files: { 'tiny.onnx': { bytes: onnx.length, sha256: sha(onnx) }, 'tiny.meanstd.f32': { bytes: msBuf.length, sha256: sha(msBuf) } },
-  };
+  const manifest = buildTinyManifest(
+    real.skeleton,
+    { path: 'tiny.onnx', bytes: onnx.length, sha256: sha(onnx) },
+    { path: 'tiny.meanstd.f32', bytes: msBuf.length, sha256: sha(msBuf) },
+  );
   const dir = fs.mkdtempSync(path.join(tmp, 'models-'));
   fs.writeFileSync(path.join(dir, 'tiny.onnx'), onnx);
   fs.writeFileSync(path.join(dir, 'tiny.meanstd.f32'), msBuf);
   fs.writeFileSync(path.join(dir, 'manifest.json'), JSON.stringify(manifest));
-  return { dir: dir + '/', manifest: manifest as unknown as Manifest };
+  return { dir: dir + '/', manifest };
 }
 
 describe('createGenerator on the tiny model', () => {

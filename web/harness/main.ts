@@ -5,7 +5,7 @@ import { type Generator, type GenerateOptions, createGenerator } from '../../src
 import { type Manifest, loadManifest, sha256Hex } from '../../src/manifest';
 import { createTextEncoder } from '../../src/text';
 import { SeededRandom } from '../../src/sampler/rng';
-import { computeSchedule } from '../../src/sampler/schedule';
+import { buildTinyManifest } from '../../tests/fixtures/parity/tinyManifest';
 import tinyMeanStdUrl from '../../tests/fixtures/parity/tiny.meanstd.f32?url&no-inline';
 import tinyOnnxUrl from '../../tests/fixtures/parity/tiny-step.onnx?url&no-inline';
 
@@ -33,25 +33,11 @@ async function tinyManifest(): Promise<{ manifest: Manifest; baseUrl: string }> 
   if (dirOf(tinyOnnxUrl) !== dirOf(tinyMeanStdUrl)) throw new Error('harness: tiny fixture files are served from different folders');
   const [onnx, ms] = await Promise.all([tinyOnnxUrl, tinyMeanStdUrl].map(async (u) => new Uint8Array(await (await fetch(u)).arrayBuffer())));
   const real = await loadManifest(MODELS);
-  const s = computeSchedule(4);
-  const manifest = {
-    schema: 1,
-    skeleton: real.skeleton,
-    textEncoders: {},
-    models: {
-      tiny: {
-        task: 'action', condition: { type: 'action', labels: ['a', 'b', 'c', 'd', 'e', 'f', 'g', 'h'], dim: 8 },
-        onnx: baseOf(tinyOnnxUrl), meanStd: baseOf(tinyMeanStdUrl), zDim: 64, featureDim: 263, fps: 20, maxFrames: 196,
-        guidance: 2.5, defaultSteps: 4, supportedSteps: [2, 4],
-        schedules: { '4': { time: [...s.time], coef1: [...s.coef1], coef2: [...s.coef2], sigma: [...s.sigma] } },
-        files: [baseOf(tinyOnnxUrl), baseOf(tinyMeanStdUrl)],
-      },
-    },
-    files: {
-      [baseOf(tinyOnnxUrl)]: { bytes: onnx.byteLength, sha256: await sha256Hex(onnx) },
-      [baseOf(tinyMeanStdUrl)]: { bytes: ms.byteLength, sha256: await sha256Hex(ms) },
-    },
-  } as unknown as Manifest;
+  const manifest = buildTinyManifest(
+    real.skeleton,
+    { path: baseOf(tinyOnnxUrl), bytes: onnx.byteLength, sha256: await sha256Hex(onnx) },
+    { path: baseOf(tinyMeanStdUrl), bytes: ms.byteLength, sha256: await sha256Hex(ms) },
+  );
   return { manifest, baseUrl: dirOf(tinyOnnxUrl) };
 }
 
