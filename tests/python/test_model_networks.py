@@ -59,3 +59,14 @@ def test_discriminator_conditional_and_unconditional():
     x2[0, 30:] += 5
     c, t, tp = torch.randn(3, 16), torch.rand(3), torch.rand(3)
     torch.testing.assert_close(D(x, x, c, t, tp, mask), D(x2, x2, c, t, tp, mask))
+
+
+def test_discriminator_reads_its_input_at_every_width():
+    # a GroupNorm group of one channel normalises to a constant: D must still see x (width 64 did not)
+    for width in (64, 128, 1024):
+        D = Discriminator(8, max_frames=20, width=width)
+        x, mask = torch.randn(4, 20, 263), torch.ones(4, 20)
+        c, t, tp = torch.randn(4, 8), torch.rand(4), torch.rand(4)
+        a, b = D(x, x, c, t, tp, mask), D(x + torch.randn_like(x), x, c, t, tp, mask)
+        assert (a - b).abs().max() > 1e-4, width
+        assert a.std() > 1e-4, width

@@ -31,7 +31,8 @@ class Discriminator(nn.Module):
         for i in range(len(dims) - 1):
             layers.append(nn.Linear(dims[i], dims[i + 1]))
             if i in (1, 3):
-                layers.append(nn.GroupNorm(min(groups, dims[i + 1]), dims[i + 1]))
+                # ≥ 4 channels per group: a group of one channel normalises to 0 and D would ignore its input
+                layers.append(nn.GroupNorm(max(1, min(groups, dims[i + 1] // 4)), dims[i + 1]))
             layers.append(EluSELU())
         layers.append(nn.Linear(dims[-1], 1))
         self.net = nn.Sequential(*layers)
