@@ -87,7 +87,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--time-limit-min", type=float, default=None, help="checkpoint and stop after M minutes")
     p.add_argument("--stop-at", type=int, default=None, help="checkpoint and stop at this step (testing resume)")
     p.add_argument("--no-resume", action="store_true", help="start fresh even if <out>/ckpt.pt exists")
+    p.add_argument("--init-weights", type=Path, default=None,
+                   help="start G (and its EMA) from a --weights-out file of an earlier run of the same model; "
+                        "D and the optimisers start fresh. Its steps are recorded as the run's 'init' in meta")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=True, help="tqdm progress bar")
+    p.add_argument("--weights-out", type=Path, default=None,
+                   help="at the end also write the EMA generator alone (+ meta) to this file: what export, sample "
+                        "and the evaluation read, ~1/50 of ckpt.pt (D and the optimisers stay out)")
+    p.add_argument("--weights-dtype", choices=["float32", "float16"], default="float32",
+                   help="storage type of --weights-out (float16 halves it again; loaded back as float32)")
     return p
 
 
@@ -252,10 +260,29 @@ class Trainer:
         self.step = 0
         self.wall = 0.0
         self.last_losses: dict[str, float] = {}
+        self.init: dict | None = None
+        if args.init_weights is not None:
+            self.init_from(args.init_weights)
         torch.manual_seed(args.seed * 1000 + 17 + self.dist.rank)   # per-rank noise stream
         ckpt = args.out / "ckpt.pt"
         if ckpt.exists() and not args.no_resume:
             self.load(ckpt)
+
+    def init_from(self, path: Path) -> None:
+        st = torch.load(path, map_location="cpu", weights_only=False)
+        if not isinstance(st, dict) or "G_ema" not in st or "meta" not in st:
+            raise SystemExit(f"{path}: not a --weights-out file (needs G_ema and meta)")
+        m = st["meta"]
+        if m["generator"] != self.G.config() or m["task"] != self.args.task or m["objective"] != self.args.objective:
+            raise SystemExit(f"{path}: weights of another model/task/objective ({m['task']}, {m['objective']}, "
+                             f"{m['generator']}); --init-weights needs the same")
+        weights = {k: v.float() for k, v in st["G_ema"].items()}
+        self.G.load_state_dict(weights)
+        self.G_ema.load_state_dict(weights)
+        prior = m.get("init") or {"steps": 0, "wall_s": 0.0, "runs": []}
+        self.init = {"steps": prior["steps"] + int(st["step"]), "wall_s": prior["wall_s"] + float(st.get("wall", 0.0)),
+                     "runs": prior["runs"] + [{"file": path.name, "steps": int(st["step"]), "device": m.get("device"),
+                                                "batch": m.get("batch"), "weights_dtype": m.get("weights_dtype")}]}
 
     # -- conditions ---------------------------------------------------------------------------------
     def conditions(self, idx: np.ndarray) -> torch.Tensor:
@@ -414,7 +441,7 @@ class Trainer:
             "generator": self.G.config(), "supported_steps": self.supported,
             "mean": self.ms.mean.tolist(), "std": self.ms.std.tolist(),
             "dataset": self.data_dir.name, "clips": len(self.ms), "device": self.device_name(),
-            "world": self.dist.world, "batch": a.batch,
+            "world": self.dist.world, "batch": a.batch, "init": self.init,
             "args": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(a).items()},
         }
 
@@ -437,6 +464,16 @@ class Trainer:
         }
         atomic_save(state, self.args.out / "ckpt.pt")
 
+    def save_weights(self, path: Path, dtype: str = "float32") -> None:
+        """The EMA generator and meta only (a checkpoint ``emdm.export.load_generator`` reads)."""
+        if not self.dist.main:
+            return
+        dt = getattr(torch, dtype)
+        weights = {k: v.detach().to("cpu", dt) for k, v in self.G_ema.state_dict().items()}
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_save({"step": self.step, "wall": self.wall, "meta": {**self.meta(), "weights_dtype": dtype},
+                     "last_losses": self.last_losses, "G_ema": weights}, path)
+
     def load(self, path: Path) -> None:
         st = torch.load(path, map_location=self.device, weights_only=False)
         meta = st["meta"]
@@ -452,9 +489,9 @@ class Trainer:
         self.step, self.wall, self.last_losses = st["step"], st["wall"], st.get("last_losses", {})
         self.batcher.load_state(st["batcher"][0])
         rng = st["rng"][self.dist.rank] if self.dist.rank < len(st["rng"]) else st["rng"][0]
-        torch.set_rng_state(rng["torch"])
+        torch.set_rng_state(rng["torch"].cpu())          # map_location may have moved it to the GPU
         if rng.get("cuda") is not None and self.device.type == "cuda":
-            torch.cuda.set_rng_state_all(rng["cuda"])
+            torch.cuda.set_rng_state_all([s.cpu() for s in rng["cuda"]])
         if self.dist.main:
             print(f"resumed {path} at step {self.step}", file=sys.stderr)
 
@@ -538,6 +575,8 @@ def main(argv: list[str] | None = None) -> int:
     trainer = Trainer(args)
     try:
         trainer.run()
+        if args.weights_out is not None:
+            trainer.save_weights(args.weights_out, args.weights_dtype)
     finally:
         trainer.dist.close()
     return 0

@@ -91,3 +91,26 @@ def test_ddp_two_gloo_processes(dataset, tmp_path):
 def test_missing_dataset_names_the_file(tmp_path):
     with pytest.raises(Exception, match="train.txt"):
         train_main(["--data", str(tmp_path), "--task", "action", "--out", str(tmp_path / "r"), "--steps", "1", *TINY])
+
+
+def test_weights_out_and_init_weights_continue_a_run(dataset, tmp_path):
+    from emdm.export import load_generator
+
+    first, second = tmp_path / "a", tmp_path / "b"
+    common = ["--data", str(dataset), "--task", "action", *TINY]
+    train_main([*common, "--out", str(first), "--steps", "3", "--weights-out", str(tmp_path / "a.pt"),
+                "--weights-dtype", "float16"])
+    slim = torch.load(tmp_path / "a.pt", weights_only=False)
+    assert set(slim) == {"step", "wall", "meta", "last_losses", "G_ema"} and slim["step"] == 3
+    assert all(v.dtype == torch.float16 for v in slim["G_ema"].values())
+    G, meta, summary = load_generator(tmp_path / "a.pt")               # what export/sample/eval read
+    ema = torch.load(first / "ckpt.pt", weights_only=False)["G_ema"]
+    for k, v in G.state_dict().items():
+        assert v.dtype == torch.float32 and torch.allclose(v, ema[k], atol=1e-2, rtol=1e-3), k
+    train_main([*common, "--out", str(second), "--steps", "2", "--init-weights", str(tmp_path / "a.pt"),
+                "--weights-out", str(tmp_path / "b.pt")])
+    b = torch.load(tmp_path / "b.pt", weights_only=False)
+    assert b["step"] == 2 and b["meta"]["init"]["steps"] == 3 and b["meta"]["init"]["runs"][0]["file"] == "a.pt"
+    with pytest.raises(SystemExit, match="another model/task/objective"):
+        train_main(["--data", str(dataset), "--task", "action", *TINY, "--objective", "diffusion",
+                    "--out", str(tmp_path / "c"), "--steps", "1", "--init-weights", str(tmp_path / "a.pt")])
