@@ -1,0 +1,187 @@
+"""Pack a prepared dataset into one small archive to move it to a training machine, and unpack it there.
+
+    python -m emdm.data.pack data/dataset dataset.tar.xz              # ~1 GB of .npy files -> tens of MB
+    python -m emdm.data.pack --unpack dataset.tar.xz data/dataset      # rebuilds the full folder
+
+The archive keeps every small file as it is (texts/, the split lists, metadata.csv, actions.json, Mean.npy,
+Std.npy, info.json, summary.txt, skipped.txt) and stores the joints of the non-mirrored windows only,
+quantised to ``QUANTUM`` metres and delta-coded along time (xz-compressed). Unpacking rebuilds
+``new_joints/`` (mirrored copies through ``normalize_clip(mirror_joints(...))``, as ``emdm.data.prepare``
+makes them) and recomputes ``new_joint_vecs/`` with ``extract_features``: the code ``prepare`` ran, on
+joints within QUANTUM/2 of the originals (mirrored copies, re-normalised, within ~0.3 mm). Mean/Std are the packed (original) ones, so normalisation is
+unchanged. Both directions write to a temporary file/folder and rename it into place at the end.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import os
+import sys
+import tarfile
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from emdm import skeleton as sk
+from emdm.data.dataset import DatasetError
+from emdm.motion.features import extract_features
+from emdm.motion.retarget import normalize_clip
+
+QUANTUM = 1e-5            # metres (0.01 mm)
+FORMAT = 1
+SMALL_FILES = ("train.txt", "val.txt", "test.txt", "all.txt", "metadata.csv", "actions.json", "Mean.npy",
+               "Std.npy", "info.json", "summary.txt", "skipped.txt")
+
+
+def _ids(root: Path) -> list[str]:
+    f = root / "all.txt"
+    if not f.is_file():
+        raise DatasetError(f"{root}: all.txt not found (not a dataset written by emdm.data.prepare)")
+    return [line.strip() for line in f.read_text().splitlines() if line.strip()]
+
+
+def _add_bytes(tar: tarfile.TarFile, name: str, data: bytes) -> None:
+    info = tarfile.TarInfo(name)
+    info.size = len(data)
+    info.mtime = 0
+    tar.addfile(info, io.BytesIO(data))
+
+
+def pack(root: Path, out: Path) -> dict:
+    root = Path(root)
+    ids = _ids(root)
+    base_ids = [i for i in ids if not i.startswith("M")]
+    mirrored = sorted(set(ids) - set(base_ids))
+    missing = [m for m in mirrored if m[1:] not in set(base_ids)]
+    if missing:
+        raise DatasetError(f"{root}: mirrored clip {missing[0]} has no original {missing[0][1:]}")
+    lengths, deltas = [], []
+    for cid in base_ids:
+        path = root / "new_joints" / f"{cid}.npy"
+        if not path.is_file():
+            raise DatasetError(f"{path}: joints not found")
+        j = np.load(path).astype(np.float64)
+        if j.ndim != 3 or j.shape[1:] != (22, 3):
+            raise DatasetError(f"{path}: expected (F, 22, 3) joints, got {j.shape}")
+        q = np.round(j / QUANTUM).astype(np.int64)
+        deltas.append(np.diff(q, axis=0, prepend=np.zeros_like(q[:1])))
+        lengths.append(len(j))
+    d = np.concatenate(deltas).astype(np.int32)
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(out.name + ".tmp")
+    header = {"format": FORMAT, "quantum": QUANTUM, "ids": base_ids, "lengths": lengths,
+              "mirrored": mirrored, "clips": len(ids)}
+    with tarfile.open(tmp, "w:xz", preset=6) as tar:
+        _add_bytes(tar, "pack.json", json.dumps(header).encode())
+        buf = io.BytesIO()
+        np.save(buf, d)
+        _add_bytes(tar, "joints_delta.npy", buf.getvalue())
+        for name in SMALL_FILES:
+            if (root / name).is_file():
+                _add_bytes(tar, name, (root / name).read_bytes())
+        for cid in ids:
+            p = root / "texts" / f"{cid}.txt"
+            if p.is_file():
+                _add_bytes(tar, f"texts/{cid}.txt", p.read_bytes())
+    os.replace(tmp, out)
+    return {"clips": len(ids), "packed_clips": len(base_ids), "frames": int(sum(lengths)), "bytes": out.stat().st_size}
+
+
+def _rebuild_clip(job: tuple[str, str, np.ndarray, bool]) -> None:
+    """Joints from the deltas (+ the mirrored copy, as prepare makes it), then features, written under root."""
+    root, cid, delta, with_mirror = job
+    joints = np.cumsum(delta.astype(np.int64), axis=0) * QUANTUM
+    variants = [(cid, joints)]
+    if with_mirror:
+        variants.append(("M" + cid, normalize_clip(sk.mirror_joints(joints))))
+    for vid, j in variants:
+        np.save(Path(root) / "new_joints" / f"{vid}.npy", j.astype(np.float32))
+        np.save(Path(root) / "new_joint_vecs" / f"{vid}.npy", extract_features(j))
+
+
+def unpack(archive: Path, out: Path, workers: int = 1) -> dict:
+    archive, out = Path(archive), Path(out)
+    if not archive.is_file():
+        raise DatasetError(f"{archive}: archive not found")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    try:
+        with tarfile.open(archive, "r:xz") as tar:
+            names = set(tar.getnames())
+            for need in ("pack.json", "joints_delta.npy", "all.txt", "Mean.npy", "Std.npy"):
+                if need not in names:
+                    raise DatasetError(f"{archive}: member {need} missing (not written by emdm.data.pack)")
+            header = json.loads(tar.extractfile("pack.json").read())
+            if header.get("format") != FORMAT:
+                raise DatasetError(f"{archive}: pack format {header.get('format')!r}, this reader knows {FORMAT}")
+            d = np.load(io.BytesIO(tar.extractfile("joints_delta.npy").read()))
+            for m in tar.getmembers():
+                if m.name in ("pack.json", "joints_delta.npy"):
+                    continue
+                if m.name.startswith("/") or ".." in Path(m.name).parts or not m.isfile():
+                    raise DatasetError(f"{archive}: unsafe member {m.name!r}")
+                dst = tmp / m.name
+                dst.parent.mkdir(parents=True, exist_ok=True)
+                dst.write_bytes(tar.extractfile(m).read())
+        if d.shape != (sum(header["lengths"]), 22, 3):
+            raise DatasetError(f"{archive}: joints_delta.npy has shape {d.shape}, header says "
+                               f"{sum(header['lengths'])} frames")
+        (tmp / "new_joints").mkdir()
+        (tmp / "new_joint_vecs").mkdir()
+        mirrored = set(header["mirrored"])
+        offsets = np.concatenate([[0], np.cumsum(header["lengths"])])
+        jobs = [(str(tmp), cid, d[offsets[i]:offsets[i + 1]], "M" + cid in mirrored)
+                for i, cid in enumerate(header["ids"])]
+        if workers > 1:
+            from concurrent.futures import ProcessPoolExecutor
+
+            with ProcessPoolExecutor(workers) as ex:
+                list(ex.map(_rebuild_clip, jobs, chunksize=64))
+        else:
+            for job in jobs:
+                _rebuild_clip(job)
+        os.chmod(tmp, 0o755)
+        if out.exists():
+            old = out.with_name(f".{out.name}.old-{os.getpid()}")
+            os.replace(out, old)
+            os.replace(tmp, out)
+            import shutil
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(tmp, out)
+    except BaseException:
+        import shutil
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return {"clips": header["clips"], "frames": int(sum(header["lengths"]))}
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m emdm.data.pack", description=__doc__.split("\n\n")[0])
+    ap.add_argument("src", type=Path, help="dataset folder (pack) or archive (--unpack)")
+    ap.add_argument("dst", type=Path, help="archive (pack) or dataset folder (--unpack)")
+    ap.add_argument("--unpack", action="store_true")
+    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="unpack: processes rebuilding features")
+    a = ap.parse_args(argv)
+    t0 = time.time()
+    try:
+        if a.unpack:
+            r = unpack(a.src, a.dst, a.workers)
+            print(f"unpacked {a.src} -> {a.dst}: {r['clips']} clips ({time.time() - t0:.1f} s)")
+        else:
+            r = pack(a.src, a.dst)
+            print(f"packed {a.src} -> {a.dst}: {r['clips']} clips ({r['packed_clips']} stored, {r['frames']} frames), "
+                  f"{r['bytes'] / 1e6:.1f} MB ({time.time() - t0:.1f} s)")
+    except DatasetError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
