@@ -76,12 +76,17 @@ def onnx_step(path: Path | str, threads: int = 1) -> StepFn:
     return step
 
 
-def torch_step(G) -> StepFn:
+def torch_step(G, device: str = "cpu") -> StepFn:
+    """A step function over a PyTorch generator; ``device`` "cuda" moves G there (numpy in, numpy out)."""
     import torch
+
+    dev = torch.device(device)
+    G = G.to(dev)
 
     def step(x, z, c, t, mask):
         with torch.no_grad():
-            return G(*(torch.from_numpy(np.ascontiguousarray(a)) for a in (x, z, c, t, mask))).numpy()
+            args = (torch.from_numpy(np.ascontiguousarray(a)).to(dev) for a in (x, z, c, t, mask))
+            return G(*args).cpu().numpy()
     return step
 
 

@@ -94,7 +94,7 @@ def run_quality(a) -> Path:
         from emdm.eval.sources import ModelSource
 
         source = ModelSource(ckpt=a.ckpt, model=a.model, onnx_variant=a.variant, models_dir=a.models_dir, steps=a.steps, guidance=a.guidance,
-                             batch_size=a.batch, threads=a.threads, name=a.name or "")
+                             batch_size=a.batch, threads=a.threads, device=a.device, name=a.name or "")
         if source.task != a.task:
             raise SystemExit(f"error: {a.ckpt or a.model} is a {source.task} model, not {a.task}")
     if a.name:
@@ -130,18 +130,19 @@ def run_timing(a) -> Path:
         ckpt, steps = spec.rsplit("=", 1)
         for T in [int(s) for s in steps.split(",")]:
             where = {"ckpt": Path(ckpt)} if Path(ckpt).suffix == ".pt" else {"model": ckpt}
-            src = ModelSource(**where, steps=T, guidance=a.guidance, batch_size=1, threads=a.threads)
+            src = ModelSource(**where, steps=T, guidance=a.guidance, batch_size=1, threads=a.threads, device=a.device)
             if src.task == "text":
-                from emdm.text import encode_texts
+                from emdm.data.dataset import cached_text_embeddings
 
-                cond = Conditions(lengths=np.array([a.frames]), text_emb=encode_texts([a.prompt]))
+                emb = cached_text_embeddings([a.prompt], evdata.TEXT_ENCODER, os.environ.get("EMDM_EVAL_CACHE") or evdata.CACHE_DIR)
+                cond = Conditions(lengths=np.array([a.frames]), text_emb=emb)
             else:
                 cond = Conditions(lengths=np.array([a.frames]), labels=np.array([0]))
             src.generate(cond, 0)                                  # warm-up
             ms = []
             for r in range(a.runs):
                 t0 = time.perf_counter()
-                src.generate(cond, r + 1)
+                src.generate(cond, r + 1)                          # returns numpy: the GPU has finished
                 ms.append((time.perf_counter() - t0) * 1000)
             rows.append({"variant": src.info["variant"], "sampler": src.info["sampler"], "steps": T,
                          "frames": a.frames, "ms_per_motion": ms, "guidance": a.guidance, "batch": 1,
@@ -231,6 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--mm-texts", type=int, default=100)
         p.add_argument("--mm-repeats", type=int, default=30)
         p.add_argument("--threads", type=int, default=1)
+        p.add_argument("--device", default="cpu", help="with --ckpt: cpu or cuda (the generator's device)")
         p.add_argument("--out", type=Path, default=None)
     p = sub.add_parser("timing")
     p.add_argument("--model", action="append", required=True,
@@ -241,6 +243,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--prompt", default="a person walks forward and waves")
     p.add_argument("--runtime", default="python-cpu")
     p.add_argument("--threads", type=int, default=1)
+    p.add_argument("--device", default="cpu", help="with checkpoints: cpu or cuda")
     p.add_argument("--out", type=Path, default=None)
     p = sub.add_parser("import-bench", help="timing JSON from scripts/bench/core-bench.mjs --json output")
     p.add_argument("bench", type=Path)

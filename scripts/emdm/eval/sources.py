@@ -80,6 +80,7 @@ class ModelSource:
     guidance: float = DEFAULT_GUIDANCE
     batch_size: int = 64
     threads: int = 1
+    device: str = "cpu"                      # with ckpt=: "cuda" runs the generator on the GPU
     name: str = ""
     kind: str = "model"
     info: dict = field(default_factory=dict)
@@ -106,16 +107,19 @@ class ModelSource:
         from emdm.sample import torch_step
 
         G, meta, summary = load_generator(ckpt)
-        self.step = torch_step(G)
+        self.step = torch_step(G, self.device)
         self.task, self.objective, self.cond_spec = meta["task"], meta.get("objective", "ddgan"), meta["condition"]
         self.mean, self.std = np.asarray(meta["mean"], np.float32), np.asarray(meta["std"], np.float32)
         self.z_dim, self.max_frames = G.z_dim, G.max_frames
         self.flags = meta.get("args", {})
-        self.origin = {"checkpoint": str(ckpt), "runtime": "pytorch", "train_steps": summary["steps"],
+        self.origin = {"checkpoint": str(ckpt), "runtime": "pytorch" + ("-cuda" if self.device.startswith("cuda") else ""), "train_steps": summary["steps"],
                        "train_wall_min": round(summary["wall_s"] / 60, 1), "device": meta.get("device"),
                        "preset": meta["generator"]["preset"], "dataset": meta.get("dataset")}
 
     def _from_manifest(self, name: str) -> None:
+        if self.device != "cpu":
+            raise ValueError(f"ModelSource: model={name!r} runs through onnxruntime on the CPU; device={self.device!r} "
+                             "needs a checkpoint (ckpt=)")
         from emdm import manifest as mf
         from emdm.paths import MODELS_DIR
         from emdm.sample import onnx_step, read_meanstd

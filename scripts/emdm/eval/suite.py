@@ -3,7 +3,7 @@ Python CPU timings, then docs/RESULTS.md.
 
     python -m emdm.eval.suite --text runs/t2m-web/ckpt.pt --action runs/a2m-web/ckpt.pt \\
         [--diffusion runs/t2m-diffusion/ckpt.pt] [--naive runs/t2m-naive/ckpt.pt] [--nodcond runs/t2m-nodcond/ckpt.pt] \\
-        [--repeats 20] [--max-items 0] [--skip-real]
+        [--repeats 20] [--max-items 0] [--skip-real] [--device cuda --batch 512]
 
 A model is an ``emdm.train`` checkpoint (``.pt``) or the name of a shipped model in
 public/models/manifest.json. EMDM-style models are evaluated at ``--steps`` (default 10); the
@@ -26,6 +26,7 @@ def _where(model: str) -> list[str]:
 
 def plan(a) -> list[list[str]]:
     common = ["--repeats", str(a.repeats), "--max-items", str(a.max_items), "--threads", str(a.threads),
+              "--device", a.device, "--batch", str(a.batch),
               "--mm-texts", str(a.mm_texts), "--mm-repeats", str(a.mm_repeats), "--plaus-n", str(a.plaus_n)]
     runs: list[list[str]] = []
     if not a.skip_real:
@@ -47,7 +48,8 @@ def plan(a) -> list[list[str]]:
         timing.append(f"{a.diffusion}={','.join(map(str, a.ddim_steps))}")
     if timing and a.timing_runs > 0:
         runs.append(["timing", *sum((["--model", t] for t in timing), []), "--runs", str(a.timing_runs),
-                     "--threads", str(a.threads)])
+                     "--threads", str(a.threads), "--device", a.device,
+                     "--runtime", "python-cuda" if a.device.startswith("cuda") else "python-cpu"])
     return runs
 
 
@@ -70,6 +72,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--mm-repeats", type=int, default=30)
     ap.add_argument("--plaus-n", type=int, default=200)
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--device", default="cpu", help="cpu or cuda: where checkpoints' generators run")
+    ap.add_argument("--batch", type=int, default=64, help="motions per batched sampling call")
     ap.add_argument("--skip-real", action="store_true")
     ap.add_argument("--dry-run", action="store_true", help="print the evaluate commands only")
     a = ap.parse_args(argv)
