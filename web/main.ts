@@ -370,6 +370,9 @@ async function main(): Promise<void> {
       } else {
         api.counters.errors++;
         reportError(e, failing.model);
+        if (plan && failing.model === models.diffusion?.name && e instanceof ModelFileError) {
+          controls.setCompareAvailable(`The diffusion model ${failing.model} cannot be used: ${describe(e)}`);
+        }
       }
       throw e;
     } finally {

@@ -118,4 +118,21 @@ test.describe('compare view', () => {
     }
     watch.assertClean();
   });
+
+  test('a diffusion model file that cannot be loaded: compare turns itself off with the reason; EMDM keeps working', async ({ page }) => {
+    const m = (await readManifest(page)) as { models: Record<string, ModelInfo & { onnx: string; variants?: Record<string, string> }> };
+    const ddimModel = Object.entries(m.models).find(([, e]) => e.objective === 'diffusion' && e.task === 'text');
+    test.skip(!ddimModel, 'public/models/manifest.json has no diffusion-objective text model (diffusion-t2m-web)');
+    const [name, entry] = ddimModel!;
+    for (const f of [entry.onnx, ...Object.values(entry.variants ?? {})]) await page.route(`**/models/${f}`, (r: Route) => r.fulfill({ status: 404, body: 'not found' }));
+    await open(page);
+    await page.locator('#compare').click(); // turned on; the model's download fails quickly and turns it off again
+    await expect(page.locator('#compare')).toBeDisabled({ timeout: 60_000 });
+    await expect(page.locator('#compare')).not.toBeChecked();
+    await expect(page.locator('#compare-hint')).toContainText(`The diffusion model ${name} failed to load`);
+    await expect(page.locator('#error-title')).toContainText(name);
+    const r = await page.evaluate((t) => window.emdm.generate({ text: t, seconds: 1, steps: 1, seed: 1 }), PROMPT);
+    expect(r.frames).toBe(20);
+    expect(r.sampler).toBe('ddgan');
+  });
 });
