@@ -11,8 +11,8 @@ import type { Motion } from './motion/types';
 import { type Backend, type BackendRequest, type OrtSession, getSession, resolveBackend } from './runtime/ort';
 import { IncompatibleModelError, stepFunction } from './runtime/stepModel';
 import { SeededRandom } from './sampler/rng';
-import { type NoiseSource, type StepFn, sample } from './sampler/sampler';
-import { scheduleFor } from './sampler/schedule';
+import { type NoiseSource, type SamplerChoice, type SamplerName, type StepFn, sample } from './sampler/sampler';
+import { ddimScheduleFor, scheduleFor } from './sampler/schedule';
 import { type TextEncoder, createTextEncoder } from './text';
 
 export type Condition =
@@ -48,6 +48,10 @@ export interface GenerateResult {
   motion: Motion;
   timings: { encodeMs: number; stepMs: number[]; decodeMs: number; totalMs: number; backend: Backend; threads: number };
   modelCalls: number;
+  /** the sampler that ran: 'ddgan' (EMDM posterior, objective "ddgan") or 'ddim' (η = 0, objective "diffusion") */
+  sampler: SamplerName;
+  /** denoising steps run */
+  steps: number;
 }
 
 export interface Generator {
@@ -55,6 +59,8 @@ export interface Generator {
   readonly backend: Backend;
   readonly threads: number;
   readonly entry: ModelEntry;
+  /** the sampler this model's objective calls for: 'ddgan' or 'ddim' */
+  readonly sampler: SamplerName;
   generate(o: GenerateOptions): Promise<GenerateResult>;
   dispose(): Promise<void>;
 }
@@ -87,9 +93,9 @@ function modelEntry(manifest: Manifest, name: string): ModelEntry {
       throw new ModelFileError('manifest.json', 'incompatible', `field 'models.${name}.${k}' must be a positive integer`);
     }
   }
-  const objective = (entry as { objective?: unknown }).objective ?? 'ddgan';
-  if (objective !== 'ddgan') {
-    throw new ModelFileError('manifest.json', 'incompatible', `field 'models.${name}.objective' is ${JSON.stringify(objective)}; the browser sampler runs DDGAN models only`);
+  const objective = entry.objective ?? 'ddgan';
+  if (objective !== 'ddgan' && objective !== 'diffusion') {
+    throw new ModelFileError('manifest.json', 'incompatible', `field 'models.${name}.objective' is ${JSON.stringify(objective)}; expected "ddgan" (sampled with the DDGAN posterior) or "diffusion" (sampled with DDIM)`);
   }
   if (!entry.condition || !Number.isInteger(entry.condition.dim)) {
     throw new ModelFileError('manifest.json', 'incompatible', `field 'models.${name}.condition.dim' must be an integer`);
@@ -106,6 +112,7 @@ export async function createGenerator(opts: GeneratorOptions): Promise<Generator
   }
   const D = entry.featureDim;
   const C = entry.condition.dim;
+  const samplerName: SamplerName = entry.objective === 'diffusion' ? 'ddim' : 'ddgan';
 
   // downloads: model + mean/std, one combined progress
   const sizes = [onnxPath, entry.meanStd].map((p) => manifest.files[p]?.bytes ?? 0);
@@ -210,12 +217,14 @@ export async function createGenerator(opts: GeneratorOptions): Promise<Generator
       throw new RangeError(`generate: frames must be an integer in 1…${entry.maxFrames}, got ${o.frames}`);
     }
     if (!Number.isFinite(o.guidance) || o.guidance < 0) throw new RangeError(`generate: guidance must be a finite number ≥ 0, got ${o.guidance}`);
-    const schedule = scheduleFor(entry, o.steps, model);
+    const choice: SamplerChoice = samplerName === 'ddim'
+      ? { method: 'ddim', schedule: ddimScheduleFor(entry, o.steps, model) }
+      : { method: 'ddgan', schedule: scheduleFor(entry, o.steps, model) };
     const noise = o.noise ?? new SeededRandom(o.seed);
     const cond = await conditionVector(o.condition);
     const t1 = now();
     const r = await sample({
-      step, schedule, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance, signal: o.signal, onStep: o.onStep,
+      ...choice, step, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance, signal: o.signal, onStep: o.onStep,
     });
     const t2 = now();
     const features = denormalize(r.x, mean, std);
@@ -232,6 +241,8 @@ export async function createGenerator(opts: GeneratorOptions): Promise<Generator
       motion: { frames: o.frames, fps: entry.fps, joints, features },
       timings: { encodeMs: t1 - t0, stepMs: r.stepMs, decodeMs: t3 - t2, totalMs: t3 - t0, backend, threads: session.threads },
       modelCalls: r.modelCalls,
+      sampler: r.sampler,
+      steps: o.steps,
     };
   }
 
@@ -240,6 +251,7 @@ export async function createGenerator(opts: GeneratorOptions): Promise<Generator
     backend,
     threads: session.threads,
     entry,
+    sampler: samplerName,
     generate(o) {
       // one generation at a time per generator: ORT sessions are not re-entrant
       const p = queue.then(() => run(o));

@@ -48,6 +48,8 @@ export interface ModelEntry {
   task: 'text' | 'action' | 'none';
   condition: ModelCondition;
   onnx: string;
+  /** training objective: 'ddgan' (EMDM, sampled with the posterior; the default) or 'diffusion' (sampled with DDIM) */
+  objective?: 'ddgan' | 'diffusion';
   variants?: Record<string, string>;
   meanStd: string;
   zDim: number;

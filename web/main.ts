@@ -1,7 +1,7 @@
 // The demo page: type a prompt (or pick an action, or nothing), watch the skinned character move.
 // Wiring only: models come from src/ (createGenerator, solveIK, writeBVH), the character from
 // src/character, the controls/URL/panels/downloads from web/ui.
-import { Quaternion, Vector3 } from 'three';
+import { MeshStandardMaterial, Quaternion, Vector3 } from 'three';
 import { HEAD_PITCH } from '../src/character/body';
 import { applyPose, createCharacter } from '../src/character/character';
 import { MotionPlayer, type PoseTrack } from '../src/character/player';
@@ -9,6 +9,7 @@ import { writeBVH } from '../src/export/bvh';
 import type { GenerateResult } from '../src/generate';
 import { loadManifest, ModelFileError, type Manifest } from '../src/manifest';
 import { solveIK } from '../src/motion/ik';
+import { compareNote, compareStepChoices, planCompare, type ComparePlan } from './ui/compare';
 import { Controls } from './ui/controls';
 import { byId, formatBytes, formatMs, saveBlob } from './ui/dom';
 import { fileStem, motionToGLB, motionToJSON } from './ui/downloads';
@@ -18,9 +19,9 @@ import { ErrorPanel, Notices } from './ui/notices';
 import { PlaybackBar } from './ui/playback';
 import { Stage } from './ui/stage';
 import {
-  framesFor, MAX_PROMPT_CHARS, parseState, randomSeed, stateToSearch, truncatePrompt, type PageState, type StateLimits,
+  framesFor, MAX_PROMPT_CHARS, parseState, randomSeed, stateToSearch, stepChoices, truncatePrompt, type PageState, type StateLimits,
 } from './ui/state';
-import { emptyCounters, type EmdmTestApi, type GenerateRequest, type GenerateResponse } from './ui/testapi';
+import { emptyCounters, type CompareResponse, type EmdmTestApi, type GenerateRequest, type GenerateResponse } from './ui/testapi';
 
 const MODELS_URL = `${import.meta.env.BASE_URL}models/`;
 /** `?noauto` (tests): do not generate a first motion on load. Read before the URL is rewritten. */
@@ -48,7 +49,20 @@ interface Shown {
   result: GenerateResult;
   track: PoseTrack;
   label: string;
+  /** the model and step count that made the (left, in compare mode) motion */
+  model: string;
+  steps: number;
+  ikMs: number;
 }
+
+/** One model's finished motion, solved for the character. */
+interface Produced {
+  model: string;
+  result: GenerateResult;
+  track: PoseTrack;
+  ikMs: number;
+}
+
 
 // ---------------------------------------------------------------- status line
 const statusDot = byId('status-dot');
@@ -72,6 +86,11 @@ const api: EmdmTestApi = {
   error: '',
   whenReady: () => readyPromise,
   generate: () => Promise.reject(new Error('window.emdm.generate: the page is still loading (await window.emdm.whenReady())')),
+  compare: () => Promise.reject(new Error('window.emdm.compare: the page is still loading (await window.emdm.whenReady())')),
+  setCompare: () => {
+    throw new Error('window.emdm.setCompare: the page is still loading (await window.emdm.whenReady())');
+  },
+  compareInfo: () => ({ available: false, reason: 'the page is still loading', on: false, steps: [], emdm: null, ddim: null, emdmMaxSteps: 0, panelsVisible: false, ddimCharacterVisible: false, split: false }),
   counters: emptyCounters(),
   backend: '',
   notices: () => notices.log.slice(),
@@ -109,6 +128,10 @@ const stage = new Stage(byId('scene', HTMLCanvasElement));
 stage.adaptive = new URLSearchParams(location.search).get('quality') !== 'high';
 const player = new MotionPlayer();
 const playback = new PlaybackBar(player);
+/** the DDIM motion of the compare view, kept in step with `player` (null when not comparing) */
+const player2 = new MotionPlayer();
+let compareShown: Produced | null = null;
+let ddimBones: import('three').Bone[] = [];
 
 async function main(): Promise<void> {
   let manifest: Manifest;
@@ -126,6 +149,13 @@ async function main(): Promise<void> {
   const character = createCharacter(skeleton);
   stage.add(character.object);
   restPose(character.bones, skeleton.offsets[0]);
+  // the compare view's second character (DDIM), tinted warm; hidden until a comparison is shown
+  const ddimCharacter = createCharacter(skeleton);
+  (ddimCharacter.mesh.material as MeshStandardMaterial).color.setHex(0xffc58a);
+  ddimCharacter.object.visible = false;
+  ddimCharacter.object.name = 'ddim-character';
+  stage.add(ddimCharacter.object);
+  ddimBones = ddimCharacter.bones;
 
   const models = pickModels(manifest);
   const base = models.text ?? models.action;
@@ -145,6 +175,7 @@ async function main(): Promise<void> {
     fps: base.entry.fps,
     maxFrames: Math.min(base.entry.maxFrames, skeleton.maxFrames),
     defaultText: '',
+    compareSteps: models.text && models.diffusion ? compareStepChoices(models.text.entry, models.diffusion.entry) : [],
   };
   const examples = examplePrompts(manifest, models.text?.name ?? null, limits.actions);
   limits.defaultText = examples[0] ?? '';
@@ -165,8 +196,28 @@ async function main(): Promise<void> {
 
   const controls = new Controls(limits, examples, {
     generate: () => void generate(controls.read()).catch(() => undefined),
-    change: (s) => history.replaceState(null, '', stateToSearch(s)),
+    change: (s) => {
+      history.replaceState(null, '', stateToSearch(s));
+      if (s.compare) preloadDiffusion();
+      else if (compareShown && shown) {
+        // compare turned off: back to the EMDM character alone
+        showCompare(null);
+        stage.setPath(shown.track.rootPos, shown.track.frames);
+        showTimings(shown.result, shown.ikMs);
+      }
+    },
+    stepsNote: (s) => (s.compare && models.text && models.diffusion
+      ? compareNote(s.steps, planCompare(s.steps, models.text.entry.supportedSteps, models.diffusion.entry.supportedSteps)) : ''),
   });
+  /** Start loading the diffusion model as soon as the compare view is turned on; a failure disables it. */
+  function preloadDiffusion(): void {
+    if (!models.diffusion) return;
+    const name = models.diffusion.name;
+    engine.load(name).catch((e) => {
+      reportError(e, name);
+      controls.setCompareAvailable(`The diffusion model ${name} failed to load: ${describe(e)}`);
+    });
+  }
   controls.set(parsed.state);
   if (!models.action) controls.setModeAvailable('action', 'No action model is shipped with this demo');
   if (!models.text) {
@@ -197,21 +248,71 @@ async function main(): Promise<void> {
     byId('timings').hidden = false;
   };
   const caption = byId('caption');
-  const showCaption = (s: PageState, label: string) => {
+  const showCaption = (s: PageState, label: string, plan: ComparePlan | null) => {
     caption.replaceChildren();
     const main = document.createElement('span');
     main.textContent = s.mode === 'text' ? `“${label}”` : label;
     const small = document.createElement('small');
-    small.textContent = `${s.mode} · seed ${s.seed} · ${s.steps} step${s.steps === 1 ? '' : 's'} · ${s.seconds.toFixed(1)} s`;
+    const steps = plan ? `EMDM ${plan.emdm} vs DDIM ${plan.ddim} steps` : `${s.steps} step${s.steps === 1 ? '' : 's'}`;
+    small.textContent = `${s.mode} · seed ${s.seed} · ${steps} · ${s.seconds.toFixed(1)} s`;
     caption.append(main, small);
   };
 
   // ------------------------------------------------------------ generation (newest request wins)
-  async function generate(requested: PageState): Promise<GenerateResponse> {
+  const condFor = (s: PageState) =>
+    s.mode === 'text' ? { type: 'text' as const, text: s.text }
+      : s.mode === 'action' ? { type: 'action' as const, label: limits.actions.indexOf(s.action) }
+        : { type: 'none' as const };
+
+  /** One model's motion for a state, checked and solved (WebGPU failures retry on WASM). */
+  async function produce(model: string, s: PageState, steps: number, frames: number, signal: AbortSignal,
+    progressLabel: (done: number, total: number) => string): Promise<Produced> {
+    const gen = await engine.load(model);
+    api.backend = gen.backend;
+    if (signal.aborted) throw signal.reason;
+    const opts = {
+      condition: condFor(s), frames, steps, guidance: s.guidance, seed: s.seed, signal, smooth: true, footCleanup: true,
+      onStep(done: number, total: number) {
+        api.counters.stepsRun++;
+        showProgressText(done, total, progressLabel(done, total));
+      },
+    };
+    let result: GenerateResult;
+    try {
+      result = await gen.generate(opts);
+    } catch (e) {
+      if (isAbort(e) || gen.backend !== 'webgpu') throw e;
+      const wasm = await engine.reloadOnWasm(model, describe(e));
+      api.backend = wasm.backend;
+      result = await wasm.generate(opts);
+    }
+    const t0 = performance.now();
+    const bad = firstNonFinite(result.motion.joints);
+    if (bad >= 0) throw new BadMotionError(`joint value ${bad} of ${result.motion.joints.length} is ${result.motion.joints[bad]}`);
+    const ik = solveIK(result.motion.joints, result.motion.frames, skeleton);
+    const badQ = firstNonFinite(ik.quats);
+    if (badQ >= 0 || firstNonFinite(ik.rootPos) >= 0) throw new BadMotionError('the solved joint rotations');
+    const track: PoseTrack = { frames: result.motion.frames, fps: result.motion.fps, joints: skeleton.joints.length, rootPos: ik.rootPos, quats: ik.quats };
+    return { model, result, track, ikMs: performance.now() - t0 };
+  }
+  let showProgressText: (done: number, total: number, text: string) => void = () => undefined;
+
+  const respond = (s: PageState, p: Produced): GenerateResponse => ({
+    state: s, frames: p.track.frames, fps: p.track.fps, joints: Array.from(p.result.motion.joints),
+    timings: { ...p.result.timings, stepMs: [...p.result.timings.stepMs], ikMs: p.ikMs },
+    modelCalls: p.result.modelCalls, model: p.model, sampler: p.result.sampler, steps: p.result.steps,
+  });
+
+  async function generate(requested: PageState, modelOverride?: string): Promise<GenerateResponse> {
     const s = { ...requested };
     api.counters.requests++;
-    const choice = modelForMode(models, s.mode);
-    if (!choice) throw new Error(`no ${s.mode} model is shipped with this demo`);
+    const compare = s.compare && !modelOverride;
+    if (compare) {
+      const why = controls.compareUnavailable(s.mode) || (!models.text || !models.diffusion ? 'no EMDM text model or no diffusion model' : '');
+      if (why) throw new Error(`compare view unavailable: ${why}`);
+    }
+    const choice = modelOverride ? { name: modelOverride, entry: manifest.models[modelOverride] } : modelForMode(models, s.mode);
+    if (!choice || !choice.entry) throw new Error(modelOverride ? `no model '${modelOverride}' in the manifest` : `no ${s.mode} model is shipped with this demo`);
     if (s.mode === 'text') {
       const cut = truncatePrompt(s.text);
       if (cut.truncated) {
@@ -224,67 +325,54 @@ async function main(): Promise<void> {
     if (s.mode === 'action' && !limits.actions.includes(s.action)) throw new Error(`unknown action '${s.action}'`);
     const frames = framesFor(s.seconds, limits);
     const label = s.mode === 'text' ? s.text.trim() : s.mode === 'action' ? s.action.replace(/[_-]+/g, ' ') : 'Random motion';
+    const plan = compare ? planCompare(s.steps, models.text!.entry.supportedSteps, models.diffusion!.entry.supportedSteps) : null;
     controls.setBusy(true);
     showProgress(0, 'Starting…');
+    const failing = { model: choice.name };
     try {
       const out = await engine.run(async (signal) => {
-        const gen = await engine.load(choice.name);
-        api.backend = gen.backend;
-        if (signal.aborted) throw signal.reason;
         showProgress(0, s.mode === 'text' ? 'Encoding the prompt…' : 'Sampling…');
-        const condition =
-          s.mode === 'text' ? { type: 'text' as const, text: s.text }
-            : s.mode === 'action' ? { type: 'action' as const, label: limits.actions.indexOf(s.action) }
-              : { type: 'none' as const };
-        const opts = {
-          condition, frames, steps: s.steps, guidance: s.guidance, seed: s.seed, signal, smooth: true, footCleanup: true,
-          onStep(done: number, total: number) {
-            api.counters.stepsRun++;
-            showProgress(done / total, `Denoising step ${done} / ${total}`);
-          },
-        };
-        let result: GenerateResult;
-        try {
-          result = await gen.generate(opts);
-        } catch (e) {
-          if (isAbort(e) || gen.backend !== 'webgpu') throw e;
-          const wasm = await engine.reloadOnWasm(choice.name, describe(e));
-          api.backend = wasm.backend;
-          result = await wasm.generate(opts);
+        if (!plan) {
+          showProgressText = (d, t, text) => showProgress(d / t, text);
+          return { main: await produce(choice.name, s, s.steps, frames, signal, (d, t) => `Denoising step ${d} / ${t}`), ddim: null };
         }
-        const t0 = performance.now();
-        const bad = firstNonFinite(result.motion.joints);
-        if (bad >= 0) throw new BadMotionError(`joint value ${bad} of ${result.motion.joints.length} is ${result.motion.joints[bad]}`);
-        const ik = solveIK(result.motion.joints, result.motion.frames, skeleton);
-        const badQ = firstNonFinite(ik.quats);
-        if (badQ >= 0 || firstNonFinite(ik.rootPos) >= 0) throw new BadMotionError('the solved joint rotations');
-        return { result, ik, ikMs: performance.now() - t0 };
+        // compare: EMDM first, then DDIM, one after the other (fair timings on a shared CPU)
+        const total = plan.emdm + plan.ddim;
+        showProgressText = (d, t, text) => showProgress(text.startsWith('EMDM') ? d / total : (plan.emdm + d) / total, text);
+        const main = await produce(models.text!.name, s, plan.emdm, frames, signal, (d, t) => `EMDM: denoising step ${d} / ${t}`);
+        failing.model = models.diffusion!.name;
+        const ddim = await produce(models.diffusion!.name, s, plan.ddim, frames, signal, (d, t) => `DDIM: denoising step ${d} / ${t}`);
+        return { main, ddim };
       });
-      const { result, ik, ikMs } = out;
-      const track: PoseTrack = { frames: result.motion.frames, fps: result.motion.fps, joints: skeleton.joints.length, rootPos: ik.rootPos, quats: ik.quats };
-      player.setTrack(track);
+      const { main, ddim } = out;
+      player.setTrack(main.track);
       player.playing = true;
-      stage.setPath(ik.rootPos, track.frames);
-      stage.snapTo(ik.rootPos);
-      shown = { state: s, result, track, label };
-      showCaption(s, label);
-      showTimings(result, ikMs);
+      showCompare(ddim);
+      stage.setPath(main.track.rootPos, ddim ? 0 : main.track.frames);
+      stage.snapTo(main.track.rootPos);
+      if (ddim) stage.snapTo2(ddim.track.rootPos);
+      shown = { state: s, result: main.result, track: main.track, label, model: main.model, steps: main.result.steps, ikMs: main.ikMs };
+      showCaption(s, label, plan);
+      if (ddim) showPanels(main, ddim);
+      else showTimings(main.result, main.ikMs);
       for (const id of ['dl-bvh', 'dl-glb', 'dl-json']) byId(id, HTMLButtonElement).disabled = false;
       history.replaceState(null, '', stateToSearch(s));
       api.counters.generations++;
-      api.counters.modelCalls += result.modelCalls;
-      setStatus('ready', `Ready · ${result.timings.backend === 'webgpu' ? 'WebGPU' : 'WASM'} · ${result.timings.threads} thread${result.timings.threads === 1 ? '' : 's'}`);
-      return {
-        state: s, frames: track.frames, fps: track.fps, joints: Array.from(result.motion.joints),
-        timings: { ...result.timings, stepMs: [...result.timings.stepMs], ikMs },
-        modelCalls: result.modelCalls,
-      };
+      api.counters.modelCalls += main.result.modelCalls + (ddim?.result.modelCalls ?? 0);
+      const t = main.result.timings;
+      setStatus('ready', `Ready · ${t.backend === 'webgpu' ? 'WebGPU' : 'WASM'} · ${t.threads} thread${t.threads === 1 ? '' : 's'}`);
+      const r = respond(s, main);
+      if (ddim) r.compare = { emdm: respond(s, main), ddim: respond(s, ddim) };
+      return r;
     } catch (e) {
       if (isAbort(e)) {
         api.counters.cancelled++;
       } else {
         api.counters.errors++;
-        reportError(e, choice.name);
+        reportError(e, failing.model);
+        if (plan && failing.model === models.diffusion?.name && e instanceof ModelFileError) {
+          controls.setCompareAvailable(`The diffusion model ${failing.model} cannot be used: ${describe(e)}`);
+        }
       }
       throw e;
     } finally {
@@ -292,6 +380,35 @@ async function main(): Promise<void> {
         controls.setBusy(false);
         progress.hidden = true;
       }
+    }
+  }
+
+  // ------------------------------------------------------------ compare view: second character + panels
+  const comparePanels = byId('compare-panels');
+  const compareDivider = byId('compare-divider');
+  const timingsHud = byId('timings');
+  function showCompare(ddim: Produced | null): void {
+    compareShown = ddim;
+    if (ddim) {
+      player2.setTrack(ddim.track);
+      player2.playing = false;
+    }
+    ddimCharacter.object.visible = !!ddim;
+    // split view: EMDM in the left half, DDIM in the right, each followed by its own camera
+    stage.setSplit(ddim ? { left: character.object, right: ddimCharacter.object } : null);
+    comparePanels.hidden = !ddim;
+    compareDivider.hidden = !ddim;
+    if (ddim) timingsHud.hidden = true;
+  }
+  function showPanels(emdm: Produced, ddim: Produced): void {
+    for (const [id, p] of [['emdm', emdm], ['ddim', ddim]] as const) {
+      const t = p.result.timings;
+      const mean = t.stepMs.length ? t.stepMs.reduce((a, b) => a + b, 0) / t.stepMs.length : NaN;
+      byId(`panel-${id}-label`).textContent = id === 'emdm' ? 'EMDM (left)' : 'DDIM (right)';
+      byId(`panel-${id}-sub`).textContent = `${p.model} · ${p.result.sampler === 'ddim' ? 'DDIM, η = 0' : 'DDGAN posterior'}`;
+      byId(`panel-${id}-steps`).textContent = `${p.result.steps} (${p.result.modelCalls} model call${p.result.modelCalls === 1 ? '' : 's'})`;
+      byId(`panel-${id}-step`).textContent = formatMs(mean);
+      byId(`panel-${id}-total`).textContent = formatMs(t.totalMs + p.ikMs);
     }
   }
 
@@ -326,8 +443,8 @@ async function main(): Promise<void> {
   }));
   byId('dl-json').addEventListener('click', guard((s) => {
     const json = motionToJSON(skeleton, s.result.motion.joints, s.result.motion.frames, s.result.motion.fps, {
-      model: modelForMode(models, s.state.mode)?.name, mode: s.state.mode, text: s.state.mode === 'text' ? s.state.text : undefined,
-      action: s.state.mode === 'action' ? s.state.action : undefined, steps: s.state.steps, guidance: s.state.guidance, seed: s.state.seed,
+      model: s.model, mode: s.state.mode, text: s.state.mode === 'text' ? s.state.text : undefined,
+      action: s.state.mode === 'action' ? s.state.action : undefined, steps: s.steps, guidance: s.state.guidance, seed: s.state.seed,
     });
     saveBlob(new Blob([json], { type: 'application/json' }), `${fileStem(s.label, s.state.seed)}.json`);
   }));
@@ -342,9 +459,44 @@ async function main(): Promise<void> {
     if (req.seconds !== undefined) s.seconds = req.seconds;
     if (req.guidance !== undefined) s.guidance = req.guidance;
     if (req.seed !== undefined) s.seed = req.seed;
-    if (!limits.supportedSteps.includes(s.steps)) return Promise.reject(new RangeError(`steps ${s.steps} is not one of ${limits.supportedSteps.join(', ')}`));
+    if (req.compare !== undefined) s.compare = req.compare;
+    if (req.model !== undefined) {
+      // one named model (benchmarks: e.g. the diffusion model alone), never the compare view
+      const entry = manifest.models[req.model];
+      if (!entry) return Promise.reject(new Error(`window.emdm.generate: no model '${req.model}' in the manifest (models: ${Object.keys(manifest.models).join(', ')})`));
+      if (req.compare) return Promise.reject(new Error('window.emdm.generate: give either model or compare, not both'));
+      if (!entry.supportedSteps.includes(s.steps)) return Promise.reject(new RangeError(`steps ${s.steps} is not one of ${req.model}'s ${entry.supportedSteps.join(', ')}`));
+      s.compare = false;
+      controls.set(s);
+      return generate(s, req.model);
+    }
+    if (s.compare) {
+      const why = controls.compareUnavailable(s.mode);
+      if (why) return Promise.reject(new Error(`window.emdm.generate: compare view unavailable: ${why}`));
+    }
+    const choices = stepChoices(limits, s.compare);
+    if (!choices.includes(s.steps)) return Promise.reject(new RangeError(`steps ${s.steps} is not one of ${choices.join(', ')}`));
     controls.set(s);
     return generate(s);
+  };
+  api.compare = async (req: GenerateRequest = {}): Promise<CompareResponse> => {
+    const r = await api.generate({ ...req, compare: true });
+    if (!r.compare) throw new Error('window.emdm.compare: the page did not produce a comparison');
+    return { state: r.state, ...r.compare };
+  };
+  api.setCompare = (on: boolean) => {
+    const why = controls.compareUnavailable();
+    if (on && why) throw new Error(`window.emdm.setCompare: compare view unavailable: ${why}`);
+    controls.setCompare(on, true);
+  };
+  api.compareInfo = () => {
+    const why = controls.compareUnavailable();
+    return {
+      available: why === '', reason: why, on: controls.read().compare, steps: [...limits.compareSteps],
+      emdm: models.text?.name ?? null, ddim: models.diffusion?.name ?? null,
+      emdmMaxSteps: models.text ? Math.max(...models.text.entry.supportedSteps) : 0,
+      panelsVisible: !comparePanels.hidden, ddimCharacterVisible: ddimCharacter.object.visible, split: stage.isSplit,
+    };
   };
   api.seek = (time: number, play = false) => {
     player.seek(time);
@@ -405,12 +557,18 @@ function startLoop(bones: import('three').Bone[]): void {
   const tick = (now: number) => {
     const dt = Math.min(0.1, Math.max(0, (now - last) / 1000));
     last = now;
+    let second: ArrayLike<number> | null = null;
     if (player.track) {
       player.update(dt);
       applyPose(bones, player.root, player.quats);
       playback.sync();
+      if (compareShown && player2.track) {
+        player2.seek(player.time); // same length and clock: the two motions play in step
+        applyPose(ddimBones, player2.root, player2.quats);
+        second = player2.root;
+      }
     }
-    stage.frame(dt, player.track ? player.root : null);
+    stage.frame(dt, player.track ? player.root : null, second);
     fpsTimes.push(now);
     while (fpsTimes.length > 2 && now - fpsTimes[0] > 2000) fpsTimes.shift();
     requestAnimationFrame(tick);

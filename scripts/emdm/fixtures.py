@@ -8,12 +8,17 @@ What it writes (each case = ``<name>.json`` index + ``<name>.bin`` float32 littl
 * ``tiny-step.onnx`` + ``tiny``: a tiny random step model with the real ONNX contract
   (x_t, z, cond, t, mask -> x0), one step and a guided 4-step run with supplied noise, so the
   runtime and sampler are tested without the shipped models.
+* ``tiny-ddim``: the same step model sampled as a diffusion-objective model with DDIM
+  (``emdm.sample.sample_features(objective="diffusion")``, guided and unconditional, 5 steps) with
+  the noise it drew, and the DDIM marginals a_cum / s_cum of ``emdm.model.schedule`` for the step
+  counts a diffusion model ships (1 … 100), which the TypeScript schedule must reproduce.
 * ``recover``: features of a real clip from the prepared dataset and the joints
   ``emdm.motion.features.recover_joints`` gives for them (the TypeScript port must match).
 * ``model-<name>`` for every model in ``public/models/manifest.json``: one step (x_t, z, cond, t
   -> x0) and a whole ``defaultSteps`` run with classifier-free guidance and supplied noise
   (-> final normalised x, de-normalised features, joints), computed with onnxruntime (CPU) by
-  ``reference_sample``, the numpy transcription of docs/ARCHITECTURE.md "Sampling".
+  ``reference_sample``, the numpy transcription of docs/ARCHITECTURE.md "Sampling" (DDIM for a
+  model whose ``objective`` is ``"diffusion"``).
 
 Model files are read through the manifest (paths, sha256 checked), so fixtures follow whatever is
 shipped; ``index.json`` lists the cases and the sha256 of the model each was made from, so a test
@@ -37,6 +42,8 @@ from emdm.model.schedule import make_schedule
 PARITY_DIR = paths.FIXTURES_DIR / "parity"
 FRAMES = 40          # fixture motion length (the models take any L <= 196)
 TINY_COND_DIM = 8
+TINY_DDIM_STEPS = 5
+DDIM_STEP_COUNTS = (1, 2, 4, 5, 8, 10, 20, 50, 100)   # the diffusion baseline's supportedSteps
 
 
 # ---------------------------------------------------------------------------------------------
@@ -82,21 +89,30 @@ def run_step(sess, x: np.ndarray, z: np.ndarray, cond: np.ndarray, t: np.ndarray
 
 
 def reference_sample(sess, x_T: np.ndarray, zs: list[np.ndarray], epss: list[np.ndarray | None],
-                     cond: np.ndarray, guidance: float, sched) -> np.ndarray:
+                     cond: np.ndarray, guidance: float, sched, objective: str = "ddgan") -> np.ndarray:
     """x_T (L, D); zs[k] (zDim,), epss[k] (L, D) or None, indexed by step k; cond (C,) -> x_0 (L, D).
 
     Guidance (s != 1 and a non-zero condition): one batched call with rows [cond, 0], same x and z,
-    x0 = x0_u + s (x0_c - x0_u)."""
+    x0 = x0_u + s (x0_c - x0_u). ``objective="diffusion"``: z = 0 (the drawn z is ignored) and the
+    DDIM update (η = 0) of docs/ARCHITECTURE.md "DDIM sampling", in float32 like emdm.sample."""
     x = x_T.astype(np.float32)[None]
     guided = bool(np.any(cond != 0)) and guidance != 1.0
     for k in range(sched.steps - 1, -1, -1):
         t = np.float32(sched.time[k])
+        z = np.zeros_like(zs[k]) if objective == "diffusion" else zs[k]
         if guided:
-            out = run_step(sess, np.concatenate([x, x]), np.stack([zs[k], zs[k]]),
+            out = run_step(sess, np.concatenate([x, x]), np.stack([z, z]),
                            np.stack([cond, np.zeros_like(cond)]), np.array([t, t], np.float32))
             x0 = out[1:2] + np.float32(guidance) * (out[0:1] - out[1:2])
         else:
-            x0 = run_step(sess, x, zs[k][None], cond[None], np.array([t], np.float32))
+            x0 = run_step(sess, x, z[None], cond[None], np.array([t], np.float32))
+        if objective == "diffusion":
+            if k == 0:
+                x = x0.astype(np.float32)
+            else:
+                eps = (x - np.float32(sched.a_cum[k + 1]) * x0) / np.float32(sched.s_cum[k + 1])
+                x = (np.float32(sched.a_cum[k]) * x0 + np.float32(sched.s_cum[k]) * eps).astype(np.float32)
+            continue
         x_new = sched.coef1[k] * x0.astype(np.float64) + sched.coef2[k] * x.astype(np.float64)
         if sched.sigma[k] != 0:
             x_new = x_new + sched.sigma[k] * epss[k][None].astype(np.float64)
@@ -104,15 +120,17 @@ def reference_sample(sess, x_T: np.ndarray, zs: list[np.ndarray], epss: list[np.
     return x[0]
 
 
-def draw_noise(rng: np.random.Generator, steps: int, frames: int, dim: int, z_dim: int, sched):
+def draw_noise(rng: np.random.Generator, steps: int, frames: int, dim: int, z_dim: int, sched,
+               objective: str = "ddgan"):
     """Noise in emdm.sample's order and dtype (x_T, then per step k = T-1..0: z, then eps when
-    sigma[k] > 0), so a fixture run equals ``emdm.sample.sample_features`` with the same rng."""
+    sigma[k] > 0; DDIM draws z (then zeroes it) and no eps), so a fixture run equals
+    ``emdm.sample.sample_features`` with the same rng."""
     x_T = rng.standard_normal((1, frames, dim), dtype=np.float32)[0]
     zs: list = [None] * steps
     epss: list = [None] * steps
     for k in range(steps - 1, -1, -1):
         zs[k] = rng.standard_normal((1, z_dim), dtype=np.float32)[0]
-        if sched.sigma[k] > 0:
+        if objective != "diffusion" and sched.sigma[k] > 0:
             epss[k] = rng.standard_normal((1, frames, dim), dtype=np.float32)[0]
     return x_T, zs, epss
 
@@ -197,6 +215,40 @@ def make_tiny(out_dir: Path) -> dict[str, Any]:
     ms[3] = 0.9
     (out_dir / "tiny.meanstd.f32").write_bytes(ms.astype("<f4").tobytes())
     return {"case": "tiny", "model": "tiny-step.onnx"}
+
+
+def make_tiny_ddim(out_dir: Path) -> dict[str, Any]:
+    """The tiny step model as a diffusion-objective model: DDIM runs of ``emdm.sample.sample_features``
+    (the Python pipeline itself) with the noise they drew, plus the DDIM marginals for every step count."""
+    from emdm.sample import onnx_step, sample_features
+
+    onnx_path = out_dir / "tiny-step.onnx"
+    if not onnx_path.is_file():
+        raise FileNotFoundError(f"{onnx_path}: run `python -m emdm.fixtures --only tiny` first")
+    sess = step_session(onnx_path)
+    step = onnx_step(onnx_path)
+    T, L, D, Z, C = TINY_DDIM_STEPS, 16, 263, 64, TINY_COND_DIM
+    sched = make_schedule(T)
+    cond = np.random.default_rng(20251123).standard_normal(C).astype(np.float32)
+    seed = 77
+    x_T, zs, epss = draw_noise(np.random.default_rng(seed), T, L, D, Z, sched, objective="diffusion")
+    x = sample_features(step, cond, L, steps=T, guidance=2.5, seed=seed, z_dim=Z, feature_dim=D, objective="diffusion")[0]
+    x_u = sample_features(step, np.zeros(C, np.float32), L, steps=T, guidance=2.5, seed=seed, z_dim=Z, feature_dim=D,
+                          objective="diffusion")[0]
+    # the supplied noise reproduces the Python run (so the TypeScript loop can be fed exactly this noise)
+    for got, c in ((x, cond), (x_u, np.zeros(C, np.float32))):
+        ref = reference_sample(sess, x_T, zs, epss, c, 2.5, sched, objective="diffusion")
+        if np.max(np.abs(ref - got)) > 1e-5:
+            raise AssertionError(f"fixtures: DDIM reference_sample differs from sample_features by {np.max(np.abs(ref - got)):.2e}")
+    arrays = {"cond": cond, **noise_arrays(x_T, zs, epss), "final_x": x, "final_x_uncond": x_u}
+    marginals = {str(n): {"a_cum": make_schedule(n).a_cum.tolist(), "s_cum": make_schedule(n).s_cum.tolist()}
+                 for n in DDIM_STEP_COUNTS}
+    meta = {"model": "tiny-step.onnx", "objective": "diffusion", "sampler": "ddim", "seed": seed, "frames": L,
+            "featureDim": D, "zDim": Z, "condDim": C, "steps": T, "guidance": 2.5,
+            "schedule": {**schedule_meta(sched), "a_cum": sched.a_cum.tolist(), "s_cum": sched.s_cum.tolist()},
+            "marginals": marginals}
+    write_case(out_dir, "tiny-ddim", meta, arrays)
+    return {"case": "tiny-ddim", "model": "tiny-step.onnx"}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -289,6 +341,7 @@ def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[s
     if ms.shape != (2 * D,):
         raise ValueError(f"{models_dir / entry['meanStd']}: {ms.size} floats, expected {2 * D}")
     mean, std = ms[:D], ms[D:]
+    objective = entry.get("objective", "ddgan")
     sched = make_schedule(steps)
     m_sched = entry.get("schedules", {}).get(str(steps))
     if m_sched:
@@ -305,12 +358,13 @@ def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[s
     step_t = np.array([sched.time[steps // 2]], np.float32)
     step_x0 = run_step(sess, step_x, step_z, cond[None], step_t)
     seed = 1000 + len(name)
-    x_T, zs, epss = draw_noise(np.random.default_rng(seed), steps, L, D, Z, sched)
-    x = reference_sample(sess, x_T, zs, epss, cond, guidance, sched)
+    x_T, zs, epss = draw_noise(np.random.default_rng(seed), steps, L, D, Z, sched, objective)
+    x = reference_sample(sess, x_T, zs, epss, cond, guidance, sched, objective)
     # the fixture run must be what the Python pipeline itself samples with this seed
     from emdm.sample import onnx_step, sample_features
 
-    x_py = sample_features(onnx_step(onnx_path), cond, L, steps=steps, guidance=guidance, seed=seed, z_dim=Z, feature_dim=D)[0]
+    x_py = sample_features(onnx_step(onnx_path), cond, L, steps=steps, guidance=guidance, seed=seed, z_dim=Z, feature_dim=D,
+                           objective=objective)[0]
     if np.max(np.abs(x_py - x)) > 1e-4:
         raise AssertionError(f"fixtures: reference_sample differs from emdm.sample.sample_features by {np.max(np.abs(x_py - x)):.2e}")
     feats = (x * std + mean).astype(np.float32)
@@ -318,7 +372,8 @@ def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[s
     arrays = {"step_x_t": step_x, "step_z": step_z, "step_cond": cond[None], "step_t": step_t, "step_x0": step_x0,
               "cond": cond, **noise_arrays(x_T, zs, epss), "final_x": x, "features": feats, "joints": joints}
     case = f"model-{name}"
-    meta = {"model": name, "onnx": onnx_rel, "sha256": meta_file["sha256"], "frames": L, "featureDim": D, "zDim": Z,
+    meta = {"model": name, "onnx": onnx_rel, "sha256": meta_file["sha256"], "objective": objective,
+            "sampler": "ddim" if objective == "diffusion" else "ddgan", "frames": L, "featureDim": D, "zDim": Z,
             "condDim": C, "condition": cond_desc, "seed": seed, "steps": steps, "guidance": guidance, "schedule": schedule_meta(sched)}
     write_case(out_dir, case, meta, arrays)
     return {"case": case, "model": name, "sha256": meta_file["sha256"]}
@@ -328,15 +383,18 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m emdm.fixtures", description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", type=Path, default=PARITY_DIR)
     ap.add_argument("--models-dir", type=Path, default=paths.MODELS_DIR)
-    ap.add_argument("--only", nargs="*", choices=["tiny", "recover", "models"], default=None)
+    ap.add_argument("--only", nargs="*", choices=["tiny", "tiny-ddim", "recover", "models"], default=None)
     args = ap.parse_args(argv)
-    want = set(args.only or ["tiny", "recover", "models"])
+    want = set(args.only or ["tiny", "tiny-ddim", "recover", "models"])
     out: Path = args.out
     index_path = out / "index.json"
     index = json.loads(index_path.read_text()) if index_path.exists() else {"cases": {}}
     if "tiny" in want:
         index["cases"]["tiny"] = make_tiny(out)
         print(f"fixtures: wrote {out / 'tiny.json'}")
+    if "tiny-ddim" in want:
+        index["cases"]["tiny-ddim"] = make_tiny_ddim(out)
+        print(f"fixtures: wrote {out / 'tiny-ddim.json'}")
     if "recover" in want:
         try:
             index["cases"]["recover"] = make_recover(out)

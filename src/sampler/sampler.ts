@@ -1,8 +1,11 @@
 /**
- * The few-step DDGAN sampler loop (docs/ARCHITECTURE.md "Sampling"), independent of ONNX: the
- * step model is a function, the noise a source, so tests can run it with fixture noise.
+ * The sampler loop (docs/ARCHITECTURE.md "Sampling" and "DDIM sampling"), independent of ONNX: the
+ * step model is a function, the noise a source, so tests can run it with fixture noise. Two update
+ * rules share the loop: the few-step DDGAN posterior (fresh z and ε every step) for EMDM models and
+ * deterministic DDIM (z drawn then zeroed, no ε) for the plain diffusion baseline.
  */
-import type { Schedule } from './schedule';
+import { ddimUpdate } from './ddim';
+import type { DdimSchedule, Schedule } from './schedule';
 
 /** One call of the denoising step model: inputs in the ONNX contract layout, returns x0 [B, L, D]. */
 export interface StepInputs {
@@ -28,9 +31,12 @@ export class AbortError extends Error {
   }
 }
 
-export interface SampleOptions {
+/** Which update rule runs: 'ddgan' (the default) takes the posterior Schedule, 'ddim' a DdimSchedule. */
+export type SamplerChoice = { method?: 'ddgan'; schedule: Schedule } | { method: 'ddim'; schedule: DdimSchedule };
+export type SamplerName = 'ddgan' | 'ddim';
+
+export type SampleOptions = SamplerChoice & {
   step: StepFn;
-  schedule: Schedule;
   noise: NoiseSource;
   frames: number;
   featureDim: number;
@@ -42,13 +48,15 @@ export interface SampleOptions {
   signal?: AbortSignal;
   onStep?: (done: number, total: number) => void;
   now?: () => number;
-}
+};
 
 export interface SampleResult {
   /** final x_0 in normalised feature space [L, D] */
   x: Float32Array;
   stepMs: number[];
   modelCalls: number;
+  /** the update rule that ran */
+  sampler: SamplerName;
 }
 
 function throwIfAborted(signal: AbortSignal | undefined, done: number, total: number): void {
@@ -66,6 +74,10 @@ function checkLength(a: Float32Array, n: number, what: string): void {
 /** Run T denoising steps from x_T ~ N(0, I); returns x_0 (normalised features). */
 export async function sample(o: SampleOptions): Promise<SampleResult> {
   const { schedule, frames: L, featureDim: D, zDim, cond } = o;
+  const ddim = o.method === 'ddim';
+  if (ddim && ((o.schedule as DdimSchedule).aCum?.length !== schedule.steps + 1 || (o.schedule as DdimSchedule).sCum?.length !== schedule.steps + 1)) {
+    throw new Error(`sampler: method 'ddim' needs a DdimSchedule (aCum and sCum of ${schedule.steps + 1} values; see ddimScheduleFor)`);
+  }
   const now = o.now ?? (() => performance.now());
   if (!Number.isInteger(L) || L < 1) throw new RangeError(`sampler: frames must be a positive integer, got ${L}`);
   if (!Number.isFinite(o.guidance)) throw new RangeError(`sampler: guidance must be a finite number, got ${o.guidance}`);
@@ -92,8 +104,10 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
   for (let k = schedule.steps - 1; k >= 0; k--) {
     throwIfAborted(o.signal, schedule.steps - 1 - k, schedule.steps);
     const t0 = now();
-    const z = o.noise.normals(zDim, 'z', k);
-    checkLength(z, zDim, `z noise at step ${k}`);
+    // z is drawn at every step even for DDIM (then zeroed), so the draw order is the same for both
+    const drawn = o.noise.normals(zDim, 'z', k);
+    checkLength(drawn, zDim, `z noise at step ${k}`);
+    const z = ddim ? new Float32Array(zDim) : drawn;
     for (let b = 0; b < B; b++) {
       xB.set(x, b * n);
       zB.set(z, b * zDim);
@@ -102,9 +116,16 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     const out = await o.step({ x: xB, z: zB, cond: condB, t: tB, mask: maskB, batch: B, frames: L });
     modelCalls++;
     checkLength(out, B * n, `model output x0 at step ${k}`);
-    const c1 = schedule.coef1[k];
-    const c2 = schedule.coef2[k];
-    const sig = schedule.sigma[k];
+    if (ddim) {
+      ddimUpdate(x, guided ? guidedX0(out, n, s) : out, k, o.schedule as DdimSchedule);
+      stepMs.push(now() - t0);
+      o.onStep?.(schedule.steps - k, schedule.steps);
+      continue;
+    }
+    const sch = o.schedule as Schedule;
+    const c1 = sch.coef1[k];
+    const c2 = sch.coef2[k];
+    const sig = sch.sigma[k];
     const eps = sig !== 0 ? o.noise.normals(n, 'eps', k) : null;
     if (eps) checkLength(eps, n, `ε noise at step ${k}`);
     for (let i = 0; i < n; i++) {
@@ -117,7 +138,14 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     stepMs.push(now() - t0);
     o.onStep?.(schedule.steps - k, schedule.steps);
   }
-  return { x, stepMs, modelCalls };
+  return { x, stepMs, modelCalls, sampler: ddim ? 'ddim' : 'ddgan' };
+}
+
+/** x0 = x0_u + s·(x0_c − x0_u) from a batched [cond, uncond] output, rounded to float32 like Python. */
+function guidedX0(out: Float32Array, n: number, s: number): Float32Array {
+  const x0 = new Float32Array(n);
+  for (let i = 0; i < n; i++) x0[i] = Math.fround(out[n + i] + Math.fround(s * Math.fround(out[i] - out[n + i])));
+  return x0;
 }
 
 /** Noise from a seeded generator, drawn in the documented order. */

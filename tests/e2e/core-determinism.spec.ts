@@ -1,6 +1,7 @@
 // The TypeScript core in headless Chromium (web/harness/) against the same code in Node:
 // same seed → bit-identical features and joints, twice in the browser and equal to Node
-// (both run ORT-web's WASM build, single-threaded here), and the seeded RNG agrees bit for bit.
+// (both run ORT-web's WASM build, single-threaded here), for the DDGAN and the DDIM sampler, and the
+// seeded RNG agrees bit for bit.
 // Text prompts: the text encoder runs on different ORT builds in Node and Chromium (see below),
 // so Node is given the browser's embedding and the embeddings are compared to 1e-5.
 import fs from 'node:fs';
@@ -11,7 +12,7 @@ import { expect, test, type Page } from '@playwright/test';
 import { createGenerator, type GenerateOptions } from '../../src/generate';
 import { type Manifest, loadManifest } from '../../src/manifest';
 import { SeededRandom } from '../../src/sampler/rng';
-import { computeSchedule } from '../../src/sampler/schedule';
+import { buildTinyManifest } from '../fixtures/parity/tinyManifest';
 import { watchExternalRequests, watchPage } from './helpers';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
@@ -21,31 +22,24 @@ const MODELS = path.join(ROOT, 'public', 'models') + '/';
 const sha = (a: Float32Array) => crypto.createHash('sha256').update(new Uint8Array(a.buffer, a.byteOffset, a.byteLength)).digest('hex');
 const file = (p: string) => fs.readFileSync(p);
 
-/** The harness's tiny model manifest, built the same way in Node (files from tests/fixtures/parity). */
+/** The harness's tiny model manifest (tiny = DDGAN, tiny-ddim = DDIM), built the same way in Node. */
 async function tinyNode(): Promise<{ manifest: Manifest; baseUrl: string }> {
   const onnx = file(path.join(PARITY, 'tiny-step.onnx'));
   const ms = file(path.join(PARITY, 'tiny.meanstd.f32'));
   const real = await loadManifest(MODELS);
-  const s = computeSchedule(4);
   const h = (b: Buffer) => crypto.createHash('sha256').update(b).digest('hex');
-  const manifest = {
-    schema: 1, skeleton: real.skeleton, textEncoders: {},
-    models: { tiny: {
-      task: 'action', condition: { type: 'action', labels: ['a', 'b', 'c', 'd', 'e', 'f', 'g', 'h'], dim: 8 },
-      onnx: 'tiny-step.onnx', meanStd: 'tiny.meanstd.f32', zDim: 64, featureDim: 263, fps: 20, maxFrames: 196, guidance: 2.5,
-      defaultSteps: 4, supportedSteps: [2, 4],
-      schedules: { '4': { time: [...s.time], coef1: [...s.coef1], coef2: [...s.coef2], sigma: [...s.sigma] } },
-      files: ['tiny-step.onnx', 'tiny.meanstd.f32'],
-    } },
-    files: { 'tiny-step.onnx': { bytes: onnx.length, sha256: h(onnx) }, 'tiny.meanstd.f32': { bytes: ms.length, sha256: h(ms) } },
-  } as unknown as Manifest;
+  const manifest = buildTinyManifest(
+    real.skeleton,
+    { path: 'tiny-step.onnx', bytes: onnx.length, sha256: h(onnx) },
+    { path: 'tiny.meanstd.f32', bytes: ms.length, sha256: h(ms) },
+  );
   return { manifest, baseUrl: PARITY + '/' };
 }
 
 interface Req { model: string; condition: GenerateOptions['condition']; frames: number; steps: number; guidance: number; seed: number }
 
 async function nodeRun(req: Req) {
-  const { manifest, baseUrl } = req.model === 'tiny' ? await tinyNode() : { manifest: await loadManifest(MODELS), baseUrl: MODELS };
+  const { manifest, baseUrl } = req.model === 'tiny' || req.model === 'tiny-ddim' ? await tinyNode() : { manifest: await loadManifest(MODELS), baseUrl: MODELS };
   const gen = await createGenerator({ manifest, baseUrl, model: req.model, backend: 'wasm', threads: 1 });
   try {
     const r = await gen.generate(req);
@@ -79,7 +73,11 @@ test.describe('core determinism: Chromium == Node', () => {
     expect(browser).toEqual(Array.from(new SeededRandom(42).normals(1000)));
   });
 
-  const cases: Req[] = [{ model: 'tiny', condition: { type: 'action', label: 2 }, frames: 30, steps: 4, guidance: 2.5, seed: 123 }, ...shippedRequests()];
+  const cases: Req[] = [
+    { model: 'tiny', condition: { type: 'action', label: 2 }, frames: 30, steps: 4, guidance: 2.5, seed: 123 },
+    { model: 'tiny-ddim', condition: { type: 'action', label: 2 }, frames: 30, steps: 5, guidance: 2.5, seed: 123 },
+    ...shippedRequests(),
+  ];
   for (const req of cases) {
     test(`${req.model} ${req.condition.type} seed ${req.seed}: bit-identical twice in Chromium and equal to Node`, async ({ page, baseURL }) => {
       const watch = watchPage(page);

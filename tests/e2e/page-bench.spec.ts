@@ -1,7 +1,15 @@
 // Figures for the demo page in headless Chromium (WASM backend): cold start to ready, generate latency
-// for 196 frames at the default steps, playback fps, and the JS heap after 100 generations.
-// A benchmark, not a test: it runs only with EMDM_BENCH=1 and prints what it measured (also written to
-// its test output folder as bench.json). `UPDATE_SCREENSHOT=1` also refreshes docs/screenshot.png.
+// for 196 frames at the default steps, playback fps, and the JS heap after 100 generations; and the
+// issue-7 timing table, EMDM at 1/2/4/5/8/10 steps vs the diffusion baseline (DDIM) at 10/50/100,
+// per motion and per frame, in one run through the page's test API (window.emdm.generate({model})).
+// Benchmarks, not tests: they run only with EMDM_BENCH=1 and print what they measured (also written to
+// the test output folder as bench.json / timing-compare.json). `UPDATE_SCREENSHOT=1` also refreshes
+// docs/screenshot.png.
+//
+//   EMDM_BENCH=1 EMDM_BENCH_JSON=bench-page.json npx playwright test tests/e2e/page-bench.spec.ts -g "EMDM vs DDIM"
+//   .venv/bin/python -m emdm.eval.evaluate import-bench bench-page.json   # -> docs/results/json/timing-browser-wasm.json
+//
+// EMDM_BENCH_REPS (default 3), EMDM_BENCH_EMDM_STEPS (1,2,4,5,8,10), EMDM_BENCH_DDIM_STEPS (10,50,100) change the run.
 import fs from 'node:fs';
 import os from 'node:os';
 import { expect, test, type Page } from '@playwright/test';
@@ -35,7 +43,7 @@ test('benchmark: cold start, 196-frame latency, playback fps, heap over 100 gene
   const coldMs = await ready(page, 'noauto=1&backend=wasm');
   const info = await page.evaluate(async () => {
     const m = await (await fetch('/models/manifest.json')).json();
-    const name = Object.keys(m.models).find((k) => m.models[k].task === 'text')!;
+    const name = Object.keys(m.models).find((k) => m.models[k].task === 'text' && m.models[k].objective !== 'diffusion')!;
     return { name, steps: m.models[name].defaultSteps as number, bytes: m.files[m.models[name].onnx].bytes as number };
   });
 
@@ -82,4 +90,70 @@ test('benchmark: cold start, 196-frame latency, playback fps, heap over 100 gene
   console.log(JSON.stringify(figures, null, 1));
   fs.writeFileSync(test.info().outputPath('bench.json'), JSON.stringify(figures, null, 1));
   expect(heap100 - heap0).toBeLessThan(16 * 2 ** 20);
+});
+
+test('benchmark: EMDM vs DDIM, ms per motion and per frame through the page (issue 7 timing)', async ({ page }) => {
+  test.skip(process.env.EMDM_BENCH !== '1', 'benchmark: set EMDM_BENCH=1 to run it');
+  test.setTimeout(3_600_000);
+  await page.setViewportSize({ width: 1280, height: 720 });
+  await ready(page, 'noauto=1&backend=wasm');
+  const info = await page.evaluate(() => window.emdm.compareInfo());
+  if (!info.emdm || !info.ddim) throw new Error(`the manifest needs an EMDM text model and a diffusion model (have: emdm ${info.emdm}, ddim ${info.ddim}); ${info.reason}`);
+  const models = await page.evaluate(async () => (await (await fetch('/models/manifest.json')).json()).models as Record<string, { supportedSteps: number[]; guidance: number }>);
+  const list = (v: string | undefined, d: string) => (v ?? d).split(',').filter(Boolean).map(Number);
+  const reps = Number(process.env.EMDM_BENCH_REPS ?? 3);
+  const plan: Array<[string, number[]]> = [
+    [info.emdm, list(process.env.EMDM_BENCH_EMDM_STEPS, '1,2,4,5,8,10')],
+    [info.ddim, list(process.env.EMDM_BENCH_DDIM_STEPS, '10,50,100')],
+  ];
+  for (const [model, steps] of plan) {
+    const bad = steps.filter((s) => !models[model].supportedSteps.includes(s));
+    if (bad.length) throw new Error(`${model} does not support ${bad.join(', ')} steps (supportedSteps ${models[model].supportedSteps.join(', ')})`);
+  }
+  const frames = 196;
+  const seconds = frames / 20;
+  const gen = (model: string, steps: number, seed: number) =>
+    page.evaluate(([m, t, st, sec, sd]) => window.emdm.generate({ model: m, mode: 'text', text: t, steps: st, seconds: sec, seed: sd }), [model, PROMPT, steps, seconds, seed] as const);
+  // warm-up: load both models and let V8 tier the WASM up (Liftoff → TurboFan)
+  for (const [model, steps] of plan) for (let i = 0; i < 2; i++) await gen(model, Math.min(...steps), 1);
+  const load0 = os.loadavg()[0];
+  const rows: Array<{ env: string; model: string; threads: number; guidance: number; sampler: string; results: Array<{ steps: number; msPerStep: number; msPerMotion: number; msPerFrame: number; modelCalls: number }> }> = [];
+  for (const [model, stepList] of plan) {
+    const results = [];
+    let threads = 0;
+    let sampler = '';
+    for (const steps of stepList) {
+      const totals: number[] = [];
+      const per: number[] = [];
+      let calls = 0;
+      for (let i = 0; i < reps; i++) {
+        const r = await gen(model, steps, 100 + i);
+        expect(r.frames).toBe(frames);
+        expect(r.steps).toBe(steps);
+        totals.push(r.timings.totalMs);
+        per.push(...r.timings.stepMs);
+        calls = r.modelCalls;
+        threads = r.timings.threads;
+        sampler = r.sampler;
+      }
+      const msPerMotion = median(totals);
+      results.push({ steps, msPerStep: median(per), msPerMotion, msPerFrame: msPerMotion / frames, modelCalls: calls });
+    }
+    rows.push({ env: 'chromium (demo page)', model, threads, guidance: models[model].guidance, sampler, results });
+  }
+  const figures = { frames, reps, source: 'tests/e2e/page-bench.spec.ts (window.emdm.generate)', cpuCores: os.cpus().length, loadAverage: [load0, os.loadavg()[0]], rows };
+  const emdm10 = rows[0].results.find((x) => x.steps === 10) ?? rows[0].results[rows[0].results.length - 1];
+  const lines = [
+    `EMDM vs DDIM in the demo page (Chromium, ORT-web WASM, ${rows[0].threads} thread(s)): ${frames} frames, median of ${reps} runs, load ${load0.toFixed(1)}`,
+    'model               sampler steps  calls  ms/step  ms/motion  ms/frame  × EMDM@' + emdm10.steps,
+  ];
+  for (const r of rows) {
+    for (const x of r.results) {
+      lines.push(`${r.model.padEnd(19)} ${r.sampler.padEnd(7)} ${String(x.steps).padStart(5)}  ${String(x.modelCalls).padStart(5)}  ${x.msPerStep.toFixed(1).padStart(7)}  ${x.msPerMotion.toFixed(0).padStart(9)}  ${x.msPerFrame.toFixed(3).padStart(8)}  ${(x.msPerMotion / emdm10.msPerMotion).toFixed(2).padStart(8)}`);
+    }
+  }
+  console.log(lines.join('\n'));
+  const json = JSON.stringify(figures, null, 1);
+  fs.writeFileSync(test.info().outputPath('timing-compare.json'), json);
+  if (process.env.EMDM_BENCH_JSON) fs.writeFileSync(process.env.EMDM_BENCH_JSON, json);
 });

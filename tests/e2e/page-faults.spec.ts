@@ -15,7 +15,10 @@ const NAN_STEP_MODEL = Buffer.from(
   'base64',
 );
 
-interface ModelInfo { task: string; onnx: string; variants?: Record<string, string>; condition: { labels?: string[] } }
+interface ModelInfo { task: string; objective?: string; onnx: string; variants?: Record<string, string>; condition: { labels?: string[] } }
+
+/** The EMDM text model (not the diffusion baseline the compare view uses). */
+const isEmdmText = (x: ModelInfo) => x.task === 'text' && x.objective !== 'diffusion';
 
 async function readManifest(page: Page): Promise<{ models: Record<string, ModelInfo>; files: Record<string, { bytes: number; sha256: string }> }> {
   const r = await page.request.get('/models/manifest.json');
@@ -149,7 +152,7 @@ test.describe('demo page: bad input', () => {
     expect(await fresh.locator('#prompt').inputValue()).toBe('a person runs');
     const steps = Number(await fresh.locator('#steps-out').textContent());
     const m = await readManifest(fresh);
-    const text = Object.values(m.models).find((x) => x.task === 'text') as unknown as { supportedSteps: number[] };
+    const text = Object.values(m.models).find(isEmdmText) as unknown as { supportedSteps: number[] };
     expect(text.supportedSteps).toContain(steps);
     expect(new URL(fresh.url()).searchParams.get('seconds')).toBe('9.8'); // the URL now holds the clamped state
   });
@@ -158,7 +161,7 @@ test.describe('demo page: bad input', () => {
 test.describe('demo page: faults', () => {
   test('a missing model file: a clear panel, and the rest of the page stays usable', async ({ page }) => {
     const m = await readManifest(page);
-    const [name, text] = Object.entries(m.models).find(([, x]) => x.task === 'text')!;
+    const [name, text] = Object.entries(m.models).find(([, x]) => isEmdmText(x))!;
     for (const f of onnxFiles(text)) await page.route(`**/models/${f}`, (r: Route) => r.fulfill({ status: 404, body: 'not found' }));
     await open(page);
     await expect(page.locator('#error-panel')).toBeVisible();
@@ -174,7 +177,7 @@ test.describe('demo page: faults', () => {
 
   test('a model whose sha256 differs from the manifest is refused with the reason', async ({ page }) => {
     const m = await readManifest(page);
-    const [name, text] = Object.entries(m.models).find(([, x]) => x.task === 'text')!;
+    const [name, text] = Object.entries(m.models).find(([, x]) => isEmdmText(x))!;
     for (const f of onnxFiles(text)) {
       await page.route(`**/models/${f}`, async (r: Route) => {
         const res = await r.fetch();

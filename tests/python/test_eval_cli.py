@@ -155,3 +155,34 @@ def test_suite_plans_every_row_of_the_comparisons(monkeypatch):
     assert ("text", "t.pt", "10") in rows and ("text", "n.pt", "10") in rows and ("action", "emdm-a2m-web", "10") in rows
     timing = next(c for c in cmds if c[0] == "timing")
     assert "t.pt=1,2,4,5,8,10" in timing and "d.pt=10,50,100" in timing
+
+
+def test_page_benchmark_json_with_a_diffusion_model_becomes_ddim_rows(world, exported, tmp_path):
+    """The demo page's EMDM-vs-DDIM benchmark (tests/e2e/page-bench.spec.ts, EMDM_BENCH_JSON): rows of a
+    diffusion-objective model are DDIM rows of the 'diffusion' variant; its source and load are kept."""
+    import shutil
+
+    from emdm import manifest as mf
+    from emdm.eval import evaluate, report
+
+    models = tmp_path / "models"
+    shutil.copytree(exported, models)
+    man = mf.load(models)
+    man["models"]["tiny-ddim"] = {**man["models"]["tiny-t2m"], "objective": "diffusion"}
+    (models / mf.MANIFEST_NAME).write_text(json.dumps(man))
+    bench = {"frames": 196, "reps": 3, "source": "tests/e2e/page-bench.spec.ts (window.emdm.generate)",
+             "loadAverage": [1.25, 1.5], "rows": [
+                 {"env": "chromium (demo page)", "model": "tiny-t2m", "threads": 2, "guidance": 2.5, "sampler": "ddgan",
+                  "results": [{"steps": 10, "modelCalls": 10, "msPerStep": 9.0, "msPerMotion": 98.0}]},
+                 {"env": "chromium (demo page)", "model": "tiny-ddim", "threads": 2, "guidance": 2.5, "sampler": "ddim",
+                  "results": [{"steps": 50, "modelCalls": 50, "msPerStep": 9.0, "msPerMotion": 490.0}]}]}
+    (tmp_path / "bench.json").write_text(json.dumps(bench))
+    out = evaluate.import_bench(evaluate.build_parser().parse_args(
+        ["import-bench", str(tmp_path / "bench.json"), "--models-dir", str(models), "--out-dir", str(tmp_path / "json")]))
+    doc = json.loads(out.read_text())
+    assert doc["runtime"] == "browser-wasm" and doc["load_avg_1min"] == [1.25, 1.5]
+    assert "page-bench.spec.ts" in doc["note"]
+    rows = report.timing_rows(report.load_results(tmp_path / "json"))
+    assert sorted((r["variant"], r["sampler"], r["steps"]) for r in rows) == [("diffusion", "DDIM", 50), ("emdm", "DDGAN", 10)]
+    table, ratios = report.timing_table(report.load_results(tmp_path / "json"))
+    assert any("diffusion + DDIM at 50 steps takes 5.0× the time per frame of EMDM at 10 steps" in r for r in ratios)

@@ -84,7 +84,7 @@ describe('createGenerator on the tiny model', () => {
     await expect(createGenerator({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(/tiny\.onnx: size 11 bytes differs/);
     fs.rmSync(path.join(dir, 'tiny.onnx'));
     await expect(createGenerator({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(/tiny\.onnx: not found/);
-    await expect(createGenerator({ manifest, baseUrl: dir, model: 'nope', backend: 'wasm', threads: 1 })).rejects.toThrow(/models\.nope' not found \(models: tiny\)/);
+    await expect(createGenerator({ manifest, baseUrl: dir, model: 'nope', backend: 'wasm', threads: 1 })).rejects.toThrow(/models\.nope' not found \(models: tiny, tiny-ddim\)/);
   });
 
   it('refuses a model whose shapes do not match the manifest (incompatible)', async () => {
@@ -94,6 +94,49 @@ describe('createGenerator on the tiny model', () => {
     await expect(createGenerator({ manifest: bad, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toMatchObject({
       name: 'ModelFileError', reason: 'incompatible', path: 'tiny.onnx',
     });
+  });
+});
+
+describe('createGenerator on a diffusion-objective model (DDIM)', () => {
+  it('samples with DDIM and says so; a fixture run equals emdm.sample.sample_features(objective="diffusion")', async () => {
+    const { dir } = tinyModels();
+    const manifest = await loadManifest(dir);
+    const ddim = await createGenerator({ manifest, baseUrl: dir, model: 'tiny-ddim', backend: 'wasm', threads: 1 });
+    const ddgan = await createGenerator({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
+    expect(ddim.sampler).toBe('ddim');
+    expect(ddgan.sampler).toBe('ddgan');
+    const fx = loadCase('tiny-ddim');
+    const L = fx.meta.frames;
+    const r = await ddim.generate({ condition: { type: 'vector', vector: fx.get('cond') }, frames: L, steps: fx.meta.steps as number, guidance: 2.5, seed: 0, noise: fixtureNoise(fx) });
+    expect(r.sampler).toBe('ddim');
+    expect(r.steps).toBe(5);
+    expect(r.modelCalls).toBe(5);
+    expect(r.timings.stepMs).toHaveLength(5);
+    // tiny.meanstd.f32: mean 0 except mean[3] = 0.9, std 1 → features = x + mean
+    const want = fx.get('final_x');
+    for (let f = 0; f < L; f++) want[f * 263 + 3] += 0.9;
+    expect(maxAbsDiff(r.motion.features, want)).toBeLessThan(1e-4);
+    // the same request on the DDGAN declaration of the same file is another motion
+    const o = { condition: { type: 'action' as const, label: 1 }, frames: 24, steps: 2, guidance: 2.5, seed: 9 };
+    const a = await ddim.generate(o);
+    const b = await ddgan.generate(o);
+    expect(b.sampler).toBe('ddgan');
+    expect(maxAbsDiff(a.motion.features, b.motion.features)).toBeGreaterThan(1e-3);
+    // deterministic: same seed, same motion
+    const a2 = await ddim.generate(o);
+    expect(Buffer.from(a.motion.joints.buffer).equals(Buffer.from(a2.motion.joints.buffer))).toBe(true);
+    await expect(ddim.generate({ ...o, steps: 4 })).rejects.toThrow(/tiny-ddim: 4 steps not supported \(supportedSteps = \[1, 2, 5, 10\]\)/);
+    await ddim.dispose();
+    await ddgan.dispose();
+  });
+
+  it('refuses an unknown objective, naming the field', async () => {
+    const { dir, manifest } = tinyModels();
+    const bad = structuredClone(manifest);
+    (bad.models.tiny as { objective: string }).objective = 'flow';
+    await expect(createGenerator({ manifest: bad, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(
+      /models\.tiny\.objective' is "flow"; expected "ddgan" .* or "diffusion" \(sampled with DDIM\)/,
+    );
   });
 });
 
@@ -125,6 +168,8 @@ describe('parity with Python on the shipped models', () => {
         condition: { type: 'vector', vector: fx.get('cond') }, frames: L, steps: fx.meta.steps as number, guidance: fx.meta.guidance as number,
         seed: 0, noise: fixtureNoise(fx),
       });
+      expect(r.sampler).toBe(entry.objective === 'diffusion' ? 'ddim' : 'ddgan');
+      if (fx.meta.sampler !== undefined) expect(r.sampler, `fixture model-${name} was sampled with ${fx.meta.sampler}`).toBe(fx.meta.sampler);
       expect(maxAbsDiff(r.motion.features, fx.get('features'))).toBeLessThan(1e-4);
       expect(maxJointDist(r.motion.joints, fx.get('joints'))).toBeLessThan(1e-3);
       await gen.dispose();

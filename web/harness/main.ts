@@ -16,7 +16,7 @@ const backend = (params.get('backend') ?? 'wasm') as 'wasm' | 'webgpu' | 'auto';
 const MODELS = params.get('models') ?? `${import.meta.env.BASE_URL}models/`;
 
 export interface HarnessRequest {
-  /** 'tiny' (the parity fixture's tiny step model) or a shipped model name */
+  /** 'tiny' / 'tiny-ddim' (the parity fixture's tiny step model, DDGAN / DDIM) or a shipped model name */
   model: string;
   condition: GenerateOptions['condition'];
   frames: number;
@@ -47,7 +47,7 @@ function generatorFor(model: string, variant?: string): Promise<Generator> {
   let g = generators.get(key);
   if (!g) {
     g = (async () => {
-      const { manifest, baseUrl } = model === 'tiny' ? await tinyManifest() : { manifest: await loadManifest(MODELS), baseUrl: MODELS };
+      const { manifest, baseUrl } = model === 'tiny' || model === 'tiny-ddim' ? await tinyManifest() : { manifest: await loadManifest(MODELS), baseUrl: MODELS };
       return createGenerator({ manifest, baseUrl, model, variant, backend, threads });
     })();
     generators.set(key, g);

@@ -1,15 +1,19 @@
-// The side-bar form: mode tabs, prompt + examples, action list, sliders, seed + dice, Generate.
-// It owns the DOM of the controls and turns it into a PageState; it never runs a model itself.
+// The side-bar form: mode tabs, prompt + examples, action list, the compare toggle, sliders, seed +
+// dice, Generate. It owns the DOM of the controls and turns it into a PageState; it never runs a model itself.
 import { byId, el } from './dom';
 import {
   MAX_GUIDANCE, MAX_PROMPT_CHARS, MAX_SECONDS, MAX_SEED, MIN_GUIDANCE, MIN_SECONDS, nearestSteps, randomSeed,
-  truncatePrompt, type Mode, type PageState, type StateLimits,
+  stepChoices, truncatePrompt, type Mode, type PageState, type StateLimits,
 } from './state';
 
 export interface ControlsEvents {
   generate(): void;
   change(state: PageState): void;
+  /** the note under the steps slider for a state ('' = none), e.g. what each model runs in compare mode */
+  stepsNote?(state: PageState): string;
 }
+
+const COMPARE_ACTION_REASON = 'The diffusion (DDIM) model takes a text prompt or nothing: switch to Text or Random to compare.';
 
 export class Controls {
   private readonly prompt = byId('prompt', HTMLTextAreaElement);
@@ -21,6 +25,13 @@ export class Controls {
   private readonly guidance = byId('guidance', HTMLInputElement);
   private readonly seed = byId('seed', HTMLInputElement);
   private readonly button = byId('generate', HTMLButtonElement);
+  private readonly compare = byId('compare', HTMLInputElement);
+  private readonly compareParam = byId('compare-param');
+  private readonly compareHint = byId('compare-hint');
+  private readonly stepsNote = byId('steps-note');
+  private readonly compareText = this.compareHint.textContent ?? '';
+  /** why compare mode cannot be used (no diffusion model, it failed to load), null when it can */
+  private compareBlocked: string | null = null;
   private readonly tabs = Array.from(document.querySelectorAll<HTMLButtonElement>('.modes [data-mode]'));
   private mode: Mode = 'text';
   private ready = false;
@@ -30,6 +41,8 @@ export class Controls {
   constructor(private readonly limits: StateLimits, examples: string[], private readonly on: ControlsEvents) {
     this.steps.min = '0';
     this.steps.max = String(limits.supportedSteps.length - 1);
+    if (!limits.compareSteps.length) this.setCompareAvailable('This demo ships no diffusion (DDIM) model to compare with (manifest model diffusion-t2m-web).');
+    this.compare.addEventListener('change', () => this.setCompare(this.compare.checked, true));
     this.seconds.min = String(MIN_SECONDS);
     this.seconds.max = String(MAX_SECONDS);
     this.guidance.min = String(MIN_GUIDANCE);
@@ -86,20 +99,55 @@ export class Controls {
     this.guidance.value = String(s.guidance);
     this.seed.value = String(s.seed >>> 0);
     this.backend = s.backend;
+    this.compare.checked = s.compare && this.compareUsable(s.mode);
+    this.syncSteps(s.steps);
     this.setMode(s.mode);
+  }
+
+  /** Turn the compare view on or off (as the toggle does); the slider keeps the nearest step count. */
+  setCompare(on: boolean, user = false): void {
+    const steps = this.read().steps;
+    this.compare.checked = on && this.compareUsable(this.mode);
+    this.syncSteps(steps);
+    this.refresh(user);
+  }
+
+  /** Disable the compare view with the reason shown under it (null: available again). */
+  setCompareAvailable(reason: string | null): void {
+    this.compareBlocked = reason;
+    if (reason) this.setCompare(false);
+    else this.refresh();
+  }
+
+  /** Why compare mode cannot be used now ('' when it can). */
+  compareUnavailable(mode: Mode = this.mode): string {
+    return this.compareBlocked ?? (mode === 'action' ? COMPARE_ACTION_REASON : '');
+  }
+
+  private compareUsable(mode: Mode): boolean {
+    return this.compareUnavailable(mode) === '';
+  }
+
+  /** Point the slider at the choices of the current compare state, at the count nearest `steps`. */
+  private syncSteps(steps: number): void {
+    const choices = stepChoices(this.limits, this.compare.checked);
+    this.steps.max = String(choices.length - 1);
+    this.steps.value = String(Math.max(0, choices.indexOf(nearestSteps(steps, choices))));
   }
 
   /** The state the controls show (prompt NOT truncated: see truncatePrompt). */
   read(): PageState {
+    const compare = this.compare.checked;
     return {
       mode: this.mode,
       text: this.prompt.value,
       action: this.action.value,
-      steps: this.limits.supportedSteps[Number(this.steps.value)] ?? this.limits.defaultSteps,
+      steps: stepChoices(this.limits, compare)[Number(this.steps.value)] ?? this.limits.defaultSteps,
       seconds: Number(Number(this.seconds.value).toFixed(2)),
       guidance: Number(Number(this.guidance.value).toFixed(2)),
       seed: this.readSeed(),
       backend: this.backend,
+      compare,
     };
   }
 
@@ -127,6 +175,11 @@ export class Controls {
 
   setMode(mode: Mode, user = false): void {
     this.mode = mode;
+    if (this.compare.checked && !this.compareUsable(mode)) {
+      const steps = this.read().steps;
+      this.compare.checked = false;
+      this.syncSteps(steps);
+    }
     for (const tab of this.tabs) tab.setAttribute('aria-selected', String(tab.dataset.mode === mode));
     for (const pane of Array.from(document.querySelectorAll<HTMLElement>('[data-pane]'))) pane.hidden = pane.dataset.pane !== mode;
     byId('guidance-param').hidden = mode === 'random';
@@ -142,6 +195,15 @@ export class Controls {
   private refresh(changed = false): void {
     const s = this.read();
     byId('steps-out').textContent = String(s.steps);
+    const note = this.on.stepsNote?.(s) ?? '';
+    this.stepsNote.textContent = note;
+    this.stepsNote.hidden = note === '';
+    const why = this.compareUnavailable(s.mode);
+    this.compare.disabled = why !== '';
+    this.compareParam.classList.toggle('unavailable', why !== '');
+    this.compareHint.textContent = why || this.compareText;
+    this.compareHint.classList.toggle('warn', why !== '' && this.compareBlocked !== null);
+    this.compare.title = why;
     byId('seconds-out').textContent = `${s.seconds.toFixed(1)} s`;
     byId('guidance-out').textContent = s.guidance.toFixed(1);
     const chars = Array.from(s.text).length;

@@ -11,14 +11,24 @@ export interface ModelChoice {
   entry: ModelEntry;
 }
 
-/** The models for each mode: text and random use the text model, action the action model. */
-export function pickModels(m: Manifest): { text: ModelChoice | null; action: ModelChoice | null } {
-  const find = (task: ModelEntry['task'], preferred: string): ModelChoice | null => {
-    if (m.models[preferred]?.task === task) return { name: preferred, entry: m.models[preferred] };
-    const hit = Object.entries(m.models).find(([, e]) => e.task === task);
+/**
+ * The models for each mode: text and random use the text model, action the action model (EMDM models,
+ * objective "ddgan"); `diffusion` is the text model trained with the plain diffusion objective that the
+ * compare view samples with DDIM beside EMDM (null when the manifest has none).
+ */
+export function pickModels(m: Manifest): { text: ModelChoice | null; action: ModelChoice | null; diffusion: ModelChoice | null } {
+  const isDiffusion = (e: ModelEntry) => e.objective === 'diffusion';
+  const find = (task: ModelEntry['task'], preferred: string, diffusion: boolean): ModelChoice | null => {
+    const ok = (e: ModelEntry | undefined) => !!e && e.task === task && isDiffusion(e) === diffusion;
+    if (ok(m.models[preferred])) return { name: preferred, entry: m.models[preferred] };
+    const hit = Object.entries(m.models).find(([, e]) => ok(e));
     return hit ? { name: hit[0], entry: hit[1] } : null;
   };
-  return { text: find('text', 'emdm-t2m-web'), action: find('action', 'emdm-a2m-web') };
+  return {
+    text: find('text', 'emdm-t2m-web', false),
+    action: find('action', 'emdm-a2m-web', false),
+    diffusion: find('text', 'diffusion-t2m-web', true),
+  };
 }
 
 export function modelForMode(models: ReturnType<typeof pickModels>, mode: Mode): ModelChoice | null {

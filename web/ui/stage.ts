@@ -1,9 +1,11 @@
 // The 3-D stage: renderer, lights with soft shadows, a floor with a grid that fades into the fog, a
 // camera that follows the character's root and can be orbited, and the root's path on the floor.
+// Split view (the compare mode): the canvas's left half shows one character and the right half the
+// other, each followed by its own camera with the same (orbited) view direction.
 import {
   ACESFilmicToneMapping, BufferAttribute, BufferGeometry, CircleGeometry, Color, DirectionalLight, Fog,
   GridHelper, HemisphereLight, Line, LineBasicMaterial, Mesh, MeshStandardMaterial, PCFShadowMap,
-  PerspectiveCamera, Scene, SRGBColorSpace, Vector3, WebGLRenderer, type Object3D,
+  PerspectiveCamera, Scene, SRGBColorSpace, Vector2, Vector3, WebGLRenderer, type Object3D,
 } from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
@@ -19,6 +21,11 @@ export class Stage {
   private readonly path: Line;
   private readonly pathGeometry = new BufferGeometry();
   private readonly follow = new Vector3(0, 0.9, 0);
+  /** split view: the right half's camera and follow point, and what each half shows */
+  private readonly camera2 = new PerspectiveCamera(38, 1, 0.05, 200);
+  private readonly follow2 = new Vector3(0, 0.9, 0);
+  private split: { left: Object3D; right: Object3D } | null = null;
+  private readonly size = new Vector2();
   /** Adaptive resolution: smoothed frame time (s) and how long it has been too slow. */
   private frameTime = 1 / 60;
   private slowFor = 0;
@@ -104,9 +111,30 @@ export class Stage {
     this.pathGeometry.setDrawRange(0, n);
   }
 
+  /**
+   * Split the view: `left` is drawn only in the left half (main camera), `right` only in the right
+   * half (a camera following the root given to frame() as `root2`); null = one full view again.
+   */
+  setSplit(split: { left: Object3D; right: Object3D } | null): void {
+    this.split = split;
+    this.path.visible = !split;
+    if (!split) {
+      // the right object may stay in the scene hidden; the left one is the main view's again
+      this.resize(true);
+    }
+  }
+
+  get isSplit(): boolean {
+    return this.split !== null;
+  }
+
   /** Move the orbit target (and the camera with it) smoothly towards the root, then render. */
-  frame(dt: number, root: ArrayLike<number> | null): void {
+  frame(dt: number, root: ArrayLike<number> | null, root2: ArrayLike<number> | null = null): void {
     if (this.adaptive) this.adapt(dt);
+    if (this.split && root2) {
+      this.tmp.set(root2[0], 0.9, root2[2]);
+      this.follow2.add(this.tmp.sub(this.follow2).multiplyScalar(1 - Math.exp(-dt * 3)));
+    }
     if (root) {
       this.tmp.set(root[0], 0.9, root[2]);
       const k = 1 - Math.exp(-dt * 3);
@@ -119,7 +147,41 @@ export class Stage {
     }
     this.controls.update();
     this.resize();
-    this.renderer.render(this.scene, this.camera);
+    if (!this.split) {
+      this.renderer.render(this.scene, this.camera);
+      return;
+    }
+    // split: two half-width passes, each showing one character
+    const { left, right } = this.split;
+    const r = this.renderer;
+    r.getSize(this.size);
+    const half = Math.floor(this.size.x / 2);
+    const h = this.size.y;
+    this.camera.aspect = half / h;
+    this.camera.updateProjectionMatrix();
+    this.camera2.copy(this.camera);
+    this.camera2.position.add(this.tmp.copy(this.follow2).sub(this.follow));
+    r.setScissorTest(true);
+    const pass = (x: number, w: number, cam: PerspectiveCamera, show: Object3D, hide: Object3D) => {
+      show.visible = true;
+      hide.visible = false;
+      r.setViewport(x, 0, w, h);
+      r.setScissor(x, 0, w, h);
+      r.render(this.scene, cam);
+    };
+    pass(0, half, this.camera, left, right);
+    pass(half, this.size.x - half, this.camera2, right, left);
+    left.visible = true;
+    right.visible = true;
+    r.setScissorTest(false);
+    r.setViewport(0, 0, this.size.x, h);
+    this.camera.aspect = this.size.x / h;
+    this.camera.updateProjectionMatrix();
+  }
+
+  /** Snap the right half's follow point to a root (split view). */
+  snapTo2(root: ArrayLike<number>): void {
+    this.follow2.set(root[0], 0.9, root[2]);
   }
 
   /** Snap the follow point to the root (used when a new motion starts far away). */
@@ -157,13 +219,13 @@ export class Stage {
     return { pixelRatio: this.renderer.getPixelRatio(), shadows: this.renderer.shadowMap.enabled };
   }
 
-  private resize(): void {
+  private resize(force = false): void {
     const c = this.canvas;
     const w = c.clientWidth;
     const h = c.clientHeight;
     if (w === 0 || h === 0) return;
     const pr = this.renderer.getPixelRatio();
-    if (c.width !== Math.floor(w * pr) || c.height !== Math.floor(h * pr)) {
+    if (force || c.width !== Math.floor(w * pr) || c.height !== Math.floor(h * pr)) {
       this.renderer.setSize(w, h, false);
       this.camera.aspect = w / h;
       this.camera.updateProjectionMatrix();

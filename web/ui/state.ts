@@ -14,6 +14,8 @@ export interface PageState {
   guidance: number;        // classifier-free guidance scale
   seed: number;            // uint32
   backend: BackendChoice;
+  /** side-by-side EMDM vs diffusion (DDIM) view (only when the manifest has a diffusion model) */
+  compare: boolean;
 }
 
 /** What the loaded models allow (from the manifest). */
@@ -25,6 +27,8 @@ export interface StateLimits {
   fps: number;
   maxFrames: number;
   defaultText: string;
+  /** step counts of the compare view (EMDM's and the diffusion model's, merged); [] = no diffusion model */
+  compareSteps: number[];
 }
 
 export const MIN_SECONDS = 1;
@@ -51,7 +55,13 @@ export function defaultState(l: StateLimits, seed: number): PageState {
     guidance: l.defaultGuidance,
     seed: seed >>> 0,
     backend: 'auto',
+    compare: false,
   };
+}
+
+/** The step counts the slider offers for a state: the compare view adds the diffusion model's. */
+export function stepChoices(l: Pick<StateLimits, 'supportedSteps' | 'compareSteps'>, compare: boolean): number[] {
+  return compare && l.compareSteps.length ? l.compareSteps : l.supportedSteps;
 }
 
 /** Frames for a length in seconds (at least 2, at most maxFrames). */
@@ -107,9 +117,17 @@ export function parseState(search: string, l: StateLimits, fallbackSeed: number)
     if (raw.trim() === '' || !Number.isFinite(v)) notices.push(`URL ${name}='${raw}' is not a number; ignored.`);
     else apply(v);
   };
+  const compare = q.get('compare');
+  if (compare !== null) {
+    if (compare !== '1' && compare !== '0') notices.push(`URL compare='${compare}' is not 1 or 0; ignored.`);
+    else if (compare === '1' && !l.compareSteps.length) notices.push('URL compare=1: this demo ships no diffusion (DDIM) model to compare with.');
+    else if (compare === '1' && s.mode === 'action') notices.push('URL compare=1: the diffusion model takes a text prompt or nothing, not an action; compare is off.');
+    else s.compare = compare === '1';
+  }
   num('steps', (v) => {
-    const n = nearestSteps(v, l.supportedSteps);
-    if (n !== v) notices.push(`URL steps=${fmt(v)} is not supported (choices: ${l.supportedSteps.join(', ')}); using ${n}.`);
+    const choices = stepChoices(l, s.compare);
+    const n = nearestSteps(v, choices);
+    if (n !== v) notices.push(`URL steps=${fmt(v)} is not supported (choices: ${choices.join(', ')}); using ${n}.`);
     s.steps = n;
   });
   num('seconds', (v) => {
@@ -148,6 +166,7 @@ export function stateToSearch(s: PageState): string {
   if (s.mode !== 'random') q.set('guidance', String(s.guidance));
   q.set('seed', String(s.seed >>> 0));
   if (s.backend !== 'auto') q.set('backend', s.backend);
+  if (s.compare) q.set('compare', '1');
   return `?${q.toString()}`;
 }
 

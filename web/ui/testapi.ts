@@ -9,6 +9,10 @@ export interface GenerateRequest {
   seconds?: number;
   guidance?: number;
   seed?: number;
+  /** turn the compare view on/off for this and later generations (text and random modes) */
+  compare?: boolean;
+  /** generate with this manifest model alone (e.g. 'diffusion-t2m-web' for a benchmark), steps from its supportedSteps */
+  model?: string;
 }
 
 export interface GenerateResponse {
@@ -19,6 +23,37 @@ export interface GenerateResponse {
   joints: number[];
   timings: { encodeMs: number; stepMs: number[]; decodeMs: number; ikMs: number; totalMs: number; backend: string; threads: number };
   modelCalls: number;
+  /** the model that made this motion, its sampler ('ddgan' | 'ddim') and the steps it ran */
+  model: string;
+  sampler: string;
+  steps: number;
+  /** compare view: both panels' motions (the response itself describes the EMDM one) */
+  compare?: { emdm: GenerateResponse; ddim: GenerateResponse };
+}
+
+/** The compare view's two motions: EMDM (left character) and DDIM (right), same prompt, seed and length. */
+export interface CompareResponse {
+  state: PageState;
+  emdm: GenerateResponse;
+  ddim: GenerateResponse;
+}
+
+export interface CompareInfo {
+  /** whether the compare toggle can be used now, and why not ('' when it can) */
+  available: boolean;
+  reason: string;
+  /** the toggle is on */
+  on: boolean;
+  /** the slider's step counts in compare mode ([] without a diffusion model) */
+  steps: number[];
+  emdm: string | null;
+  ddim: string | null;
+  /** EMDM runs at most this many steps (the slider's larger values run DDIM only at them) */
+  emdmMaxSteps: number;
+  panelsVisible: boolean;
+  ddimCharacterVisible: boolean;
+  /** the 3-D view is split: EMDM in the left half, DDIM in the right */
+  split: boolean;
 }
 
 export interface Counters {
@@ -43,6 +78,11 @@ export interface EmdmTestApi {
   error: string;
   whenReady(): Promise<void>;
   generate(req?: GenerateRequest): Promise<GenerateResponse>;
+  /** generate in the compare view (turns it on): EMDM and DDIM side by side */
+  compare(req?: GenerateRequest): Promise<CompareResponse>;
+  /** the compare toggle, as a user would flip it (throws, saying why, when it is unavailable) */
+  setCompare(on: boolean): void;
+  compareInfo(): CompareInfo;
   counters: Counters;
   /** backend in use once a model is loaded */
   backend: string;

@@ -158,9 +158,11 @@ def run_timing(a) -> Path:
 
 def import_bench(a) -> Path:
     """Convert the TypeScript core benchmark's JSON (``node scripts/bench/core-bench.mjs --json F``:
-    {frames, reps, rows: [{env, model, threads, guidance, results: [{steps, msPerMotion, ...}]}]})
-    into timing JSON: runtime ``browser-wasm`` (Chromium rows) or ``node-wasm``; the variant of each
-    model comes from its manifest entry's training flags."""
+    {frames, reps, rows: [{env, model, threads, guidance, results: [{steps, msPerMotion, ...}]}]}, or
+    the demo page's EMDM-vs-DDIM benchmark, tests/e2e/page-bench.spec.ts with EMDM_BENCH_JSON=F, which
+    adds ``source`` and ``loadAverage`` [start, end]) into timing JSON: runtime ``browser-wasm``
+    (Chromium rows) or ``node-wasm``; the variant of each model comes from its manifest entry's
+    objective and training flags."""
     from emdm import manifest as mf
     from emdm.eval.sources import variant_of
     from emdm.paths import MODELS_DIR
@@ -196,14 +198,21 @@ def import_bench(a) -> Path:
     for runtime, rows in by_runtime.items():
         result = {"schema": SCHEMA, "task": "timing", "runtime": runtime,
                   "hardware": f"{hardware().split(' (')[0]}; {rows[0]['env']}, ORT-web WASM",
-                  "note": f"median of {bench.get('reps', '?')} runs from {src.name} (scripts/bench/core-bench.mjs): "
-                          "text encoding + all steps + decode",
-                  "load_avg_1min": [a.load_avg, a.load_avg] if a.load_avg else None,
+                  "note": f"median of {bench.get('reps', '?')} runs from {src.name} "
+                          f"({bench.get('source', 'scripts/bench/core-bench.mjs')}): text encoding + all steps + decode",
+                  "load_avg_1min": [a.load_avg, a.load_avg] if a.load_avg else _load_pair(bench.get("loadAverage")),
                   "created": datetime.now(timezone.utc).isoformat(timespec="seconds"), "rows": rows}
         written.append(write_result(result, (a.out_dir or RESULTS_DIR / "json") / f"timing-{runtime}.json"))
     if not written:
         raise SystemExit(f"error: {src}: no rows")
     return written[-1]
+
+
+def _load_pair(v) -> list[float] | None:
+    """A benchmark's own [start, end] load average, when it recorded one."""
+    if isinstance(v, list) and len(v) == 2 and all(isinstance(x, (int, float)) for x in v):
+        return [round(float(x), 2) for x in v]
+    return None
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -402,6 +402,10 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
             "python -m emdm.eval.suite --text runs/t2m-web/ckpt.pt --action runs/a2m-web/ckpt.pt \\",
             "    --diffusion runs/t2m-diffusion/ckpt.pt --naive runs/t2m-naive/ckpt.pt --nodcond runs/t2m-nodcond/ckpt.pt",
             "node scripts/bench/core-bench.mjs --json bench.json && python -m emdm.eval.evaluate import-bench bench.json",
+            "# browser-wasm, issue 7: EMDM at 1/2/4/5/8/10 and diffusion + DDIM at 10/50/100 steps in one run of the demo",
+            "# page (window.emdm.generate, needs diffusion-t2m-web in public/models); replaces the browser-wasm rows above",
+            "EMDM_BENCH=1 EMDM_BENCH_JSON=bench-page.json npx playwright test tests/e2e/page-bench.spec.ts -g \"EMDM vs DDIM\"",
+            "python -m emdm.eval.evaluate import-bench bench-page.json",
             "python -m emdm.eval.report                   # this file + docs/results/*.png from docs/results/json/",
             "```", "",
             "(add the EMDM run's other training flags to each baseline command so that only the named flag differs)", ""]
