@@ -29,3 +29,13 @@ def shared_file(name: str) -> Path:
             f"or set EMDM_SHARED_DATA to its path."
         )
     return p
+
+
+def display_path(p) -> str:
+    """A path as results and logs record it: relative to the repository when inside it, else as given
+    (so committed JSON carries no machine's folder names)."""
+    p = Path(p)
+    try:
+        return p.resolve().relative_to(REPO_ROOT).as_posix()
+    except ValueError:
+        return str(p)

@@ -29,7 +29,7 @@ from emdm.eval import data as evdata
 from emdm.eval import evaluators as E
 from emdm.eval.protocol import Conditions, RealSource, evaluate_action, evaluate_text
 from emdm.eval.report import RESULTS_DIR, SCHEMA
-from emdm.paths import DATASET_DIR, RUNS_DIR
+from emdm.paths import DATASET_DIR, RUNS_DIR, display_path
 
 
 def hardware() -> str:
@@ -78,7 +78,7 @@ def _evaluator_info(model, path: Path) -> dict:
     meta = getattr(model, "meta", {})
     final = meta.get("final", {})
     val = ", ".join(f"{k[4:]} {v:.3f}" for k, v in final.items() if k.startswith("val_"))
-    return {"path": str(path), "train_items": meta.get("train_items"), "minutes": meta.get("minutes"),
+    return {"path": display_path(path), "train_items": meta.get("train_items"), "minutes": meta.get("minutes"),
             "epochs_run": meta.get("epochs_run"), "config": meta.get("config"), "final": final,
             "summary": f"{type(model).__name__} (hidden {model.config['hidden']}) trained on "
                        f"{meta.get('train_items', '?')} train clips for {meta.get('epochs_run', '?')} epochs "
@@ -147,7 +147,7 @@ def run_timing(a) -> Path:
             rows.append({"variant": src.info["variant"], "sampler": src.info["sampler"], "steps": T,
                          "frames": a.frames, "ms_per_motion": ms, "guidance": a.guidance, "batch": 1,
                          "threads": a.threads,
-                         "source": ckpt, "engine": src.info["runtime"], "preset": src.info["preset"]})
+                         "source": display_path(ckpt) if Path(ckpt).suffix == ".pt" else ckpt, "engine": src.info["runtime"], "preset": src.info["preset"]})
             print(f"{src.name}: {np.mean(ms):.1f} ms / motion, {np.mean(ms) / a.frames:.3f} ms / frame", flush=True)
     result = {"schema": SCHEMA, "task": "timing", "runtime": a.runtime, "hardware": hardware(),
               "load_avg_1min": [load_before, os.getloadavg()[0]],

@@ -112,7 +112,9 @@ class ModelSource:
         self.mean, self.std = np.asarray(meta["mean"], np.float32), np.asarray(meta["std"], np.float32)
         self.z_dim, self.max_frames = G.z_dim, G.max_frames
         self.flags = meta.get("args", {})
-        self.origin = {"checkpoint": str(ckpt), "runtime": "pytorch" + ("-cuda" if self.device.startswith("cuda") else ""), "train_steps": summary["steps"],
+        from emdm.paths import display_path
+
+        self.origin = {"checkpoint": display_path(ckpt), "runtime": "pytorch" + ("-cuda" if self.device.startswith("cuda") else ""), "train_steps": summary["steps"],
                        "train_wall_min": round(summary["wall_s"] / 60, 1), "device": meta.get("device"),
                        "preset": meta["generator"]["preset"], "dataset": meta.get("dataset")}
 
