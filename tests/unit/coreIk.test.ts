@@ -107,21 +107,36 @@ describe('IK (joints → root + local quaternions with twist from body planes)',
   const generated = modelFixtures();
   if (!generated.length) it.skip('FK(IK(joints)) on generated motions: no model parity fixtures yet (run `python -m emdm.fixtures`)', () => {});
   for (const name of generated) {
-    it(`FK(IK(joints)) is within 1 cm on a generated motion (${name})`, () => {
-      // Generated joints are not a rigid skeleton: bone lengths vary over a motion (the first
-      // shipped models: forearm length range ≈ 4 cm), which no rigid rig can follow, so the bar
-      // is on the 95th percentile and the mean of the per-joint distance (the worst joint, a
-      // wrist, is off by about the forearm's length range; see the issue note).
+    it(`FK(IK(joints)) follows a generated motion up to its own non-rigidity (${name})`, () => {
+      // Generated joints are not a rigid skeleton: bone lengths vary over a motion, which no rigid rig
+      // can follow. With each bone pointing the right way, a joint can be off by at most the summed
+      // length differences of the bones on its chain (triangle inequality); the bar is that bound + 1 cm
+      // for 95% of joint-frames (multi-child joints such as pelvis and spine3 split the difference).
       const fx = loadCase(name);
       const joints = fx.get('joints');
       const frames = fx.meta.frames;
       const ik = solveIK(joints, frames, sk);
       const fk = forwardKinematics(ik.rootPos, ik.quats, frames, sk, ik.offsets);
-      const d: number[] = [];
-      for (let i = 0; i < fk.length; i += 3) d.push(Math.hypot(fk[i] - joints[i], fk[i + 1] - joints[i + 1], fk[i + 2] - joints[i + 2]));
-      d.sort((a, b) => a - b);
-      expect(d[Math.floor(0.95 * d.length)], '95th percentile').toBeLessThan(0.01);
-      expect(d.reduce((a, b) => a + b, 0) / d.length, 'mean').toBeLessThan(0.005);
+      const rigLen = ik.offsets.map((o) => Math.hypot(o[0], o[1], o[2]));
+      let within = 0;
+      let total = 0;
+      for (let f = 0; f < frames; f++) {
+        const base = f * J * 3;
+        const slack = new Array<number>(J).fill(0);
+        for (let j = 1; j < J; j++) {
+          const p = sk.parents[j];
+          const len = Math.hypot(joints[base + 3 * j] - joints[base + 3 * p], joints[base + 3 * j + 1] - joints[base + 3 * p + 1],
+            joints[base + 3 * j + 2] - joints[base + 3 * p + 2]);
+          slack[j] = slack[p] + Math.abs(len - rigLen[j]);      // parents precede children (SMPL order)
+        }
+        for (let j = 0; j < J; j++) {
+          const i = base + 3 * j;
+          const d = Math.hypot(fk[i] - joints[i], fk[i + 1] - joints[i + 1], fk[i + 2] - joints[i + 2]);
+          within += d <= slack[j] + 0.01 ? 1 : 0;
+          total += 1;
+        }
+      }
+      expect(within / total, 'joint-frames within their bone-length slack + 1 cm').toBeGreaterThanOrEqual(0.95);
       // what remains is the motion's own non-rigidity: on its rigid version FK(IK(·)) is exact
       const ik2 = solveIK(fk, frames, { ...sk, offsets: ik.offsets });
       expect(maxJointDist(forwardKinematics(ik2.rootPos, ik2.quats, frames, sk, ik2.offsets), fk)).toBeLessThan(1e-3);
