@@ -55,7 +55,7 @@ EXPECTED = [
     ("action", "emdm", 10, "action-to-motion: EMDM at 10 steps"),
 ]
 EXPECTED_TIMING = [("python-cpu", "emdm"), ("python-cpu", "diffusion"), ("browser-wasm", "emdm"),
-                   ("browser-wasm", "diffusion"), ("gpu", "emdm"), ("gpu", "diffusion")]
+                   ("browser-wasm", "diffusion"), ("python-cuda", "emdm"), ("python-cuda", "diffusion")]
 
 
 class ReportError(ValueError):
@@ -114,7 +114,7 @@ def _table(header: list[str], rows: list[list[str]]) -> str:
 def _method_cells(r: dict) -> list[str]:
     info = r["info"]
     steps = _steps(r)
-    return [r["name"], "–" if steps is None else str(steps), str(info.get("train_steps", "–"))]
+    return [r["name"], "–" if steps is None else str(steps), str(r.get("n", "–")), str(info.get("train_steps", "–"))]
 
 
 def text_table(results: list[dict]) -> str:
@@ -124,7 +124,7 @@ def text_table(results: list[dict]) -> str:
         rows.append(_method_cells(r) + [fmt(m.get("top1")), fmt(m.get("top2")), fmt(m.get("top3")),
                                          fmt(m.get("fid")), fmt(m.get("mm_dist")), fmt(m.get("diversity")),
                                          fmt(m.get("multimodality")), str(r.get("repeats", len(m.get("top1", []))))])
-    return _table(["Method", "Steps", "Train steps", "R-prec top-1 ↑", "top-2 ↑", "top-3 ↑", "FID ↓",
+    return _table(["Method", "Steps", "Clips", "Train steps", "R-prec top-1 ↑", "top-2 ↑", "top-3 ↑", "FID ↓",
                    "MM-Dist ↓", "Diversity →", "MModality ↑", "Repeats"], rows)
 
 
@@ -134,7 +134,7 @@ def action_table(results: list[dict]) -> str:
         m = r["metrics"]
         rows.append(_method_cells(r) + [fmt(m.get("accuracy")), fmt(m.get("fid")), fmt(m.get("diversity")),
                                          fmt(m.get("multimodality")), str(r.get("repeats", len(m.get("accuracy", []))))])
-    return _table(["Method", "Steps", "Train steps", "Accuracy ↑", "FID ↓", "Diversity →", "Multimodality →",
+    return _table(["Method", "Steps", "Clips", "Train steps", "Accuracy ↑", "FID ↓", "Diversity →", "Multimodality →",
                    "Repeats"], rows)
 
 
@@ -216,30 +216,36 @@ def plot_fid_vs_steps(results: list[dict], path: Path) -> bool:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    series: dict[str, list[tuple[int, float, float]]] = {}
+    # one series per (variant, number of clips): FID is biased by the sample size, so rows measured on a
+    # subset are drawn apart, each with the real-vs-real floor of its own clip count
+    series: dict[tuple[str, int], list[tuple[int, float, float]]] = {}
     reals: dict[int, float] = {}
-    model_n = None
     for r in results:
         if r["task"] != "text" or "fid" not in r["metrics"]:
             continue
         m, h = mean_ci95(r["metrics"]["fid"])
-        v = r["info"].get("variant")
         if r["kind"] == "real":
             reals[r.get("n", 0)] = m
         elif _steps(r) is not None:
-            series.setdefault(v, []).append((_steps(r), m, h))
-            model_n = r.get("n", model_n)
-    # the real-vs-real floor measured on the same number of clips as the models, when there is one
-    real = reals.get(model_n, next(iter(reals.values()), None)) if reals else None
+            key = (r["info"].get("variant"), r.get("n", 0), r["info"].get("train_steps"))
+            series.setdefault(key, []).append((_steps(r), m, h))
     if not series:
         return False
-    fig, ax = plt.subplots(figsize=(6, 4), dpi=120)
-    for v, pts in sorted(series.items()):
+    several = len({k[1] for k in series}) > 1
+    trained = {}                                   # variant -> its train-step counts
+    for v, _, t in series:
+        trained.setdefault(v, set()).add(t)
+    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=120)
+    for (v, n, t), pts in sorted(series.items(), key=lambda kv: (-kv[0][1], kv[0][0], kv[0][2] or 0)):
         pts.sort()
+        label = (VARIANT_LABEL.get(v, v) + (f", {t} train steps" if len(trained[v]) > 1 else "")
+                 + (f", {n} clips" if several else ""))
         ax.errorbar([p[0] for p in pts], [p[1] for p in pts], yerr=[p[2] for p in pts], marker="o", capsize=3,
-                    label=VARIANT_LABEL.get(v, v))
-    if real is not None:
-        ax.axhline(real, color="gray", ls="--", label="real vs real")
+                    ls="-" if n == max(k[1] for k in series) else ":", label=label)
+    for n in sorted({k[1] for k in series}, reverse=True):
+        if n in reals:
+            ax.axhline(reals[n], color="gray", ls="--" if n == max(reals) else ":",
+                       label="real vs real" + (f", {n} clips" if several else ""))
     _step_axis(ax, [p[0] for pts in series.values() for p in pts])
     ax.set_xlabel("sampling steps")
     ax.set_ylabel("FID (matcher features) ↓")
@@ -327,6 +333,24 @@ def _describe(results: list[dict]) -> list[str]:
     return lines
 
 
+def models_table(results: list[dict]) -> str:
+    rows, seen = [], set()
+    for r in sorted((r for r in results if r["task"] in ("text", "action") and r["kind"] != "real"),
+                    key=lambda r: (r["task"], _sort_key(r))):
+        i = r["info"]
+        where = i.get("checkpoint") or i.get("model") or "?"
+        key = (r["task"], where)
+        if key in seen:
+            continue
+        seen.add(key)
+        rows.append([r["task"], VARIANT_LABEL.get(i.get("variant"), str(i.get("variant"))), f"`{where}`",
+                     str(i.get("train_steps", "–")), str(i.get("train_wall_min", "–")), str(i.get("device", "–")),
+                     "continued" if "cont" in Path(str(where)).stem else ""])
+    if not rows:
+        return ""
+    return _table(["Task", "Variant", "Weights", "Train steps", "Train wall (min)", "Device", ""], rows)
+
+
 def headlines(results: list[dict]) -> list[str]:
     """One line per model row: its key metrics next to the real row measured on the same clips."""
     out = []
@@ -360,6 +384,12 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
             "it is strongly biased upwards, so compare a model's FID with the real row of the same clip "
             "count). Rows with one repeat carry no interval. The \"Train steps\" column says how long each "
             "generator was trained: read every model row in that light.", ""]
+    models = models_table(results)
+    if models:
+        out += ["## Models evaluated", "", "Each generator row's training (from its checkpoint): the comparisons "
+                "(EMDM vs its baselines) use models trained side by side on one GPU for the same wall-clock "
+                "budget (`scripts/gpu/train-all.sh`); rows marked *continued* are the shipped models, trained "
+                "further from those weights.", "", models, ""]
     heads = headlines(results)
     if heads:
         out += ["## Headline", "", "Each model row against the real row measured on the same test clips "
@@ -393,7 +423,13 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
     out += ([f"- {m}" for m in miss] if miss else ["- nothing: every row of the seed's comparisons is measured"]) + [""]
     out += ["## Regenerate", "",
             "The baselines are trained with the project's training code and flags (same backbone, data and "
-            "budget as the EMDM run they are compared with), then the suite measures every row:", "", "```",
+            "budget as the EMDM run they are compared with), then the suite measures every row. On a GPU "
+            "machine, the recipe of the shipped models and of these tables (five generators side by side "
+            "within one wall-clock budget, then every row in parallel):", "", "```",
+            "python -m emdm.data.pack data/dataset dataset.tar.xz       # 32 MB: the dataset, to carry there",
+            "scripts/gpu/train-all.sh dataset.tar.xz runs/gpu 8          # t2m, a2m, t2m-ddim, t2m-naive, t2m-nodcond",
+            "scripts/gpu/eval-all.sh runs/dataset runs/gpu 20            # needs runs/gpu/eval/{matcher,classifier}.pt",
+            "```", "", "or, step by step (any machine):", "", "```",
             "python -m emdm.eval.evaluators matcher       # the evaluators (once; runs/eval/*.pt)",
             "python -m emdm.eval.evaluators classifier",
             "python -m emdm.train --task text --objective diffusion --out runs/t2m-diffusion   # Tab. D2 baseline",

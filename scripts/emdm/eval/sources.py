@@ -114,7 +114,7 @@ class ModelSource:
         self.flags = meta.get("args", {})
         from emdm.paths import display_path
 
-        self.origin = {"checkpoint": display_path(ckpt), "runtime": "pytorch" + ("-cuda" if self.device.startswith("cuda") else ""), "train_steps": summary["steps"],
+        self.origin = {"checkpoint": display_path(ckpt), "runtime": "pytorch" + ("-cuda" if self.device.startswith("cuda") else ""), "train_steps": summary["steps"] + int((meta.get("init") or {}).get("steps", 0)),
                        "train_wall_min": round(summary["wall_s"] / 60, 1), "device": meta.get("device"),
                        "preset": meta["generator"]["preset"], "dataset": meta.get("dataset")}
 
@@ -144,7 +144,7 @@ class ModelSource:
         self.z_dim, self.max_frames = int(e.get("zDim", 64)), int(e.get("maxFrames", 196))
         tr = e.get("training", {})
         self.flags = {**tr.get("flags", {})}
-        self.origin = {"model": name, "onnx": onnx_file, "runtime": "onnxruntime", "train_steps": tr.get("steps"),
+        self.origin = {"model": name, "onnx": onnx_file, "runtime": "onnxruntime", "train_steps": (tr.get("steps") or 0) + int(tr.get("continuedFrom", {}).get("steps", 0)) or None,
                        "train_wall_min": round(tr.get("wallSeconds", 0) / 60, 1), "device": tr.get("device"),
                        "preset": e.get("preset"), "dataset": tr.get("dataset")}
 
