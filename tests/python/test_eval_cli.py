@@ -53,7 +53,7 @@ def test_commands_write_results_and_report(world):
     assert emdm["n"] == 36 and emdm["dataset"]["ids"]["test"] == 36
     assert report.main(["--results", str(res), "--out", str(root / "RESULTS.md")]) == 0
     md = (root / "RESULTS.md").read_text()
-    assert "| EMDM (2 steps) | 2 | 2 |" in md
+    assert "| EMDM (2 steps) | 2 | 36 | 2 |" in md
     assert "| python-cpu |" in md and "Tab. D3: naive DDGAN" in md
 
 

@@ -44,12 +44,12 @@ def test_report_tables_carry_the_numbers_of_the_json_files(tmp_path):
     assert "text, EMDM, 96 clips × 3 repeat(s): R-precision top-1 0.520 (real 0.520), FID 0.500 (real 0.020)" in md
     assert "Tab. D3: naive DDGAN" in md                   # not measured → listed
     assert "Tab. D2: diffusion + DDIM at 10 steps" not in md.split("## Not measured yet")[1]
-    assert "timing: Diffusion (same transformer) + DDIM on gpu" in md
+    assert "timing: Diffusion (same transformer) + DDIM on python-cuda" in md
     assert (tmp_path / "fid_vs_steps.png").stat().st_size > 1000
     assert (tmp_path / "time_vs_steps.png").stat().st_size > 1000
     # real row has no multimodality: shown as a dash, not a number
     real_line = next(line for line in md.splitlines() if line.startswith("| Real motion | – "))
-    assert real_line.split("|")[10].strip() == "–"
+    assert real_line.split("|")[11].strip() == "–"            # MModality (after the Clips column)
 
 
 def test_no_results_yet_lists_everything_as_missing(tmp_path):
