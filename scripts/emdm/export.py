@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 import warnings
@@ -203,7 +204,8 @@ def manifest_entry(name: str, meta: dict, summary: dict, files: dict[str, str], 
         "objective": meta.get("objective", "ddgan"),
         "condition": meta["condition"],
         "onnx": files["onnx"],
-        "variants": {k: v for k, v in files.items() if k not in ("onnx", "meanStd")},
+        "variants": {k: v for k, v in files.items() if k not in ("onnx", "meanStd", "weights")},
+        **({"trainingWeights": files["weights"]} if "weights" in files else {}),
         "meanStd": files["meanStd"],
         "zDim": meta["generator"]["z_dim"], "featureDim": meta["generator"]["feature_dim"], "fps": 20,
         "maxFrames": meta["generator"]["max_frames"],
@@ -236,6 +238,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tolerance", type=float, default=1e-4)
     p.add_argument("--no-manifest", action="store_true")
     p.add_argument("--bench", action="store_true", help="also time one step (196 frames) on ORT CPU, 1 and 2 threads")
+    p.add_argument("--ship-weights", action="store_true",
+                   help="also ship the EMA generator as float16 PyTorch tensors (<name>.weights.f16.pt, ~8 MB), so "
+                        "training can continue from the shipped model: python -m emdm.train --init-weights FILE")
     return p
 
 
@@ -265,6 +270,16 @@ def main(argv: list[str] | None = None) -> int:
         extra["variantRelErr"] = {k: float(f"{v:.3g}") for k, v in var_err.items()}
     ms_path = write_meanstd(np.array(meta["mean"]), np.array(meta["std"]), out / f"{a.name}.meanstd.f32")
     files["meanStd"] = ms_path.name
+    if a.ship_weights:
+        st = torch.load(a.ckpt, map_location="cpu", weights_only=False)
+        dst = out / f"{a.name}.weights.f16.pt"
+        tmp = dst.with_name(dst.name + ".tmp")
+        torch.save({"step": int(st["step"]), "wall": float(st.get("wall", 0.0)),
+                    "meta": {**st["meta"], "weights_dtype": "float16"}, "last_losses": st.get("last_losses", {}),
+                    "G_ema": {k: v.detach().to(torch.float16) for k, v in G.state_dict().items()}}, tmp)
+        os.replace(tmp, dst)
+        files["weights"] = dst.name
+        print(f"{dst}: {dst.stat().st_size / 1e6:.2f} MB (float16 EMA weights for --init-weights)")
     if a.bench:
         bench = {}
         for key, path in [("fp32", onnx_path)] + [(v, out / files[v]) for v in var_err]:

@@ -269,7 +269,10 @@ class Trainer:
             self.load(ckpt)
 
     def init_from(self, path: Path) -> None:
-        st = torch.load(path, map_location="cpu", weights_only=False)
+        try:                                   # tensors and plain values only: no code runs from the file
+            st = torch.load(path, map_location="cpu", weights_only=True)
+        except Exception as e:  # noqa: BLE001 - re-raised with the file name
+            raise SystemExit(f"{path}: cannot read as a --weights-out file: {e}") from e
         if not isinstance(st, dict) or "G_ema" not in st or "meta" not in st:
             raise SystemExit(f"{path}: not a --weights-out file (needs G_ema and meta)")
         m = st["meta"]

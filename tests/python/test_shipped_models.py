@@ -123,3 +123,27 @@ def test_unconditional_generation_works(generated):
     _, entry, run, c = generated
     feats, joints = run(0, np.zeros_like(c))
     assert np.isfinite(joints).all()
+
+
+def test_shipped_training_weights_are_the_onnx_model(generated):
+    # <name>.weights.f16.pt lets training continue from the shipped model (train --init-weights): it must be
+    # the same network as the ONNX file, up to float16 rounding of the weights
+    name, entry, _, _ = generated
+    if "trainingWeights" not in entry:
+        pytest.skip(f"{name} ships no training weights")
+    import torch
+
+    from emdm.export import load_generator
+    from emdm.sample import torch_step
+
+    path = paths.MODELS_DIR / entry["trainingWeights"]
+    assert torch.load(path, weights_only=True)["meta"]["weights_dtype"] == "float16"
+    G, meta, _ = load_generator(path)
+    assert meta["task"] == entry["task"] and meta.get("objective", "ddgan") == entry["objective"]
+    rng = np.random.default_rng(0)
+    x, z = rng.standard_normal((2, 40, 263), dtype=np.float32), rng.standard_normal((2, 64), dtype=np.float32)
+    c = rng.standard_normal((2, entry["condition"]["dim"]), dtype=np.float32)
+    t, m = np.array([0.9, 0.3], np.float32), np.ones((2, 40), np.float32)
+    ref = onnx_step(paths.MODELS_DIR / entry["onnx"])(x, z, c, t, m)
+    got = torch_step(G)(x, z, c, t, m)
+    assert np.abs(got - ref).max() < 0.05 * ref.std()
