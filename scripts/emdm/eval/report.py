@@ -235,7 +235,7 @@ def plot_fid_vs_steps(results: list[dict], path: Path) -> bool:
     trained = {}                                   # variant -> its train-step counts
     for v, _, t in series:
         trained.setdefault(v, set()).add(t)
-    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=120)
+    fig, ax = plt.subplots(figsize=(9.6, 4.2), dpi=120)
     for (v, n, t), pts in sorted(series.items(), key=lambda kv: (-kv[0][1], kv[0][0], kv[0][2] or 0)):
         pts.sort()
         label = (VARIANT_LABEL.get(v, v) + (f", {t} train steps" if len(trained[v]) > 1 else "")
@@ -250,7 +250,7 @@ def plot_fid_vs_steps(results: list[dict], path: Path) -> bool:
     ax.set_xlabel("sampling steps")
     ax.set_ylabel("FID (matcher features) ↓")
     ax.set_title("Text-to-motion FID vs steps (test split, ±95%)")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))        # outside: never over a point
     ax.grid(alpha=0.3)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
