@@ -18,6 +18,7 @@ import argparse
 import io
 import json
 import os
+import shutil
 import sys
 import tarfile
 import tempfile
@@ -28,6 +29,7 @@ import numpy as np
 
 from emdm import skeleton as sk
 from emdm.data.dataset import DatasetError
+from emdm.data.prepare import publish
 from emdm.motion.features import extract_features
 from emdm.motion.retarget import normalize_clip
 
@@ -145,17 +147,8 @@ def unpack(archive: Path, out: Path, workers: int = 1) -> dict:
         else:
             for job in jobs:
                 _rebuild_clip(job)
-        os.chmod(tmp, 0o755)
-        if out.exists():
-            old = out.with_name(f".{out.name}.old-{os.getpid()}")
-            os.replace(out, old)
-            os.replace(tmp, out)
-            import shutil
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(tmp, out)
+        publish(tmp, out)
     except BaseException:
-        import shutil
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return {"clips": header["clips"], "frames": int(sum(header["lengths"]))}
