@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import time
 import warnings
@@ -271,13 +270,11 @@ def main(argv: list[str] | None = None) -> int:
     ms_path = write_meanstd(np.array(meta["mean"]), np.array(meta["std"]), out / f"{a.name}.meanstd.f32")
     files["meanStd"] = ms_path.name
     if a.ship_weights:
-        st = torch.load(a.ckpt, map_location="cpu", weights_only=False)
+        from emdm.train import save_weights_file
+
         dst = out / f"{a.name}.weights.f16.pt"
-        tmp = dst.with_name(dst.name + ".tmp")
-        torch.save({"step": int(st["step"]), "wall": float(st.get("wall", 0.0)),
-                    "meta": {**st["meta"], "weights_dtype": "float16"}, "last_losses": st.get("last_losses", {}),
-                    "G_ema": {k: v.detach().to(torch.float16) for k, v in G.state_dict().items()}}, tmp)
-        os.replace(tmp, dst)
+        save_weights_file(dst, G.state_dict(), step=summary["steps"], wall=summary["wall_s"], meta=meta,
+                          last_losses=summary["losses"], dtype="float16")
         files["weights"] = dst.name
         print(f"{dst}: {dst.stat().st_size / 1e6:.2f} MB (float16 EMA weights for --init-weights)")
     if a.bench:

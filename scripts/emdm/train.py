@@ -206,6 +206,17 @@ def atomic_save(obj, path: Path) -> None:
     os.replace(tmp, path)
 
 
+def save_weights_file(path: Path, state: dict, *, step: int, wall: float, meta: dict, last_losses: dict,
+                      dtype: str = "float32") -> None:
+    """The --weights-out format: a generator's state dict (on the CPU, as ``dtype``) with its meta and
+    progress, read by ``emdm.export.load_generator`` and ``--init-weights`` (tensors and plain values only)."""
+    dt = getattr(torch, dtype)
+    weights = {k: v.detach().to("cpu", dt) for k, v in state.items()}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_save({"step": int(step), "wall": float(wall), "meta": {**meta, "weights_dtype": dtype},
+                 "last_losses": last_losses, "G_ema": weights}, path)
+
+
 # ---------------------------------------------------------------------------------------------- trainer
 
 class Trainer:
@@ -471,11 +482,8 @@ class Trainer:
         """The EMA generator and meta only (a checkpoint ``emdm.export.load_generator`` reads)."""
         if not self.dist.main:
             return
-        dt = getattr(torch, dtype)
-        weights = {k: v.detach().to("cpu", dt) for k, v in self.G_ema.state_dict().items()}
-        path.parent.mkdir(parents=True, exist_ok=True)
-        atomic_save({"step": self.step, "wall": self.wall, "meta": {**self.meta(), "weights_dtype": dtype},
-                     "last_losses": self.last_losses, "G_ema": weights}, path)
+        save_weights_file(path, self.G_ema.state_dict(), step=self.step, wall=self.wall, meta=self.meta(),
+                          last_losses=self.last_losses, dtype=dtype)
 
     def load(self, path: Path) -> None:
         st = torch.load(path, map_location=self.device, weights_only=False)
