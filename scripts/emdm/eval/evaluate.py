@@ -129,7 +129,8 @@ def run_timing(a) -> Path:
             raise SystemExit(f"error: --model {spec!r}: expected CKPT=STEPS[,STEPS...]")
         ckpt, steps = spec.rsplit("=", 1)
         for T in [int(s) for s in steps.split(",")]:
-            where = {"ckpt": Path(ckpt)} if Path(ckpt).suffix == ".pt" else {"model": ckpt}
+            is_ckpt = Path(ckpt).suffix == ".pt"
+            where = {"ckpt": Path(ckpt)} if is_ckpt else {"model": ckpt}
             src = ModelSource(**where, steps=T, guidance=a.guidance, batch_size=1, threads=a.threads, device=a.device)
             if src.task == "text":
                 from emdm.data.dataset import cached_text_embeddings
@@ -147,7 +148,7 @@ def run_timing(a) -> Path:
             rows.append({"variant": src.info["variant"], "sampler": src.info["sampler"], "steps": T,
                          "frames": a.frames, "ms_per_motion": ms, "guidance": a.guidance, "batch": 1,
                          "threads": a.threads,
-                         "source": display_path(ckpt) if Path(ckpt).suffix == ".pt" else ckpt, "engine": src.info["runtime"], "preset": src.info["preset"]})
+                         "source": display_path(ckpt) if is_ckpt else ckpt, "engine": src.info["runtime"], "preset": src.info["preset"]})
             print(f"{src.name}: {np.mean(ms):.1f} ms / motion, {np.mean(ms) / a.frames:.3f} ms / frame", flush=True)
     result = {"schema": SCHEMA, "task": "timing", "runtime": a.runtime, "hardware": hardware(),
               "load_avg_1min": [load_before, os.getloadavg()[0]],
