@@ -6,9 +6,10 @@
 Objectives (``--objective``):
   ddgan      alternate D and G updates. D: softplus(−D(real)) + softplus(D(fake)), lazy R1 on the real x_k
              (γ ``--r1-gamma`` every ``--r1-every`` steps). G: softplus(−D(fake)) + R·L_geo with
-             L_geo = L_recon + λ(w_pos L_pos + w_vel L_vel + w_foot L_foot) (``--geo-weight`` R = 0 gives the
-             naive DDGAN). Each sample draws a step count T from ``--supported-steps`` and k ∈ 0..T−1, so one
-             model serves every step count; G sees the continuous time t_{k+1} (ARCHITECTURE.md).
+             L_geo = L_recon + λ(w_pos L_pos + w_vel L_vel + w_foot L_foot + w_bone L_bone) (``--geo-weight``
+             R = 0 gives the naive DDGAN; L_bone, off by default, is this project's rigidity term). Each
+             sample draws a step count T from ``--supported-steps`` and k ∈ 0..T−1, so one model serves
+             every step count; G sees the continuous time t_{k+1} (ARCHITECTURE.md).
   diffusion  the same transformer trained on the plain x0 objective at t ~ U(ε, 1) (z = 0), sampled with DDIM.
 
 Checkpoints (``<out>/ckpt.pt``, atomic) hold models, EMA, optimisers, RNG states and the data order, so a
@@ -36,7 +37,7 @@ from emdm.model.geometry import geometric_losses
 from emdm.model.schedule import EPS_SMALL, SUPPORTED_STEPS, make_schedule, marginal_coeffs
 
 LOG_FIELDS = ["step", "epoch", "wall_s", "sec_per_step", "lr_g", "lr_d", "loss_d", "d_real", "d_fake", "r1",
-              "loss_g", "g_adv", "recon", "pos", "vel", "foot"]
+              "loss_g", "g_adv", "recon", "pos", "vel", "foot", "bone"]
 DEFAULT_LR_G = {"text": 2e-5, "action": 3e-5}
 
 
@@ -65,6 +66,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--w-pos", type=float, default=1.0)
     p.add_argument("--w-vel", type=float, default=1.0)
     p.add_argument("--w-foot", type=float, default=1.0)
+    p.add_argument("--w-bone", type=float, default=0.0,
+                   help="weight of L_bone, the squared relative bone-length error (not in the paper: 0 = its recipe)")
     p.add_argument("--adv-weight", type=float, default=1.0, help="weight of the G adversarial term")
     p.add_argument("--r1-gamma", type=float, default=0.02)
     p.add_argument("--r1-every", type=int, default=15)
@@ -336,7 +339,7 @@ class Trainer:
     def geo(self, x0_pred: torch.Tensor, x0: torch.Tensor, mask: torch.Tensor) -> dict[str, torch.Tensor]:
         a = self.args
         out = {"recon": masked_mse(x0_pred, x0, mask)}
-        need_joints = a.lambda_geo > 0 and (a.w_pos or a.w_vel or a.w_foot)
+        need_joints = a.lambda_geo > 0 and (a.w_pos or a.w_vel or a.w_foot or a.w_bone)
         if need_joints:
             out.update(geometric_losses(x0_pred * self.std + self.mean, x0 * self.std + self.mean, mask))
         return out
@@ -345,7 +348,8 @@ class Trainer:
         a = self.args
         total = terms["recon"]
         if "pos" in terms:
-            total = total + a.lambda_geo * (a.w_pos * terms["pos"] + a.w_vel * terms["vel"] + a.w_foot * terms["foot"])
+            total = total + a.lambda_geo * (a.w_pos * terms["pos"] + a.w_vel * terms["vel"] + a.w_foot * terms["foot"]
+                                            + a.w_bone * terms["bone"])
         return total
 
     # -- one optimisation step ---------------------------------------------------------------------------
@@ -511,8 +515,12 @@ class Trainer:
         a = self.args
         log_path = a.out / "log.csv"
         new_log = not log_path.exists() or self.step == 0
+        fields = LOG_FIELDS
+        if not new_log:              # appending: keep the columns the file already has (an older run's log)
+            with open(log_path, newline="") as f:
+                fields = next(csv.reader(f), None) or LOG_FIELDS
         logf = open(log_path, "w" if new_log else "a", newline="") if self.dist.main else None
-        writer = csv.DictWriter(logf, fieldnames=LOG_FIELDS) if logf else None
+        writer = csv.DictWriter(logf, fieldnames=fields) if logf else None
         if writer and new_log:
             writer.writeheader()
         if self.dist.main:
@@ -544,7 +552,7 @@ class Trainer:
                 self.last_losses = {k: round(v, 6) for k, v in means.items() if not k.startswith("lr")}
                 if writer:
                     writer.writerow({"step": self.step, "epoch": self.batcher.epoch, "wall_s": round(self.wall, 1),
-                                     **{k: f"{v:.6g}" for k, v in means.items() if k in LOG_FIELDS}})
+                                     **{k: f"{v:.6g}" for k, v in means.items() if k in fields}})
                     logf.flush()
                 if bar:
                     bar.set_postfix({k: f"{means[k]:.3g}" for k in ("loss_d", "g_adv", "recon") if k in means})

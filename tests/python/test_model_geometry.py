@@ -37,12 +37,13 @@ def test_geometric_losses_vanish_for_the_truth_and_have_gradients():
     feats = torch.from_numpy(extract_features(synth_clip(60, 0, np.random.default_rng(2))))[None].float()
     mask = torch.ones(1, feats.shape[1])
     zero = geometric_losses(feats, feats, mask)
-    assert float(zero["pos"]) < 1e-10 and float(zero["vel"]) < 1e-10
+    assert float(zero["pos"]) < 1e-10 and float(zero["vel"]) < 1e-10 and float(zero["bone"]) < 1e-10
     # the truth's feet move less than the contact threshold (0.002 m² per frame) on contact frames
     assert 0 <= float(zero["foot"]) < 0.002 / 3
     pred = (feats + 0.05 * torch.randn_like(feats)).requires_grad_(True)
     losses = geometric_losses(pred, feats, mask)
     assert float(losses["pos"]) > 0 and float(losses["vel"]) > 0 and float(losses["foot"]) > float(zero["foot"])
+    assert float(losses["bone"]) > 0
     sum(losses.values()).backward()
     assert torch.isfinite(pred.grad).all() and pred.grad.abs().sum() > 0
 
@@ -55,5 +56,23 @@ def test_padding_is_ignored_by_the_losses():
     pred[:, 41:] += 10.0                    # garbage only in the padding (frame 40 is the first pad frame,
     losses = geometric_losses(pred, feats, mask)   # its velocity pair with frame 39 is masked too)
     truth = geometric_losses(feats, feats, mask)
-    for k in ("pos", "vel", "foot"):
+    for k in ("pos", "vel", "foot", "bone"):
         assert abs(float(losses[k]) - float(truth[k])) < 1e-10, k
+
+
+def test_bone_loss_is_the_squared_relative_length_error_and_ignores_the_pose():
+    feats = torch.from_numpy(extract_features(synth_clip(60, 1, np.random.default_rng(4))))[None].double()
+    mask = torch.ones(1, feats.shape[1], dtype=torch.double)
+    # the body scaled by 1.1 about the root's floor point (root height and the joints' xz-relative, y-absolute
+    # positions): every bone is 10% long, so L_bone = 0.01 exactly
+    longer = feats.clone()
+    longer[..., 3:67] *= 1.1
+    # the same skeleton turned about the vertical through the root: a different pose, bones unchanged, L_bone = 0 while L_pos is not
+    rel = feats[..., 4:67].reshape(1, -1, 21, 3)
+    c, s = np.cos(0.7), np.sin(0.7)
+    turned = feats.clone()
+    turned[..., 4:67] = torch.stack([c * rel[..., 0] + s * rel[..., 2], rel[..., 1], -s * rel[..., 0] + c * rel[..., 2]],
+                                    dim=-1).reshape(1, -1, 63)
+    assert abs(float(geometric_losses(longer, feats, mask)["bone"]) - 0.01) < 1e-9
+    got = geometric_losses(turned, feats, mask)
+    assert float(got["bone"]) < 1e-12 and float(got["pos"]) > 1e-3

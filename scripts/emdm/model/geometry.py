@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import torch
 
+from emdm.skeleton import PARENTS
+
 FOOT_JOINTS = (7, 10, 8, 11)       # l_ankle, l_foot, r_ankle, r_foot == contact channels 259..262
 CONTACT_CHANNELS = slice(259, 263)
 
@@ -53,13 +55,23 @@ def _masked_mean(err: torch.Tensor, weight: torch.Tensor) -> torch.Tensor:
     return (err * w).sum() / w.sum().clamp_min(1.0)
 
 
+def bone_lengths(joints: torch.Tensor) -> torch.Tensor:
+    """(..., 22, 3) joints → (..., 21) lengths of the bones joint j ← PARENTS[j], j = 1..21."""
+    return torch.linalg.vector_norm(joints[..., 1:, :] - joints[..., PARENTS[1:], :], dim=-1)
+
+
 def geometric_losses(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor) -> dict[str, torch.Tensor]:
-    """L_pos, L_vel, L_foot on de-normalised features (B, L, 263) with mask (B, L).
+    """L_pos, L_vel, L_foot, L_bone on de-normalised features (B, L, 263) with mask (B, L).
 
     pos: MSE of recovered joints (m²); vel: MSE of joint velocities between consecutive real frames;
-    foot: squared velocity of the predicted foot joints on the target's contact frames (MDM's foot loss).
+    foot: squared velocity of the predicted foot joints on the target's contact frames (MDM's foot loss);
+    bone: squared relative error of the predicted bone lengths against the target's (a rigidity term this
+    project adds, off in the paper's recipe: the 263-d features carry joint positions with nothing that keeps
+    a forearm one length, and unlike L_pos it asks nothing of the pose, so it holds at every noise level).
     """
     jp, jt = recover_joints(pred), recover_joints(target)
+    bt = bone_lengths(jt)
+    bone = _masked_mean((bone_lengths(jp) / bt.clamp_min(1e-3) - 1.0) ** 2, mask)
     pos = _masked_mean((jp - jt) ** 2, mask)
     pair = mask[:, 1:] * mask[:, :-1]
     vp, vt = jp[:, 1:] - jp[:, :-1], jt[:, 1:] - jt[:, :-1]
@@ -67,4 +79,4 @@ def geometric_losses(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tenso
     contact = (target[:, :-1, CONTACT_CHANNELS] > 0.5).float() * pair.unsqueeze(-1)     # (B, L-1, 4)
     foot_v = vp[:, :, list(FOOT_JOINTS)]                                                 # (B, L-1, 4, 3)
     foot = _masked_mean(foot_v ** 2, contact)
-    return {"pos": pos, "vel": vel, "foot": foot}
+    return {"pos": pos, "vel": vel, "foot": foot, "bone": bone}
