@@ -388,8 +388,10 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
     if models:
         out += ["## Models evaluated", "", "Each generator row's training (from its checkpoint): the comparisons "
                 "(EMDM vs its baselines) use models trained side by side on one GPU for the same wall-clock "
-                "budget (`scripts/gpu/train-all.sh`); rows marked *continued* are the shipped models, trained "
-                "further from those weights.", "", models, ""]
+                "budget (`scripts/gpu/train-all.sh`); rows marked *continued* were trained further from those "
+                "weights (the models shipped before L_bone). The models shipped now were trained further still, "
+                "with the rigidity term L_bone: docs/MODELS.md describes them and compares them with these.",
+                "", models, ""]
     heads = headlines(results)
     if heads:
         out += ["## Headline", "", "Each model row against the real row measured on the same test clips "
