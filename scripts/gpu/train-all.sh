@@ -25,21 +25,9 @@ data_in="${1:?usage: train-all.sh DATASET RUNS MINUTES [CACHE]}"
 runs="${2:?RUNS folder}"
 minutes="${3:?MINUTES}"
 cache="${4:-}"
-py="${PYTHON:-python3}"
-export PYTHONPATH="$here/scripts${PYTHONPATH:+:$PYTHONPATH}" PYTHONUNBUFFERED=1
 t_begin=$(date +%s)
-mkdir -p "$runs"
-
-if [[ -f "$data_in" ]]; then
-  data="$(dirname "$runs")/dataset"
-  [[ -f "$data/train.txt" ]] || "$py" -m emdm.data.pack --unpack "$data_in" "$data"
-else
-  data="$data_in"
-fi
-
-common=(--data "$data" --preset web --batch 64 --min-frames 16 --random-crop 0.3 --warmup 200 --ema 0.999
-        --d-width 1024 --lr-d 1.25e-4 --lr-min 1e-5 --no-progress --log-every 25 --ckpt-minutes 1000)
-read -r -a extra <<<"${EMDM_TRAIN_EXTRA:-}"
+# shellcheck source=scripts/gpu/common.sh
+source "$here/scripts/gpu/common.sh"
 declare -A flags=(
   [t2m]="--task text --lr-g 1e-4"
   [a2m]="--task action --lr-g 1.5e-4"
@@ -49,31 +37,9 @@ declare -A flags=(
 )
 declare -A dtype=([t2m]=float32 [a2m]=float32 [t2m-ddim]=float32 [t2m-naive]=float16 [t2m-nodcond]=float16)
 names=(t2m a2m t2m-ddim t2m-naive t2m-nodcond)
-
-for n in "${names[@]}"; do
-  mkdir -p "$runs/$n"
-  if [[ -n "$cache" && "${flags[$n]}" == *"--task text"* ]]; then cp -n "$cache"/text-*.npy "$runs/$n/" 2>/dev/null || true; fi
-done
-
-launch() {  # name, extra args...
-  local n="$1"; shift
-  # shellcheck disable=SC2086
-  "$py" -m emdm.train "${common[@]}" ${flags[$n]} --out "$runs/$n" "$@" "${extra[@]}" >>"$runs/$n/train.out" 2>&1 &
-  pids+=($!)
-}
-
-wait_all() {
-  local rc=0
-  for p in "${pids[@]}"; do wait "$p" || rc=1; done
-  pids=()
-  if (( rc )); then
-    for n in "${names[@]}"; do echo "== $n"; tail -5 "$runs/$n/train.out"; done
-    echo "train-all: a run failed" >&2; exit 1
-  fi
-}
+seed_cache
 
 echo "probe: 50 steps each, all five at once"
-pids=()
 for n in "${names[@]}"; do launch "$n" --steps 100000 --stop-at 50; done
 wait_all
 

@@ -21,21 +21,11 @@ minutes="${3:?MINUTES}"
 cache="${4:-}"
 r1="${5:-}"
 r2="${6:-}"
-py="${PYTHON:-python3}"
-export PYTHONPATH="$here/scripts${PYTHONPATH:+:$PYTHONPATH}" PYTHONUNBUFFERED=1
 t_begin=$(date +%s)
-mkdir -p "$runs"
-if [[ -f "$data_in" ]]; then
-  data="$(dirname "$runs")/dataset"
-  [[ -f "$data/train.txt" ]] || "$py" -m emdm.data.pack --unpack "$data_in" "$data" --workers "$(nproc)"
-else
-  data="$data_in"
-fi
+# shellcheck source=scripts/gpu/common.sh
+source "$here/scripts/gpu/common.sh"
+common+=(--weights-dtype float16)
 m="$here/public/models"
-common=(--data "$data" --preset web --batch 64 --min-frames 16 --random-crop 0.3 --warmup 200 --ema 0.999
-        --d-width 1024 --lr-d 1.25e-4 --lr-min 1e-5 --no-progress --log-every 25 --ckpt-minutes 1000
-        --weights-dtype float16)
-read -r -a extra <<<"${EMDM_TRAIN_EXTRA:-}"
 declare -A flags=(
   [t2m-b10]="--task text --lr-g 1e-4 --w-bone 10 --steps 4200 --init-weights $m/emdm-t2m-web.weights.f16.pt"
   [t2m-b30]="--task text --lr-g 1e-4 --w-bone 30 --steps 4200 --init-weights $m/emdm-t2m-web.weights.f16.pt"
@@ -59,18 +49,9 @@ if [[ -n "$r2" ]]; then      # alone on the GPU: ~0.03 s per diffusion step
   names=(ddim-b300)
 fi
 limit=$("$py" -c "print(round(($minutes * 60 - ($(date +%s) - $t_begin) - 25) / 60, 2))")
-pids=()
-for n in "${names[@]}"; do
-  mkdir -p "$runs/$n"
-  if [[ -n "$cache" && "${flags[$n]}" == *"--task text"* ]]; then cp -n "$cache"/text-*.npy "$runs/$n/" 2>/dev/null || true; fi
-  # shellcheck disable=SC2086
-  "$py" -m emdm.train "${common[@]}" ${flags[$n]} --out "$runs/$n" --time-limit-min "$limit" \
-    --weights-out "$runs/$n.pt" "${extra[@]}" >>"$runs/$n/train.out" 2>&1 &
-  pids+=($!)
-done
-rc=0
-for p in "${pids[@]}"; do wait "$p" || rc=1; done
-for n in "${names[@]}"; do echo "== $n: $(tail -1 "$runs/$n/log.csv")"; [[ $rc == 0 ]] || tail -5 "$runs/$n/train.out"; done
+seed_cache
+for n in "${names[@]}"; do launch "$n" --time-limit-min "$limit" --weights-out "$runs/$n.pt"; done
+wait_all
+for n in "${names[@]}"; do echo "== $n: $(tail -1 "$runs/$n/log.csv")"; done
 echo "header: $(head -1 "$runs/${names[0]}/log.csv")"
 echo "train-bone: done in $(( $(date +%s) - t_begin )) s"
-exit $rc
