@@ -111,3 +111,30 @@ def test_length_batches_cover_each_clip_once_with_little_padding():
     assert all(len(b) == 64 for b in batches)
     waste = np.mean([1 - lengths[b].mean() / lengths[b].max() for b in batches])
     assert waste < 0.1                                   # random batches waste ~35 %
+
+
+@pytest.mark.parametrize("kind", ["matcher", "classifier"])
+def test_every_epoch_trains_with_dropout_after_a_validation(kind, monkeypatch):
+    # the per-epoch validation runs in eval mode (embed_*/classify); every later epoch must still train with dropout
+    seen = []
+    cls = E.MatchingModel if kind == "matcher" else E.ActionClassifier
+    method = "encode_motion" if kind == "matcher" else "forward"
+    orig = getattr(cls, method)
+
+    def spy(self, *a, **k):
+        if torch.is_grad_enabled():        # a training batch (validation runs under no_grad)
+            seen.append(self.training)
+        return orig(self, *a, **k)
+
+    monkeypatch.setattr(cls, method, spy)
+    cfg = E.TrainConfig(**{**SMALL.__dict__, "epochs": 3, "dropout": 0.2})
+    if kind == "matcher":
+        motions, text = _pairs(64, seed=2)
+        vm, vt = _pairs(M.R_PRECISION_POOL, seed=3)
+        E.train_matcher(motions, [t[None] for t in text], MEAN, STD, cfg, val=(vm, vt))
+    else:
+        rng = np.random.default_rng(1)
+        labels = rng.integers(0, 2, size=64)
+        motions = [_motion(np.eye(4)[k], 48, rng) for k in labels]
+        E.train_classifier(motions, labels, 2, MEAN, STD, cfg, val=(motions[:8], labels[:8]))
+    assert len(seen) >= 3 and all(seen), seen

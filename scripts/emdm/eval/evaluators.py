@@ -252,35 +252,21 @@ def train_matcher(motions: Sequence[np.ndarray], text_emb: Sequence[np.ndarray],
     torch.manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
     model = MatchingModel(mean, std, caps[0].shape[1], cfg.hidden, cfg.emb_dim, cfg.dropout)
-    opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
-    lens = np.array([len(m) for m in motions])
-    n_batches = len(length_batches(lens, cfg.batch_size, np.random.default_rng(0)))
-    sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=cfg.epochs * n_batches, eta_min=cfg.lr * 0.05)
-    t0 = time.time()
-    for epoch in range(cfg.epochs):
-        losses = []
-        for idx in length_batches(lens, cfg.batch_size, rng):
-            raw, lengths = pad_motions([motions[i] for i in idx])
-            t_raw = torch.from_numpy(np.stack([caps[i][rng.integers(len(caps[i]))] for i in idx]))
-            neg = (F.normalize(t_raw, dim=-1) @ F.normalize(t_raw, dim=-1).T) < cfg.duplicate_cos
-            loss = matching_loss(model.encode_text(t_raw), model.encode_motion(raw, lengths),
-                                 model.log_scale.exp().clamp(max=100.0), neg)
-            opt.zero_grad()
-            loss.backward()
-            nn.utils.clip_grad_norm_(model.parameters(), 1.0)
-            opt.step()
-            sched.step()
-            losses.append(loss.item())
-        row = {"epoch": epoch + 1, "loss": float(np.mean(losses)), "minutes": (time.time() - t0) / 60}
-        if val is not None and len(val[0]) >= M.R_PRECISION_POOL:
-            rp, mm = M.r_precision_and_matching(embed_texts(model, val[1]), embed_motions(model, val[0]), rng=0)
-            row.update({"val_top1": rp[0], "val_top3": rp[2], "val_mm_dist": mm})
-        if log:
-            log(row)
-        if cfg.max_minutes and row["minutes"] >= cfg.max_minutes:
-            break
-    model.eval()
-    return model
+
+    def batch_loss(idx: np.ndarray) -> torch.Tensor:
+        raw, lengths = pad_motions([motions[i] for i in idx])
+        t_raw = torch.from_numpy(np.stack([caps[i][rng.integers(len(caps[i]))] for i in idx]))
+        neg = (F.normalize(t_raw, dim=-1) @ F.normalize(t_raw, dim=-1).T) < cfg.duplicate_cos
+        return matching_loss(model.encode_text(t_raw), model.encode_motion(raw, lengths),
+                             model.log_scale.exp().clamp(max=100.0), neg)
+
+    def validate() -> dict:
+        if val is None or len(val[0]) < M.R_PRECISION_POOL:
+            return {}
+        rp, mm = M.r_precision_and_matching(embed_texts(model, val[1]), embed_motions(model, val[0]), rng=0)
+        return {"val_top1": rp[0], "val_top3": rp[2], "val_mm_dist": mm}
+
+    return _fit(model, [len(m) for m in motions], cfg, rng, batch_loss, validate, log)
 
 
 def train_classifier(motions: Sequence[np.ndarray], labels, num_classes: int, mean, std,
@@ -297,17 +283,36 @@ def train_classifier(motions: Sequence[np.ndarray], labels, num_classes: int, me
     model = ActionClassifier(mean, std, num_classes, cfg.hidden, cfg.emb_dim, cfg.dropout)
     counts = np.bincount(labels, minlength=num_classes).astype(np.float32)
     weight = torch.from_numpy(np.where(counts > 0, counts.sum() / np.maximum(counts, 1) / num_classes, 0.0)).float()
+
+    def batch_loss(idx: np.ndarray) -> torch.Tensor:
+        raw, lengths = pad_motions([_crop(motions[i], rng, cfg.min_crop) for i in idx])
+        logits, _ = model(raw, lengths)
+        return F.cross_entropy(logits, torch.from_numpy(labels[idx]), weight=weight)
+
+    def validate() -> dict:
+        if val is None or not len(val[0]):
+            return {}
+        return {"val_accuracy": M.accuracy(classify(model, val[0])[0], val[1])}
+
+    return _fit(model, [len(m) for m in motions], cfg, rng, batch_loss, validate, log)
+
+
+def _fit(model: nn.Module, lens: Sequence[int], cfg: TrainConfig, rng: np.random.Generator,
+         batch_loss: Callable[[np.ndarray], torch.Tensor], validate: Callable[[], dict],
+         log: Callable[[dict], None] | None):
+    """The evaluators' one training loop: AdamW, cosine decay to 5% over ``cfg.epochs`` epochs of
+    length-bucketed batches (``batch_loss(indices)`` → loss), gradient clipping at 1, a row per epoch
+    (loss, minutes, ``validate()``'s metrics) to ``log``, a stop after ``cfg.max_minutes``. Returns the
+    model in eval mode."""
+    lens = np.asarray(lens)
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
-    lens = np.array([len(m) for m in motions])
     n_batches = len(length_batches(lens, cfg.batch_size, np.random.default_rng(0)))
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=cfg.epochs * n_batches, eta_min=cfg.lr * 0.05)
     t0 = time.time()
     for epoch in range(cfg.epochs):
         losses = []
         for idx in length_batches(lens, cfg.batch_size, rng):
-            raw, lengths = pad_motions([_crop(motions[i], rng, cfg.min_crop) for i in idx])
-            logits, _ = model(raw, lengths)
-            loss = F.cross_entropy(logits, torch.from_numpy(labels[idx]), weight=weight)
+            loss = batch_loss(idx)
             opt.zero_grad()
             loss.backward()
             nn.utils.clip_grad_norm_(model.parameters(), 1.0)
@@ -315,14 +320,12 @@ def train_classifier(motions: Sequence[np.ndarray], labels, num_classes: int, me
             sched.step()
             losses.append(loss.item())
         row = {"epoch": epoch + 1, "loss": float(np.mean(losses)), "minutes": (time.time() - t0) / 60}
-        if val is not None and len(val[0]):
-            row["val_accuracy"] = M.accuracy(classify(model, val[0])[0], val[1])
+        row.update(validate())
         if log:
             log(row)
         if cfg.max_minutes and row["minutes"] >= cfg.max_minutes:
             break
-    model.eval()
-    return model
+    return model.eval()
 
 
 # ----------------------------------------------------------------------------- checkpoints
