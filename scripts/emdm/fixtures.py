@@ -368,10 +368,11 @@ def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[s
     # float32 rounding (the reference updates x in float64) grows over the steps, amplified by guidance:
     # compare relative to the motion's scale
     scale = max(1.0, float(np.max(np.abs(x))))
-    print(f"{name}: reference vs sample_features max abs diff {np.max(np.abs(x_py - x)):.2e}, scale {scale:.2f}")
-    if np.max(np.abs(x_py - x)) > 1e-4 * scale:
+    diff = float(np.max(np.abs(x_py - x)))
+    print(f"{name}: reference vs sample_features max abs diff {diff:.2e}, scale {scale:.2f}")
+    if diff > 1e-4 * scale:
         raise AssertionError(f"fixtures {name}: reference_sample differs from emdm.sample.sample_features by "
-                             f"{np.max(np.abs(x_py - x)):.2e} (more than 1e-4 × {scale:.2f}, the motion's largest value)")
+                             f"{diff:.2e} (more than 1e-4 × {scale:.2f}, the motion's largest value)")
     feats = (x * std + mean).astype(np.float32)
     joints = recover_joints(feats).astype(np.float32)
     arrays = {"step_x_t": step_x, "step_z": step_z, "step_cond": cond[None], "step_t": step_t, "step_x0": step_x0,

@@ -5,7 +5,6 @@ import csv
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 import torch
 

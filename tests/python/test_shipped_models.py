@@ -91,8 +91,9 @@ def test_bone_lengths_match_the_reference_skeleton(generated):
     ref = np.linalg.norm(sk.REFERENCE_OFFSETS[1:], axis=1)
     worst_rel, msg = 0.0, ""
     for i in range(len(PROMPTS)):
+        cond = condition(entry, i)
         for seed in (0, 1):
-            _, joints = run(seed, condition(entry, i))
+            _, joints = run(seed, cond)
             bones = np.linalg.norm(joints[:, 1:] - joints[:, sk.PARENTS[1:]], axis=-1)      # (F, 21)
             rel = np.median(np.abs(bones / ref - 1.0), axis=0)
             if rel.max() > worst_rel:

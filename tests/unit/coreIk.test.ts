@@ -121,8 +121,10 @@ describe('IK (joints → root + local quaternions with twist from body planes)',
       const ik = solveIK(joints, frames, sk);
       const fk = forwardKinematics(ik.rootPos, ik.quats, frames, sk, ik.offsets);
       const rigLen = ik.offsets.map((o) => Math.hypot(o[0], o[1], o[2]));
-      const siblings = sk.parents.map((p, j) => sk.parents.map((q, s) => (j > 0 && s !== j && q === p ? s : -1)).filter((s) => s >= 0));
       const dist = (a: ArrayLike<number>, i: number, k: number) => Math.hypot(a[i] - a[k], a[i + 1] - a[k + 1], a[i + 2] - a[k + 2]);
+      // per joint: its siblings s and their distance on the rig (constant over the motion)
+      const siblings = sk.parents.map((p, j) => sk.parents.flatMap((q, s) => (j > 0 && s !== j && q === p
+        ? [{ s, rig: Math.hypot(...[0, 1, 2].map((c) => ik.offsets[j][c] - ik.offsets[s][c])) }] : [])));
       let within = 0;
       let total = 0;
       for (let f = 0; f < frames; f++) {
@@ -131,8 +133,7 @@ describe('IK (joints → root + local quaternions with twist from body planes)',
         for (let j = 1; j < J; j++) {
           const p = sk.parents[j];
           const len = dist(joints, base + 3 * j, base + 3 * p);
-          const shape = Math.max(0, ...siblings[j].map((s) => Math.abs(dist(joints, base + 3 * j, base + 3 * s)
-            - Math.hypot(...[0, 1, 2].map((c) => ik.offsets[j][c] - ik.offsets[s][c])))));
+          const shape = Math.max(0, ...siblings[j].map(({ s, rig }) => Math.abs(dist(joints, base + 3 * j, base + 3 * s) - rig)));
           slack[j] = slack[p] + Math.abs(len - rigLen[j]) + shape;      // parents precede children (SMPL order)
         }
         for (let j = 0; j < J; j++) {
