@@ -16,7 +16,9 @@ draws come from numpy's default_rng(seed) in the order x_T, then per step z, the
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+import tempfile
 from pathlib import Path
 from typing import Callable
 
@@ -28,7 +30,10 @@ StepFn = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], 
 
 
 class SampleError(ValueError):
-    pass
+    """A bad argument or a bad result, said in one line (the CLI prints it and exits with status 2)."""
+
+
+MAX_SEED = 2**32 - 1      # the page's seeds are uint32
 
 
 def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10, guidance: float = 1.0,
@@ -101,6 +106,8 @@ def make_condition(spec: dict, text: str | None, action: str | None, uncond: boo
     if spec["type"] == "text":
         if text is None:
             raise SampleError("this is a text model: use --text or --uncond")
+        if not text.strip():
+            raise SampleError("--text is empty: say what the character should do (or use --uncond)")
         from emdm.text import encode_texts
 
         emb = np.asarray(encode_texts([text], encoder_id=spec["encoder"]), np.float32)[0]
@@ -148,9 +155,71 @@ def load_model(args) -> tuple[StepFn, dict, np.ndarray, np.ndarray]:
         raise SampleError(f"{Path(args.models_dir) / mf.MANIFEST_NAME}: no model {args.model!r} "
                           f"(have: {', '.join(man['models']) or 'none'})")
     entry = man["models"][args.model]
-    onnx_file = entry["onnx"] if args.variant in (None, "fp32") else entry["variants"][args.variant]
+    onnx_file = variant_file(entry, args.model, args.variant)
     mean, std = read_meanstd(Path(args.models_dir) / entry["meanStd"])
     return onnx_step(Path(args.models_dir) / onnx_file, args.threads), entry, mean, std
+
+
+def variant_file(entry: dict, name: str, variant: str | None) -> str:
+    """The ONNX file of ``variant`` (None/"fp32": the model's ``onnx``); an unknown one is a SampleError."""
+    if variant in (None, "fp32"):
+        return entry["onnx"]
+    variants = entry.get("variants") or {}
+    if variant not in variants:
+        raise SampleError(f"--variant: model {name!r} has no variant {variant!r}; use one of "
+                          f"{', '.join(['fp32', *variants])}")
+    return variants[variant]
+
+
+def check_out(out: Path, num: int, bvh: bool) -> None:
+    """Refuse an output prefix that cannot be written, before any sampling: the nearest existing folder
+    must take a new file, and no output name may be an existing folder."""
+    names = [out.with_suffix(".npy"), out.with_suffix(".features.npy")]
+    if bvh:
+        names += [out.with_suffix(".bvh")] if num == 1 else [out.with_name(f"{out.name}_{i}.bvh") for i in range(num)]
+    for p in names:
+        if p.is_dir():
+            raise SampleError(f"--out: {p} is a folder; give a path prefix such as out/walk (writes .npy, .bvh)")
+    folder = out.parent
+    while not folder.exists():
+        if folder.is_symlink():
+            raise SampleError(f"--out: {folder} is a broken symbolic link; give a writable folder")
+        folder = folder.parent
+    if not folder.is_dir():
+        raise SampleError(f"--out: {folder} is a file, not a folder; give a path in a writable folder")
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as e:
+        raise SampleError(f"--out: cannot write in {folder} ({e.strerror}); give a path in a writable folder") from None
+
+
+def check_args(a) -> None:
+    """What can be checked before any model is opened (one line each, as the page's limits)."""
+    if a.num < 1:
+        raise SampleError(f"--num must be ≥ 1, got {a.num}")
+    if a.guidance is not None and not (math.isfinite(a.guidance) and a.guidance >= 0):
+        raise SampleError(f"--guidance must be a finite number ≥ 0, got {a.guidance:g} (1 = no guidance)")
+    if not 0 <= a.seed <= MAX_SEED:
+        raise SampleError(f"--seed must be in 0..{MAX_SEED}, got {a.seed}")
+    if a.threads < 1:
+        raise SampleError(f"--threads must be ≥ 1, got {a.threads}")
+    if a.ckpt is not None and a.variant not in (None, "fp32"):
+        raise SampleError(f"--variant {a.variant!r} needs --model (a checkpoint has only its fp32 weights)")
+    check_out(a.out, a.num, not a.no_bvh)
+
+
+def check_steps(steps: int | None, entry: dict, name: str) -> int:
+    """The step count to run: ``steps`` (None: the model's default) if the model supports it, as the page."""
+    supported = entry.get("supportedSteps")
+    if steps is None:
+        return int(entry.get("defaultSteps", 10))
+    if supported:
+        if steps not in supported:
+            raise SampleError(f"--steps: {steps} is not supported by model {name!r}; use one of {list(supported)}")
+    elif steps < 1:
+        raise SampleError(f"--steps must be ≥ 1, got {steps}")
+    return steps
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -177,23 +246,35 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    a = build_parser().parse_args(argv)
+    try:
+        return run(a)
+    except SampleError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+
+
+def run(a: argparse.Namespace) -> int:
     from emdm.motion.features import recover_joints
 
-    a = build_parser().parse_args(argv)
+    check_args(a)
     step, entry, mean, std = load_model(a)
     max_frames = int(entry.get("maxFrames", 196))
     if not 1 <= a.frames <= max_frames:
         raise SampleError(f"--frames must be in 1..{max_frames}, got {a.frames}")
-    steps = a.steps or int(entry.get("defaultSteps", 10))
-    supported = entry.get("supportedSteps")
-    if supported and steps not in supported:
-        print(f"warning: {steps} steps is not among the model's supportedSteps {supported}", file=sys.stderr)
+    steps = check_steps(a.steps, entry, a.model or str(a.ckpt))
     cond = make_condition(entry["condition"], a.text, a.action, a.uncond)
     guidance = float(entry.get("guidance", 2.5)) if a.guidance is None else a.guidance
     x = sample_features(step, cond, a.frames, steps, guidance, a.seed, a.num, int(entry.get("zDim", 64)),
                         objective=entry.get("objective", "ddgan"))
     feats = denormalise(x, mean, std)
+    if not np.isfinite(feats).all():
+        raise SampleError(f"the model returned non-finite numbers ({int((~np.isfinite(feats)).sum())} of {feats.size} "
+                          f"feature values); nothing written. Check the model file and its meanStd against the "
+                          f"manifest's sha256, or try --variant fp32")
     joints = np.stack([recover_joints(f) for f in feats]).astype(np.float32)
+    if not np.isfinite(joints).all():
+        raise SampleError("recovering joints gave non-finite positions; nothing written")
     a.out.parent.mkdir(parents=True, exist_ok=True)
     np.save(a.out.with_suffix(".npy"), joints[0] if a.num == 1 else joints)
     np.save(a.out.with_suffix(".features.npy"), feats[0] if a.num == 1 else feats)
@@ -209,8 +290,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    try:
-        raise SystemExit(main())
-    except SampleError as e:
-        print(f"error: {e}", file=sys.stderr)
-        raise SystemExit(2)
+    raise SystemExit(main())

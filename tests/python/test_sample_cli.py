@@ -101,3 +101,69 @@ def test_bvh_round_trip_through_the_project_reader(tmp_path):
 
     pos = bvh_fk(bvh)[:, [bvh.index(n) for n in sk.JOINT_NAMES]] / 100.0
     np.testing.assert_allclose(pos, joints, atol=2e-4)      # 4 decimals in cm
+
+
+# --- bad arguments: one line naming the argument and what is allowed, exit status 2, nothing written ---
+
+def _cli(models, out, *extra):
+    return ["--model", "m", "--models-dir", str(models), "--action", "wave", "--frames", "12", "--out", str(out),
+            *extra]
+
+
+@pytest.mark.parametrize("extra, expected", [
+    (["--steps", "0"], r"--steps: 0 is not supported by model 'm'; use one of \[1, 2, 4, 5, 8, 10\]"),
+    (["--steps", "3"], r"--steps: 3 is not supported by model 'm'; use one of \[1, 2, 4, 5, 8, 10\]"),
+    (["--guidance", "nan"], r"--guidance must be a finite number ≥ 0, got nan"),
+    (["--guidance", "inf"], r"--guidance must be a finite number ≥ 0, got inf"),
+    (["--guidance", "-1"], r"--guidance must be a finite number ≥ 0, got -1"),
+    (["--num", "0"], r"--num must be ≥ 1, got 0"),
+    (["--variant", "int4"], r"--variant: model 'm' has no variant 'int4'; use one of fp32"),
+    (["--seed", "-1"], r"--seed must be in 0\.\.4294967295, got -1"),
+    (["--threads", "0"], r"--threads must be ≥ 1, got 0"),
+    (["--frames", "0"], r"--frames must be in 1\.\.196, got 0"),
+])
+def test_bad_argument_is_one_line_and_exit_2(models, tmp_path, capsys, extra, expected):
+    import re
+
+    out = tmp_path / "o" / "x"
+    assert sample_main(_cli(models, out, *extra)) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and re.fullmatch(r"error: " + expected + r".*", err[0]), err
+    assert not (tmp_path / "o").exists()
+
+
+def test_empty_prompt_is_refused_like_the_page():
+    spec = {"type": "text", "encoder": "all-MiniLM-L6-v2", "dim": 384}
+    with pytest.raises(SampleError, match=r"--text is empty"):
+        make_condition(spec, "   ", None, False)
+
+
+def test_unwritable_out_is_found_before_sampling(models, tmp_path, capsys, monkeypatch):
+    """A path under a regular file cannot be written: refused before the model runs."""
+    import emdm.sample as sample_mod
+
+    calls = []
+    real = sample_mod.onnx_step
+    monkeypatch.setattr(sample_mod, "onnx_step", lambda *a, **k: (calls.append(1), real(*a, **k))[1])
+    blocker = tmp_path / "file.txt"
+    blocker.write_text("not a folder")
+    assert sample_main(_cli(models, blocker / "sub" / "x")) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: --out: ") and "file.txt is a file, not a folder" in err[0], err
+    assert calls == [], "the model was opened before --out was checked"
+    (tmp_path / "dir.npy").mkdir()
+    assert sample_main(_cli(models, tmp_path / "dir")) == 2
+    assert "dir.npy is a folder" in capsys.readouterr().err
+
+
+def test_non_finite_motion_is_an_error_and_not_written(models, tmp_path, capsys, monkeypatch):
+    import emdm.sample as sample_mod
+
+    def nan_step(path, threads=1):
+        return lambda x, z, c, t, mask: np.full_like(x, np.nan)
+    monkeypatch.setattr(sample_mod, "onnx_step", nan_step)
+    out = tmp_path / "o" / "nan"
+    assert sample_main(_cli(models, out, "--steps", "2")) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "non-finite" in err[0], err
+    assert not (tmp_path / "o").exists()
