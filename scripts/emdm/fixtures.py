@@ -190,8 +190,14 @@ def export_tiny_model(path: Path, cond_dim: int = TINY_COND_DIM) -> Path:
     return path
 
 
-def make_tiny(out_dir: Path) -> dict[str, Any]:
-    onnx_path = export_tiny_model(out_dir / "tiny-step.onnx")
+def make_tiny(out_dir: Path, export: bool = True) -> dict[str, Any]:
+    """``export=False`` samples the ``tiny-step.onnx`` already in ``out_dir`` (the committed one, so a test can
+    re-run the sampler without re-exporting: the exporter's bytes vary between runs, its outputs do not)."""
+    onnx_path = out_dir / "tiny-step.onnx"
+    if export:
+        export_tiny_model(onnx_path)
+    elif not onnx_path.is_file():
+        raise FileNotFoundError(f"{onnx_path}: absent; call make_tiny with export=True (or copy the committed model there)")
     sess = step_session(onnx_path)
     rng = np.random.default_rng(20251122)
     sched = make_schedule(4)
