@@ -3,6 +3,7 @@
  * (docs/ARCHITECTURE.md "TypeScript library"). Wires the manifest (verified downloads), the text
  * encoder, the ONNX step model (src/runtime), the sampler (src/sampler) and decoding (src/motion).
  */
+import { assertFinite } from './errors';
 import { type Manifest, type ModelEntry, ModelFileError, fetchVerified } from './manifest';
 import { cleanupFootContacts, contactsFromFeatures } from './motion/footContact';
 import { denormalize, parseMeanStd, recoverJoints } from './motion/recover';
@@ -61,6 +62,7 @@ export interface Generator {
   readonly entry: ModelEntry;
   /** the sampler this model's objective calls for: 'ddgan' or 'ddim' */
   readonly sampler: SamplerName;
+  /** Rejects with NonFiniteMotionError (src/errors.ts) when the model's output holds NaN or ±Infinity. */
   generate(o: GenerateOptions): Promise<GenerateResult>;
   dispose(): Promise<void>;
 }
@@ -228,6 +230,7 @@ export async function createGenerator(opts: GeneratorOptions): Promise<Generator
     });
     const t2 = now();
     const features = denormalize(r.x, mean, std);
+    assertFinite(features, `model ${model} (${onnxPath}) output features`);
     let joints = recoverJoints(features, o.frames, D);
     if (o.smooth) joints = smoothJoints(joints, o.frames, 1);
     if (o.footCleanup) {
@@ -236,6 +239,7 @@ export async function createGenerator(opts: GeneratorOptions): Promise<Generator
         footJoints: manifest.skeleton.footJoints,
       });
     }
+    assertFinite(joints, `joints decoded from model ${model}'s output`);
     const t3 = now();
     return {
       motion: { frames: o.frames, fps: entry.fps, joints, features },

@@ -2,6 +2,7 @@
 export { createGenerator } from './generate';
 export type { Condition, GenerateOptions, GenerateResult, Generator, GeneratorOptions, Motion } from './generate';
 export { loadManifest, fetchVerified, ModelFileError } from './manifest';
+export { assertFinite, NonFiniteMotionError } from './errors';
 export type { Manifest, ModelEntry, Skeleton } from './manifest';
 export { createTextEncoder } from './text';
 export type { TextEncoder } from './text';

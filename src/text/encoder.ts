@@ -70,6 +70,11 @@ async function prefetch(manifest: Manifest, baseUrl: string, entry: TextEncoderE
   );
 }
 
+/** Free transformers.js tensors (inputs and outputs of a run) once their numbers have been copied out. */
+export function disposeAll(tensors: Record<string, unknown>): void {
+  for (const t of Object.values(tensors)) (t as { dispose?: () => void } | null)?.dispose?.();
+}
+
 /** Run calls one at a time (an ORT-web session must not run twice at once); a failure does not block later calls. */
 function serialised(fn: (text: string) => Promise<Float32Array>): (text: string) => Promise<Float32Array> {
   let tail: Promise<unknown> = Promise.resolve();
@@ -144,13 +149,17 @@ async function load(manifest: Manifest, baseUrl: string, id: string, opts: TextE
           attention_mask: new tf.Tensor('int64', new BigInt64Array(n).fill(1n), [1, n]),
           token_type_ids: new tf.Tensor('int64', new BigInt64Array(n), [1, n]),
         };
-        const out = await model(inputs);
-        const hidden = (out.last_hidden_state ?? out.token_embeddings) as { data: Float32Array; dims: number[] } | undefined;
-        if (!hidden) throw new TextEncoderError(id, `model output has no last_hidden_state (outputs: ${Object.keys(out).join(', ')})`);
-        const [, tokens, dim] = hidden.dims;
-        if (dim !== entry.dim) throw new TextEncoderError(id, `model gives ${dim}-d token vectors, manifest says dim ${entry.dim}`);
-        const v = meanPool(hidden.data, tokens, dim);
-        return entry.normalize === false ? v : l2Normalize(v);
+        const out = await model(inputs).finally(() => disposeAll(inputs));
+        try {
+          const hidden = (out.last_hidden_state ?? out.token_embeddings) as { data: Float32Array; dims: number[] } | undefined;
+          if (!hidden) throw new TextEncoderError(id, `model output has no last_hidden_state (outputs: ${Object.keys(out).join(', ')})`);
+          const [, tokens, dim] = hidden.dims;
+          if (dim !== entry.dim) throw new TextEncoderError(id, `model gives ${dim}-d token vectors, manifest says dim ${entry.dim}`);
+          const v = meanPool(hidden.data, tokens, dim);
+          return entry.normalize === false ? v : l2Normalize(v);
+        } finally {
+          disposeAll(out);
+        }
       }),
     };
   }
@@ -168,13 +177,17 @@ async function load(manifest: Manifest, baseUrl: string, id: string, opts: TextE
       encode: serialised(async (text: string): Promise<Float32Array> => {
         const t = checkText(id, text);
         const ids = emdmClipIds(tokenizeClip(tokenizer, t), eot);
-        const input_ids = new tf.Tensor('int64', BigInt64Array.from(ids, (x) => BigInt(x)), [1, ids.length]);
-        const out = await model({ input_ids });
-        const emb = out.text_embeds as { data: Float32Array; dims: number[] } | undefined;
-        if (!emb) throw new TextEncoderError(id, `model output has no text_embeds (outputs: ${Object.keys(out).join(', ')})`);
-        if (emb.data.length !== entry.dim) throw new TextEncoderError(id, `model gives ${emb.data.length}-d vectors, manifest says dim ${entry.dim}`);
-        const v = Float32Array.from(emb.data);
-        return entry.normalize ? l2Normalize(v) : v;
+        const inputs = { input_ids: new tf.Tensor('int64', BigInt64Array.from(ids, (x) => BigInt(x)), [1, ids.length]) };
+        const out = await model(inputs).finally(() => disposeAll(inputs));
+        try {
+          const emb = out.text_embeds as { data: Float32Array; dims: number[] } | undefined;
+          if (!emb) throw new TextEncoderError(id, `model output has no text_embeds (outputs: ${Object.keys(out).join(', ')})`);
+          if (emb.data.length !== entry.dim) throw new TextEncoderError(id, `model gives ${emb.data.length}-d vectors, manifest says dim ${entry.dim}`);
+          const v = Float32Array.from(emb.data);
+          return entry.normalize ? l2Normalize(v) : v;
+        } finally {
+          disposeAll(out);
+        }
       }),
     };
   }

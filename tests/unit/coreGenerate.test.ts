@@ -6,6 +6,7 @@ import os from 'node:os';
 import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
 import { createGenerator } from '../../src/generate';
+import { assertFinite, NonFiniteMotionError } from '../../src/index';
 import { type Manifest, ModelFileError, loadManifest } from '../../src/manifest';
 import { getSession } from '../../src/runtime/ort';
 import { stepFunction } from '../../src/runtime/stepModel';
@@ -85,6 +86,30 @@ describe('createGenerator on the tiny model', () => {
     fs.rmSync(path.join(dir, 'tiny.onnx'));
     await expect(createGenerator({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(/tiny\.onnx: not found/);
     await expect(createGenerator({ manifest, baseUrl: dir, model: 'nope', backend: 'wasm', threads: 1 })).rejects.toThrow(/models\.nope' not found \(models: tiny, tiny-ddim\)/);
+  });
+
+  it('refuses NaN from the model with NonFiniteMotionError (exported by the library); the generator keeps working', async () => {
+    // x0 = x_t * NaN (onnx.helper, opset 18): a valid step model whose every output is NaN
+    const nanModel = Buffer.from(
+      'CAgSCGVtZG0tZTJlOsUBChMKA3hfdAoDbmFuEgJ4MCIDTXVsEghuYW5fc3RlcCoNEAEiBAAAwH9CA25hblocCgN4X3QSFQoTCAESDwoDEgFCCgMSAUwKAwiHAloUCgF6Eg8KDQgBEgkKAxIBQgoCCEBaGAoEY29uZBIQCg4IARIKCgMSAUIKAxIBQ1oQCgF0EgsKCQgBEgUKAxIBQloYCgRtYXNrEhAKDggBEgoKAxIBQgoDEgFMYhsKAngwEhUKEwgBEg8KAxIBQgoDEgFMCgMIhwJCBAoAEBI=',
+      'base64',
+    );
+    const { dir, manifest } = tinyModels();
+    const m = structuredClone(manifest);
+    fs.writeFileSync(path.join(dir, 'nan.onnx'), nanModel);
+    m.files['nan.onnx'] = { bytes: nanModel.length, sha256: sha(nanModel) };
+    m.models.tiny.variants = { nan: 'nan.onnx' };
+    const o = { condition: { type: 'action' as const, label: 1 }, frames: 10, steps: 2, guidance: 2.5, seed: 3 };
+    const bad = await createGenerator({ manifest: m, baseUrl: dir, model: 'tiny', variant: 'nan', backend: 'wasm', threads: 1 });
+    const err = await bad.generate(o).catch((e: unknown) => e);
+    expect(err).toBeInstanceOf(NonFiniteMotionError);
+    expect(err).toMatchObject({ name: 'NonFiniteMotionError', index: 0, count: 10 * 263 });
+    expect((err as Error).message).toMatch(/^model tiny \(nan\.onnx\) output features: non-finite numbers \(value 0 of 2630 is NaN\)/);
+    await bad.dispose();
+    const good = await createGenerator({ manifest: m, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
+    expect((await good.generate(o)).motion.joints.every(Number.isFinite)).toBe(true);
+    await good.dispose();
+    expect(() => assertFinite(Float32Array.of(0, 1, Infinity), 'x')).toThrow(/^x: non-finite numbers \(value 2 of 3 is Infinity\)/);
   });
 
   it('refuses a model whose shapes do not match the manifest (incompatible)', async () => {

@@ -1,10 +1,11 @@
 // The shipped MiniLM through transformers.js (Node) agrees with Python on the same ONNX file,
 // and hostile prompts give a vector or a clear error.
-import { beforeAll, describe, expect, test } from 'vitest';
+import { beforeAll, describe, expect, test, vi } from 'vitest';
 import fs from 'node:fs';
 import path from 'node:path';
 import { loadManifest } from '../../src/manifest';
 import { cosine, createTextEncoder, type TextEncoder, TextEncoderError } from '../../src/text';
+import { loadTransformers } from '../../src/text/transformersEnv';
 
 const MODELS = path.resolve(__dirname, '../../public/models') + '/';
 const FIXTURE = JSON.parse(fs.readFileSync(path.resolve(__dirname, '../fixtures/text/minilm_vectors.json'), 'utf8')) as {
@@ -41,6 +42,22 @@ describe('all-MiniLM-L6-v2 (transformers.js, Node)', () => {
       ['a person walks forward slowly', 'someone is walking ahead at a slow pace', 'the stock market fell sharply today'].map((t) => enc.encode(t)),
     );
     expect(cosine(a, b)).toBeGreaterThan(cosine(a, c) + 0.3);
+  });
+
+  test('every transformers.js tensor of a run is disposed (the 3 inputs and the outputs)', async () => {
+    const tf = await loadTransformers();
+    const disposed: unknown[] = [];
+    const spy = vi.spyOn(tf.Tensor.prototype, 'dispose').mockImplementation(function (this: unknown) {
+      disposed.push(this);
+    });
+    try {
+      await enc.encode('a person walks forward');
+    } finally {
+      spy.mockRestore();
+    }
+    const dims = disposed.map((t) => (t as { dims: number[] }).dims.join('x'));
+    expect(dims.filter((d) => /^1x\d+$/.test(d))).toHaveLength(3); // input_ids, attention_mask, token_type_ids
+    expect(dims.some((d) => /^1x\d+x384$/.test(d))).toBe(true); // last_hidden_state
   });
 
   test('non-string and absurdly long input give a clear error, the encoder keeps working', async () => {
