@@ -2,7 +2,8 @@
 
 Each model generates with the exact browser loop (emdm.sample) from its ONNX file and mean/std:
 no NaN, bone lengths close to the reference skeleton, feet on the floor on contact frames, different
-seeds give different motions and the same seed gives the same motion.
+seeds give different motions and the same seed gives the same motion. The same checks run on every
+variant the manifest lists (int8, fp16: files the page loads when asked), not only on the fp32 file.
 """
 
 import numpy as np
@@ -22,7 +23,8 @@ FOOT_CONTACT = {10: 260, 11: 262}      # their contact channels
 # Every shipped model meets every bar. Until L_bone (train --w-bone, docs/MODELS.md) their bone lengths did
 # not (worst bone median 24-78% off, the forearms). A model found below a bar that is known and being worked on
 # goes in this table with the measurement in the note: its check then xfails, and once the model passes the
-# test FAILS and asks to remove it, so the table cannot silently outlive the problem.
+# test FAILS and asks to remove it, so the table cannot silently outlive the problem. Entries are labels:
+# the model's name for its fp32 file, "<name>.<variant>" for a variant (e.g. "emdm-t2m-web.int8").
 KNOWN_BELOW_BAR: dict[str, set[str]] = {"bones": set(), "feet": set()}
 
 
@@ -32,6 +34,15 @@ def check(name: str, bar: str, ok: bool, message: str) -> None:
             pytest.fail(f"{name} now passes the {bar!r} bar: remove it from KNOWN_BELOW_BAR")
         pytest.xfail(f"{name} below the {bar!r} bar (known, under-trained): {message}")
     assert ok, message
+
+
+def _model_variants() -> list[tuple[str, str]]:
+    """(model, variant) pairs to check: fp32 for every model, plus each variant its manifest entry lists."""
+    try:
+        models = mf.load(paths.MODELS_DIR)["models"]
+    except mf.ManifestError:
+        models = {}
+    return [(m, v) for m in MODELS for v in ["fp32", *models.get(m, {}).get("variants", {})]]
 
 
 def shipped(name: str) -> dict:
@@ -57,23 +68,38 @@ def condition(entry: dict, i: int = 0) -> np.ndarray:
 
 
 @pytest.fixture(scope="module", params=MODELS)
+def model(request):
+    return request.param, shipped(request.param)
+
+
+@pytest.fixture(scope="module", params=_model_variants(), ids=lambda p: p[0] if p[1] == "fp32" else f"{p[0]}.{p[1]}")
 def generated(request):
-    entry = shipped(request.param)
-    step = onnx_step(paths.MODELS_DIR / entry["onnx"], threads=1)
+    """(label, entry, run, condition) for one ONNX file of a model: its fp32 file or one of its variants."""
+    name, variant = request.param
+    entry = shipped(name)
+    onnx = entry["onnx"] if variant == "fp32" else entry["variants"][variant]
+    label = name if variant == "fp32" else f"{name}.{variant}"
+    step = onnx_step(paths.MODELS_DIR / onnx, threads=1)
     mean, std = read_meanstd(paths.MODELS_DIR / entry["meanStd"])
     c = condition(entry)
 
-    def run(seed: int, cond=c) -> tuple[np.ndarray, np.ndarray]:
-        x = sample_features(step, cond, FRAMES, entry["defaultSteps"], entry["guidance"], seed, 1, entry["zDim"],
-                            objective=entry.get("objective", "ddgan"))
-        feats = denormalise(x[0], mean, std)
-        return feats, recover_joints(feats)
+    done: dict[tuple[int, bytes], tuple[np.ndarray, np.ndarray]] = {}
 
-    return request.param, entry, run, c
+    def run(seed: int, cond=c, fresh: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """(features, joints); a (seed, condition) already generated for another check is reused unless fresh."""
+        key = (seed, np.asarray(cond, np.float32).tobytes())
+        if fresh or key not in done:
+            x = sample_features(step, cond, FRAMES, entry["defaultSteps"], entry["guidance"], seed, 1, entry["zDim"],
+                                objective=entry.get("objective", "ddgan"))
+            feats = denormalise(x[0], mean, std)
+            done[key] = (feats, recover_joints(feats))
+        return done[key]
+
+    return label, entry, run, c
 
 
-def test_manifest_files_match(generated):
-    name, entry, _, _ = generated
+def test_manifest_files_match(model):
+    name, entry = model
     problems = [p for p in mf.verify(paths.MODELS_DIR) if any(f in p for f in entry["files"])]
     assert not problems, problems
     assert entry["training"]["steps"] > 0
@@ -119,9 +145,9 @@ def test_feet_on_the_floor_on_contact_frames(generated):
 
 def test_seeds_differ_and_repeat(generated):
     _, _, run, _ = generated
-    _, a = run(3)
-    _, b = run(3)
-    _, c = run(4)
+    _, a = run(3, fresh=True)
+    _, b = run(3, fresh=True)
+    _, c = run(4, fresh=True)
     np.testing.assert_array_equal(a, b)
     assert np.abs(a - c).mean() > 0.01          # more than 1 cm on average
 
@@ -132,10 +158,10 @@ def test_unconditional_generation_works(generated):
     assert np.isfinite(joints).all()
 
 
-def test_shipped_training_weights_are_the_onnx_model(generated):
+def test_shipped_training_weights_are_the_onnx_model(model):
     # <name>.weights.f16.pt lets training continue from the shipped model (train --init-weights): it must be
     # the same network as the ONNX file, up to float16 rounding of the weights
-    name, entry, _, _ = generated
+    name, entry = model
     if "trainingWeights" not in entry:
         pytest.skip(f"{name} ships no training weights")
     import torch
