@@ -37,7 +37,12 @@ def load_generator(ckpt_path: Path | str, weights: str = "G_ema") -> tuple[Gener
     ckpt_path = Path(ckpt_path)
     if not ckpt_path.is_file():
         raise ExportError(f"{ckpt_path}: checkpoint not found")
-    st = torch.load(ckpt_path, map_location="cpu", weights_only=False)
+    from emdm.checkpoints import CheckpointError, load_file
+
+    try:                                     # tensors and plain values only: a checkpoint cannot run code
+        st = load_file(ckpt_path, need=())
+    except CheckpointError as e:
+        raise ExportError(str(e)) from e
     for key in ("meta", weights, "step"):
         if key not in st:
             raise ExportError(f"{ckpt_path}: not an emdm.train checkpoint (missing {key!r})")
@@ -271,7 +276,7 @@ def main(argv: list[str] | None = None) -> int:
     ms_path = write_meanstd(np.array(meta["mean"]), np.array(meta["std"]), out / f"{a.name}.meanstd.f32")
     files["meanStd"] = ms_path.name
     if a.ship_weights:
-        from emdm.train import save_weights_file
+        from emdm.checkpoints import save_weights_file
 
         dst = out / f"{a.name}.weights.f16.pt"
         save_weights_file(dst, G.state_dict(), step=summary["steps"], wall=summary["wall_s"], meta=meta,

@@ -1,19 +1,22 @@
 """Train the EMDM generator (DDGAN with geometric losses, or the plain diffusion baseline).
 
     python -m emdm.train --data data/dataset --task text --out runs/t2m-web --steps 20000
+    python -m emdm.train ... --batch 256 --lr-scale sqrt --amp bf16 --balance-alpha 0.5   # a GPU run
     torchrun --nproc_per_node 2 -m emdm.train ...          # DDP (gloo on CPU, nccl on GPU)
 
-Objectives (``--objective``):
-  ddgan      alternate D and G updates. D: softplus(−D(real)) + softplus(D(fake)), lazy R1 on the real x_k
-             (γ ``--r1-gamma`` every ``--r1-every`` steps). G: softplus(−D(fake)) + R·L_geo with
-             L_geo = L_recon + λ(w_pos L_pos + w_vel L_vel + w_foot L_foot + w_bone L_bone) (``--geo-weight``
-             R = 0 gives the naive DDGAN; L_bone, off by default, is this project's rigidity term). Each
-             sample draws a step count T from ``--supported-steps`` and k ∈ 0..T−1, so one model serves
-             every step count; G sees the continuous time t_{k+1} (ARCHITECTURE.md).
-  diffusion  the same transformer trained on the plain x0 objective at t ~ U(ε, 1) (z = 0), sampled with DDIM.
+Objectives (``--objective``, one step each in ``emdm.model.objectives``): ``ddgan`` alternates D and G updates
+(G: adversarial + R·L_geo; each sample draws a step count T from ``--supported-steps`` and k ∈ 0..T−1, so one
+model serves every step count); ``diffusion`` is the same transformer on the plain x0 objective, sampled with DDIM.
 
-Checkpoints (``<out>/ckpt.pt``, atomic) hold models, EMA, optimisers, RNG states and the data order, so a
-resumed run continues exactly as if it had not stopped. Losses go to ``<out>/log.csv``.
+Data: the whole split lives on the training device as one padded tensor; each epoch's batches (similar lengths
+bucketed together, clips drawn by action with P ∝ n_action^α, ``--balance-alpha``; α = 1 is the plain epoch) and
+their random crops are planned on the host once per epoch and uploaded, so a step gathers its batch on the device.
+Loss terms are accumulated on the device and read back every ``--log-every`` steps; a non-finite term is caught
+by an on-device flag checked at every log and before every checkpoint: the run then stops with exit status 2,
+naming the step and the term, and leaves the last good ``ckpt.pt`` as it was.
+
+Checkpoints (``<out>/ckpt.pt``, atomic, ``emdm.checkpoints``) hold models, EMA, optimisers, RNG states and the data
+order, so a resumed run continues exactly as if it had not stopped. Losses go to ``<out>/log.csv``.
 """
 
 from __future__ import annotations
@@ -30,15 +33,23 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from emdm.data.dataset import BucketBatcher, caption_table, cached_text_embeddings, collate, load_split
+from emdm.checkpoints import (CheckpointError, TRAIN_KEYS, atomic_save, check_same_model, load_file, load_state_dict,
+                              load_weights_file, save_weights_file)
+from emdm.data.dataset import (BucketBatcher, DeviceClips, action_shares, caption_table, cached_text_embeddings,
+                               crop_plan, load_split)
 from emdm.model.discriminator import Discriminator
 from emdm.model.generator import Generator, count_parameters
-from emdm.model.geometry import geometric_losses
-from emdm.model.schedule import EPS_SMALL, SUPPORTED_STEPS, make_schedule, marginal_coeffs
+from emdm.model.objectives import GanWeights, Geo, Nets, ScheduleTables, ddgan_step, diffusion_step
+from emdm.model.schedule import SUPPORTED_STEPS
+
+__all__ = ["main", "build_parser", "Trainer", "cosine_lr", "save_weights_file", "atomic_save"]   # save_weights_file: re-exported
 
 LOG_FIELDS = ["step", "epoch", "wall_s", "sec_per_step", "lr_g", "lr_d", "loss_d", "d_real", "d_fake", "r1",
               "loss_g", "g_adv", "recon", "pos", "vel", "foot", "bone"]
+# loss terms in the order a step computes them (the first non-finite one is the cause; later ones follow from it)
+LOSS_TERMS = ["d_real", "r1", "d_fake", "loss_d", "g_adv", "recon", "pos", "vel", "foot", "bone", "loss_g"]
 DEFAULT_LR_G = {"text": 2e-5, "action": 3e-5}
+REFERENCE_BATCH = 64               # the batch the default learning rates were tuned for (--lr-scale)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -53,8 +64,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--objective", choices=["ddgan", "diffusion"], default="ddgan")
     p.add_argument("--steps", type=int, default=20000, help="total optimisation steps (cosine LR horizon)")
     p.add_argument("--batch", type=int, default=64, help="batch per process")
-    p.add_argument("--lr-g", type=float, default=None, help="generator LR (default 2e-5 text, 3e-5 action)")
-    p.add_argument("--lr-d", type=float, default=1.25e-4)
+    p.add_argument("--lr-g", type=float, default=None, help="generator LR at batch 64 (default 2e-5 text, 3e-5 action)")
+    p.add_argument("--lr-d", type=float, default=1.25e-4, help="discriminator LR at batch 64")
+    p.add_argument("--lr-scale", choices=["none", "sqrt", "linear"], default="none",
+                   help="scale --lr-g/--lr-d by (global batch / 64)^½ or ^1 (global batch = --batch × processes)")
     p.add_argument("--lr-min", type=float, default=1e-5, help="cosine decay floor")
     p.add_argument("--warmup", type=int, default=0, help="linear LR warm-up steps")
     p.add_argument("--betas", type=float, nargs=2, default=(0.5, 0.9))
@@ -80,10 +93,15 @@ def build_parser() -> argparse.ArgumentParser:
                    help="probability of training on a random sub-window (≥ --min-frames) of a clip; teaches short "
                         "lengths and saves compute")
     p.add_argument("--crop-min", type=int, default=40, help="shortest random sub-window (frames)")
+    p.add_argument("--balance-alpha", type=float, default=1.0,
+                   help="draw clips by action with P(action) ∝ n_action^α (1 = every clip equally often, as before; "
+                        "0 = every action equally often); clips without an action form one group")
     p.add_argument("--limit", type=int, default=None, help="use at most this many clips (smoke tests)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--threads", type=int, default=None, help="torch CPU threads per process")
     p.add_argument("--device", default=None, help="cpu | cuda (default: cuda when available)")
+    p.add_argument("--amp", choices=["off", "bf16"], default="off", help="bfloat16 autocast of G and D (losses in float32)")
+    p.add_argument("--compile", action="store_true", help="torch.compile G and D (the R1 steps run D eagerly)")
     p.add_argument("--log-every", type=int, default=10)
     p.add_argument("--ckpt-every", type=int, default=0, help="also checkpoint every N steps (0 = off)")
     p.add_argument("--ckpt-minutes", type=float, default=5.0, help="checkpoint every M minutes of wall time")
@@ -113,6 +131,15 @@ def cosine_lr(step: int, total: int, base: float, floor: float, warmup: int = 0)
     return floor + (base - floor) * 0.5 * (1.0 + math.cos(math.pi * frac))
 
 
+def lr_factor(rule: str, global_batch: int) -> float:
+    r = global_batch / REFERENCE_BATCH
+    return {"none": 1.0, "sqrt": math.sqrt(r), "linear": r}[rule]
+
+
+class NonFiniteLoss(RuntimeError):
+    """A loss term became NaN/inf; the message names the step and the term (one line)."""
+
+
 class Dist:
     """torchrun environment (rank/world) and a gradient all-reduce (average) for plain modules."""
 
@@ -140,17 +167,16 @@ class Dist:
             g.copy_(flat[off:off + n].view_as(g))
             off += n
 
-    def broadcast_module(self, module: torch.nn.Module) -> None:
+    def all_reduce(self, t: torch.Tensor, op=None) -> torch.Tensor:
         if self.world > 1:
-            for t in list(module.parameters()) + list(module.buffers()):
-                torch.distributed.broadcast(t.data, 0)
+            torch.distributed.all_reduce(t, op=op or torch.distributed.ReduceOp.SUM)
+        return t
 
     def mean_scalars(self, values: dict[str, float]) -> dict[str, float]:
         if self.world == 1:
             return values
         keys = sorted(values)
-        t = torch.tensor([values[k] for k in keys], dtype=torch.float64)
-        torch.distributed.all_reduce(t)
+        t = self.all_reduce(torch.tensor([values[k] for k in keys], dtype=torch.float64))
         return {k: float(v) / self.world for k, v in zip(keys, t)}
 
     def gather(self, obj):
@@ -169,55 +195,48 @@ class Dist:
             torch.distributed.destroy_process_group()
 
 
-class ScheduleTables:
-    """Per-T schedule coefficients stacked so a batch can mix step counts: index [T slot, i]."""
+class StepLog:
+    """Loss terms summed on the device, read back once per log; plus, per term, the first step whose value was
+    not finite (-1 = none so far), updated on the device every step without a host synchronisation."""
 
-    def __init__(self, steps: list[int], device: torch.device):
-        self.steps = steps
-        n = max(steps) + 1
-        keys = ["time", "time_prev", "coef1", "coef2", "sigma"]
-        cum = ["a_cum", "s_cum", "a_step", "s_step"]
-        self.tab = {k: torch.zeros(len(steps), n, dtype=torch.float32) for k in keys + cum}
-        for i, T in enumerate(steps):
-            s = make_schedule(T)
-            for k in keys + cum:
-                v = torch.tensor(getattr(s, k), dtype=torch.float32)
-                self.tab[k][i, : len(v)] = v
-        self.tab = {k: v.to(device) for k, v in self.tab.items()}
+    def __init__(self, device: torch.device):
+        self.keys = LOSS_TERMS
+        self.device = device
+        self.sums = torch.zeros(len(self.keys), dtype=torch.float64, device=device)
+        self.counts = [0] * len(self.keys)
+        self.first_bad = torch.full((len(self.keys),), -1, dtype=torch.int64, device=device)
+        self._idx: dict[tuple[str, ...], torch.Tensor] = {}
 
-    def draw(self, b: int, device: torch.device) -> tuple[torch.Tensor, torch.Tensor]:
-        slot = torch.randint(len(self.steps), (b,))
-        T = torch.tensor(self.steps)[slot]
-        k = (torch.rand(b) * T).long().clamp(max=T - 1)
-        return slot.to(device), k.to(device)
+    def add(self, step: int, logs: dict[str, torch.Tensor]) -> None:
+        names = tuple(k for k in self.keys if k in logs)
+        if names not in self._idx:
+            self._idx[names] = torch.tensor([self.keys.index(k) for k in names], device=self.device)
+        idx = self._idx[names]
+        vals = torch.stack([logs[k].float() for k in names])
+        self.sums.index_add_(0, idx, vals.double())
+        fb = self.first_bad[idx]
+        self.first_bad[idx] = torch.where(~torch.isfinite(vals) & (fb < 0), step, fb)
+        for k in names:
+            self.counts[self.keys.index(k)] += 1
 
-    def get(self, name: str, slot: torch.Tensor, idx: torch.Tensor) -> torch.Tensor:
-        return self.tab[name][slot, idx]
+    def means(self) -> dict[str, float]:
+        sums = self.sums.tolist()                     # the one host sync of a log interval
+        out = {k: s / c for k, s, c in zip(self.keys, sums, self.counts) if c}
+        self.sums.zero_()
+        self.counts = [0] * len(self.keys)
+        return out
 
-
-def bcast(v: torch.Tensor) -> torch.Tensor:
-    return v[:, None, None]
-
-
-def masked_mse(a: torch.Tensor, b: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
-    return (((a - b) ** 2).mean(-1) * mask).sum() / mask.sum().clamp_min(1.0)
-
-
-def atomic_save(obj, path: Path) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    torch.save(obj, tmp)
-    os.replace(tmp, path)
-
-
-def save_weights_file(path: Path, state: dict, *, step: int, wall: float, meta: dict, last_losses: dict,
-                      dtype: str = "float32") -> None:
-    """The --weights-out format: a generator's state dict (on the CPU, as ``dtype``) with its meta and
-    progress, read by ``emdm.export.load_generator`` and ``--init-weights`` (tensors and plain values only)."""
-    dt = getattr(torch, dtype)
-    weights = {k: v.detach().to("cpu", dt) for k, v in state.items()}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    atomic_save({"step": int(step), "wall": float(wall), "meta": {**meta, "weights_dtype": dtype},
-                 "last_losses": last_losses, "G_ema": weights}, path)
+    def first_non_finite(self, dist: Dist) -> tuple[int, list[str]] | None:
+        """(step, terms bad at that step in computation order) over all ranks, or None."""
+        big = torch.iinfo(torch.int64).max
+        fb = torch.where(self.first_bad < 0, big, self.first_bad)
+        if dist.world > 1:                            # gloo on CPU tensors, nccl on CUDA ones: both match the device
+            dist.all_reduce(fb, torch.distributed.ReduceOp.MIN)
+        vals = fb.tolist()
+        step = min(vals)
+        if step == big:
+            return None
+        return int(step), [k for k, v in zip(self.keys, vals) if v == step]
 
 
 # ---------------------------------------------------------------------------------------------- trainer
@@ -233,48 +252,19 @@ class Trainer:
         self.supported = sorted({int(s) for s in str(args.supported_steps).split(",") if s.strip()})
         if not self.supported or min(self.supported) < 1:
             raise SystemExit(f"--supported-steps: expected positive integers, got {args.supported_steps!r}")
-        lr_g = args.lr_g if args.lr_g is not None else DEFAULT_LR_G[args.task]
-        self.lr_g = lr_g
-
-        from emdm import paths
-        data = args.data or paths.DATASET_DIR
-        self.data_dir = Path(data)
-        self.ms = load_split(self.data_dir, args.split, min_frames=args.min_frames, limit=args.limit,
-                             require_action=args.task == "action")
-        if args.task == "text":
-            captions, self.clip_caps = caption_table(self.ms)
-            if self.dist.main:
-                emb = cached_text_embeddings(captions, args.encoder, args.out)
-            self.dist.barrier()
-            if not self.dist.main:
-                emb = cached_text_embeddings(captions, args.encoder, args.out)
-            self.text_emb = torch.from_numpy(emb).to(self.device)
-            self.cond_dim = int(emb.shape[1])
-        else:
-            if not self.ms.action_labels:
-                raise SystemExit(f"{self.data_dir}: --task action needs actions.json and metadata.csv")
-            self.cond_dim = len(self.ms.action_labels)
-        self.motions = [torch.from_numpy(m) for m in self.ms.motions]
-        self.mean = torch.from_numpy(self.ms.mean).to(self.device)
-        self.std = torch.from_numpy(self.ms.std).to(self.device)
-
-        torch.manual_seed(args.seed)                         # identical init on every rank
-        self.G = Generator(self.cond_dim, args.preset).to(self.device)
-        self.G_ema = Generator(self.cond_dim, args.preset).to(self.device)
-        self.G_ema.load_state_dict(self.G.state_dict())
-        self.G_ema.eval().requires_grad_(False)
-        self.D = None
-        self.opt_d = None
-        if args.objective == "ddgan":
-            self.D = Discriminator(self.cond_dim if args.d_cond else 0, width=args.d_width).to(self.device)
-            self.opt_d = torch.optim.Adam(self.D.parameters(), lr=args.lr_d, betas=tuple(args.betas))
-        self.opt_g = torch.optim.Adam(self.G.parameters(), lr=lr_g, betas=tuple(args.betas))
-        self.tables = ScheduleTables(self.supported, self.device)
-        self.batcher = BucketBatcher(self.ms.lengths, args.batch, seed=args.seed, rank=self.dist.rank, world=self.dist.world)
+        self.lr_scale = lr_factor(args.lr_scale, args.batch * self.dist.world)
+        self.lr_g = (args.lr_g if args.lr_g is not None else DEFAULT_LR_G[args.task]) * self.lr_scale
+        self.lr_d = args.lr_d * self.lr_scale
+        self.load_data()
+        self.build_models()
+        self.batcher = BucketBatcher(self.ms.lengths, args.batch, seed=args.seed, rank=self.dist.rank,
+                                     world=self.dist.world, groups=self.ms.actions, alpha=args.balance_alpha)
+        self.sampling = action_shares(self.ms.actions, args.balance_alpha, self.ms.action_labels)
         self.step = 0
         self.wall = 0.0
         self.last_losses: dict[str, float] = {}
         self.init: dict | None = None
+        self._plan_epoch = -1
         if args.init_weights is not None:
             self.init_from(args.init_weights)
         torch.manual_seed(args.seed * 1000 + 17 + self.dist.rank)   # per-rank noise stream
@@ -282,75 +272,93 @@ class Trainer:
         if ckpt.exists() and not args.no_resume:
             self.load(ckpt)
 
+    def load_data(self) -> None:
+        a = self.args
+        from emdm import paths
+        self.data_dir = Path(a.data or paths.DATASET_DIR)
+        self.ms = load_split(self.data_dir, a.split, min_frames=a.min_frames, limit=a.limit,
+                             require_action=a.task == "action")
+        clip_caps = None
+        if a.task == "text":
+            captions, clip_caps = caption_table(self.ms)
+            if self.dist.main:
+                emb = cached_text_embeddings(captions, a.encoder, a.out)
+            self.dist.barrier()
+            if not self.dist.main:
+                emb = cached_text_embeddings(captions, a.encoder, a.out)
+            self.text_emb = torch.from_numpy(emb).to(self.device)
+            self.cond_dim = int(emb.shape[1])
+        else:
+            if not self.ms.action_labels:
+                raise SystemExit(f"{self.data_dir}: --task action needs actions.json and metadata.csv")
+            self.cond_dim = len(self.ms.action_labels)
+        self.clips = DeviceClips(self.ms, self.device, clip_caps)
+        self.geo = Geo(torch.from_numpy(self.ms.mean).to(self.device), torch.from_numpy(self.ms.std).to(self.device),
+                       a.lambda_geo, a.w_pos, a.w_vel, a.w_foot, a.w_bone)
+
+    def build_models(self) -> None:
+        a = self.args
+        torch.manual_seed(a.seed)                         # identical init on every rank
+        self.G = Generator(self.cond_dim, a.preset).to(self.device)
+        self.G_ema = Generator(self.cond_dim, a.preset).to(self.device)
+        self.G_ema.load_state_dict(self.G.state_dict())
+        self.G_ema.eval().requires_grad_(False)
+        self.D = None
+        self.opt_d = None
+        if a.objective == "ddgan":
+            self.D = Discriminator(self.cond_dim if a.d_cond else 0, width=a.d_width).to(self.device)
+            self.opt_d = torch.optim.Adam(self.D.parameters(), lr=self.lr_d, betas=tuple(a.betas))
+        self.opt_g = torch.optim.Adam(self.G.parameters(), lr=self.lr_g, betas=tuple(a.betas))
+        self.tables = ScheduleTables(self.supported, self.device)
+        g_fwd, d_fwd = self.G, self.D
+        if a.compile:
+            g_fwd = torch.compile(self.G, dynamic=True)
+            d_fwd = torch.compile(self.D, dynamic=True) if self.D is not None else None
+        self.nets = Nets(self.G, self.opt_g, self.D, self.opt_d, g_fwd, d_fwd, self.dist.average_grads,
+                         torch.bfloat16 if a.amp == "bf16" else None)
+        self.gan = GanWeights(a.geo_weight, a.adv_weight, a.r1_gamma, a.r1_every)
+        self._ema_pairs = (list(self.G_ema.parameters()), list(self.G.parameters()))
+
     def init_from(self, path: Path) -> None:
-        try:                                   # tensors and plain values only: no code runs from the file
-            st = torch.load(path, map_location="cpu", weights_only=True)
-        except Exception as e:  # noqa: BLE001 - re-raised with the file name
-            raise SystemExit(f"{path}: cannot read as a --weights-out file: {e}") from e
-        if not isinstance(st, dict) or "G_ema" not in st or "meta" not in st:
-            raise SystemExit(f"{path}: not a --weights-out file (needs G_ema and meta)")
+        st = load_weights_file(path)                   # tensors and plain values only: no code runs from the file
         m = st["meta"]
-        if m["generator"] != self.G.config() or m["task"] != self.args.task or m["objective"] != self.args.objective:
-            raise SystemExit(f"{path}: weights of another model/task/objective ({m['task']}, {m['objective']}, "
-                             f"{m['generator']}); --init-weights needs the same")
-        weights = {k: v.float() for k, v in st["G_ema"].items()}
-        self.G.load_state_dict(weights)
-        self.G_ema.load_state_dict(weights)
+        check_same_model(path, m, self.G.config(), self.args.task, self.args.objective,
+                         "--init-weights needs the same")
+        load_state_dict(path, self.G, st["G_ema"], "G_ema")
+        self.G_ema.load_state_dict(st["G_ema"])
         prior = m.get("init") or {"steps": 0, "wall_s": 0.0, "runs": []}
         self.init = {"steps": prior["steps"] + int(st["step"]), "wall_s": prior["wall_s"] + float(st.get("wall", 0.0)),
                      "runs": prior["runs"] + [{"file": path.name, "steps": int(st["step"]), "device": m.get("device"),
                                                 "batch": m.get("batch"), "weights_dtype": m.get("weights_dtype")}]}
 
-    # -- conditions ---------------------------------------------------------------------------------
-    def conditions(self, idx: np.ndarray) -> torch.Tensor:
-        b = len(idx)
+    # -- batches -------------------------------------------------------------------------------------
+    def next_batch(self) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """(x0, mask, c) gathered on the device; the epoch's plan (order and crops) is uploaded once per epoch."""
+        a = self.args
+        epoch, row, _ = self.batcher.next_row()
+        if epoch != self._plan_epoch:
+            order = self.batcher.epoch_order()
+            rng = np.random.default_rng([a.seed, epoch, self.dist.rank, 7])
+            start, length = crop_plan(self.ms.lengths[order], a.random_crop, a.crop_min, rng)
+            plan = torch.from_numpy(np.stack([order, start, length]))
+            self._plan = plan.to(self.device)
+            self._frames = length.max(1)                # host copy: the padded length of each batch
+            self._plan_epoch = epoch
+        frames = int(self._frames[row])
+        if a.compile:                                   # fewer distinct shapes for the compiled graphs
+            frames = min(-(-frames // 8) * 8, self.G.max_frames)
+        idx, start, length = self._plan[:, row]
+        x0, mask = self.clips.gather(idx, start, length, frames)
+        return x0, mask, self.conditions(idx)
+
+    def conditions(self, idx: torch.Tensor) -> torch.Tensor:
+        b = idx.shape[0]
         if self.args.task == "text":
-            pick = [int(self.clip_caps[i][int(torch.randint(len(self.clip_caps[i]), ()))]) for i in idx]
-            c = self.text_emb[pick]
+            c = self.text_emb[self.clips.pick_captions(idx)]
         else:
-            c = F.one_hot(torch.from_numpy(self.ms.actions[idx]), self.cond_dim).float().to(self.device)
+            c = F.one_hot(self.clips.actions[idx], self.cond_dim).float()
         keep = (torch.rand(b, device=self.device) >= self.args.cond_drop).float()
         return c * keep[:, None]
-
-    def crop(self, m: np.ndarray) -> np.ndarray:
-        a = self.args
-        if a.random_crop <= 0 or len(m) <= a.crop_min or float(torch.rand(())) >= a.random_crop:
-            return m
-        n = int(torch.randint(a.crop_min, len(m) + 1, ()))
-        s = int(torch.randint(0, len(m) - n + 1, ()))
-        return m[s:s + n]
-
-    # -- diffusion pairs ------------------------------------------------------------------------------
-    def pairs(self, x0: torch.Tensor, mask: torch.Tensor):
-        b = x0.shape[0]
-        slot, k = self.tables.draw(b, self.device)
-        g = self.tables.get
-        x_k = bcast(g("a_cum", slot, k)) * x0 + bcast(g("s_cum", slot, k)) * torch.randn_like(x0)
-        x_k1 = bcast(g("a_step", slot, k + 1)) * x_k + bcast(g("s_step", slot, k + 1)) * torch.randn_like(x0)
-        m = mask.unsqueeze(-1)
-        return x_k * m, x_k1 * m, slot, k
-
-    def posterior(self, x0_pred: torch.Tensor, x_k1: torch.Tensor, slot, k, mask) -> torch.Tensor:
-        g = self.tables.get
-        x = bcast(g("coef1", slot, k)) * x0_pred + bcast(g("coef2", slot, k)) * x_k1
-        x = x + bcast(g("sigma", slot, k)) * torch.randn_like(x)
-        return x * mask.unsqueeze(-1)
-
-    def geo(self, x0_pred: torch.Tensor, x0: torch.Tensor, mask: torch.Tensor) -> dict[str, torch.Tensor]:
-        a = self.args
-        out = {"recon": masked_mse(x0_pred, x0, mask)}
-        need_joints = a.lambda_geo > 0 and (a.w_pos or a.w_vel or a.w_foot or a.w_bone)
-        if need_joints:
-            out.update(geometric_losses(x0_pred * self.std + self.mean, x0 * self.std + self.mean, mask))
-        return out
-
-    def geo_total(self, terms: dict[str, torch.Tensor]) -> torch.Tensor:
-        a = self.args
-        total = terms["recon"]
-        if "pos" in terms:
-            total = total + a.lambda_geo * (a.w_pos * terms["pos"] + a.w_vel * terms["vel"] + a.w_foot * terms["foot"]
-                                            + a.w_bone * terms["bone"])
-        return total
 
     # -- one optimisation step ---------------------------------------------------------------------------
     def set_lr(self) -> tuple[float, float]:
@@ -360,85 +368,21 @@ class Trainer:
             grp["lr"] = lr_g
         lr_d = 0.0
         if self.opt_d is not None:
-            lr_d = cosine_lr(self.step, a.steps, a.lr_d, a.lr_min, a.warmup)
+            lr_d = cosine_lr(self.step, a.steps, self.lr_d, a.lr_min, a.warmup)
             for grp in self.opt_d.param_groups:
                 grp["lr"] = lr_d
         return lr_g, lr_d
 
-    def train_step(self) -> dict[str, float]:
-        a = self.args
-        idx = self.batcher.next()
-        x0_np, mask_np = collate([self.crop(self.ms.motions[i]) for i in idx])
-        x0 = torch.from_numpy(x0_np).to(self.device)
-        mask = torch.from_numpy(mask_np).to(self.device)
-        c = self.conditions(idx)
-        b = x0.shape[0]
-        lr_g, lr_d = self.set_lr()
-        logs: dict[str, float] = {"lr_g": lr_g, "lr_d": lr_d}
+    def train_step(self) -> dict[str, torch.Tensor]:
+        """One step; its loss terms as 0-d device tensors (the learning rates it used in ``self.lrs``)."""
+        x0, mask, c = self.next_batch()
+        self.lrs = self.set_lr()
         self.G.train()
-
-        if a.objective == "diffusion":
-            t = torch.rand(b, device=self.device) * (1 - EPS_SMALL) + EPS_SMALL
-            a_t, s_t = marginal_coeffs(t)
-            x_t = (bcast(a_t) * x0 + bcast(s_t) * torch.randn_like(x0)) * mask.unsqueeze(-1)
-            x0_pred = self.G(x_t, torch.zeros(b, self.G.z_dim, device=self.device), c, t, mask)
-            terms = self.geo(x0_pred, x0, mask)
-            loss_g = self.geo_total(terms)
-            self.opt_g.zero_grad(set_to_none=True)
-            loss_g.backward()
-            self.dist.average_grads(self.G)
-            self.opt_g.step()
-            logs.update({k: float(v.detach()) for k, v in terms.items()})
-            logs["loss_g"] = float(loss_g.detach())
-            self.update_ema()
-            return logs
-
-        # ---- D step
-        self.D.requires_grad_(True)
-        x_k, x_k1, slot, k = self.pairs(x0, mask)
-        t_cur, t_prev = self.tables.get("time", slot, k), self.tables.get("time_prev", slot, k)
-        do_r1 = a.r1_gamma > 0 and a.r1_every > 0 and self.step % a.r1_every == 0
-        x_k.requires_grad_(do_r1)
-        d_real = self.D(x_k, x_k1, c, t_cur, t_prev, mask)
-        loss_real = F.softplus(-d_real).mean()
-        r1 = torch.zeros((), device=self.device)
-        if do_r1:
-            (grad,) = torch.autograd.grad(d_real.sum(), x_k, create_graph=True)
-            r1 = a.r1_gamma / 2 * grad.pow(2).reshape(b, -1).sum(1).mean()
-        with torch.no_grad():
-            z = torch.randn(b, self.G.z_dim, device=self.device)
-            fake = self.posterior(self.G(x_k1, z, c, t_cur, mask), x_k1, slot, k, mask)
-        d_fake = self.D(fake, x_k1, c, t_cur, t_prev, mask)
-        loss_fake = F.softplus(d_fake).mean()
-        loss_d = loss_real + loss_fake + r1
-        self.opt_d.zero_grad(set_to_none=True)
-        loss_d.backward()
-        self.dist.average_grads(self.D)
-        self.opt_d.step()
-        logs.update(loss_d=float((loss_real + loss_fake).detach()), d_real=float(d_real.detach().mean()), d_fake=float(d_fake.detach().mean()))
-        if do_r1:
-            logs["r1"] = float(r1.detach())
-
-        # ---- G step
-        self.D.requires_grad_(False)
-        x_k, x_k1, slot, k = self.pairs(x0, mask)
-        t_cur, t_prev = self.tables.get("time", slot, k), self.tables.get("time_prev", slot, k)
-        z = torch.randn(b, self.G.z_dim, device=self.device)
-        x0_pred = self.G(x_k1, z, c, t_cur, mask)
-        fake = self.posterior(x0_pred, x_k1, slot, k, mask)
-        g_adv = F.softplus(-self.D(fake, x_k1, c, t_cur, t_prev, mask)).mean()
-        loss_g = a.adv_weight * g_adv
-        terms = {}
-        if a.geo_weight > 0:
-            terms = self.geo(x0_pred, x0, mask)
-            loss_g = loss_g + a.geo_weight * self.geo_total(terms)
-        self.opt_g.zero_grad(set_to_none=True)
-        loss_g.backward()
-        self.dist.average_grads(self.G)
-        self.opt_g.step()
+        if self.args.objective == "diffusion":
+            logs = diffusion_step(self.nets, self.geo, x0, mask, c)
+        else:
+            logs = ddgan_step(self.nets, self.geo, self.gan, self.tables, x0, mask, c, self.step)
         self.update_ema()
-        logs.update({k: float(v.detach()) for k, v in terms.items()})
-        logs.update(loss_g=float(loss_g.detach()), g_adv=float(g_adv.detach()))
         return logs
 
     @torch.no_grad()
@@ -446,8 +390,9 @@ class Trainer:
         decay = self.args.ema
         if self.args.ema_warmup:
             decay = min(decay, (1 + self.step) / (10 + self.step))
-        for pe, p in zip(self.G_ema.parameters(), self.G.parameters()):
-            pe.mul_(decay).add_(p.detach(), alpha=1 - decay)
+        ema, cur = self._ema_pairs
+        torch._foreach_mul_(ema, decay)
+        torch._foreach_add_(ema, cur, alpha=1 - decay)
 
     # -- checkpoints -----------------------------------------------------------------------------------
     def meta(self) -> dict:
@@ -460,6 +405,8 @@ class Trainer:
             "mean": self.ms.mean.tolist(), "std": self.ms.std.tolist(),
             "dataset": self.data_dir.name, "clips": len(self.ms), "device": self.device_name(),
             "world": self.dist.world, "batch": a.batch, "init": self.init,
+            "lr": {"g": self.lr_g, "d": self.lr_d if self.D is not None else None, "scale": self.lr_scale},
+            "sampling": {"balance_alpha": a.balance_alpha, "actions": self.sampling},
             "args": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(a).items()},
         }
 
@@ -469,6 +416,8 @@ class Trainer:
         return f"cpu ({torch.get_num_threads()} threads × {self.dist.world} processes)"
 
     def save(self) -> None:
+        """Write ckpt.pt, after checking that no loss term has gone non-finite since the last check."""
+        self.check_finite()
         rng = self.dist.gather({"torch": torch.get_rng_state(),
                                 "cuda": torch.cuda.get_rng_state_all() if self.device.type == "cuda" else None})
         if not self.dist.main:
@@ -481,36 +430,63 @@ class Trainer:
             "batcher": [self.batcher.state()], "rng": rng,
         }
         atomic_save(state, self.args.out / "ckpt.pt")
+        self.saved_step = self.step
 
     def save_weights(self, path: Path, dtype: str = "float32") -> None:
         """The EMA generator and meta only (a checkpoint ``emdm.export.load_generator`` reads)."""
+        self.check_finite()
         if not self.dist.main:
             return
         save_weights_file(path, self.G_ema.state_dict(), step=self.step, wall=self.wall, meta=self.meta(),
                           last_losses=self.last_losses, dtype=dtype)
 
+    def check_finite(self) -> None:
+        bad = self.steplog.first_non_finite(self.dist) if hasattr(self, "steplog") else None
+        if bad is None:
+            return
+        step, terms = bad
+        ckpt = self.args.out / "ckpt.pt"
+        kept = (f"{ckpt} left as it was (step {self.saved_step})" if getattr(self, "saved_step", None) is not None
+                else (f"{ckpt} left as it was" if ckpt.exists() else "no checkpoint written"))
+        also = f" (then {', '.join(terms[1:])})" if len(terms) > 1 else ""
+        raise NonFiniteLoss(f"step {step}: loss term {terms[0]} is not finite{also}; stopped, {kept}")
+
     def load(self, path: Path) -> None:
-        st = torch.load(path, map_location=self.device, weights_only=False)
-        meta = st["meta"]
-        if meta["generator"] != self.G.config() or meta["task"] != self.args.task or meta["objective"] != self.args.objective:
-            raise SystemExit(f"{path}: checkpoint was trained with a different model/task/objective "
-                             f"({meta['task']}, {meta['objective']}, {meta['generator']}); use another --out or --no-resume")
-        self.G.load_state_dict(st["G"])
-        self.G_ema.load_state_dict(st["G_ema"])
-        self.opt_g.load_state_dict(st["opt_g"])
-        if self.D is not None:
-            self.D.load_state_dict(st["D"])
-            self.opt_d.load_state_dict(st["opt_d"])
+        st = load_file(path, TRAIN_KEYS, map_location=self.device)
+        check_same_model(path, st["meta"], self.G.config(), self.args.task, self.args.objective,
+                         "use another --out or --no-resume")
+        for key, module in (("G", self.G), ("G_ema", self.G_ema), ("opt_g", self.opt_g), ("D", self.D),
+                            ("opt_d", self.opt_d)):
+            if module is not None:
+                load_state_dict(path, module, st[key], key)
         self.step, self.wall, self.last_losses = st["step"], st["wall"], st.get("last_losses", {})
-        self.batcher.load_state(st["batcher"][0])
+        try:
+            self.batcher.load_state(st["batcher"][0])
+        except (ValueError, KeyError, TypeError, IndexError) as e:
+            raise CheckpointError(f"{path}: data order: {e}") from e
         rng = st["rng"][self.dist.rank] if self.dist.rank < len(st["rng"]) else st["rng"][0]
         torch.set_rng_state(rng["torch"].cpu())          # map_location may have moved it to the GPU
         if rng.get("cuda") is not None and self.device.type == "cuda":
             torch.cuda.set_rng_state_all([s.cpu() for s in rng["cuda"]])
+        self.saved_step = self.step
         if self.dist.main:
             print(f"resumed {path} at step {self.step}", file=sys.stderr)
 
     # -- loop ------------------------------------------------------------------------------------------
+    def describe(self) -> None:
+        a = self.args
+        print(f"G {count_parameters(self.G):,} params, D {count_parameters(self.D) if self.D else 0:,}; "
+              f"{len(self.ms)} clips; device {self.device_name()}; batch {a.batch}×{self.dist.world}, "
+              f"LR G {self.lr_g:.3g} D {self.lr_d:.3g} (×{self.lr_scale:.3g}, --lr-scale {a.lr_scale}); "
+              f"amp {a.amp}{', compiled' if a.compile else ''}", file=sys.stderr)
+        rows = self.sampling
+
+        def fmt(r: dict) -> str:
+            return f"{r['action']} {100 * r['share']:.1f}% ({r['clips']} clips; α=1: {100 * r['share_clips']:.1f}%)"
+        listed = ("; ".join(map(fmt, rows)) if len(rows) <= 8 else
+                  "top " + "; ".join(map(fmt, rows[:4])) + " … bottom " + "; ".join(map(fmt, rows[-4:])))
+        print(f"sampling: --balance-alpha {a.balance_alpha} over {len(rows)} actions: {listed}", file=sys.stderr)
+
     def run(self) -> None:
         a = self.args
         log_path = a.out / "log.csv"
@@ -524,8 +500,7 @@ class Trainer:
         if writer and new_log:
             writer.writeheader()
         if self.dist.main:
-            print(f"G {count_parameters(self.G):,} params, D {count_parameters(self.D) if self.D else 0:,}; "
-                  f"{len(self.ms)} clips; device {self.device_name()}", file=sys.stderr)
+            self.describe()
         bar = None
         if a.progress and self.dist.main:
             from tqdm import tqdm
@@ -533,49 +508,49 @@ class Trainer:
         stop_at = min(a.steps, a.stop_at) if a.stop_at is not None else a.steps
         t_start, t_ckpt = time.time(), time.time()
         wall0 = self.wall
-        acc: dict[str, list[float]] = {}
-        t_log = time.time()
-        while self.step < stop_at:
-            logs = self.train_step()
-            self.step += 1
-            self.wall = wall0 + time.time() - t_start
-            for k, v in logs.items():
-                acc.setdefault(k, []).append(v)
-            if bar:
-                bar.update(1)
-            if self.step % a.log_every == 0 or self.step == stop_at:
-                means = self.dist.mean_scalars({k: float(np.mean(v)) for k, v in acc.items()})
-                n = len(next(iter(acc.values())))
-                means["sec_per_step"] = (time.time() - t_log) / max(n, 1)
-                t_log = time.time()
-                acc = {}
-                self.last_losses = {k: round(v, 6) for k, v in means.items() if not k.startswith("lr")}
-                if writer:
-                    writer.writerow({"step": self.step, "epoch": self.batcher.epoch, "wall_s": round(self.wall, 1),
-                                     **{k: f"{v:.6g}" for k, v in means.items() if k in fields}})
-                    logf.flush()
+        self.steplog = StepLog(self.device)
+        n_log, lr_sum, t_log = 0, np.zeros(2), time.time()
+        try:
+            while self.step < stop_at:
+                logs = self.train_step()
+                self.step += 1
+                self.steplog.add(self.step, logs)
+                n_log += 1
+                lr_sum += self.lrs
+                self.wall = wall0 + time.time() - t_start
                 if bar:
-                    bar.set_postfix({k: f"{means[k]:.3g}" for k in ("loss_d", "g_adv", "recon") if k in means})
-                if any(not math.isfinite(v) for v in means.values()):
+                    bar.update(1)
+                if self.step % a.log_every == 0 or self.step == stop_at:
+                    means = self.dist.mean_scalars(self.steplog.means())
+                    means.update(lr_g=lr_sum[0] / n_log, lr_d=lr_sum[1] / n_log,
+                                 sec_per_step=(time.time() - t_log) / max(n_log, 1))
+                    n_log, lr_sum, t_log = 0, np.zeros(2), time.time()
+                    self.last_losses = {k: round(v, 6) for k, v in means.items() if not k.startswith("lr")}
+                    if writer:
+                        writer.writerow({"step": self.step, "epoch": self.batcher.epoch, "wall_s": round(self.wall, 1),
+                                         **{k: f"{v:.6g}" for k, v in means.items() if k in fields}})
+                        logf.flush()
+                    if bar:
+                        bar.set_postfix({k: f"{means[k]:.3g}" for k in ("loss_d", "g_adv", "recon") if k in means})
+                    self.check_finite()
+                timed_out = a.time_limit_min is not None and (time.time() - t_start) > a.time_limit_min * 60
+                due = (a.ckpt_every and self.step % a.ckpt_every == 0) or (time.time() - t_ckpt) > a.ckpt_minutes * 60
+                if self.dist.world > 1:      # all ranks must agree (save gathers RNG states)
+                    flag = self.dist.all_reduce(torch.tensor([float(bool(due)), float(bool(timed_out))]),
+                                                torch.distributed.ReduceOp.MAX)
+                    due, timed_out = bool(flag[0]), bool(flag[1])
+                if due or timed_out or self.step == stop_at:
                     self.save()
-                    raise SystemExit(f"step {self.step}: non-finite loss {means}; checkpoint saved, stopping")
-            timed_out = a.time_limit_min is not None and (time.time() - t_start) > a.time_limit_min * 60
-            due = (a.ckpt_every and self.step % a.ckpt_every == 0) or (time.time() - t_ckpt) > a.ckpt_minutes * 60
-            if self.dist.world > 1:      # all ranks must agree (save gathers RNG states)
-                flag = torch.tensor([float(bool(due)), float(bool(timed_out))])
-                torch.distributed.all_reduce(flag, op=torch.distributed.ReduceOp.MAX)
-                due, timed_out = bool(flag[0]), bool(flag[1])
-            if due or timed_out or self.step == stop_at:
-                self.save()
-                t_ckpt = time.time()
-            if timed_out:
-                if self.dist.main:
-                    print(f"time limit reached at step {self.step}", file=sys.stderr)
-                break
-        if bar:
-            bar.close()
-        if logf:
-            logf.close()
+                    t_ckpt = time.time()
+                if timed_out:
+                    if self.dist.main:
+                        print(f"time limit reached at step {self.step}", file=sys.stderr)
+                    break
+        finally:
+            if bar:
+                bar.close()
+            if logf:
+                logf.close()
         self.check_replicas()
 
     def check_replicas(self) -> None:
@@ -590,14 +565,20 @@ class Trainer:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Train; 0 on success, 2 (one line on stderr) for an unusable checkpoint or a non-finite loss."""
     args = build_parser().parse_args(argv)
-    trainer = Trainer(args)
+    trainer = None
     try:
+        trainer = Trainer(args)
         trainer.run()
         if args.weights_out is not None:
             trainer.save_weights(args.weights_out, args.weights_dtype)
+    except (CheckpointError, NonFiniteLoss) as e:
+        print(f"emdm.train: {e}", file=sys.stderr)
+        return 2
     finally:
-        trainer.dist.close()
+        if trainer is not None:
+            trainer.dist.close()
     return 0
 
 

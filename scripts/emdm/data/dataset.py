@@ -6,7 +6,9 @@ frames, at least ``min_frames``), their captions and (when the folder has ``acti
 unconditional training. Caption lines with a nonzero from/to become their own sub-clip, as HumanML3D does.
 
 :class:`BucketBatcher` yields index batches of similar length (less padding → less compute) with an
-exactly resumable, seeded, DDP-shardable order. :func:`collate` pads a batch and builds the frame mask.
+exactly resumable, seeded, DDP-shardable order; with ``alpha`` ≠ 1 it draws clips by action with
+P(action a) ∝ n_a^α (:func:`balanced_weights`). :class:`DeviceClips` holds the whole split as one padded tensor
+on the training device and gathers batches there. :func:`collate` pads a batch and builds the frame mask.
 """
 
 from __future__ import annotations
@@ -211,24 +213,59 @@ def cached_text_embeddings(captions: list[str], encoder_id: str, cache_dir: Path
     return emb
 
 
+def balanced_weights(groups: np.ndarray, alpha: float) -> np.ndarray:
+    """Per-clip probabilities (N,) float64: group (action) a with n_a clips is drawn with P(a) ∝ n_a^α and its
+    clips uniformly, so α = 1 is uniform over clips (the plain epoch) and α = 0 uniform over actions. Clips
+    without an action (-1) form one group of their own."""
+    groups = np.asarray(groups)
+    if not np.isfinite(alpha) or alpha < 0:
+        raise ValueError(f"balance alpha must be a finite number ≥ 0, got {alpha}")
+    _, inv, counts = np.unique(groups, return_inverse=True, return_counts=True)
+    pa = counts.astype(np.float64) ** alpha
+    pa /= pa.sum()
+    return pa[inv] / counts[inv]
+
+
+def action_shares(groups: np.ndarray, alpha: float, labels: list[str]) -> list[dict]:
+    """Per action, most drawn first: {"action", "clips", "share" (P at α), "share_clips" (P at α = 1)}."""
+    groups = np.asarray(groups)
+    w = balanced_weights(groups, alpha)
+    rows = []
+    for a in np.unique(groups):
+        sel = groups == a
+        name = labels[a] if 0 <= a < len(labels) else ("(no action)" if a < 0 else str(a))
+        rows.append({"action": name, "clips": int(sel.sum()), "share": float(w[sel].sum()),
+                     "share_clips": float(sel.mean())})
+    return sorted(rows, key=lambda r: (-r["share"], r["action"]))
+
+
 class BucketBatcher:
     """Seeded batches of similar-length clips; ``state()``/``load_state()`` give exact resume.
 
-    Each epoch: permute (seed, epoch), cut into chunks of ``batch * bucket`` clips, sort each chunk by
+    Each epoch: permute (seed, epoch) — or, with ``alpha`` ≠ 1, draw N clips with replacement with the
+    :func:`balanced_weights` of ``groups`` —, cut into chunks of ``batch * bucket`` clips, sort each chunk by
     length, cut into batches, permute the batches. With ``world > 1`` every rank takes its own
     ``batch``-sized slice of each global batch of ``batch * world`` clips.
     """
 
-    def __init__(self, lengths: np.ndarray, batch: int, seed: int = 0, bucket: int = 20, rank: int = 0, world: int = 1):
+    def __init__(self, lengths: np.ndarray, batch: int, seed: int = 0, bucket: int = 20, rank: int = 0, world: int = 1,
+                 groups: np.ndarray | None = None, alpha: float = 1.0):
         if len(lengths) < batch * world:
             raise ValueError(f"dataset has {len(lengths)} clips, fewer than one global batch ({batch}×{world})")
         self.lengths, self.batch, self.seed, self.bucket, self.rank, self.world = np.asarray(lengths), batch, seed, bucket, rank, world
+        self.alpha = float(alpha)
+        self.weights = None
+        if self.alpha != 1.0:
+            if groups is None or len(groups) != len(lengths):
+                raise ValueError("balanced sampling (alpha ≠ 1) needs one group (action id) per clip")
+            self.weights = balanced_weights(groups, self.alpha)
         self.epoch, self.pos = 0, 0
         self._order = self._epoch_batches(0)
 
     def _epoch_batches(self, epoch: int) -> list[np.ndarray]:
         rng = np.random.default_rng([self.seed, epoch])
-        perm = rng.permutation(len(self.lengths))
+        n = len(self.lengths)
+        perm = rng.permutation(n) if self.weights is None else rng.choice(n, size=n, p=self.weights)
         gb = self.batch * self.world
         chunk = gb * self.bucket
         batches = []
@@ -240,20 +277,94 @@ class BucketBatcher:
         return [batches[i][self.rank * self.batch:(self.rank + 1) * self.batch] for i in order]
 
     def next(self) -> np.ndarray:
+        return self.next_row()[2]
+
+    def next_row(self) -> tuple[int, int, np.ndarray]:
+        """(epoch, row of :meth:`epoch_order`, clip indices) of the next batch."""
         if self.pos >= len(self._order):
             self.epoch += 1
             self.pos = 0
             self._order = self._epoch_batches(self.epoch)
         b = self._order[self.pos]
         self.pos += 1
-        return b
+        return self.epoch, self.pos - 1, b
+
+    def epoch_order(self) -> np.ndarray:
+        """This rank's batches of the current epoch, (batches, batch) int64."""
+        return np.stack(self._order).astype(np.int64)
 
     def state(self) -> dict:
-        return {"epoch": self.epoch, "pos": self.pos, "seed": self.seed}
+        return {"epoch": self.epoch, "pos": self.pos, "seed": self.seed, "alpha": self.alpha}
 
     def load_state(self, st: dict) -> None:
+        alpha = float(st.get("alpha", 1.0))
+        if alpha != self.alpha:
+            raise ValueError(f"the checkpoint's data order was drawn with balance alpha {alpha}, this run asks "
+                             f"for {self.alpha}: use the same --balance-alpha, or another --out / --no-resume")
         self.seed, self.epoch, self.pos = st["seed"], st["epoch"], st["pos"]
         self._order = self._epoch_batches(self.epoch)
+
+
+def crop_plan(lengths: np.ndarray, p: float, crop_min: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Random sub-windows: (start, length) per clip of ``lengths`` (any shape). With probability ``p`` a clip
+    longer than ``crop_min`` gets a window of crop_min..len frames at a uniform start; otherwise the whole clip."""
+    lengths = np.asarray(lengths, np.int64)
+    start, n = np.zeros_like(lengths), lengths.copy()
+    if p <= 0:
+        return start, n
+    u = rng.random(lengths.shape)
+    v = rng.random(lengths.shape)
+    w = rng.random(lengths.shape)
+    do = (u < p) & (lengths > crop_min)
+    cut = crop_min + np.floor(v * (lengths - crop_min + 1)).astype(np.int64)
+    cut = np.minimum(cut, lengths)
+    s = np.floor(w * (lengths - cut + 1)).astype(np.int64)
+    return np.where(do, s, 0), np.where(do, cut, lengths)
+
+
+class DeviceClips:
+    """The whole split as one zero-padded tensor on ``device`` (N, L_max, 263), with lengths, actions and (text
+    task) a padded table of each clip's caption ids, so a batch is gathered on the device without collation.
+
+    Memory: N × L_max × 263 × 4 bytes (7,202 clips × 196 frames ≈ 1.5 GB)."""
+
+    def __init__(self, ms: MotionSet, device, clip_caps: list[np.ndarray] | None = None):
+        import torch
+
+        n, lmax = len(ms), int(ms.lengths.max())
+        x = torch.zeros(n, lmax, FEATURE_DIM, dtype=torch.float32)
+        for i, m in enumerate(ms.motions):
+            x[i, : len(m)] = torch.from_numpy(m)
+        self.device = device
+        self.x = x.to(device)
+        self.max_len = lmax
+        self.actions = torch.from_numpy(ms.actions).to(device)
+        self.caps = self.ncaps = None
+        if clip_caps is not None:
+            width = max(len(c) for c in clip_caps)
+            caps = np.zeros((n, width), np.int64)
+            for i, c in enumerate(clip_caps):
+                caps[i, : len(c)] = c
+            self.caps = torch.from_numpy(caps).to(device)
+            self.ncaps = torch.from_numpy(np.array([len(c) for c in clip_caps], np.int64)).to(device)
+
+    def gather(self, idx, start, length, frames: int):
+        """idx, start, length (B,) device int64; ``frames`` (host int ≥ max length) → x0 (B, frames, 263), mask."""
+        import torch
+
+        ar = torch.arange(frames, device=self.x.device)
+        mask = (ar[None] < length[:, None])
+        rows = (start[:, None] + ar[None]).clamp(max=self.max_len - 1)
+        x0 = self.x[idx[:, None], rows] * mask.unsqueeze(-1)
+        return x0, mask.float()
+
+    def pick_captions(self, idx):
+        """One caption id per clip of ``idx``, uniformly among the clip's captions (device RNG)."""
+        import torch
+
+        n = self.ncaps[idx]
+        j = torch.minimum((torch.rand(idx.shape, device=self.x.device) * n).long(), n - 1)
+        return self.caps[idx, j]
 
 
 def collate(motions: list[np.ndarray], max_frames: int = MAX_FRAMES) -> tuple[np.ndarray, np.ndarray]:

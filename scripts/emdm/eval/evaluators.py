@@ -347,7 +347,13 @@ def load(path: Path | str, kind: str | None = None) -> MatchingModel | ActionCla
     if not path.exists():
         raise FileNotFoundError(f"{path}: evaluator checkpoint not found; train it with "
                                 f"`python -m emdm.eval.evaluators {kind or 'matcher'} --out {path}`")
-    ck = torch.load(path, map_location="cpu", weights_only=False)
+    try:                                     # tensors and plain values only: a checkpoint cannot run code
+        from emdm.checkpoints import torch_load
+
+        ck = torch_load(path)
+    except Exception as e:  # noqa: BLE001 - re-raised as one line naming the file
+        first = (str(e).strip().splitlines() or [type(e).__name__])[0]
+        raise ValueError(f"{path}: cannot read as an evaluator checkpoint: {type(e).__name__}: {first[:200]}") from e
     if not isinstance(ck, dict) or ck.get("schema") != CHECKPOINT_SCHEMA:
         raise ValueError(f"{path}: not an evaluator checkpoint of schema {CHECKPOINT_SCHEMA}")
     if kind is not None and ck["kind"] != kind:
