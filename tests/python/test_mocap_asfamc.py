@@ -113,6 +113,48 @@ def test_malformed_amc_reports_file_and_line(tmp_path, old, new, line, needle):
     assert needle in str(e.value)
 
 
+@pytest.mark.parametrize("old,new,line,needle", [
+    ("root 1 2 3 0 0 90", "root 1 nan 3 0 0 90", 8, "'nan' is not a finite number"),
+    ("root 1 2 3 0 0 90", "root 1 2 3 0 0 -inf", 8, "'-inf' is not a finite number"),
+    ("lower 90 0\n4", "lower 1e308 0\n4", 14, "out of range"),
+])
+def test_non_finite_and_absurd_amc_values_report_the_line(tmp_path, old, new, line, needle):
+    asf_p, amc_p = _write(tmp_path)
+    amc_p.write_text(amc_p.read_text().replace(old, new))
+    with pytest.raises(MocapFormatError) as e:
+        asfamc.read_amc(amc_p, asfamc.read_asf(asf_p))
+    assert e.value.line == line and needle in str(e.value), str(e.value)
+
+
+def test_a_position_that_overflows_after_scaling_is_refused(tmp_path):
+    """1e308 inches in the root's tx is finite in the file; in metres its square is inf (Mean/Std NaN)."""
+    from emdm.mocap.jointmap import load_joint_map
+    from emdm.mocap.load import load_amc_clip
+
+    asf_p, amc_p = _write(tmp_path)
+    amc_p.write_text(amc_p.read_text().replace("root 1 2 3 0 0 90", "root 1e308 2 3 0 0 90"))
+    jm = load_joint_map("cmu_asfamc")
+    jm.joints = {n: ("lower" if n.startswith("l") else "upper") for n in jm.joints}
+    with pytest.raises(MocapFormatError, match="out of range") as e:
+        load_amc_clip(amc_p, asfamc.read_asf(asf_p), jm)
+    assert e.value.path == str(amc_p)
+
+
+def test_missing_asf_names_the_file_it_looked_for(tmp_path):
+    from emdm.mocap.load import find_asf
+
+    (tmp_path / "take.amc").write_text("")
+    with pytest.raises(MocapFormatError, match=r"take\.asf") as e:
+        find_asf(tmp_path / "take.amc")
+    assert "(tried )" not in str(e.value)
+    (tmp_path / "a.asf").write_text("")
+    (tmp_path / "b.asf").write_text("")
+    with pytest.raises(MocapFormatError, match="2 .asf files"):
+        find_asf(tmp_path / "take.amc")
+    (tmp_path / "take.asf").write_text("")
+    assert find_asf(tmp_path / "take.amc") == tmp_path / "take.asf"
+
+
 @pytest.mark.parametrize("old,new,needle", [
     ("axis 0 0 0  XYZ", "axis 0 0 0", "expected 'axis ax ay az ORDER'"),
     ("    upper lower", "    upper forearm", "names bone 'forearm'"),

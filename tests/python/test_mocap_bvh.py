@@ -74,6 +74,11 @@ def test_partial_fk_computes_only_the_requested_joints_and_ancestors(tmp_path):
     (lambda s: s.replace("  }\n}\nMOTION", "  }\nMOTION"), 20, "unclosed"),
     (lambda s: s.replace("HIERARCHY", "HIERARCHIE"), 1, "expected 'HIERARCHY'"),
     (lambda s: s.replace("0 0 0  0 0 0   0 0 0    0 0 2", "0 0 0  0 0 0   0 0 x    0 0 2"), 24, "expected a number"),
+    (lambda s: s.replace("10 20 30  90", "10 nan 30  90"), 25, "joint 'Base' yposition: 'nan' is not a finite number"),
+    (lambda s: s.replace("0 0 0  0 0 0   90 90 0", "0 0 0  0 0 0   90 1e308 0"), 26, "'Mid' xrotation: 1e308 degrees is out of range"),
+    (lambda s: s.replace("OFFSET 0 0 2", "OFFSET 0 inf 2"), 12, "'inf' is not a finite number"),
+    (lambda s: s.replace("Frame Time: 0.0333333", "Frame Time: inf"), 23, "Frame Time: 'inf' is not a finite number"),
+    (lambda s: s.replace("Frame Time: 0.0333333", "Frame Time: 0"), 23, "Frame Time must be between 1e-05 and 10 seconds"),
 ])
 def test_malformed_files_report_file_and_line(tmp_path, edit, line, needle):
     p = tmp_path / "bad.bvh"

@@ -61,6 +61,17 @@ def test_invalid_maps_name_the_field(tmp_path, edit, field):
     assert str(p) in str(e.value)
 
 
+def test_unknown_name_and_broken_json_say_what_to_do(tmp_path):
+    with pytest.raises(FileNotFoundError) as e:
+        load_joint_map("no_such_rig")
+    assert "'no_such_rig'" in str(e.value) and "bandai, cmu_asfamc, cmu_cc_bvh" in str(e.value)
+    p = tmp_path / "m.json"
+    p.write_text('{"name": "m",\n  "format": "bvh" "scale": 1}')
+    with pytest.raises(MocapFormatError, match="column 19") as e:
+        load_joint_map(p)
+    assert e.value.line == 2 and e.value.path == str(p)
+
+
 def test_missing_source_point_is_reported():
     m = parse_joint_map(_identity_map(), "t.json")
     with pytest.raises(MocapFormatError, match="needs point 'head'"):

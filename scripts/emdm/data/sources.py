@@ -8,7 +8,8 @@
   versions of one trial share a take id, so the split never separates them.
 * a user folder (``user_jobs``): every ``*.bvh`` / ``*.amc`` below it, with one joint map; the action
   is the file's sub-folder name (or ``unknown``), captions from a ``<stem>.txt`` beside the file
-  (one caption per line) or made from the action name.
+  (one caption per line) or made from the action name. An AMC without its ASF is still a job: it is
+  skipped when processed, with the reason naming the file looked for.
 """
 
 from __future__ import annotations
@@ -150,6 +151,12 @@ def user_jobs(root: Path, joint_map: str, amc_fps: float = 120.0, n_captions: in
             caps = [f"A person performs the motion: {phrase}."]
         clip = _safe(str(rel.with_suffix("")).replace("/", "-"))
         kind = "bvh" if f.suffix.lower() == ".bvh" else "amc"
+        asf, extra = "", {}
+        if kind == "amc":
+            try:
+                asf = str(find_asf(f))
+            except MocapFormatError as e:   # that file is skipped with this reason, the others go on
+                extra["asf_error"] = e.message
         jobs.append(Job("user", kind, str(f), joint_map, f"user/{clip}", clip, action, "", caps[:max(n_captions, len(caps))],
-                        asf=str(find_asf(f)) if kind == "amc" else "", fps=amc_fps))
+                        asf=asf, fps=amc_fps, extra=extra))
     return jobs

@@ -18,6 +18,7 @@ come back in metres (``v / L * 0.0254``) unless ``length_scale`` overrides that 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,6 +28,7 @@ from emdm.mocap.errors import MocapFormatError
 from emdm.mocap.rotations import axis_rotation
 
 INCH = 0.0254
+MAX_DEGREES = 1e7          # a rotation beyond this (~28,000 turns) is a broken value: cos/sin of it are noise
 
 
 @dataclass
@@ -74,9 +76,12 @@ def _floats(toks: list[str], path: str, line: int, what: str) -> list[float]:
     out = []
     for t in toks:
         try:
-            out.append(float(t))
+            v = float(t)
         except ValueError:
             raise MocapFormatError(path, line, f"expected a number in {what}, got {t!r}") from None
+        if not math.isfinite(v):
+            raise MocapFormatError(path, line, f"{what}: {t!r} is not a finite number")
+        out.append(v)
     return out
 
 
@@ -187,6 +192,8 @@ def parse_amc_text(text: str, asf: ASF, path: str = "<amc>") -> AMC:
     angle_unit = None
     counts = {b: len(asf.bones[b].dof) for b in asf.bones}
     counts["root"] = len(asf.root_order)
+    rot_cols = {b: [i for i, d in enumerate(asf.bones[b].dof) if d[0] == "r"] for b in asf.bones}
+    rot_cols["root"] = [i for i, d in enumerate(asf.root_order) if d[0] == "r"]
     rows: dict[str, list[list[float]]] = {b: [] for b in counts}
     frame = 0
     frame_line = 0
@@ -222,6 +229,11 @@ def parse_amc_text(text: str, asf: ASF, path: str = "<amc>") -> AMC:
         vals = _floats(toks[1:], path, ln, f"bone {bone!r}")
         if len(vals) != counts[bone]:
             raise MocapFormatError(path, ln, f"bone {bone!r} has {len(vals)} values, expected {counts[bone]} (its dof)")
+        limit = MAX_DEGREES if (angle_unit or asf.angle_unit) == "deg" else math.radians(MAX_DEGREES)
+        for i in rot_cols[bone]:
+            if abs(vals[i]) > limit:
+                raise MocapFormatError(path, ln, f"bone {bone!r}: rotation {toks[1 + i]} is out of range (more than "
+                                                 f"{MAX_DEGREES:g} degrees; the value is broken)")
         rows[bone].append(vals)
     if frame == 0:
         raise MocapFormatError(path, None, "no frames found")

@@ -7,10 +7,14 @@ unit (positions are returned in file units; the joint map says how to convert).
 
 Position channels replace the joint's OFFSET (the usual convention); joints without position
 channels use their OFFSET. Rotation channels are in degrees.
+
+Every number must be finite, a rotation within ``MAX_DEGREES`` (beyond it cos/sin are noise) and the
+Frame Time within ``FRAME_TIME_RANGE`` seconds; otherwise ``MocapFormatError`` names the line.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -19,6 +23,8 @@ import numpy as np
 from emdm.mocap.errors import MocapFormatError
 from emdm.mocap.rotations import axis_rotation
 
+MAX_DEGREES = 1e7                      # ~28,000 turns: more is a broken value, not an unwrapped spin
+FRAME_TIME_RANGE = (1e-5, 10.0)        # seconds: 100,000 fps .. 0.1 fps
 _CHANNELS = {"xposition", "yposition", "zposition", "xrotation", "yrotation", "zrotation"}
 
 
@@ -55,13 +61,16 @@ class BVH:
 
 def _parse_float(tok: str, path: str, line: int, what: str) -> float:
     try:
-        return float(tok)
+        v = float(tok)
     except ValueError:
         raise MocapFormatError(path, line, f"expected a number for {what}, got {tok!r}") from None
+    if not math.isfinite(v):
+        raise MocapFormatError(path, line, f"{what}: {tok!r} is not a finite number")
+    return v
 
 
-def parse_bvh_text(text: str, path: str = "<string>") -> BVH:
-    lines = text.splitlines()
+def _parse_hierarchy(lines: list[str], path: str):
+    """HIERARCHY ... MOTION -> (names, parents, offsets, channels, end_site, index of the line after MOTION)."""
     names: list[str] = []
     parents: list[int] = []
     offsets: list[list[float]] = []
@@ -161,6 +170,30 @@ def parse_bvh_text(text: str, path: str = "<string>") -> BVH:
             raise MocapFormatError(path, lineno, f"unexpected {toks[0]!r} in HIERARCHY")
         i += 1
 
+    return names, parents, offsets, channels, end_site, i
+
+
+def read_bvh_names(path: str | Path) -> list[str]:
+    """The joint names of a BVH file (End Sites as ``<parent>_End``), from its HIERARCHY only."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8", errors="replace")
+    except OSError as e:
+        raise MocapFormatError(str(p), None, f"cannot read: {e.strerror}") from e
+    head = text.split("\nMOTION", 1)[0].splitlines() + ["MOTION"]
+    return _parse_hierarchy(head, str(p))[0]
+
+
+def parse_bvh_text(text: str, path: str = "<string>") -> BVH:
+    lines = text.splitlines()
+    n = len(lines)
+    names, parents, offsets, channels, end_site, i = _parse_hierarchy(lines, path)
+
+    def next_nonempty(i: int) -> int:
+        while i < n and not lines[i].strip():
+            i += 1
+        return i
+
     # MOTION header
     i = next_nonempty(i)
     if i >= n or not lines[i].strip().lower().startswith("frames:"):
@@ -173,8 +206,10 @@ def parse_bvh_text(text: str, path: str = "<string>") -> BVH:
     if i >= n or not lines[i].strip().lower().startswith("frame time:"):
         raise MocapFormatError(path, i + 1 if i < n else n, "expected 'Frame Time: <seconds>'")
     frame_time = _parse_float(lines[i].split(":", 1)[1].strip(), path, i + 1, "Frame Time")
-    if not frame_time > 0:
-        raise MocapFormatError(path, i + 1, f"Frame Time must be positive, got {frame_time}")
+    lo, hi = FRAME_TIME_RANGE
+    if not lo <= frame_time <= hi:
+        raise MocapFormatError(path, i + 1, f"Frame Time must be between {lo:g} and {hi:g} seconds "
+                                            f"({1 / lo:g} to {1 / hi:g} fps), got {frame_time:g}")
     first_data = i + 1
     starts, total = [], 0
     for c in channels:
@@ -188,7 +223,36 @@ def parse_bvh_text(text: str, path: str = "<string>") -> BVH:
     if values is None or values.size != frames * total:
         _locate_motion_error(lines, first_data, frames, total, path)
     motion = values.reshape(frames, total) if total else np.zeros((frames, 0))
+    _check_motion_values(motion, channels, names, lines, first_data, path)
     return BVH(path, names, parents, np.array(offsets, dtype=np.float64), channels, starts, frame_time, motion, end_site)
+
+
+def _check_motion_values(motion: np.ndarray, channels: list[list[str]], names: list[str], lines: list[str],
+                         first: int, path: str) -> None:
+    """Every value finite, every rotation within MAX_DEGREES; else the line, joint and channel."""
+    owner = [(names[j], c) for j, chans in enumerate(channels) for c in chans]
+    rot = np.array([c.endswith("rotation") for _, c in owner], dtype=bool)
+    bad = ~np.isfinite(motion)
+    bad_rot = np.zeros_like(bad)
+    if rot.any():
+        with np.errstate(invalid="ignore"):
+            bad_rot[:, rot] = np.abs(motion[:, rot]) > MAX_DEGREES
+    if not (bad.any() or bad_rot.any()):
+        return
+    flat = int(np.flatnonzero((bad | bad_rot).ravel())[0])
+    row, col = divmod(flat, motion.shape[1])
+    seen = 0
+    for k in range(first, len(lines)):          # the line holding value number ``flat`` of the motion block
+        toks = lines[k].split()
+        if seen + len(toks) > flat:
+            tok = toks[flat - seen]
+            joint, chan = owner[col]
+            where = f"motion row {row + 1}, joint {joint!r} {chan}"
+            if bad.ravel()[flat]:
+                raise MocapFormatError(path, k + 1, f"{where}: {tok!r} is not a finite number")
+            raise MocapFormatError(path, k + 1, f"{where}: {tok} degrees is out of range (more than "
+                                                f"{MAX_DEGREES:g} degrees; the value is broken)")
+        seen += len(toks)
 
 
 def _locate_motion_error(lines: list[str], first: int, frames: int, total: int, path: str) -> None:

@@ -129,13 +129,16 @@ def parse_joint_map(data: Any, path: str) -> JointMap:
 def load_joint_map(name_or_path: str | Path) -> JointMap:
     """A built-in map by name ('bandai', 'cmu_asfamc', 'cmu_cc_bvh') or a JSON file path."""
     p = Path(name_or_path)
+    builtin = ", ".join(sorted(q.stem for q in BUILTIN_DIR.glob("*.json")))
     if not p.suffix and not p.exists():
         p = BUILTIN_DIR / f"{name_or_path}.json"
+        if not p.is_file():
+            raise FileNotFoundError(f"joint map {str(name_or_path)!r} is neither a built-in map ({builtin}) nor a "
+                                    "JSON file; give one of those names or the path of your map (see docs/DATA.md)")
     if not p.is_file():
-        builtin = ", ".join(sorted(q.stem for q in BUILTIN_DIR.glob("*.json")))
-        raise FileNotFoundError(f"{p}: joint map not found (built-in maps: {builtin})")
+        raise FileNotFoundError(f"{p}: joint map file not found (built-in maps: {builtin})")
     try:
         data = json.loads(p.read_text())
     except json.JSONDecodeError as e:
-        raise MocapFormatError(str(p), e.lineno, f"invalid JSON: {e.msg}") from e
+        raise MocapFormatError(str(p), e.lineno, f"invalid JSON at column {e.colno}: {e.msg}") from e
     return parse_joint_map(data, str(p))
