@@ -10,6 +10,11 @@ quantised to ``QUANTUM`` metres and delta-coded along time (xz-compressed). Unpa
 makes them) and recomputes ``new_joint_vecs/`` with ``extract_features``: the code ``prepare`` ran, on
 joints within QUANTUM/2 of the originals (mirrored copies, re-normalised, within ~0.3 mm). Mean/Std are the packed (original) ones, so normalisation is
 unchanged. Both directions write to a temporary file/folder and rename it into place at the end.
+
+Neither direction destroys what it did not write (``emdm.outdir``): an existing archive path that is not a
+pack archive, or an unpack folder that is not a dataset, is refused unless ``--force``; an unpack folder
+that is or holds the archive (or the repository) is refused always. Archive members are checked before
+anything is written: only plain files, inside the target folder (``emdm.data.unpack.unsafe_member``).
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ from __future__ import annotations
 import argparse
 import io
 import json
+import lzma
 import os
 import shutil
 import sys
@@ -29,9 +35,10 @@ import numpy as np
 
 from emdm import skeleton as sk
 from emdm.data.dataset import DatasetError
-from emdm.data.prepare import publish
+from emdm.data.unpack import UnsafeArchiveError, unsafe_member
 from emdm.motion.features import extract_features
 from emdm.motion.retarget import normalize_clip
+from emdm.outdir import OutputRefused, check_out, replace_dir
 
 QUANTUM = 1e-5            # metres (0.01 mm)
 FORMAT = 1
@@ -53,8 +60,24 @@ def _add_bytes(tar: tarfile.TarFile, name: str, data: bytes) -> None:
     tar.addfile(info, io.BytesIO(data))
 
 
-def pack(root: Path, out: Path) -> dict:
+def is_pack_archive(path: Path) -> bool:
+    """An archive written by ``pack``: an xz tar whose first member is pack.json."""
+    try:
+        with tarfile.open(path, "r:xz") as tar:
+            first = tar.next()
+    except (tarfile.TarError, OSError, EOFError, lzma.LZMAError):
+        return False
+    return first is not None and first.name == "pack.json"
+
+
+def pack(root: Path, out: Path, force: bool = False) -> dict:
     root = Path(root)
+    out = Path(out)
+    if out.is_dir():
+        raise OutputRefused(f"{out}: is a folder; give the archive's file name (e.g. dataset.tar.xz)")
+    if out.exists() and not force and not is_pack_archive(out):
+        raise OutputRefused(f"{out}: exists and is not an archive written by emdm.data.pack; nothing was changed "
+                            "(give --force to replace it, or choose a new name)")
     ids = _ids(root)
     base_ids = [i for i in ids if not i.startswith("M")]
     mirrored = sorted(set(ids) - set(base_ids))
@@ -73,11 +96,20 @@ def pack(root: Path, out: Path) -> dict:
         deltas.append(np.diff(q, axis=0, prepend=np.zeros_like(q[:1])))
         lengths.append(len(j))
     d = np.concatenate(deltas).astype(np.int32)
-    out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(out.name + ".tmp")
     header = {"format": FORMAT, "quantum": QUANTUM, "ids": base_ids, "lengths": lengths,
               "mirrored": mirrored, "clips": len(ids)}
+    try:
+        _write_pack(tmp, root, ids, d, header)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    os.replace(tmp, out)
+    return {"clips": len(ids), "packed_clips": len(base_ids), "frames": int(sum(lengths)), "bytes": out.stat().st_size}
+
+
+def _write_pack(tmp: Path, root: Path, ids: list[str], d: np.ndarray, header: dict) -> None:
     with tarfile.open(tmp, "w:xz", preset=6) as tar:
         _add_bytes(tar, "pack.json", json.dumps(header).encode())
         buf = io.BytesIO()
@@ -90,8 +122,6 @@ def pack(root: Path, out: Path) -> dict:
             p = root / "texts" / f"{cid}.txt"
             if p.is_file():
                 _add_bytes(tar, f"texts/{cid}.txt", p.read_bytes())
-    os.replace(tmp, out)
-    return {"clips": len(ids), "packed_clips": len(base_ids), "frames": int(sum(lengths)), "bytes": out.stat().st_size}
 
 
 def _rebuild_clip(job: tuple[str, str, np.ndarray, bool]) -> None:
@@ -106,15 +136,21 @@ def _rebuild_clip(job: tuple[str, str, np.ndarray, bool]) -> None:
         np.save(Path(root) / "new_joint_vecs" / f"{vid}.npy", extract_features(j))
 
 
-def unpack(archive: Path, out: Path, workers: int = 1) -> dict:
+def unpack(archive: Path, out: Path, workers: int = 1, force: bool = False) -> dict:
     archive, out = Path(archive), Path(out)
     if not archive.is_file():
         raise DatasetError(f"{archive}: archive not found")
+    out = check_out(out, inputs=[("archive", archive)], force=force, option="unpack folder")
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
     try:
         with tarfile.open(archive, "r:xz") as tar:
-            names = set(tar.getnames())
+            members = tar.getmembers()
+            for m in members:
+                why = unsafe_member(m, tmp) or ("" if m.isfile() else "is a folder; a pack archive holds files only")
+                if why:
+                    raise UnsafeArchiveError(f"{archive}: refusing member {m.name!r}: it {why}")
+            names = {m.name for m in members}
             for need in ("pack.json", "joints_delta.npy", "all.txt", "Mean.npy", "Std.npy"):
                 if need not in names:
                     raise DatasetError(f"{archive}: member {need} missing (not written by emdm.data.pack)")
@@ -122,11 +158,9 @@ def unpack(archive: Path, out: Path, workers: int = 1) -> dict:
             if header.get("format") != FORMAT:
                 raise DatasetError(f"{archive}: pack format {header.get('format')!r}, this reader knows {FORMAT}")
             d = np.load(io.BytesIO(tar.extractfile("joints_delta.npy").read()))
-            for m in tar.getmembers():
+            for m in members:
                 if m.name in ("pack.json", "joints_delta.npy"):
                     continue
-                if m.name.startswith("/") or ".." in Path(m.name).parts or not m.isfile():
-                    raise DatasetError(f"{archive}: unsafe member {m.name!r}")
                 dst = tmp / m.name
                 dst.parent.mkdir(parents=True, exist_ok=True)
                 dst.write_bytes(tar.extractfile(m).read())
@@ -147,7 +181,7 @@ def unpack(archive: Path, out: Path, workers: int = 1) -> dict:
         else:
             for job in jobs:
                 _rebuild_clip(job)
-        publish(tmp, out)
+        replace_dir(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
@@ -160,17 +194,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("dst", type=Path, help="archive (pack) or dataset folder (--unpack)")
     ap.add_argument("--unpack", action="store_true")
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="unpack: processes rebuilding features")
+    ap.add_argument("--force", action="store_true",
+                    help="replace a destination this tool did not write (never the archive's own folder or the repository)")
     a = ap.parse_args(argv)
     t0 = time.time()
     try:
         if a.unpack:
-            r = unpack(a.src, a.dst, a.workers)
+            r = unpack(a.src, a.dst, a.workers, force=a.force)
             print(f"unpacked {a.src} -> {a.dst}: {r['clips']} clips ({time.time() - t0:.1f} s)")
         else:
-            r = pack(a.src, a.dst)
+            r = pack(a.src, a.dst, force=a.force)
             print(f"packed {a.src} -> {a.dst}: {r['clips']} clips ({r['packed_clips']} stored, {r['frames']} frames), "
                   f"{r['bytes'] / 1e6:.1f} MB ({time.time() - t0:.1f} s)")
-    except DatasetError as e:
+    except (DatasetError, OutputRefused, UnsafeArchiveError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     return 0

@@ -6,6 +6,11 @@
 
 The dataset is written into a temporary folder beside ``--out`` and renamed into place at the end,
 so ``--out`` is never half-written (training may start as soon as train.txt and Mean.npy exist).
+An existing ``--out`` is replaced only when it is a dataset this tool wrote (or with ``--force``), and
+never when it is, or holds, an input or the repository (``emdm.outdir``). The joint map is loaded and
+checked against the first readable input file before any take is processed. A file that cannot be used
+is skipped with its reason (``skipped.txt``); when every file is skipped nothing is written, the reasons
+are printed and kept in ``<out>.skipped.txt`` beside ``--out``, and the exit status is 2.
 """
 
 from __future__ import annotations
@@ -13,7 +18,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
-import os
+import math
 import shutil
 import sys
 import tempfile
@@ -31,8 +36,11 @@ from emdm.data.actions import vocabulary
 from emdm.data.process import process_job
 from emdm.data.split import split_takes
 from emdm.data.stats import mean_std
-from emdm.data.unpack import unpack_archive
+from emdm.data.unpack import UnsafeArchiveError, unpack_archive
 from emdm.mocap.errors import MocapFormatError
+from emdm.mocap.jointmap import JointMap, load_joint_map
+from emdm.mocap.load import source_point_names
+from emdm.outdir import PREPARE_TOOL, OutputRefused, check_out, replace_dir
 
 ARCHIVES = {
     "bandai": "bandai-namco-motion.tar.xz",
@@ -42,24 +50,79 @@ ARCHIVES = {
 DEFAULT_MIN_FRAMES = sk.MIN_FRAMES
 
 
-def collect_jobs(args) -> tuple[list[sources.Job], list[tuple[str, str]]]:
+SIDE_HEADER = "# emdm.data.prepare: every file was skipped, nothing was written to "
+
+
+class PrepareError(Exception):
+    """A run that cannot go on; the message is one line saying what was wrong and what to do (exit 2)."""
+
+
+def run_inputs(args) -> list[tuple[str, str]]:
+    """(option, path) of everything the run reads: --out may be none of them, nor hold one."""
+    inputs = [("--input-dir", args.input_dir)] if args.input_dir else []
+    if args.joint_map and Path(args.joint_map).is_file():
+        inputs.append(("--joint-map", args.joint_map))
+    if args.sources:
+        inputs += [("--shared", args.shared), ("--raw-dir", args.raw_dir)]
+    return inputs
+
+
+def load_map(name_or_path: str) -> JointMap:
+    try:
+        return load_joint_map(name_or_path)
+    except (FileNotFoundError, MocapFormatError) as e:
+        raise PrepareError(f"--joint-map: {e}") from None
+
+
+def check_joint_map(jm: JointMap, jobs: list[sources.Job]) -> None:
+    """The map's points all exist in the first input file whose skeleton reads (files that do not read are
+    skipped later, each with its own reason)."""
+    for job in jobs:
+        try:
+            names = source_point_names(job.kind, job.path, job.asf)
+        except (MocapFormatError, OSError):
+            continue
+        have = set(names)
+        missing = [n for n in jm.point_names() if n not in have]
+        if missing:
+            more = f" and {len(missing) - 6} more" if len(missing) > 6 else ""
+            raise PrepareError(
+                f"--joint-map {jm.name!r} ({jm.path}) needs {', '.join(map(repr, missing[:6]))}{more}, which "
+                f"{job.path} (the first input file that reads) does not have; it has {', '.join(names[:8])}"
+                f"{' ...' if len(names) > 8 else ''}. Is this the map for this rig? (see docs/DATA.md)")
+        return
+
+
+def collect_jobs(args) -> list[sources.Job]:
+    """Every take to process. Errors that stop the run (no input, a bad joint map) are PrepareError."""
     jobs: list[sources.Job] = []
-    problems: list[tuple[str, str]] = []
     if args.input_dir:
         if not args.joint_map:
-            raise SystemExit("--input-dir needs --joint-map (a built-in name or a JSON file; see docs/DATA.md)")
-        jobs += sources.user_jobs(Path(args.input_dir), args.joint_map, args.amc_fps, args.captions)
+            raise PrepareError("--input-dir needs --joint-map (a built-in name or a JSON file; see docs/DATA.md)")
+        jm = load_map(args.joint_map)          # before any file is read
+        root = Path(args.input_dir)
+        if not root.is_dir():
+            raise PrepareError(f"--input-dir {root}: not a folder")
+        try:
+            user = sources.user_jobs(root, args.joint_map, args.amc_fps, args.captions)
+        except FileNotFoundError as e:
+            raise PrepareError(f"--input-dir: {e}") from None
+        check_joint_map(jm, user)
+        jobs += user
     names = [s.strip() for s in args.sources.split(",") if s.strip()] if args.sources else []
     for name in names:
         if name not in ARCHIVES:
-            raise SystemExit(f"--sources: unknown source {name!r} (expected any of {', '.join(ARCHIVES)})")
+            raise PrepareError(f"--sources: unknown source {name!r} (expected any of {', '.join(ARCHIVES)})")
         archive = Path(args.shared) / ARCHIVES[name]
-        root = unpack_archive(archive, Path(args.raw_dir))
-        finder = {"bandai": sources.bandai_jobs, "hdm05": sources.hdm05_jobs, "cmu": sources.cmu_jobs}[name]
-        jobs += finder(root, args.captions)
+        try:
+            root = unpack_archive(archive, Path(args.raw_dir), force=args.force)
+            finder = {"bandai": sources.bandai_jobs, "hdm05": sources.hdm05_jobs, "cmu": sources.cmu_jobs}[name]
+            jobs += finder(root, args.captions)
+        except (FileNotFoundError, MocapFormatError, UnsafeArchiveError, OutputRefused) as e:
+            raise PrepareError(f"--sources {name}: {e}") from None
     if not jobs:
-        raise SystemExit("nothing to do: give --sources and/or --input-dir")
-    return jobs, problems
+        raise PrepareError("nothing to do: give --sources and/or --input-dir")
+    return jobs
 
 
 def _run_all(jobs, tmp: Path, args, strict: bool):
@@ -74,7 +137,7 @@ def _run_all(jobs, tmp: Path, args, strict: bool):
     def handle(job, fut_result=None, exc=None):
         if exc is not None:
             if strict:
-                raise exc
+                raise PrepareError(f"{exc} (--strict stops at the first bad file; nothing was written)") from exc
             skipped.append((job.path, f"{type(exc).__name__}: {exc}"))
         elif fut_result["skipped"]:
             skipped.append((job.path, fut_result["skipped"]))
@@ -85,31 +148,33 @@ def _run_all(jobs, tmp: Path, args, strict: bool):
             bar.update(1)
 
     recoverable = (MocapFormatError, ValueError, KeyError, OSError)
-    if args.workers <= 1:
-        for w in work:
-            try:
-                r = process_job(*w)
-            except recoverable as e:
-                handle(w[0], exc=e)
-                continue
-            handle(w[0], r)
-    else:
-        with ProcessPoolExecutor(max_workers=args.workers) as pool:
-            futs = {pool.submit(process_job, *w): w[0] for w in work}
-            try:
-                for fut in as_completed(futs):
-                    try:
-                        r = fut.result()
-                    except recoverable as e:
-                        handle(futs[fut], exc=e)
-                        continue
-                    handle(futs[fut], r)
-            except BaseException:
-                for f in futs:
-                    f.cancel()
-                raise
-    if bar:
-        bar.close()
+    try:
+        if args.workers <= 1:
+            for w in work:
+                try:
+                    r = process_job(*w)
+                except recoverable as e:
+                    handle(w[0], exc=e)
+                    continue
+                handle(w[0], r)
+        else:
+            with ProcessPoolExecutor(max_workers=args.workers) as pool:
+                futs = {pool.submit(process_job, *w): w[0] for w in work}
+                try:
+                    for fut in as_completed(futs):
+                        try:
+                            r = fut.result()
+                        except recoverable as e:
+                            handle(futs[fut], exc=e)
+                            continue
+                        handle(futs[fut], r)
+                except BaseException:
+                    for f in futs:
+                        f.cancel()
+                    raise
+    finally:
+        if bar:
+            bar.close()
     return results, skipped
 
 
@@ -169,8 +234,13 @@ def write_dataset(results: list[dict], tmp: Path, split_of: dict[str, str], info
                           w["frames"], int(w["mirrored"]), split, round(float(r["fps"]), 3), w["start"],
                           job["extra"].get("content", job["extra"].get("description", ""))])
     if count < 2:
-        raise SystemExit("no training frames: every take was skipped or went to val/test")
+        raise PrepareError(f"no training frames: the {len(windows)} windows all went to val/test "
+                           "(give more takes, or check skipped files)")
     mean, std = mean_std(total, total_sq, count)
+    bad = np.flatnonzero(~(np.isfinite(mean) & np.isfinite(std)))
+    if bad.size:
+        raise PrepareError(f"Mean/Std are not finite in {bad.size} of {mean.size} channels (first: {bad[0]}): some "
+                           "take holds out-of-range values that passed the per-file checks; nothing was written")
     np.save(tmp / "Mean.npy", mean)
     np.save(tmp / "Std.npy", std)
     with open(tmp / "metadata.csv", "w", newline="") as f:
@@ -182,7 +252,7 @@ def write_dataset(results: list[dict], tmp: Path, split_of: dict[str, str], info
     for split in ("val", "test", "train"):  # train.txt last: its presence means the rest is there
         (tmp / f"{split}.txt").write_text("".join(i + "\n" for i in ids[split]))
     (tmp / "all.txt").write_text("".join(i + "\n" for s in ("train", "val", "test") for i in ids[s]))
-    info = dict(info, windows=len(windows), labels=len(labels), train_frames=count,
+    info = dict({"tool": PREPARE_TOOL}, **info, windows=len(windows), labels=len(labels), train_frames=count,
                 splits={k: len(v) for k, v in ids.items()},
                 captions=sum(len(w["captions"]) for _, w in windows),
                 roundtrip_max_m=max((w["roundtrip"] for _, w in windows), default=0.0))
@@ -190,19 +260,36 @@ def write_dataset(results: list[dict], tmp: Path, split_of: dict[str, str], info
     return info
 
 
-def publish(tmp: Path, out: Path) -> None:
-    """Rename the finished temp folder onto ``out`` (replacing an older dataset)."""
-    os.chmod(tmp, 0o755)  # mkdtemp makes it private
-    if out.exists():
-        old = out.with_name(f".{out.name}.old-{os.getpid()}")
-        os.replace(out, old)
-        os.replace(tmp, out)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        os.replace(tmp, out)
+def skipped_report(skipped: list[tuple[str, str]], limit: int = 20) -> str:
+    lines = [f"skipped files: {len(skipped)}"] + [f"  {p}: {why}" for p, why in skipped[:limit]]
+    if len(skipped) > limit:
+        lines.append(f"  ... and {len(skipped) - limit} more")
+    return "\n".join(lines)
 
 
-def main(argv: list[str] | None = None) -> int:
+def side_list(out: Path) -> Path:
+    """Where the skipped list of a run that wrote nothing is kept: ``<out>.skipped.txt`` beside --out."""
+    return out.with_name(out.name + ".skipped.txt")
+
+
+def _ours(side: Path) -> bool:
+    try:
+        with open(side) as f:
+            return f.readline().startswith(SIDE_HEADER)
+    except OSError:
+        return False
+
+
+def keep_skipped(out: Path, skipped: list[tuple[str, str]]) -> str:
+    """Write the list beside --out (never over a file this tool did not write); says where it is."""
+    side = side_list(out)
+    if side.exists() and not _ours(side):
+        return f"not saved: {side} exists and was not written by this tool"
+    side.write_text(SIDE_HEADER + f"{out} (path<TAB>reason)\n" + "".join(f"{p}\t{why}\n" for p, why in skipped))
+    return f"the list is in {side}"
+
+
+def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="python -m emdm.data.prepare", description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sources", default="bandai,hdm05,cmu",
@@ -213,6 +300,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--joint-map", help="joint map for --input-dir: built-in name or JSON path")
     ap.add_argument("--amc-fps", type=float, default=120.0, help="frame rate of AMC files in --input-dir")
     ap.add_argument("--out", default=str(paths.DATASET_DIR), help="output dataset folder")
+    ap.add_argument("--force", action="store_true",
+                    help="replace an existing --out (or unpack folder) that is not a dataset this tool wrote; "
+                         "an --out that is or holds an input or the repository is refused even so")
     ap.add_argument("--strict", action="store_true", help="fail on the first bad file instead of skipping it")
     ap.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     ap.add_argument("--min-frames", type=int, default=DEFAULT_MIN_FRAMES, help="drop takes shorter than this at 20 fps")
@@ -222,14 +312,29 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-mirror", action="store_true", help="do not add mirrored copies")
     ap.add_argument("--seed", type=int, default=0, help="split seed")
     ap.add_argument("--limit", type=int, default=0, help="only the first N takes per source (quick tries)")
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = _parser()
     args = ap.parse_args(argv)
     if not 2 <= args.min_frames <= args.max_frames:
         ap.error("--min-frames must be between 2 and --max-frames")
     if args.stride < 1:
         ap.error("--stride must be >= 1")
+    if not (math.isfinite(args.amc_fps) and 0.1 <= args.amc_fps <= 1e5):
+        ap.error(f"--amc-fps must be a frame rate between 0.1 and 100000, got {args.amc_fps}")
+    try:
+        return run(args)
+    except (PrepareError, OutputRefused) as e:
+        print(f"prepare: {e}", file=sys.stderr)
+        return 2
 
+
+def run(args) -> int:
     t0 = time.time()
-    jobs, _ = collect_jobs(args)
+    out = check_out(args.out, inputs=run_inputs(args), force=args.force)   # before anything is read
+    jobs = collect_jobs(args)
     if args.limit:
         per = defaultdict(int)
         kept = []
@@ -242,7 +347,6 @@ def main(argv: list[str] | None = None) -> int:
     for j in jobs:
         take_actions.setdefault(j.take, j.action)
     split_of = split_takes(take_actions, seed=args.seed)
-    out = Path(args.out).resolve()
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
     try:
@@ -251,12 +355,21 @@ def main(argv: list[str] | None = None) -> int:
         print(f"prepare: {len(jobs)} takes from {args.sources or ''}{' + ' + args.input_dir if args.input_dir else ''}"
               f" -> {out} ({args.workers} workers)", file=sys.stderr)
         results, skipped = _run_all(jobs, tmp, args, args.strict)
-        elapsed = time.time() - t0
-        info = write_dataset(results, tmp, split_of, {
-            "sources": args.sources, "input_dir": args.input_dir or "", "fps": sk.FPS, "min_frames": args.min_frames,
-            "max_frames": args.max_frames, "stride": args.stride, "mirrored": not args.no_mirror,
-            "takes": len(take_actions), "files": len(jobs), "skipped": len(skipped),
-        })
+        if not any(r["windows"] for r in results):
+            print(skipped_report(skipped), file=sys.stderr)
+            raise PrepareError(f"every one of the {len(jobs)} files was skipped (reasons above; "
+                               f"{keep_skipped(out, skipped)}); nothing was written to {out}")
+        try:
+            info = write_dataset(results, tmp, split_of, {
+                "sources": args.sources, "input_dir": args.input_dir or "", "fps": sk.FPS,
+                "min_frames": args.min_frames, "max_frames": args.max_frames, "stride": args.stride,
+                "mirrored": not args.no_mirror, "takes": len(take_actions), "files": len(jobs), "skipped": len(skipped),
+            })
+        except PrepareError as e:
+            if skipped:
+                print(skipped_report(skipped), file=sys.stderr)
+                raise PrepareError(f"{e} ({len(skipped)} files skipped: {keep_skipped(out, skipped)})") from None
+            raise
         table = summary_table(results, skipped, time.time() - t0)
         extra = (f"\ncaptions: {info['captions']} lines, actions: {info['labels']}, splits: {info['splits']}, "
                  f"round-trip max error: {info['roundtrip_max_m'] * 1000:.4f} mm")
@@ -264,10 +377,12 @@ def main(argv: list[str] | None = None) -> int:
         with open(tmp / "skipped.txt", "w") as f:
             for p, why in skipped:
                 f.write(f"{p}\t{why}\n")
-        publish(tmp, out)
+        replace_dir(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+    if _ours(side_list(out)):
+        side_list(out).unlink()           # a stale list from an earlier run that wrote nothing
     print(table + extra)
     print(f"dataset written to {out} in {time.time() - t0:.1f} s")
     return 0

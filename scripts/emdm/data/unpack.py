@@ -1,20 +1,55 @@
 """Unpack a shared ``.tar.xz`` mocap archive once into ``data/raw/<name>/`` (atomic: a temp folder
-renamed into place, marked complete), and reuse it on later runs."""
+renamed into place, marked complete), and reuse it on later runs.
+
+Archives are checked member by member before anything is written (``unsafe_member``): links, devices,
+FIFOs and paths that resolve outside the target folder are refused, naming the member; extraction then
+runs through tarfile's ``"data"`` filter as a second line of defence. A ``<name>/`` folder that this
+function did not write (no ``.unpacked`` marker) is left alone unless ``force``."""
 
 from __future__ import annotations
 
-import os
 import shutil
 import tarfile
 import tempfile
 from pathlib import Path
 
 from emdm import paths
+from emdm.outdir import check_out, replace_dir
 
 MARKER = ".unpacked"
 
 
-def unpack_archive(archive: Path, dest_root: Path | None = None) -> Path:
+class UnsafeArchiveError(ValueError):
+    """An archive member that must not be extracted (the message names the archive and the member)."""
+
+
+def unsafe_member(member: tarfile.TarInfo, root: Path) -> str:
+    """Why ``member`` must not be extracted under the folder ``root`` ('' when it is a plain file or folder
+    that stays inside it). Containment is checked on resolved paths, not by string prefix."""
+    if member.issym() or member.islnk():
+        return f"is a {'symbolic' if member.issym() else 'hard'} link (to {member.linkname!r}); links are not extracted"
+    if member.ischr() or member.isblk() or member.isfifo():
+        return "is a device or FIFO; only plain files and folders are extracted"
+    if not (member.isfile() or member.isdir()):
+        return "is not a plain file or folder"
+    base = root.resolve()
+    target = (base / member.name).resolve()
+    if Path(member.name).is_absolute() or not target.is_relative_to(base) or target == base and member.isfile():
+        return f"would be written outside the target folder (to {target})"
+    return ""
+
+
+def check_members(tar: tarfile.TarFile, root: Path, archive: Path) -> list[tarfile.TarInfo]:
+    """Every member of ``tar``, or UnsafeArchiveError naming the first one that is not safe under ``root``."""
+    members = tar.getmembers()
+    for m in members:
+        why = unsafe_member(m, root)
+        if why:
+            raise UnsafeArchiveError(f"{archive}: refusing member {m.name!r}: it {why}")
+    return members
+
+
+def unpack_archive(archive: Path, dest_root: Path | None = None, force: bool = False) -> Path:
     archive = Path(archive)
     if not archive.is_file():
         raise FileNotFoundError(f"{archive}: archive not found (see the shared data README)")
@@ -23,20 +58,16 @@ def unpack_archive(archive: Path, dest_root: Path | None = None) -> Path:
     dest = dest_root / name
     if (dest / MARKER).is_file():
         return dest
+    check_out(dest, inputs=[("archive", archive)], force=force, recognise=lambda d: (d / MARKER).is_file(),
+              what="an archive unpacked by emdm.data.unpack", option="unpack folder")
     dest_root.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{name}.", dir=dest_root))
     try:
         with tarfile.open(archive, "r:*") as tar:
-            for member in tar.getmembers():
-                target = (tmp / member.name).resolve()
-                if not str(target).startswith(str(tmp.resolve())) or member.issym() or member.islnk():
-                    raise ValueError(f"{archive}: refusing unsafe member {member.name!r}")
-            tar.extractall(tmp)
+            members = check_members(tar, tmp, archive)
+            tar.extractall(tmp, members=members, filter="data")
         (tmp / MARKER).write_text(f"{archive.name}\n")
-        os.chmod(tmp, 0o755)  # mkdtemp makes it private
-        if dest.exists():
-            shutil.rmtree(dest)
-        os.replace(tmp, dest)
+        replace_dir(tmp, dest)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
