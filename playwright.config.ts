@@ -1,6 +1,8 @@
 // Playwright (tests/e2e/*.spec.ts) on Debian's /usr/bin/chromium (`npx playwright install` cannot
-// download browsers here). The web server is the BUILT site served by `vite preview` with the
-// COOP/COEP headers (see vite.config.ts), on its own port so a running `make demo` does not clash.
+// download browsers here). The web server is the BUILT site in the test mode (the demo as shipped plus
+// the test harness at /harness/, into dist-e2e/; the production dist/ has no harness) served by
+// `vite preview` with the COOP/COEP headers (see vite.config.ts), on its own port so a running
+// `make demo` does not clash.
 import { createHash } from 'node:crypto';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -43,7 +45,7 @@ export default defineConfig({
     screenshot: 'only-on-failure',
   },
   webServer: {
-    command: `npx vite build && npx vite preview --host 127.0.0.1 --port ${E2E_PORT} --strictPort`,
+    command: `npx vite build --mode e2e && npx vite preview --mode e2e --host 127.0.0.1 --port ${E2E_PORT} --strictPort`,
     url: `http://127.0.0.1:${E2E_PORT}/models/manifest.json`,
     reuseExistingServer: !process.env.CI,
     timeout: 300_000,

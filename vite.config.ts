@@ -1,8 +1,10 @@
 /// <reference types="vitest/config" />
 // Vite (dev/build/preview) and vitest configuration.
 // - root is web/ (the pages), static files come from public/ (models, self-hosted ORT wasm).
-// - every web/**/index.html is a page of the multi-page build (web/index.html = the demo,
-//   web/harness/index.html = the test harness, ...), output in dist/.
+// - `vite build` (production, dist/) contains the demo only (web/index.html). The test pages
+//   (web/harness/: no CSP, takes ?models=<any URL>) are built only in the test mode
+//   (`vite build --mode e2e`, into dist-e2e/), which Playwright's test server builds and serves;
+//   the dev server serves every page.
 // - COOP/COEP headers on dev AND preview so ORT-web can use wasm threads (SharedArrayBuffer).
 // - the ORT wasm binaries are copied into public/ort* before anything runs (scripts/build/copy-ort.mjs).
 import fs from 'node:fs';
@@ -21,10 +23,20 @@ export const CROSS_ORIGIN_ISOLATION_HEADERS = {
   'Cross-Origin-Resource-Policy': 'same-origin',
 };
 
-/** Every web/**\/index.html, keyed by its folder ('main' for web/index.html). */
-export function pageInputs(webDir: string = WEB): Record<string, string> {
+/** The mode of the test build (`vite build --mode e2e`): the demo plus the test pages. */
+export const E2E_MODE = 'e2e';
+
+/**
+ * The pages of a build, keyed by folder ('main' for web/index.html): the demo only, or with
+ * `testPages` every web/**\/index.html (the demo and the test harness).
+ */
+export function pageInputs(webDir: string = WEB, { testPages = false }: { testPages?: boolean } = {}): Record<string, string> {
   const inputs: Record<string, string> = {};
   if (!fs.existsSync(webDir)) return inputs;
+  if (!testPages) {
+    const demo = path.join(webDir, 'index.html');
+    return fs.existsSync(demo) ? { main: demo } : inputs;
+  }
   const entries = fs.readdirSync(webDir, { recursive: true, encoding: 'utf8' });
   for (const rel of entries.sort()) {
     if (path.basename(rel) !== 'index.html') continue;
@@ -63,42 +75,43 @@ function serveOrtRaw(): Plugin {
   };
 }
 
-const inputs = pageInputs();
-
-export default defineConfig({
-  root: WEB,
-  publicDir: path.join(ROOT, 'public'),
-  plugins: [serveOrtRaw()],
-  build: {
-    outDir: path.join(ROOT, 'dist'),
-    emptyOutDir: true,
-    target: 'es2022',
-    chunkSizeWarningLimit: 4096,
-    rollupOptions: Object.keys(inputs).length ? { input: inputs } : {},
-  },
-  server: {
-    host: '127.0.0.1',
-    port: 5173,
-    headers: CROSS_ORIGIN_ISOLATION_HEADERS,
-    fs: { allow: [ROOT] },
-  },
-  preview: {
-    host: '127.0.0.1',
-    port: 5173,
-    headers: CROSS_ORIGIN_ISOLATION_HEADERS,
-  },
-  optimizeDeps: {
-    // ORT locates its wasm via wasmPaths (public/ort*); pre-bundling it breaks that lookup.
-    exclude: ['onnxruntime-web', '@huggingface/transformers'],
-  },
-  worker: { format: 'es' },
-  test: {
-    root: ROOT,
-    include: ['tests/unit/**/*.test.ts'],
-    environment: 'node',
-    testTimeout: 60_000,
-    hookTimeout: 120_000,
-    pool: 'forks',
-    maxWorkers: 2,
-  },
+export default defineConfig(({ mode }) => {
+  const inputs = pageInputs(WEB, { testPages: mode === E2E_MODE });
+  return {
+    root: WEB,
+    publicDir: path.join(ROOT, 'public'),
+    plugins: [serveOrtRaw()],
+    build: {
+      outDir: path.join(ROOT, mode === E2E_MODE ? 'dist-e2e' : 'dist'),
+      emptyOutDir: true,
+      target: 'es2022',
+      chunkSizeWarningLimit: 4096,
+      rollupOptions: Object.keys(inputs).length ? { input: inputs } : {},
+    },
+    server: {
+      host: '127.0.0.1',
+      port: 5173,
+      headers: CROSS_ORIGIN_ISOLATION_HEADERS,
+      fs: { allow: [ROOT] },
+    },
+    preview: {
+      host: '127.0.0.1',
+      port: 5173,
+      headers: CROSS_ORIGIN_ISOLATION_HEADERS,
+    },
+    optimizeDeps: {
+      // ORT locates its wasm via wasmPaths (public/ort*); pre-bundling it breaks that lookup.
+      exclude: ['onnxruntime-web', '@huggingface/transformers'],
+    },
+    worker: { format: 'es' },
+    test: {
+      root: ROOT,
+      include: ['tests/unit/**/*.test.ts'],
+      environment: 'node',
+      testTimeout: 60_000,
+      hookTimeout: 120_000,
+      pool: 'forks',
+      maxWorkers: 2,
+    },
+  };
 });
