@@ -252,18 +252,39 @@ export async function verifyBytes(manifest: Manifest, path: string, data: ArrayB
   }
 }
 
+type Progress = (loaded: number, total: number) => void;
+
+/**
+ * Something standing in front of the network for fetchVerified (the browser's model cache,
+ * src/cache/modelCache.ts): it returns verified bytes for `path`, from where it keeps them or from
+ * `network(progress)`, which downloads and verifies them.
+ */
+export type VerifiedFileSource = (
+  baseUrl: string, manifest: Manifest, path: string, onProgress: Progress | undefined, network: (onProgress?: Progress) => Promise<ArrayBuffer>,
+) => Promise<ArrayBuffer>;
+
+let fileSource: VerifiedFileSource | null = null;
+
+/** Route every fetchVerified of this JS context through `source` (null: straight to the network). */
+export function setVerifiedFileSource(source: VerifiedFileSource | null): void {
+  fileSource = source;
+}
+
 /** Fetch `path` (relative to the models folder) and verify it against the manifest. */
 export async function fetchVerified(
   baseUrl: string,
   manifest: Manifest,
   path: string,
-  onProgress?: (loaded: number, total: number) => void,
+  onProgress?: Progress,
 ): Promise<ArrayBuffer> {
   if (!manifest.files[path]) {
     throw new ModelFileError(path, 'missing', `not listed in ${MANIFEST_FILE} 'files'; refusing an unverified file`);
   }
   const total = manifest.files[path].bytes;
-  const data = await fetchBytes(baseUrl, path, onProgress ? (loaded) => onProgress(loaded, total) : undefined);
-  await verifyBytes(manifest, path, data);
-  return data;
+  const network = async (progress: Progress | undefined = onProgress) => {
+    const data = await fetchBytes(baseUrl, path, progress ? (loaded) => progress(loaded, total) : undefined);
+    await verifyBytes(manifest, path, data);
+    return data;
+  };
+  return fileSource ? fileSource(baseUrl, manifest, path, onProgress, network) : network();
 }

@@ -8,13 +8,14 @@ import { MotionPlayer, type PoseTrack } from '../src/character/player';
 import { writeBVH } from '../src/export/bvh';
 import type { GenerateResult } from '../src/generate';
 import { loadManifest, ModelFileError, type Manifest } from '../src/manifest';
-import { solveIK } from '../src/motion/ik';
+import { clearModelCache, modelCacheUsage } from '../src/cache/modelCache';
 import { compareNote, compareStepChoices, planCompare, type ComparePlan } from './ui/compare';
 import { Controls } from './ui/controls';
 import { byId, formatBytes, formatMs, saveBlob } from './ui/dom';
 import { fileStem, motionToGLB, motionToJSON } from './ui/downloads';
 import { Engine, isAbort, modelForMode, pickModels } from './ui/engine';
 import { examplePrompts } from './ui/examples';
+import { CacheControl, FileList } from './ui/files';
 import { ErrorPanel, Notices } from './ui/notices';
 import { PlaybackBar } from './ui/playback';
 import { Stage } from './ui/stage';
@@ -24,6 +25,10 @@ import {
 import { emptyCounters, type CompareResponse, type EmdmTestApi, type GenerateRequest, type GenerateResponse } from './ui/testapi';
 
 const MODELS_URL = `${import.meta.env.BASE_URL}models/`;
+/** Shown when the page is served without COOP/COEP: ORT then runs its WebAssembly on one thread. */
+const NOT_ISOLATED = 'This page is not cross-origin isolated, so the model runs on one CPU thread (slower). '
+  + 'To use every core, serve it with the headers Cross-Origin-Opener-Policy: same-origin and '
+  + 'Cross-Origin-Embedder-Policy: require-corp (as `make demo` and `vite preview` do).';
 /** `?noauto` (tests): do not generate a first motion on load. Read before the URL is rewritten. */
 const AUTO_GENERATE = !new URLSearchParams(location.search).has('noauto');
 
@@ -79,6 +84,8 @@ let resolveReady!: () => void;
 const readyPromise = new Promise<void>((r) => (resolveReady = r));
 const notices = new Notices();
 const errorPanel = new ErrorPanel();
+const fileList = new FileList();
+const cacheControl = new CacheControl(modelCacheUsage, clearModelCache, (e) => notices.show('error', `Clearing the model cache failed: ${describe(e)}`));
 const fpsTimes: number[] = [];
 const api: EmdmTestApi = {
   ready: false,
@@ -108,6 +115,15 @@ const api: EmdmTestApi = {
   quality: () => stage.quality,
   frame: () => -1,
   startup: { manifestMs: NaN, readyMs: NaN },
+  environment: null,
+  files: () => [...fileList.states.values()].map((f) => ({ path: f.path, state: f.state, cached: f.cached, total: f.total })),
+  cache: {
+    usage: modelCacheUsage,
+    async clear() {
+      await clearModelCache();
+      await cacheControl.refresh();
+    },
+  },
 };
 window.emdm = api;
 document.addEventListener('securitypolicyviolation', (e) => {
@@ -192,6 +208,17 @@ async function main(): Promise<void> {
     fallback(model, reason) {
       notices.show('info', `${reason}: ${model} runs on WebAssembly (CPU) instead.`, 12000);
     },
+    file: (e) => fileList.update(e),
+    notice: (kind, text) => notices.show(kind, text, 14000),
+  });
+  void engine.client.environment.then((env) => {
+    api.environment = env;
+    if (!env.crossOriginIsolated) {
+      const note = byId('isolation-note');
+      note.textContent = NOT_ISOLATED;
+      note.hidden = false;
+      notices.show('warn', NOT_ISOLATED, 20000);
+    }
   });
 
   const controls = new Controls(limits, examples, {
@@ -267,33 +294,25 @@ async function main(): Promise<void> {
   /** One model's motion for a state, checked and solved (WebGPU failures retry on WASM). */
   async function produce(model: string, s: PageState, steps: number, frames: number, signal: AbortSignal,
     progressLabel: (done: number, total: number) => string): Promise<Produced> {
-    const gen = await engine.load(model);
-    api.backend = gen.backend;
+    const info = await engine.load(model);
+    api.backend = info.backend;
     if (signal.aborted) throw signal.reason;
-    const opts = {
+    // the worker encodes, samples, decodes and solves the bone rotations; this thread only shows them
+    const result = await engine.generate(model, {
       condition: condFor(s), frames, steps, guidance: s.guidance, seed: s.seed, signal, smooth: true, footCleanup: true,
       onStep(done: number, total: number) {
         api.counters.stepsRun++;
         showProgressText(done, total, progressLabel(done, total));
       },
-    };
-    let result: GenerateResult;
-    try {
-      result = await gen.generate(opts);
-    } catch (e) {
-      if (isAbort(e) || gen.backend !== 'webgpu') throw e;
-      const wasm = await engine.reloadOnWasm(model, describe(e));
-      api.backend = wasm.backend;
-      result = await wasm.generate(opts);
-    }
-    const t0 = performance.now();
+    });
+    api.backend = result.info.backend;
     const bad = firstNonFinite(result.motion.joints);
     if (bad >= 0) throw new BadMotionError(`joint value ${bad} of ${result.motion.joints.length} is ${result.motion.joints[bad]}`);
-    const ik = solveIK(result.motion.joints, result.motion.frames, skeleton);
-    const badQ = firstNonFinite(ik.quats);
-    if (badQ >= 0 || firstNonFinite(ik.rootPos) >= 0) throw new BadMotionError('the solved joint rotations');
-    const track: PoseTrack = { frames: result.motion.frames, fps: result.motion.fps, joints: skeleton.joints.length, rootPos: ik.rootPos, quats: ik.quats };
-    return { model, result, track, ikMs: performance.now() - t0 };
+    const pose = result.pose;
+    if (!pose) throw new Error('generation worker: the result has no pose track (pose: true was asked)');
+    if (firstNonFinite(pose.quats) >= 0 || firstNonFinite(pose.rootPos) >= 0) throw new BadMotionError('the solved joint rotations');
+    const track: PoseTrack = { frames: result.motion.frames, fps: result.motion.fps, joints: skeleton.joints.length, rootPos: pose.rootPos, quats: pose.quats };
+    return { model, result, track, ikMs: pose.ikMs };
   }
   let showProgressText: (done: number, total: number, text: string) => void = () => undefined;
 
@@ -516,8 +535,12 @@ async function main(): Promise<void> {
     downloadBar.hidden = true;
     controls.setReady(true);
     finishStartup('ready');
+    fileList.settle();
+    void cacheControl.refresh();
   } catch (e) {
     downloadBar.hidden = true;
+    fileList.settle();
+    void cacheControl.refresh();
     reportError(e, first.name);
     setStatus('error', `${first.name} unavailable`);
     const other = first === models.text ? models.action : models.text;

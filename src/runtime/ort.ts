@@ -104,6 +104,19 @@ export interface OrtSession {
   release(): Promise<void>;
 }
 
+/** Resolve after one macrotask (a MessageChannel message: no 4 ms timer clamp); Node: setImmediate. */
+export function yieldToEventLoop(): Promise<void> {
+  if (isNode) return new Promise((r) => setImmediate(r));
+  return new Promise((resolve) => {
+    const ch = new MessageChannel();
+    ch.port1.onmessage = () => {
+      ch.port1.close();
+      resolve();
+    };
+    ch.port2.postMessage(null);
+  });
+}
+
 interface CacheEntry {
   session: Promise<OrtSession>;
   refs: number;
@@ -164,6 +177,10 @@ async function createSession(key: string, bytes: ArrayBuffer | Uint8Array, backe
     outputNames: session.outputNames,
     async run(feeds) {
       if (released) throw new Error(`runtime: session for ${key} was released`);
+      // A wasm run blocks its thread and resolves through microtasks only: give the event loop one turn
+      // first, so messages that arrived meanwhile (a cancel sent to the generation worker, a click when
+      // run on a page's thread) are handled before the next denoising step, not after the whole loop.
+      await yieldToEventLoop();
       const tensors: Record<string, OrtTypes.Tensor> = {};
       for (const [name, { data: d, dims }] of Object.entries(feeds)) tensors[name] = new ort.Tensor('float32', d, dims);
       const out = await session.run(tensors);

@@ -1,9 +1,8 @@
-// Loads the step models the page needs (lazily, once each), falls back from WebGPU to WASM when
-// WebGPU is missing or fails, and runs generations so that the NEWEST request wins: starting one
-// aborts the one before it (between denoising steps) and waits for it to stop before running.
-import { createGenerator, type Generator } from '../../src/generate';
-import { ModelFileError, type Manifest, type ModelEntry } from '../../src/manifest';
-import { createTextEncoder, type TextEncoder } from '../../src/text';
+// The models the page needs, loaded lazily in the generation worker (which also falls back from
+// WebGPU to WASM), and generations run so that the NEWEST request wins: starting one aborts the one
+// before it (the worker stops it at the next denoising step) and waits for it to stop before running.
+import type { Manifest, ModelEntry } from '../../src/manifest';
+import { GenerationClient, type ClientEvents, type ModelInfo, type RemoteGenerateOptions, type RemoteResult } from '../../src/worker/client';
 import type { BackendChoice, Mode } from './state';
 
 export interface ModelChoice {
@@ -46,110 +45,35 @@ export function isAbort(e: unknown): boolean {
   return e instanceof Error && e.name === 'AbortError';
 }
 
-export interface LoadEvents {
-  download(model: string, loaded: number, total: number): void;
-  fallback(model: string, reason: string): void;
-}
+export type LoadEvents = Pick<ClientEvents, 'download' | 'fallback'> & Partial<ClientEvents>;
 
+/**
+ * The page's models, loaded and run in the generation worker (src/worker): the page's thread only
+ * sends requests and receives motions (bone rotations solved there too).
+ */
 export class Engine {
-  private readonly generators = new Map<string, Promise<Generator>>();
+  readonly client: GenerationClient;
+  private readonly loads = new Map<string, Promise<ModelInfo>>();
   private current: { ctrl: AbortController; done: Promise<unknown> } | null = null;
 
-  constructor(
-    private readonly manifest: Manifest,
-    private readonly baseUrl: string,
-    private readonly backend: BackendChoice,
-    private readonly events: LoadEvents,
-  ) {}
+  constructor(manifest: Manifest, baseUrl: string, backend: BackendChoice, events: LoadEvents) {
+    this.client = new GenerationClient({ manifest, baseUrl, backend, events });
+  }
 
-  /** The generator of a model (created on first use; a failed load is forgotten so it can be retried). */
-  load(model: string): Promise<Generator> {
-    let g = this.generators.get(model);
-    if (!g) {
-      g = this.create(model);
-      this.generators.set(model, g);
-      g.catch(() => this.generators.delete(model));
+  /** Load a model in the worker (once; a failed load is forgotten so it can be retried). */
+  load(model: string): Promise<ModelInfo> {
+    let p = this.loads.get(model);
+    if (!p) {
+      p = this.client.load(model);
+      this.loads.set(model, p);
+      p.catch(() => this.loads.delete(model));
     }
-    return g;
+    return p;
   }
 
-  /** Progress of every download under way, summed. */
-  private readonly downloads = new Map<string, [number, number]>();
-  private progress(key: string, label: string) {
-    return (loaded: number, total: number) => {
-      this.downloads.set(key, [loaded, total]);
-      let l = 0;
-      let t = 0;
-      for (const [a, b] of this.downloads.values()) {
-        l += a;
-        t += b;
-      }
-      this.events.download(label, l, t);
-    };
-  }
-
-  /**
-   * A text model's encoder, loaded at the same time as the step model (so the first prompt does not
-   * wait for it); the generator gets a stand-in that waits for it.
-   */
-  private encoderFor(model: string): { ready: Promise<unknown>; encoder?: TextEncoder } {
-    const c = this.manifest.models[model]?.condition;
-    if (!c || c.type !== 'text') return { ready: Promise.resolve() };
-    let enc = this.encoders.get(c.encoder);
-    if (!enc) {
-      enc = createTextEncoder(this.manifest, this.baseUrl, c.encoder, { onDownload: this.progress(`enc:${c.encoder}`, model) });
-      this.encoders.set(c.encoder, enc);
-      enc.catch(() => this.encoders.delete(c.encoder));
-    }
-    const p = enc;
-    return { ready: p, encoder: { id: c.encoder, dim: c.dim, encode: async (text: string) => (await p).encode(text) } };
-  }
-
-  private readonly encoders = new Map<string, Promise<TextEncoder>>();
-
-  /**
-   * WebGPU failed while generating: say so, drop the WebGPU generator and load the model on WASM
-   * (every later generation of this model runs there).
-   */
-  async reloadOnWasm(model: string, reason: string): Promise<Generator> {
-    this.events.fallback(model, `WebGPU failed while generating (${reason})`);
-    const old = this.generators.get(model);
-    old?.then((g) => g.dispose()).catch(() => undefined);
-    const g = this.create(model, 'wasm');
-    this.generators.set(model, g);
-    g.catch(() => this.generators.delete(model));
-    return g;
-  }
-
-  private async create(model: string, backend?: 'wasm'): Promise<Generator> {
-    const enc = this.encoderFor(model);
-    const gen = this.createStep(model, enc.encoder, backend);
-    // Both must load; if either fails, the model is unusable (the error names the file).
-    const [g] = await Promise.all([gen, enc.ready]).catch(async (e) => {
-      gen.then((g) => g.dispose()).catch(() => undefined);
-      throw e;
-    });
-    return g;
-  }
-
-  private async createStep(model: string, textEncoder?: TextEncoder, force?: 'wasm'): Promise<Generator> {
-    const onDownload = this.progress(`model:${model}`, model);
-    const common = { manifest: this.manifest, baseUrl: this.baseUrl, model, onDownload, textEncoder };
-    const hasGpu = typeof navigator !== 'undefined' && 'gpu' in navigator && !!(navigator as { gpu?: unknown }).gpu;
-    if (this.backend === 'wasm' || force === 'wasm') return createGenerator({ ...common, backend: 'wasm' });
-    if (!hasGpu) {
-      this.events.fallback(model, 'WebGPU is not available in this browser');
-      return createGenerator({ ...common, backend: 'wasm' });
-    }
-    try {
-      const g = await createGenerator({ ...common, backend: this.backend });
-      if (g.backend !== 'webgpu') this.events.fallback(model, 'WebGPU is not available (no usable GPU adapter)');
-      return g;
-    } catch (e) {
-      if (e instanceof ModelFileError) throw e; // a bad file is not a backend problem
-      this.events.fallback(model, `WebGPU failed (${e instanceof Error ? e.message : String(e)})`);
-      return createGenerator({ ...common, backend: 'wasm' });
-    }
+  /** One motion with its pose track (WebGPU failures are retried on WASM in the worker). */
+  generate(model: string, o: RemoteGenerateOptions): Promise<RemoteResult> {
+    return this.client.generate(model, { ...o, pose: true });
   }
 
   /** Run `job` as the newest request: the previous one is aborted and awaited first. */
@@ -174,9 +98,7 @@ export class Engine {
     return this.current !== null;
   }
 
-  async dispose(): Promise<void> {
-    const all = await Promise.allSettled(this.generators.values());
-    for (const r of all) if (r.status === 'fulfilled') await r.value.dispose();
-    this.generators.clear();
+  dispose(): Promise<void> {
+    return this.client.dispose();
   }
 }

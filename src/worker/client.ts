@@ -1,0 +1,188 @@
+/**
+ * The page's side of the generation worker: generate motions off the page's thread.
+ *
+ * ```ts
+ * const manifest = await loadManifest('/models/');
+ * const client = new GenerationClient({ manifest, baseUrl: '/models/' });
+ * const r = await client.generate('emdm-t2m-web', { condition: { type: 'text', text: 'a person waves' }, frames: 120, steps: 4, guidance: 2.5, seed: 1 });
+ * r.motion.joints; // frames × 22 × 3, bit-identical to createGenerator(...).generate() on the same backend
+ * ```
+ *
+ * One worker per client holds the models, the text encoder and ORT; requests travel as messages
+ * (./protocol.ts). An AbortSignal cancels a generation at the next denoising step; `onStep` hears
+ * each step; errors come back as the same classes (ModelFileError, AbortError) with their messages.
+ */
+import type { FileEvent } from '../cache/modelCache';
+import type { GenerateResult } from '../generate';
+import { ModelFileError, type Manifest, type ModelFileErrorReason } from '../manifest';
+import type { BackendRequest } from '../runtime/ort';
+import { AbortError } from '../sampler/sampler';
+import type { FromWorker, ModelInfo, ToWorker, WireError, WireGenerateOptions, WirePose } from './protocol';
+
+export type { FileEvent, ModelInfo, WireGenerateOptions, WirePose };
+
+export interface WorkerEnvironment {
+  crossOriginIsolated: boolean;
+  /** WASM threads ORT uses in the worker */
+  threads: number;
+  hardwareConcurrency: number;
+}
+
+export interface ClientEvents {
+  /** bytes of the files a model load is fetching (summed over the loads under way) */
+  download(model: string, loaded: number, total: number): void;
+  /** one file's state: read from the cache, bytes from the network, verified, failed */
+  file(e: FileEvent): void;
+  /** a model runs on WASM instead of WebGPU, and why */
+  fallback(model: string, reason: string): void;
+  /** something the user should know (e.g. a corrupt cached file was downloaded again) */
+  notice(kind: 'info' | 'warn', text: string): void;
+}
+
+export interface GenerationClientOptions {
+  manifest: Manifest;
+  /** the models folder (resolved against the page) */
+  baseUrl: string;
+  backend?: BackendRequest;
+  threads?: number;
+  /** keep model files in Cache Storage for the next visit (default true) */
+  cache?: boolean;
+  events?: Partial<ClientEvents>;
+  /** a worker that speaks ./protocol.ts (default: a new module worker of ./generation.worker.ts) */
+  worker?: Worker;
+}
+
+export interface RemoteGenerateOptions extends WireGenerateOptions {
+  signal?: AbortSignal;
+  onStep?: (done: number, total: number) => void;
+}
+
+export interface RemoteResult extends GenerateResult {
+  info: ModelInfo;
+  /** bone rotations solved in the worker (when `pose: true` was asked) */
+  pose?: WirePose;
+}
+
+/** Rebuild an error sent by the worker as the class the caller checks for. */
+function rebuild(w: WireError): Error {
+  let e: Error;
+  if (w.name === 'ModelFileError' && w.path !== undefined) {
+    e = new ModelFileError(w.path, (w.reason ?? 'network') as ModelFileErrorReason, '');
+    e.message = w.message;
+  } else if (w.name === 'AbortError') {
+    e = new AbortError(w.message);
+  } else {
+    e = new Error(w.message);
+    e.name = w.name;
+  }
+  if (w.stack) e.stack = `${w.stack}\n    (in the generation worker)`;
+  return e;
+}
+
+interface Pending {
+  resolve(m: FromWorker): void;
+  reject(e: Error): void;
+  onStep?: (done: number, total: number) => void;
+}
+
+export class GenerationClient {
+  private readonly worker: Worker;
+  private readonly pending = new Map<number, Pending>();
+  private nextId = 1;
+  private broken: Error | null = null;
+  private readonly events: Partial<ClientEvents>;
+  /** where the worker runs: cross-origin isolated or not, and ORT's thread count there */
+  readonly environment: Promise<WorkerEnvironment>;
+
+  constructor(opts: GenerationClientOptions) {
+    this.events = opts.events ?? {};
+    this.worker = opts.worker ?? new Worker(new URL('./generation.worker.ts', import.meta.url), { type: 'module', name: 'emdm-generation' });
+    let envResolve!: (e: WorkerEnvironment) => void;
+    this.environment = new Promise((r) => (envResolve = r));
+    this.worker.addEventListener('message', (e: MessageEvent<FromWorker>) => {
+      const m = e.data;
+      switch (m.type) {
+        case 'environment':
+          envResolve({ crossOriginIsolated: m.crossOriginIsolated, threads: m.threads, hardwareConcurrency: m.hardwareConcurrency });
+          return;
+        case 'download':
+          this.events.download?.(m.model, m.loaded, m.total);
+          return;
+        case 'file':
+          this.events.file?.(m.file);
+          return;
+        case 'fallback':
+          this.events.fallback?.(m.model, m.reason);
+          return;
+        case 'notice':
+          this.events.notice?.(m.kind, m.text);
+          return;
+        case 'step':
+          this.pending.get(m.id)?.onStep?.(m.done, m.total);
+          return;
+        default: {
+          const p = this.pending.get(m.id);
+          if (!p) return;
+          this.pending.delete(m.id);
+          if (m.type === 'error') p.reject(rebuild(m.error));
+          else p.resolve(m);
+        }
+      }
+    });
+    this.worker.addEventListener('error', (e: ErrorEvent) => {
+      e.preventDefault?.();
+      this.fail(new Error(`generation worker failed: ${e.message || 'its script could not be loaded or threw'} (${e.filename || 'generation.worker'}:${e.lineno ?? '?'})`));
+    });
+    this.worker.addEventListener('messageerror', () => this.fail(new Error('generation worker: a message could not be decoded')));
+    const baseUrl = typeof location !== 'undefined' ? new URL(opts.baseUrl, location.href).href : opts.baseUrl;
+    this.send({ type: 'init', init: { manifest: opts.manifest, baseUrl, backend: opts.backend ?? 'auto', threads: opts.threads, cache: opts.cache } });
+  }
+
+  private fail(e: Error): void {
+    this.broken = e;
+    for (const p of this.pending.values()) p.reject(e);
+    this.pending.clear();
+  }
+
+  private send(msg: ToWorker): void {
+    this.worker.postMessage(msg);
+  }
+
+  private request(msg: ToWorker & { id: number }, onStep?: Pending['onStep']): Promise<FromWorker> {
+    if (this.broken) return Promise.reject(this.broken);
+    return new Promise((resolve, reject) => {
+      this.pending.set(msg.id, { resolve, reject, onStep });
+      this.send(msg);
+    });
+  }
+
+  /** Load a model in the worker (downloads, verifies, opens its session; a text model's encoder too). */
+  async load(model: string, variant?: string): Promise<ModelInfo> {
+    const m = await this.request({ type: 'load', id: this.nextId++, model, variant });
+    if (m.type !== 'loaded') throw new Error(`generation worker answered '${m.type}' to load`);
+    return m.info;
+  }
+
+  /** One motion; the signal cancels it at the next denoising step (rejecting with an AbortError). */
+  async generate(model: string, o: RemoteGenerateOptions, variant?: string): Promise<RemoteResult> {
+    const { signal, onStep, ...options } = o;
+    if (signal?.aborted) throw new AbortError('generation cancelled before it started');
+    const id = this.nextId++;
+    const cancel = () => this.send({ type: 'cancel', id });
+    signal?.addEventListener('abort', cancel, { once: true });
+    try {
+      const m = await this.request({ type: 'generate', id, model, variant, options }, onStep);
+      if (m.type !== 'result') throw new Error(`generation worker answered '${m.type}' to generate`);
+      return { ...m.result, info: m.info, pose: m.pose };
+    } finally {
+      signal?.removeEventListener('abort', cancel);
+    }
+  }
+
+  /** Free the worker's sessions and stop it. */
+  async dispose(): Promise<void> {
+    if (!this.broken) await this.request({ type: 'dispose', id: this.nextId++ }).catch(() => undefined);
+    this.worker.terminate();
+    this.fail(new Error('generation worker: the client was disposed'));
+  }
+}

@@ -1,0 +1,124 @@
+/**
+ * The generation worker (a module Web Worker): the text encoder (transformers.js), the ONNX step model
+ * (ORT-web) and the whole sampler loop run here, so the page's thread only renders and handles input.
+ * It speaks the protocol of ./protocol.ts; src/worker/client.ts is the page's side.
+ *
+ * Cancellation: each generation has an AbortController; a `cancel` message aborts it, and the sampler
+ * stops at the next step boundary (the runtime yields to the event loop before every model call, so the
+ * message is handled between steps, not after the loop).
+ */
+import type { GenerateOptions } from '../generate';
+import { ModelFileError } from '../manifest';
+import { solveIK } from '../motion/ik';
+import { defaultThreads } from '../runtime/ort';
+import { useModelCache } from '../cache/modelCache';
+import { GenerationHost } from './host';
+import type { FromWorker, ModelInfo, ToWorker, WireError, WirePose } from './protocol';
+
+interface WorkerScope {
+  postMessage(message: unknown, options?: { transfer?: Transferable[] }): void;
+  addEventListener(type: 'message', fn: (e: MessageEvent<ToWorker>) => void): void;
+  crossOriginIsolated?: boolean;
+}
+const scope = globalThis as unknown as WorkerScope;
+
+function post(msg: FromWorker, transfer: Transferable[] = []): void {
+  scope.postMessage(msg, { transfer });
+}
+
+function wireError(e: unknown): WireError {
+  if (e instanceof ModelFileError) {
+    return { name: e.name, message: e.message, stack: e.stack, path: e.path, reason: e.reason };
+  }
+  if (e instanceof Error) return { name: e.name, message: e.message, stack: e.stack };
+  return { name: 'Error', message: String(e) };
+}
+
+let host: GenerationHost | null = null;
+const running = new Map<number, AbortController>();
+
+function needHost(): GenerationHost {
+  if (!host) throw new Error('generation worker: no init message before the first request (GenerationClient sends it)');
+  return host;
+}
+
+function infoOf(model: string, g: { backend: 'webgpu' | 'wasm'; threads: number; sampler: 'ddgan' | 'ddim' }): ModelInfo {
+  return { model, backend: g.backend, threads: g.threads, sampler: g.sampler };
+}
+
+/** Every distinct buffer behind the arrays (a buffer listed twice makes postMessage throw). */
+function buffersOf(...arrays: Array<Float32Array | undefined>): ArrayBuffer[] {
+  const set = new Set<ArrayBuffer>();
+  for (const a of arrays) if (a && a.buffer instanceof ArrayBuffer) set.add(a.buffer);
+  return [...set];
+}
+
+async function handle(msg: ToWorker): Promise<void> {
+  switch (msg.type) {
+    case 'init': {
+      const { init } = msg;
+      if (init.cache !== false) useModelCache((file) => post({ type: 'file', file }), (text) => post({ type: 'notice', kind: 'warn', text }));
+      host = new GenerationHost(init, {
+        download: (model, loaded, total) => post({ type: 'download', model, loaded, total }),
+        fallback: (model, reason) => post({ type: 'fallback', model, reason }),
+      });
+      post({
+        type: 'environment', crossOriginIsolated: scope.crossOriginIsolated === true, threads: init.threads ?? defaultThreads(),
+        hardwareConcurrency: (globalThis as { navigator?: { hardwareConcurrency?: number } }).navigator?.hardwareConcurrency ?? 1,
+      });
+      return;
+    }
+    case 'load': {
+      try {
+        const g = await needHost().load(msg.model, msg.variant);
+        post({ type: 'loaded', id: msg.id, info: infoOf(msg.model, g) });
+      } catch (e) {
+        post({ type: 'error', id: msg.id, error: wireError(e) });
+      }
+      return;
+    }
+    case 'generate': {
+      const ctrl = new AbortController();
+      running.set(msg.id, ctrl);
+      try {
+        const h = needHost();
+        const { pose: wantPose, ...wire } = msg.options;
+        const o: GenerateOptions = { ...wire, signal: ctrl.signal, onStep: (done, total) => post({ type: 'step', id: msg.id, done, total }) };
+        const { gen, result } = await h.generate(msg.model, o, msg.variant);
+        let pose: WirePose | undefined;
+        if (wantPose) {
+          const t0 = performance.now();
+          const ik = solveIK(result.motion.joints, result.motion.frames, h.manifest.skeleton);
+          pose = { rootPos: ik.rootPos, quats: ik.quats, ikMs: performance.now() - t0 };
+        }
+        const transfer = buffersOf(result.motion.joints, result.motion.features, pose?.rootPos, pose?.quats);
+        post({ type: 'result', id: msg.id, info: infoOf(msg.model, gen), result, pose }, transfer);
+      } catch (e) {
+        post({ type: 'error', id: msg.id, error: wireError(e) });
+      } finally {
+        running.delete(msg.id);
+      }
+      return;
+    }
+    case 'cancel': {
+      const ctrl = running.get(msg.id);
+      if (ctrl) {
+        const reason = new Error('cancelled: a newer request replaced this one');
+        reason.name = 'AbortError';
+        ctrl.abort(reason);
+      }
+      return;
+    }
+    case 'dispose': {
+      for (const c of running.values()) c.abort();
+      await host?.dispose();
+      host = null;
+      post({ type: 'loaded', id: msg.id, info: { model: '', backend: 'wasm', threads: 0, sampler: 'ddgan' } });
+      return;
+    }
+  }
+}
+
+scope.addEventListener('message', (e) => {
+  void handle(e.data);
+});

@@ -1,0 +1,143 @@
+/**
+ * The generation worker's state, without the messaging: the generators it has loaded (lazily, once
+ * each), the text encoders they share, and the backend choice with its fallbacks — WebGPU missing or
+ * failing at load → WASM, WebGPU failing while generating → reload on WASM and run again. Events say
+ * what happened (downloads, fallbacks) so the page can tell the user. Runs wherever createGenerator
+ * runs (the worker in the browser; Node in tests).
+ */
+import { createGenerator, type GenerateOptions, type GenerateResult, type Generator } from '../generate';
+import { ModelFileError, type Manifest } from '../manifest';
+import type { BackendRequest } from '../runtime/ort';
+import { createTextEncoder, type TextEncoder } from '../text';
+
+export interface HostEvents {
+  download(model: string, loaded: number, total: number): void;
+  fallback(model: string, reason: string): void;
+}
+
+export interface HostOptions {
+  manifest: Manifest;
+  baseUrl: string;
+  backend: BackendRequest;
+  threads?: number;
+}
+
+const hasWebGpu = () => {
+  const nav = (globalThis as { navigator?: { gpu?: unknown } }).navigator;
+  return !!nav && 'gpu' in nav && !!nav.gpu;
+};
+
+const isAbort = (e: unknown) => e instanceof Error && e.name === 'AbortError';
+
+export class GenerationHost {
+  private readonly generators = new Map<string, Promise<Generator>>();
+  private readonly encoders = new Map<string, Promise<TextEncoder>>();
+  /** progress of every download under way, summed */
+  private readonly downloads = new Map<string, [number, number]>();
+
+  constructor(private readonly opts: HostOptions, private readonly events: HostEvents) {}
+
+  get manifest(): Manifest {
+    return this.opts.manifest;
+  }
+
+  /** The generator of a model (created on first use; a failed load is forgotten so it can be retried). */
+  load(model: string, variant?: string): Promise<Generator> {
+    const key = `${model}|${variant ?? ''}`;
+    let g = this.generators.get(key);
+    if (!g) {
+      g = this.create(model, variant);
+      this.generators.set(key, g);
+      g.catch(() => this.generators.delete(key));
+    }
+    return g;
+  }
+
+  /** Generate with a model; a WebGPU failure reloads the model on WASM (said with a fallback event) and runs again. */
+  async generate(model: string, o: GenerateOptions, variant?: string): Promise<{ gen: Generator; result: GenerateResult }> {
+    const gen = await this.load(model, variant);
+    if (o.signal?.aborted) throw o.signal.reason;
+    try {
+      return { gen, result: await gen.generate(o) };
+    } catch (e) {
+      if (isAbort(e) || gen.backend !== 'webgpu' || e instanceof ModelFileError) throw e;
+      const wasm = await this.reloadOnWasm(model, variant, e instanceof Error ? e.message : String(e));
+      return { gen: wasm, result: await wasm.generate(o) };
+    }
+  }
+
+  private async reloadOnWasm(model: string, variant: string | undefined, reason: string): Promise<Generator> {
+    this.events.fallback(model, `WebGPU failed while generating (${reason})`);
+    const key = `${model}|${variant ?? ''}`;
+    this.generators.get(key)?.then((g) => g.dispose()).catch(() => undefined);
+    const g = this.create(model, variant, 'wasm');
+    this.generators.set(key, g);
+    g.catch(() => this.generators.delete(key));
+    return g;
+  }
+
+  private progress(key: string, label: string) {
+    return (loaded: number, total: number) => {
+      this.downloads.set(key, [loaded, total]);
+      let l = 0;
+      let t = 0;
+      for (const [a, b] of this.downloads.values()) {
+        l += a;
+        t += b;
+      }
+      this.events.download(label, l, t);
+    };
+  }
+
+  /** A text model's encoder, loaded at the same time as its step model (the first prompt does not wait for it). */
+  private encoderFor(model: string): { ready: Promise<unknown>; encoder?: TextEncoder } {
+    const c = this.opts.manifest.models[model]?.condition;
+    if (!c || c.type !== 'text') return { ready: Promise.resolve() };
+    let enc = this.encoders.get(c.encoder);
+    if (!enc) {
+      enc = createTextEncoder(this.opts.manifest, this.opts.baseUrl, c.encoder, { onDownload: this.progress(`enc:${c.encoder}`, model) });
+      this.encoders.set(c.encoder, enc);
+      enc.catch(() => this.encoders.delete(c.encoder));
+    }
+    const p = enc;
+    return { ready: p, encoder: { id: c.encoder, dim: c.dim, encode: async (text: string) => (await p).encode(text) } };
+  }
+
+  private async create(model: string, variant?: string, force?: 'wasm'): Promise<Generator> {
+    const enc = this.encoderFor(model);
+    const gen = this.createStep(model, variant, enc.encoder, force);
+    // Both must load; if either fails, the model is unusable (the error names the file).
+    const [g] = await Promise.all([gen, enc.ready]).catch(async (e) => {
+      gen.then((x) => x.dispose()).catch(() => undefined);
+      throw e;
+    });
+    return g;
+  }
+
+  private async createStep(model: string, variant: string | undefined, textEncoder?: TextEncoder, force?: 'wasm'): Promise<Generator> {
+    const common = {
+      manifest: this.opts.manifest, baseUrl: this.opts.baseUrl, model, variant, threads: this.opts.threads,
+      onDownload: this.progress(`model:${model}|${variant ?? ''}`, model), textEncoder,
+    };
+    if (this.opts.backend === 'wasm' || force === 'wasm') return createGenerator({ ...common, backend: 'wasm' });
+    if (!hasWebGpu()) {
+      this.events.fallback(model, 'WebGPU is not available in this browser');
+      return createGenerator({ ...common, backend: 'wasm' });
+    }
+    try {
+      const g = await createGenerator({ ...common, backend: this.opts.backend });
+      if (g.backend !== 'webgpu') this.events.fallback(model, 'WebGPU is not available (no usable GPU adapter)');
+      return g;
+    } catch (e) {
+      if (e instanceof ModelFileError) throw e; // a bad file is not a backend problem
+      this.events.fallback(model, `WebGPU failed (${e instanceof Error ? e.message : String(e)})`);
+      return createGenerator({ ...common, backend: 'wasm' });
+    }
+  }
+
+  async dispose(): Promise<void> {
+    const all = await Promise.allSettled(this.generators.values());
+    for (const r of all) if (r.status === 'fulfilled') await r.value.dispose();
+    this.generators.clear();
+  }
+}

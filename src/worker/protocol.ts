@@ -1,0 +1,81 @@
+/**
+ * The messages between a page and its generation worker (src/worker/generation.worker.ts), typed on
+ * both sides. The page sends requests with an `id`; the worker answers each with exactly one
+ * `loaded` / `result` / `error` of the same id, and sends events (downloads, per-step progress,
+ * backend fallbacks, cache notices) as they happen. Float32Array results travel as transferred
+ * buffers (no copy).
+ */
+import type { FileEvent } from '../cache/modelCache';
+import type { Condition, GenerateResult } from '../generate';
+import type { Manifest } from '../manifest';
+import type { BackendRequest } from '../runtime/ort';
+
+export type { FileEvent };
+
+/** What the worker is set up with (once, before any other request). */
+export interface WorkerInit {
+  manifest: Manifest;
+  /** absolute URL of the models folder (the worker resolves nothing against the page) */
+  baseUrl: string;
+  /** 'auto' tries WebGPU and falls back to WASM (at load and when a WebGPU run fails) */
+  backend: BackendRequest;
+  /** WASM threads (default: the runtime's choice for a cross-origin isolated context) */
+  threads?: number;
+  /** keep verified model files in Cache Storage (default true where `caches` exists) */
+  cache?: boolean;
+}
+
+/** The options of one generation as they cross to the worker (no signal, no callbacks, no noise source). */
+export interface WireGenerateOptions {
+  condition: Condition;
+  frames: number;
+  steps: number;
+  guidance: number;
+  seed: number;
+  smooth?: boolean;
+  footCleanup?: boolean;
+  /** also solve the joints into bone rotations (IK) in the worker: the result carries `pose` */
+  pose?: boolean;
+}
+
+export type ToWorker =
+  | { type: 'init'; init: WorkerInit }
+  | { type: 'load'; id: number; model: string; variant?: string }
+  | { type: 'generate'; id: number; model: string; variant?: string; options: WireGenerateOptions }
+  | { type: 'cancel'; id: number }
+  | { type: 'dispose'; id: number };
+
+/** Root positions and joint rotations for the character, solved by IK in the worker. */
+export interface WirePose {
+  rootPos: Float32Array;
+  quats: Float32Array;
+  ikMs: number;
+}
+
+export interface ModelInfo {
+  model: string;
+  backend: 'webgpu' | 'wasm';
+  threads: number;
+  sampler: 'ddgan' | 'ddim';
+}
+
+/** An error as it crosses the boundary; the client rebuilds ModelFileError / AbortError from it. */
+export interface WireError {
+  name: string;
+  message: string;
+  stack?: string;
+  /** ModelFileError */
+  path?: string;
+  reason?: string;
+}
+
+export type FromWorker =
+  | { type: 'loaded'; id: number; info: ModelInfo }
+  | { type: 'result'; id: number; info: ModelInfo; result: GenerateResult; pose?: WirePose }
+  | { type: 'error'; id: number; error: WireError }
+  | { type: 'step'; id: number; done: number; total: number }
+  | { type: 'download'; model: string; loaded: number; total: number }
+  | { type: 'file'; file: FileEvent }
+  | { type: 'fallback'; model: string; reason: string }
+  | { type: 'notice'; kind: 'info' | 'warn'; text: string }
+  | { type: 'environment'; crossOriginIsolated: boolean; threads: number; hardwareConcurrency: number };
