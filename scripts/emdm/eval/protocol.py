@@ -98,6 +98,19 @@ def plausibility_subset(n: int, plaus_n: int, seed: int) -> np.ndarray:
     return np.sort(np.random.default_rng([seed, 7]).choice(n, plaus_n, replace=False))
 
 
+def sample_lengths(test: EvalSplit, n: int, rng: np.random.Generator, action: int | None = None) -> np.ndarray:
+    """``n`` motion lengths drawn like the test split: with replacement from the lengths of its clips of
+    ``action`` (all its clips when ``action`` is None or has no clip), so that a generated bow is as long
+    as a real one. The protocols above use each clip's own length; this is that rule for conditions that
+    are not test clips (the coverage benchmark's prompts)."""
+    lengths = test.lengths
+    if action is not None and np.any(test.actions == action):
+        lengths = lengths[test.actions == action]
+    if lengths.size == 0:
+        raise ValueError(f"{test.root}/{test.split}.txt: no clips to draw lengths from")
+    return rng.choice(lengths, n, replace=True).astype(np.int64)
+
+
 def _fid_real_halves(real_emb: np.ndarray, rng: np.random.Generator) -> float:
     perm = rng.permutation(len(real_emb))
     h = len(perm) // 2

@@ -14,6 +14,10 @@ Result JSON (schema 1), one file per (task, source):
 Timing JSON:
     {"schema": 1, "task": "timing", "runtime": "python-cpu"|"browser-wasm"|"gpu", "hardware": str,
      "rows": [{"variant": ..., "sampler": ..., "steps": T, "frames": F, "ms_per_motion": [runs]}]}
+Coverage JSON (``python -m emdm.eval.coverage``), one file per model:
+    {"schema": 1, "task": "coverage", "name": ..., "condition": "text"|"action", "labels": [...],
+     "real": {"per_action": {label: {"n", "recognised", "rate"}}, "reference": [...], "too_few": {label: n}},
+     "runs": [{"steps": T, "per_action": {...}, "macro_accuracy", "covered": [...], ...}], "chips": {...}}
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from emdm.eval.coverage import COVERED
 from emdm.eval.metrics import mean_ci95
 from emdm.paths import REPO_ROOT
 
@@ -75,9 +80,10 @@ def load_results(json_dir: Path | str) -> list[dict]:
         if r.get("schema") != SCHEMA:
             raise ReportError(f"{path}: field 'schema' is {r.get('schema')!r}, expected {SCHEMA}")
         task = r.get("task")
-        if task not in ("text", "action", "timing"):
-            raise ReportError(f"{path}: field 'task' is {task!r}, expected 'text', 'action' or 'timing'")
-        need = ("rows", "runtime") if task == "timing" else ("name", "kind", "info", "metrics")
+        if task not in ("text", "action", "timing", "coverage"):
+            raise ReportError(f"{path}: field 'task' is {task!r}, expected 'text', 'action', 'timing' or 'coverage'")
+        need = {"timing": ("rows", "runtime"), "coverage": ("name", "labels", "real", "runs")}.get(
+            task, ("name", "kind", "info", "metrics"))
         for k in need:
             if k not in r:
                 raise ReportError(f"{path}: missing field {k!r}")
@@ -199,7 +205,86 @@ def timing_table(results: list[dict]) -> tuple[str, list[str]]:
     return table, ratios
 
 
+def _rate(v: dict | None) -> str:
+    return "–" if not v or v.get("rate") is None else f"{v['rate']:.2f}"
+
+
+def coverage_section(r: dict, plot: str | None) -> list[str]:
+    """One model's coverage: action × steps recognition rates next to the real row, summary rows, the
+    actions with too few test clips, the chip candidates and the bar plot."""
+    real, runs = r["real"], sorted(r["runs"], key=lambda x: x["steps"])
+    ref, few = set(real["reference"]), real.get("too_few", {})
+    cond = "its plain label prompt and paraphrases (`scripts/emdm/eval/prompts.json`)" if r.get("condition") == "text" \
+        else "its one-hot label"
+    seeds = r.get("key", {}).get("seeds", "?")
+    out = [f"### {r['name']} ({r.get('condition', '?')} model, guidance {r.get('key', {}).get('guidance', '?')})", "",
+           f"Each action asked for with {cond}, {seeds} motions per prompt, lengths drawn from the action's real test "
+           f"clips; a cell is the share of its motions the classifier names as that action. *Ref.* marks the "
+           f"reference set (real clips recognised ≥ {COVERED:.0%}); actions with fewer than "
+           f"{real.get('min_clips', 3)} real test clips are marked *few* and listed below.", ""]
+    header = ["Action", "Ref.", "Real (clips)"] + [f"{x['steps']} step{'s' if x['steps'] > 1 else ''}" for x in runs]
+    rows = []
+    for a in r["labels"]:
+        rv = real["per_action"][a]
+        mark = "✓" if a in ref else ("few" if a in few else "")
+        rows.append([a, mark, f"{_rate(rv)} ({rv['n']})"] + [_rate(x["per_action"].get(a)) for x in runs])
+    macro = lambda v: "–" if v is None else f"{v:.3f}"  # noqa: E731
+    rows.append(["**macro accuracy**", "", macro(real.get("macro_accuracy"))] + [macro(x["macro_accuracy"]) for x in runs])
+    rows.append(["**macro, reference set**", "", "–"] + [macro(x.get("macro_reference")) for x in runs])
+    rows.append(["**covered (≥ 50 %)**", "", f"{len(ref)}/{len(r['labels']) - len(few)}"] +
+                [f"{len(x['covered'])}/{len(r['labels'])}" for x in runs])
+    rows.append(["**covered of the reference set**", "", f"{len(ref)}/{len(ref)}"] +
+                [f"{len(x['covered_reference'])}/{x['reference_size']}" for x in runs])
+    out += [_table(header, rows), ""]
+    if few:
+        out += ["Too few real test clips to judge the classifier on (listed, not dropped; their generated rates are "
+                "in the table): " + ", ".join(f"{a} ({n})" for a, n in few.items()) + ".", ""]
+    missed = [a for a in real["reference"] if runs and a not in runs[-1]["covered_reference"]]
+    if runs and missed:
+        out += [f"Reference actions not covered at {runs[-1]['steps']} steps: " + ", ".join(missed) + ".", ""]
+    if r.get("chips"):
+        c = r["chips"]
+        out += [f"Prompts recognised in ≥ {c['threshold']:.0%} of their motions at {c['steps']} steps (the page's "
+                f"example chips come from these): " + (", ".join(f"\"{p}\"" for p in c["prompts"]) or "none") + ".", ""]
+    secs = ", ".join(f"{x['steps']} step{'s' if x['steps'] > 1 else ''} {x['seconds'] / 60:.1f} min ({x['motions']} motions)" for x in runs)
+    out += [f"Measured on {r.get('hardware', '?')}; {secs}. Classifier: {r.get('classifier', {}).get('summary', '?')}.", ""]
+    if plot:
+        out += [f"![coverage of {r['name']}]({plot})", ""]
+    return out
+
+
 # ----------------------------------------------------------------------------- plots
+
+def plot_coverage(r: dict, path: Path) -> bool:
+    """Horizontal grouped bars: per action, the real clips' and each step count's recognition rate."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    labels, runs = r["labels"], sorted(r["runs"], key=lambda x: x["steps"])
+    series = [("real test clips", [r["real"]["per_action"][a]["rate"] for a in labels], "0.6")]
+    series += [(f"{x['steps']} step{'s' if x['steps'] > 1 else ''}", [x["per_action"][a]["rate"] for a in labels], None)
+               for x in runs]
+    h = 0.8 / len(series)
+    y = np.arange(len(labels))
+    fig, ax = plt.subplots(figsize=(7.5, 0.32 * len(labels) + 1.2), dpi=100)
+    for k, (name, vals, color) in enumerate(series):
+        ax.barh(y + (k - (len(series) - 1) / 2) * h, [np.nan if v is None else v for v in vals], h,
+                label=name, color=color)
+    ax.axvline(COVERED, color="k", lw=0.8, ls="--")
+    ax.set_yticks(y, [a + (" *" if a in r["real"].get("too_few", {}) else "") for a in labels], fontsize=7)
+    ax.invert_yaxis()
+    ax.set_xlim(0, 1)
+    ax.set_xlabel("share of motions the classifier names as the action (dashed: covered)")
+    ax.set_title(f"Coverage per action: {r['name']} (* = too few real test clips)", fontsize=9)
+    ax.legend(fontsize=7, loc="lower right")
+    ax.grid(alpha=0.3, axis="x")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return True
+
 
 def _step_axis(ax, steps) -> None:
     """Log-scaled x axis labelled with the step counts themselves (1, 2, 10, 100), not powers of ten."""
@@ -296,7 +381,7 @@ def plot_time_vs_steps(results: list[dict], path: Path) -> bool:
 
 def missing(results: list[dict]) -> list[str]:
     have = {(r["task"], r["info"].get("variant", "real" if r["kind"] == "real" else "emdm"), _steps(r))
-            for r in results if r["task"] != "timing"}
+            for r in results if r["task"] in ("text", "action")}
     out = []
     for task, variant, steps, why in EXPECTED:
         ok = any(t == task and v == variant and (steps is None or s == steps) for t, v, s in have)
@@ -306,9 +391,9 @@ def missing(results: list[dict]) -> list[str]:
     for runtime, variant in EXPECTED_TIMING:
         if (runtime, variant) not in runtimes:
             out.append(f"timing: {VARIANT_LABEL[variant]} on {runtime}")
-    if not any(r.get("plausibility") for r in results if r["task"] != "timing" and r["kind"] == "real"):
+    if not any(r.get("plausibility") for r in results if r["task"] in ("text", "action") and r["kind"] == "real"):
         out.append("Tab. D5: plausibility of real data")
-    if not any(r.get("plausibility") for r in results if r["task"] != "timing" and r["kind"] != "real"):
+    if not any(r.get("plausibility") for r in results if r["task"] in ("text", "action") and r["kind"] != "real"):
         out.append("Tab. D5: plausibility of generated motions")
     return out
 
@@ -317,7 +402,7 @@ def _describe(results: list[dict]) -> list[str]:
     lines = []
     seen = set()
     for r in sorted(results, key=lambda r: r["task"] != "text"):
-        if r["task"] == "timing":
+        if r["task"] not in ("text", "action"):
             continue
         d = r.get("dataset", {})
         key = (r["task"], json.dumps(d, sort_keys=True))
@@ -327,7 +412,7 @@ def _describe(results: list[dict]) -> list[str]:
         lines.append(f"- {r['task']}: dataset `{d.get('name', '?')}` ({d.get('description', '')}), split "
                      f"`{d.get('split', '?')}`, {r.get('n', '?')} clips evaluated (≥ 40 frames); evaluator: "
                      f"{r.get('evaluator', {}).get('summary', '?')}")
-    hw = sorted({r.get("hardware", "?") for r in results})
+    hw = sorted({r.get("hardware", "?") for r in results if r["task"] != "coverage"})
     if hw:
         lines.append("- hardware: " + "; ".join(hw))
     return lines
@@ -402,13 +487,21 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
         out += [f"![FID vs steps]({plots['fid']})", ""]
     out += ["## Action-to-motion (ACTOR protocol)", ""]
     out += [action_table(results) if any(r["task"] == "action" for r in results) else "_no action-to-motion results yet_", ""]
+    cov = sorted((r for r in results if r["task"] == "coverage"), key=lambda r: (r.get("condition") != "text", r["name"]))
+    if cov:
+        out += ["## Coverage per action (issue 12)", "",
+                "Does every action of the dataset come out of its prompt? `python -m emdm.eval.coverage` asks each "
+                "model for every action of the vocabulary and lets the action classifier (the evaluator above) "
+                "name each motion. An action is *covered* when at least half its motions are recognised.", ""]
+        for r in cov:
+            out += coverage_section(r, plots.get("coverage:" + r["_file"]))
     out += ["## Physical plausibility (the seed's Tab. D5)", "",
             "Penetration: depth of the lowest joint below the floor; Float: height of the lowest joint beyond "
             "5 cm above it; Skate: horizontal speed of a toe joint while below 5 cm in two consecutive frames; "
             "Skate ratio: frames with a contact foot sliding faster than 0.5 m/s; Phys-Err: penetration + float + "
             "skate displacement per frame (mm), as PhysDiff sums them. Joints from the 263-d features' "
             "`recover_joints`, 20 fps (`emdm/eval/plausibility.py`).", ""]
-    has_p = any(r.get("plausibility") for r in results if r["task"] != "timing")
+    has_p = any(r.get("plausibility") for r in results if r["task"] in ("text", "action"))
     out += [plausibility_table(results) if has_p else "_no plausibility results yet_", ""]
     out += ["## Running time", ""]
     table, ratios = timing_table(results)
@@ -462,6 +555,11 @@ def main(argv: list[str] | None = None) -> int:
         plots["fid"] = rel((a.results / "fid_vs_steps.png").resolve())
     if plot_time_vs_steps(results, a.results / "time_vs_steps.png"):
         plots["time"] = rel((a.results / "time_vs_steps.png").resolve())
+    for r in results:
+        if r["task"] == "coverage":
+            png = a.results / (Path(r["_file"]).stem + ".png")
+            if plot_coverage(r, png):
+                plots["coverage:" + r["_file"]] = rel(png.resolve())
     text = render(results, plots)
     a.out.parent.mkdir(parents=True, exist_ok=True)
     tmp = a.out.with_suffix(".tmp")
