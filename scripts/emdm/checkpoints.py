@@ -47,7 +47,7 @@ def torch_load(path: Path | str, map_location="cpu"):
         return torch.load(path, map_location=map_location, weights_only=True)
 
 
-def load_file(path: Path | str, need: tuple[str, ...] = ("meta",), what: str = "emdm.train checkpoint",
+def load_file(path: Path | str, need: tuple[str, ...] = ("meta",), what: str = "checkpoint written by emdm.train",
               map_location="cpu") -> dict:
     """``torch.load(path, weights_only=True)`` → dict holding every key in ``need``, or CheckpointError."""
     path = Path(path)
@@ -56,12 +56,15 @@ def load_file(path: Path | str, need: tuple[str, ...] = ("meta",), what: str = "
     try:
         st = torch_load(path, map_location)
     except Exception as e:  # noqa: BLE001 - re-raised as one line naming the file
-        first = (str(e).strip().splitlines() or [type(e).__name__])[0]
-        if "weights_only" in str(e) or "Unsupported global" in str(e):
+        msg = str(e)
+        cause = msg.split("WeightsUnpickler error:", 1)[1] if "WeightsUnpickler error:" in msg else msg
+        cause = " ".join(cause.split("Check the documentation")[0].split())
+        cause = cause.split(". Please use")[0] or type(e).__name__
+        if "Unsupported global" in cause:
             raise CheckpointError(f"{path}: holds objects other than tensors and plain values, refused "
-                                  f"(weights_only=True): {first[:200]}") from e
+                                  f"(torch.load weights_only=True): {cause[:200]}") from e
         raise CheckpointError(f"{path}: cannot read as a {what} (corrupt or not a torch file): "
-                              f"{type(e).__name__}: {first[:200]}") from e
+                              f"{type(e).__name__}: {cause[:200]}") from e
     if not isinstance(st, dict):
         raise CheckpointError(f"{path}: not a {what} (holds a {type(st).__name__}, expected a dict)")
     missing = [k for k in need if k not in st]
