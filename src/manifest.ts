@@ -7,16 +7,10 @@
  * in Node a `file://` URL or a filesystem path (read with node:fs, since Node's fetch has no file:).
  */
 
-export interface Skeleton {
-  joints: string[];
-  parents: number[];
-  offsets: [number, number, number][];
-  chains: number[][];
-  footJoints: number[];
-  fps: number;
-  maxFrames: number;
-  featureDim: number;
-}
+import type { Skeleton } from './skeleton';
+
+/** The `skeleton` block: the 22-joint rig and the motion format (src/skeleton.ts). */
+export type { Skeleton };
 
 export interface TextEncoderEntry {
   kind: 'minilm' | 'clip';

@@ -4,7 +4,8 @@
 // smoothstep over a band around the joint), merged into ONE indexed geometry with position, normal,
 // color, skinIndex and skinWeight attributes. Pure geometry: no scene, no renderer.
 import { BufferAttribute, BufferGeometry, Vector3 } from 'three';
-import { checkSkeleton, restPositions, type RigSkeleton } from './rig';
+import { type JointName, type SkeletonLike, standardJoints } from '../skeleton';
+import { restPositions } from './rig';
 
 /** A body part: a capsule from a to b (rest world coordinates) with an elliptic cross-section. */
 export interface BodyPart {
@@ -34,22 +35,9 @@ const EYES = 0x1a2030;
 /** Forward pitch of the head geometry about the neck joint, radians (see bodyParts). */
 export const HEAD_PITCH = (20 * Math.PI) / 180;
 
-/** Standard joint names the body expects (SMPL order names used by the manifest). */
-const NAMES = [
-  'pelvis', 'l_hip', 'r_hip', 'spine1', 'l_knee', 'r_knee', 'spine2', 'l_ankle', 'r_ankle', 'spine3',
-  'l_foot', 'r_foot', 'neck', 'l_collar', 'r_collar', 'head', 'l_shoulder', 'r_shoulder', 'l_elbow',
-  'r_elbow', 'l_wrist', 'r_wrist',
-] as const;
-type JointName = (typeof NAMES)[number];
-
-/** The body parts for a skeleton whose joints carry the standard names (any order). */
-export function bodyParts(s: RigSkeleton): BodyPart[] {
-  checkSkeleton(s);
-  const index = new Map(s.joints.map((n, i) => [n, i]));
-  for (const n of NAMES) {
-    if (!index.has(n)) throw new Error(`manifest skeleton.joints: the character needs a joint named '${n}'`);
-  }
-  const J = (n: JointName): number => index.get(n)!;
+/** The body parts for a skeleton with the 22 SMPL-order joints by name (any order). */
+export function bodyParts(s: SkeletonLike): BodyPart[] {
+  const J = standardJoints(s, 'the character');
   const rest = restPositions(s);
   const P = (n: JointName): Vector3 => rest[J(n)].clone();
   const X = new Vector3(1, 0, 0);
@@ -166,7 +154,7 @@ export interface BodyGeometryOptions {
 }
 
 /** One indexed BufferGeometry for all parts, with skinIndex/skinWeight (4 influences) and colours. */
-export function buildBodyGeometry(s: RigSkeleton, parts: BodyPart[] = bodyParts(s), opts: BodyGeometryOptions = {}): BufferGeometry {
+export function buildBodyGeometry(s: SkeletonLike, parts: BodyPart[] = bodyParts(s), opts: BodyGeometryOptions = {}): BufferGeometry {
   const radial = opts.radial ?? 20;
   const capRings = opts.capRings ?? 6;
   const spacing = opts.ringSpacing ?? 0.025;

@@ -2,7 +2,8 @@
 // the rest T-pose. Poses are applied with applyPose (root translation + local joint quaternions).
 import { Group, MeshStandardMaterial, Skeleton, SkinnedMesh, type Bone } from 'three';
 import { buildBodyGeometry } from './body';
-import { buildBones, checkSkeleton, type RigSkeleton } from './rig';
+import { checkSkeleton, type SkeletonLike } from '../skeleton';
+import { buildBones } from './rig';
 
 export interface Character {
   /** Add this to the scene. */
@@ -14,7 +15,7 @@ export interface Character {
   dispose(): void;
 }
 
-export function createCharacter(s: RigSkeleton): Character {
+export function createCharacter(s: SkeletonLike): Character {
   checkSkeleton(s);
   const bones = buildBones(s);
   const geometry = buildBodyGeometry(s);

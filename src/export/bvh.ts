@@ -11,9 +11,10 @@
  * - Frame rate: the motion's own (20 fps), or resampled to 30/60 fps (root: linear; rotations:
  *   slerp), keeping the duration: n_out = floor((n − 1)·fps_out/fps_in) + 1.
  */
-import { solveIK, type SkeletonLike } from '../motion/ik';
+import { solveIK } from '../motion/ik';
 import { type M3, type Q4, matFromQuat, slerp } from '../motion/math3';
 import type { Motion } from '../motion/types';
+import { childrenOf, type SkeletonLike } from '../skeleton';
 
 const CM = 100;
 const DEG = 180 / Math.PI;
@@ -62,9 +63,8 @@ export function writeBVH(motion: Motion, skeleton: SkeletonLike, opts: { fps?: 2
   const ik = solveIK(motion.joints, motion.frames, skeleton);
   const { rootPos, quats, frames } = resample(ik.rootPos, ik.quats, motion.frames, J, fpsIn, fpsOut);
 
-  const children: number[][] = Array.from({ length: J }, () => []);
-  let root = -1;
-  skeleton.parents.forEach((p, j) => (p < 0 ? (root = j) : children[p].push(j)));
+  const children = childrenOf(skeleton);
+  const root = skeleton.parents.indexOf(-1);
   if (root < 0) throw new Error('writeBVH: skeleton has no root joint (parent −1)');
 
   const order: number[] = [];

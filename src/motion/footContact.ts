@@ -11,13 +11,11 @@
  *     then placed at its original distance from the ankle, towards its pinned target; step 1 is
  *     repeated at the end (vertical lifts only).
  */
+import type { Skeleton } from '../skeleton';
 import { type V3, add, norm, normalize, scale, sub, twoBoneIK } from './math3';
 
-export interface FootRig {
-  parents: number[];
-  /** [l_ankle, l_foot, r_ankle, r_foot] joint indices, the order of the four contact channels */
-  footJoints: number[];
-}
+/** The part of the manifest skeleton the clean-up reads (footJoints: l_ankle, l_foot, r_ankle, r_foot). */
+export type FootRig = Pick<Skeleton, 'parents' | 'footJoints'>;
 
 export interface FootCleanupOptions {
   threshold?: number;

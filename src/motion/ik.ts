@@ -28,39 +28,21 @@
  * a Bandai clip); with the adapted offsets `forwardKinematics(rootPos, quats, offsets)` reproduces
  * the joints (measured in tests/unit/coreIk.test.ts). A rig should place its bones at `offsets`.
  * Pass `{ adaptOffsets: false }` to keep the reference skeleton exactly.
+ *
+ * Python's `emdm.motion.ik.solve_ik` is the same algorithm (the BVH files of `emdm.sample` and of the
+ * page carry the same angles): tests/fixtures/parity/ik.* holds its numbers, checked by both languages.
  */
 import {
   type M3, type Q4, type V3, IDENTITY, add, alignFrames, cross, dot, matFromQuat, mulMM, mulMV, mulTM, mulTV, norm,
   normalize, quatFromMat, scale, sub,
 } from './math3';
-
-export interface SkeletonLike {
-  joints: string[];
-  parents: number[];
-  offsets: number[][];
-}
-
-const NAMES = [
-  'pelvis', 'l_hip', 'r_hip', 'spine1', 'l_knee', 'r_knee', 'spine2', 'l_ankle', 'r_ankle', 'spine3', 'l_foot',
-  'r_foot', 'neck', 'l_collar', 'r_collar', 'head', 'l_shoulder', 'r_shoulder', 'l_elbow', 'r_elbow', 'l_wrist', 'r_wrist',
-] as const;
-type Name = (typeof NAMES)[number];
+import { type JointName, type SkeletonLike, standardJoints } from '../skeleton';
 
 export interface IKResult {
   rootPos: Float32Array; // frames × 3
   quats: Float32Array; // frames × 22 × 4 (x, y, z, w), local
   /** per-joint offsets from the parent (rest pose) that go with these rotations, metres */
   offsets: number[][];
-}
-
-function indexer(skeleton: SkeletonLike): (n: Name) => number {
-  const idx = new Map(skeleton.joints.map((n, i) => [n, i]));
-  const missing = NAMES.filter((n) => !idx.has(n));
-  if (missing.length) throw new Error(`solveIK: skeleton.joints lacks ${missing.join(', ')} (the 22-joint SMPL-order rig is required)`);
-  if (skeleton.parents.length !== skeleton.joints.length || skeleton.offsets.length !== skeleton.joints.length) {
-    throw new Error(`solveIK: skeleton has ${skeleton.joints.length} joints but ${skeleton.parents.length} parents and ${skeleton.offsets.length} offsets`);
-  }
-  return (n) => idx.get(n)!;
 }
 
 const v3 = (a: ArrayLike<number>, o = 0): V3 => [a[o], a[o + 1], a[o + 2]];
@@ -79,18 +61,18 @@ function bendAxis(a: V3, b: V3, c: V3, ref: V3): V3 {
 }
 
 /** Mean offsets, in the parent's frame, of the children of pelvis and spine3 (see solveIK). */
-function adaptedOffsets(joints: Float32Array, frames: number, skeleton: SkeletonLike, I: (n: Name) => number): V3[] {
+function adaptedOffsets(joints: Float32Array, frames: number, skeleton: SkeletonLike, I: (n: JointName) => number): V3[] {
   const J = skeleton.joints.length;
   const off = skeleton.offsets.map((o) => v3(o));
   const out = off.map((o) => [...o] as V3);
-  const groups: [Name, Name, Name, Name, Name, Name[]][] = [
+  const groups: [JointName, JointName, JointName, JointName, JointName, JointName[]][] = [
     // parent, frame primary a→b, frame secondary c−d, children to adapt
     ['pelvis', 'r_hip', 'l_hip', 'spine1', 'pelvis', ['l_hip', 'r_hip', 'spine1']],
     ['spine3', 'spine3', 'neck', 'l_collar', 'r_collar', ['neck', 'l_collar', 'r_collar']],
   ];
   for (const [parent, a, b, c, d, kids] of groups) {
     const sums = kids.map(() => [0, 0, 0] as V3);
-    const P = (f: number, n: Name): V3 => v3(joints, (f * J + I(n)) * 3);
+    const P = (f: number, n: JointName): V3 => v3(joints, (f * J + I(n)) * 3);
     for (let f = 0; f < frames; f++) {
       const G = parent === 'pelvis'
         ? alignFrames(sub(off[I('l_hip')], off[I('r_hip')]), off[I('spine1')], sub(P(f, b), P(f, a)), sub(P(f, c), P(f, d)))
@@ -118,7 +100,7 @@ function adaptedOffsets(joints: Float32Array, frames: number, skeleton: Skeleton
 export function solveIK(joints: Float32Array, frames: number, skeleton: SkeletonLike, opts: { adaptOffsets?: boolean } = {}): IKResult {
   const J = skeleton.joints.length;
   if (joints.length !== frames * J * 3) throw new RangeError(`solveIK: joints has ${joints.length} values, expected frames (${frames}) × ${J} × 3`);
-  const I = indexer(skeleton);
+  const I = standardJoints(skeleton, 'solveIK');
   const par = skeleton.parents;
   const rest = skeleton.offsets.map((o) => v3(o)); // defines the rest frames (rotation = identity)
   const off = opts.adaptOffsets === false || frames === 0 ? rest : adaptedOffsets(joints, frames, skeleton, I); // FK offsets
@@ -127,7 +109,7 @@ export function solveIK(joints: Float32Array, frames: number, skeleton: Skeleton
   const restAcrossHip = sub(rest[I('l_hip')], rest[I('r_hip')]);
   // Rest flexion axes: the rest limb's own bend normal when it is visibly bent, else the
   // anatomical default (knees flex about +X; elbows about −Y (left) / +Y (right) in the T-pose).
-  const restAxis = (a: Name, b: Name, dflt: V3): V3 => {
+  const restAxis = (a: JointName, b: JointName, dflt: V3): V3 => {
     const n = cross(rest[I(a)], rest[I(b)]);
     const sin = norm(n) / Math.max(norm(rest[I(a)]) * norm(rest[I(b)]), 1e-12);
     if (sin < 0.03) return dflt;
@@ -166,10 +148,10 @@ export function solveIK(joints: Float32Array, frames: number, skeleton: Skeleton
 
     for (let j = 0; j < J; j++) {
       Q[j] = fkPos(j);
-      const name = skeleton.joints[j] as Name;
+      const name = skeleton.joints[j] as JointName;
       const p = par[j];
       const Gp = p < 0 ? IDENTITY : G[p];
-      const toChild = (c: Name) => sub(P(I(c)), Q[j]);
+      const toChild = (c: JointName) => sub(P(I(c)), Q[j]);
       switch (name) {
         case 'pelvis':
           set(j, alignFrames(restAcrossHip, rest[I('spine1')], hipAcross, sub(P(I('spine1')), Q[j])));

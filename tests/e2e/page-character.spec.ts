@@ -8,11 +8,12 @@ import { Box3, Quaternion, Vector3 } from 'three';
 import { bodyParts, buildBodyGeometry, chainWeights } from '../../src/character/body';
 import { applyPose, createCharacter } from '../../src/character/character';
 import { MotionPlayer, samplePose, type PoseTrack } from '../../src/character/player';
-import { restPositions, type RigSkeleton } from '../../src/character/rig';
+import { restPositions } from '../../src/character/rig';
+import type { SkeletonLike } from '../../src/skeleton';
 
 const MANIFEST = path.join(process.cwd(), 'public/models/manifest.json');
 
-function skeleton(): RigSkeleton {
+function skeleton(): SkeletonLike {
   return JSON.parse(fs.readFileSync(MANIFEST, 'utf8')).skeleton;
 }
 

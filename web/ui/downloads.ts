@@ -5,10 +5,10 @@ import { AnimationClip, QuaternionKeyframeTrack, VectorKeyframeTrack } from 'thr
 import { GLTFExporter } from 'three/addons/exporters/GLTFExporter.js';
 import { createCharacter } from '../../src/character/character';
 import type { PoseTrack } from '../../src/character/player';
-import type { RigSkeleton } from '../../src/character/rig';
+import type { SkeletonLike } from '../../src/skeleton';
 
 /** An AnimationClip of a pose track for bones named after the skeleton's joints. */
-export function trackToClip(s: RigSkeleton, t: PoseTrack, name = 'emdm'): AnimationClip {
+export function trackToClip(s: SkeletonLike, t: PoseTrack, name = 'emdm'): AnimationClip {
   const times = new Float32Array(t.frames);
   for (let i = 0; i < t.frames; i++) times[i] = i / t.fps;
   const tracks = [new VectorKeyframeTrack(`${s.joints[0]}.position`, Array.from(times), Array.from(t.rootPos))];
@@ -21,7 +21,7 @@ export function trackToClip(s: RigSkeleton, t: PoseTrack, name = 'emdm'): Animat
 }
 
 /** Binary glTF (.glb): the skinned character (own copy) with the motion as its one animation. */
-export async function motionToGLB(s: RigSkeleton, t: PoseTrack): Promise<ArrayBuffer> {
+export async function motionToGLB(s: SkeletonLike, t: PoseTrack): Promise<ArrayBuffer> {
   const ch = createCharacter(s);
   try {
     const clip = trackToClip(s, t);
@@ -45,7 +45,7 @@ export interface JointsDocument {
   positions: number[][][];
 }
 
-export function motionToJSON(s: RigSkeleton & { parents: number[] }, joints: Float32Array, frames: number, fps: number,
+export function motionToJSON(s: SkeletonLike & { parents: number[] }, joints: Float32Array, frames: number, fps: number,
   generator: Record<string, unknown>): string {
   const J = s.joints.length;
   if (joints.length !== frames * J * 3) throw new Error(`joints JSON: ${joints.length} values, expected ${frames}×${J}×3`);
