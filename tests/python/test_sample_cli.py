@@ -93,7 +93,7 @@ def test_bvh_round_trip_through_the_project_reader(tmp_path):
     rng = np.random.default_rng(0)
     local = Rotation.from_rotvec(rng.normal(size=(12 * 22, 3)) * 0.6).as_matrix().reshape(12, 22, 3, 3)
     joints = forward_kinematics(rng.normal(size=(12, 3)), local)
-    r, l2 = solve_ik(joints)
+    r, l2, _ = solve_ik(joints)
     np.testing.assert_allclose(forward_kinematics(r, l2), joints, atol=1e-9)
     path = write_bvh(joints, tmp_path / "x.bvh")
     bvh = read_bvh(path)

@@ -1,6 +1,9 @@
+import fs from 'node:fs';
+import path from 'node:path';
 import { describe, expect, it } from 'vitest';
+import { writeBVH } from '../../src/export/bvh';
 import { forwardKinematics, solveIK } from '../../src/motion/ik';
-import { fixtureExists, loadCase, manifestSkeleton, maxJointDist, modelFixtures, randomPoseQuats } from './coreFixtures';
+import { PARITY_DIR, fixtureExists, loadCase, manifestSkeleton, maxAbsDiff, maxJointDist, modelFixtures, randomPoseQuats } from './coreFixtures';
 
 const sk = manifestSkeleton();
 const J = sk.joints.length;
@@ -149,4 +152,56 @@ describe('IK (joints → root + local quaternions with twist from body planes)',
       expect(maxJointDist(forwardKinematics(ik2.rootPos, ik2.quats, frames, sk, ik2.offsets), fk)).toBeLessThan(1e-3);
     });
   }
+});
+
+/** Angle (radians) between two unit quaternions, well conditioned near 0: 2·atan2(|a − b|, |a + b|), b sign-aligned. */
+function quatAngle(a: ArrayLike<number>, b: ArrayLike<number>): number {
+  const s = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0 ? -1 : 1;
+  let d = 0;
+  let m = 0;
+  for (let c = 0; c < 4; c++) {
+    d += (a[c] - s * b[c]) ** 2;
+    m += (a[c] + s * b[c]) ** 2;
+  }
+  return 2 * Math.atan2(Math.sqrt(d), Math.sqrt(m));
+}
+
+// tests/fixtures/parity/ik.* is written by `python -m emdm.motion.ik_fixture` (emdm.motion.ik.solve_ik and
+// emdm.mocap.bvh_writer): the BVH of `emdm.sample` and of the page must come from the same IK.
+describe('the same IK as Python (emdm.motion.ik, fixture tests/fixtures/parity/ik.*)', () => {
+  const fx = loadCase('ik');
+  const cases = fx.meta.cases as Record<string, { frames: number; source: string }>;
+
+  for (const [name, { frames }] of Object.entries(cases)) {
+    it(`solveIK gives Python's local rotations, root and offsets (${name}, ${frames} frames)`, () => {
+      const ik = solveIK(fx.get(`${name}_joints`), frames, sk);
+      const want = fx.get(`${name}_quats`);
+      let worst = 0;
+      for (let i = 0; i < want.length; i += 4) worst = Math.max(worst, quatAngle(ik.quats.subarray(i, i + 4), want.subarray(i, i + 4)));
+      // float32 storage on both sides (~1e-7 rad); a changed rule (e.g. no twist, another bend blend) is ≥ 1e-2
+      expect(worst, `max angle difference, rad`).toBeLessThan(2e-6);
+      expect(maxAbsDiff(ik.rootPos, fx.get(`${name}_root`))).toBeLessThan(1e-7);
+      expect(maxAbsDiff(ik.offsets.flat(), fx.get(`${name}_offsets`))).toBeLessThan(1e-6);
+    });
+  }
+
+  it("writeBVH writes Python's BVH (emdm.mocap.bvh_writer) line for line, numbers within rounding", () => {
+    const name = fx.meta.bvhCase as string;
+    const frames = cases[name].frames;
+    const mine = writeBVH({ frames, fps: fx.meta.fps as number, joints: fx.get(`${name}_joints`), features: new Float32Array(0) }, sk).split('\n');
+    const theirs = fs.readFileSync(path.join(PARITY_DIR, fx.meta.bvh as string), 'utf8').split('\n');
+    expect(mine.length).toBe(theirs.length);
+    let worst = 0;
+    mine.forEach((line, i) => {
+      const a = line.trim().split(/\s+/);
+      const b = theirs[i].trim().split(/\s+/);
+      expect(a.length, `line ${i + 1}`).toBe(b.length);
+      a.forEach((tok, k) => {
+        const [x, y] = [Number(tok), Number(b[k])];
+        if (Number.isNaN(x) || Number.isNaN(y)) expect(tok, `line ${i + 1}`).toBe(b[k]);
+        else worst = Math.max(worst, Math.abs(x - y));
+      });
+    });
+    expect(worst, 'largest difference of a number (cm or degrees, 4 decimals written)').toBeLessThanOrEqual(2e-4);
+  });
 });

@@ -1,9 +1,15 @@
 """Write joint motions as BVH on the reference skeleton (emdm.skeleton), rotations from emdm.motion.ik.
 
-Units: centimetres (offsets and root position ×100), Y up. Root: 6 channels (Xposition Yposition
-Zposition Zrotation Xrotation Yrotation), other joints: 3 rotation channels in the same ZXY order,
-i.e. R = Rz · Rx · Ry (intrinsic, as BVH readers apply the channels left to right). Leaf joints get an
-End Site one bone-length-ish further along their offset direction.
+The same file as the page's ``writeBVH`` (src/export/bvh.ts) at the motion's own frame rate: the same IK
+(twist from body planes; tests/fixtures/parity/ik.bvh is this writer's output, which the TypeScript test
+reads back number by number), the same hierarchy and number format.
+
+Units: centimetres (offsets and root position ×100), Y up. Hierarchy: the reference skeleton with the
+offsets ``solve_ik`` adapts to the motion (the children of pelvis and spine3 at the motion's mean offsets,
+every other bone at its mean length); the root OFFSET is 0 0 0 and its position channels carry the
+pelvis's world position. Root: 6 channels (Xposition Yposition Zposition Zrotation Xrotation Yrotation),
+other joints: 3 rotation channels in the same ZXY order, i.e. R = Rz · Rx · Ry (intrinsic, as BVH readers
+apply the channels left to right). Leaf joints get an End Site 5 cm further along their bone.
 """
 
 from __future__ import annotations
@@ -16,6 +22,7 @@ from emdm import skeleton as sk
 from emdm.motion.ik import solve_ik
 
 SCALE = 100.0   # metres → centimetres
+END_SITE = 0.05  # metres along a leaf's bone
 
 
 def matrix_to_euler_zxy(R: np.ndarray) -> np.ndarray:
@@ -25,7 +32,7 @@ def matrix_to_euler_zxy(R: np.ndarray) -> np.ndarray:
     x = np.arcsin(sx)
     y = np.arctan2(-R[..., 2, 0], R[..., 2, 2])
     z = np.arctan2(-R[..., 0, 1], R[..., 1, 1])
-    gimbal = np.abs(sx) > 1.0 - 1e-9
+    gimbal = np.abs(sx) >= 0.9999999                 # as eulerZXY in src/export/bvh.ts
     if np.any(gimbal):    # cos x ≈ 0: put everything into z
         z = np.where(gimbal, np.arctan2(R[..., 1, 0], R[..., 0, 0]), z)
         y = np.where(gimbal, 0.0, y)
@@ -46,44 +53,52 @@ def _children(j: int) -> list[int]:
     return [c for c, p in enumerate(sk.PARENTS) if p == j]
 
 
+def _num(v: float) -> str:
+    """4 decimals, never "-0.0000" (as the page writes numbers)."""
+    s = f"{v:.4f}"
+    return "0.0000" if s == "-0.0000" else s
+
+
 def bvh_text(joints: np.ndarray, fps: float = sk.FPS) -> str:
     """(F, 22, 3) joint positions (metres) → BVH text."""
-    root, local = solve_ik(joints)
-    euler = matrix_to_euler_zxy(local)                          # (F, 22, 3)
+    if np.asarray(joints).shape[0] < 1:
+        raise ValueError("bvh_text: the motion has no frames")
+    ik = solve_ik(joints)
+    euler = matrix_to_euler_zxy(ik.local)                       # (F, 22, 3)
     lines = ["HIERARCHY"]
     order: list[int] = []
 
     def emit(j: int, depth: int) -> None:
         pad = "  " * depth
-        off = (np.zeros(3) if j == 0 else sk.REFERENCE_OFFSETS[j]) * SCALE
+        off = (np.zeros(3) if j == 0 else ik.offsets[j]) * SCALE
         lines.append(f"{pad}{'ROOT' if j == 0 else 'JOINT'} {sk.JOINT_NAMES[j]}")
         lines.append(f"{pad}{{")
-        lines.append(f"{pad}  OFFSET {off[0]:.4f} {off[1]:.4f} {off[2]:.4f}")
+        lines.append(f"{pad}  OFFSET {' '.join(_num(v) for v in off)}")
         if j == 0:
             lines.append(f"{pad}  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation")
         else:
             lines.append(f"{pad}  CHANNELS 3 Zrotation Xrotation Yrotation")
         order.append(j)
         kids = _children(j)
-        for c in kids:
-            emit(c, depth + 1)
         if not kids:
             d = sk.REFERENCE_OFFSETS[j]
-            end = d / max(np.linalg.norm(d), 1e-9) * 0.08 * SCALE
+            end = d / max(np.linalg.norm(d), 1e-9) * END_SITE * SCALE
             lines.append(f"{pad}  End Site")
             lines.append(f"{pad}  {{")
-            lines.append(f"{pad}    OFFSET {end[0]:.4f} {end[1]:.4f} {end[2]:.4f}")
+            lines.append(f"{pad}    OFFSET {' '.join(_num(v) for v in end)}")
             lines.append(f"{pad}  }}")
+        for c in kids:
+            emit(c, depth + 1)
         lines.append(f"{pad}}}")
 
     emit(0, 0)
-    n = len(root)
-    lines += ["MOTION", f"Frames: {n}", f"Frame Time: {1.0 / fps:.6f}"]
+    n = len(ik.root)
+    lines += ["MOTION", f"Frames: {n}", f"Frame Time: {1.0 / fps:.7f}"]
     for f in range(n):
-        vals = list(root[f] * SCALE)
+        vals = list(ik.root[f] * SCALE)
         for j in order:
             vals += list(euler[f, j])
-        lines.append(" ".join(f"{v:.4f}" for v in vals))
+        lines.append(" ".join(_num(v) for v in vals))
     return "\n".join(lines) + "\n"
 
 
