@@ -53,6 +53,8 @@ export interface GenerateResult {
   sampler: SamplerName;
   /** denoising steps run */
   steps: number;
+  /** a text prompt's tokens: `truncated` when it had more than the encoder reads (manifest maxTokens) */
+  prompt?: { tokens: number; maxTokens: number; truncated: boolean };
 }
 
 export interface Generator {
@@ -212,6 +214,12 @@ export async function createGenerator(opts: GeneratorOptions): Promise<Generator
     }
   }
 
+  /** How the encoder read the prompt (after conditionVector loaded it); undefined if it cannot say. */
+  async function promptTokens(text: string): Promise<GenerateResult['prompt']> {
+    const t = await (await encoder)?.tokenize?.(text);
+    return t && { tokens: t.tokens, maxTokens: t.maxTokens, truncated: t.truncated };
+  }
+
   async function run(o: GenerateOptions): Promise<GenerateResult> {
     if (disposed) throw new Error(`generator for ${model} was disposed`);
     const t0 = now();
@@ -224,6 +232,7 @@ export async function createGenerator(opts: GeneratorOptions): Promise<Generator
       : { method: 'ddgan', schedule: scheduleFor(entry, o.steps, model) };
     const noise = o.noise ?? new SeededRandom(o.seed);
     const cond = await conditionVector(o.condition);
+    const prompt = o.condition.type === 'text' ? await promptTokens(o.condition.text) : undefined;
     const t1 = now();
     const r = await sample({
       ...choice, step, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance, signal: o.signal, onStep: o.onStep,
@@ -247,6 +256,7 @@ export async function createGenerator(opts: GeneratorOptions): Promise<Generator
       modelCalls: r.modelCalls,
       sampler: r.sampler,
       steps: o.steps,
+      ...(prompt ? { prompt } : {}),
     };
   }
 

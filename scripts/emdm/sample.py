@@ -108,9 +108,13 @@ def make_condition(spec: dict, text: str | None, action: str | None, uncond: boo
             raise SampleError("this is a text model: use --text or --uncond")
         if not text.strip():
             raise SampleError("--text is empty: say what the character should do (or use --uncond)")
-        from emdm.text import encode_texts
+        from emdm.text import load_encoder, truncation_notice
 
-        emb = np.asarray(encode_texts([text], encoder_id=spec["encoder"]), np.float32)[0]
+        enc = load_encoder(spec["encoder"])
+        emb = np.asarray(enc.encode([text]), np.float32)[0]
+        notice = truncation_notice(enc, text)      # the page shows the same notice under its prompt box
+        if notice:
+            print(notice, file=sys.stderr)
         if emb.shape != (dim,):
             raise SampleError(f"text encoder {spec['encoder']} gave {emb.shape}, model expects ({dim},)")
         return emb

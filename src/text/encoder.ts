@@ -3,17 +3,34 @@
  * - `minilm` (all-MiniLM-L6-v2, shipped): BERT token vectors → mean pooling → L2 norm (384-d).
  * - `clip` (CLIP ViT-B/32 text tower, EMDM's encoder): EMDM truncation (20 tokens, padded to 77)
  *   → projected end-of-text embedding (512-d, not normalised), as EMDM feeds its model.
- * Python computes the same vectors from the same files (scripts/emdm/text).
+ * A prompt's only limit is in tokens: the manifest's `maxTokens` (counting the encoder's start and
+ * end tokens); `tokenize` says whether a prompt was cut. Python computes the same ids and vectors
+ * from the same files (scripts/emdm/text).
  */
 import { fetchVerified, joinUrl, ModelFileError, type Manifest, type TextEncoderEntry } from '../manifest';
-import { emdmClipIds, truncateKeepingEnd } from './clipTokens';
+import { CLIP_CONTEXT, emdmClipIds, truncateKeepingEnd } from './clipTokens';
 import { l2Normalize, meanPool } from './pooling';
 import { isNodeRuntime, loadTransformers, provideVerifiedFile } from './transformersEnv';
+
+/** The tokens an encoder reads from a prompt. */
+export interface PromptTokens {
+  /** the ids the encoder runs (at most maxTokens, start and end tokens included) */
+  ids: number[];
+  /** how many tokens the whole prompt has (more than ids.length when it was cut) */
+  tokens: number;
+  maxTokens: number;
+  truncated: boolean;
+}
 
 export interface TextEncoder {
   readonly id: string;
   readonly dim: number;
   encode(text: string): Promise<Float32Array>;
+  /**
+   * The ids `encode` runs on `text`, and whether the prompt was cut to the manifest's maxTokens.
+   * Every encoder createTextEncoder makes has it; a wrapper without it gives prompts no truncation notice.
+   */
+  tokenize?(text: string): Promise<PromptTokens>;
 }
 
 export interface TextEncoderOptions {
@@ -25,9 +42,6 @@ export interface TextEncoderOptions {
 
 export const DEFAULT_TEXT_ENCODER = 'all-MiniLM-L6-v2';
 
-/** Longest prompt accepted (characters); longer text is a caller bug, not a prompt. */
-export const MAX_PROMPT_CHARS = 100_000;
-
 export class TextEncoderError extends Error {
   constructor(readonly encoderId: string, message: string) {
     super(`text encoder ${encoderId}: ${message}`);
@@ -37,9 +51,6 @@ export class TextEncoderError extends Error {
 
 function checkText(id: string, text: unknown): string {
   if (typeof text !== 'string') throw new TextEncoderError(id, `encode() expects a string, got ${text === null ? 'null' : typeof text}`);
-  if (text.length > MAX_PROMPT_CHARS) {
-    throw new TextEncoderError(id, `prompt has ${text.length} characters; at most ${MAX_PROMPT_CHARS} are accepted`);
-  }
   return text;
 }
 
@@ -135,14 +146,19 @@ async function load(manifest: Manifest, baseUrl: string, id: string, opts: TextE
       tf.AutoModel.from_pretrained(root, { ...common, dtype }),
     ]);
     const maxTokens = entry.maxTokens ?? 128;
+    const tokenize = (text: string): PromptTokens => {
+      // transformers.js's own truncation drops [SEP]; HF tokenizers, which Python uses, keep it.
+      // Encode untruncated and cut here exactly like Python does.
+      const all = tokenizer.encode(checkText(id, text));
+      const ids = truncateKeepingEnd(all, maxTokens);
+      return { ids, tokens: all.length, maxTokens, truncated: ids.length < all.length };
+    };
     return {
       id,
       dim: entry.dim,
+      tokenize: async (text: string) => tokenize(text),
       encode: serialised(async (text: string): Promise<Float32Array> => {
-        const t = checkText(id, text);
-        // transformers.js truncates AFTER adding [SEP] (and so drops it); HF tokenizers, which Python
-        // uses, keep it. Truncate here exactly like Python does.
-        const ids = truncateKeepingEnd(tokenizer.encode(t), maxTokens);
+        const { ids } = tokenize(text);
         const n = ids.length;
         const inputs = {
           input_ids: new tf.Tensor('int64', BigInt64Array.from(ids, (x) => BigInt(x)), [1, n]),
@@ -171,9 +187,17 @@ async function load(manifest: Manifest, baseUrl: string, id: string, opts: TextE
     ]);
     const eot = tokenizer.model.tokens_to_ids.get('<|endoftext|>');
     if (eot === undefined) throw new TextEncoderError(id, 'tokenizer has no <|endoftext|> token; is this a CLIP tokenizer?');
+    if (entry.maxTokens !== undefined && entry.maxTokens !== CLIP_CONTEXT) {
+      throw new ModelFileError('manifest.json', 'incompatible', `textEncoders.${id}.maxTokens is ${entry.maxTokens}; EMDM's CLIP reads ${CLIP_CONTEXT} tokens ([SOT] + 20 + [EOT])`);
+    }
     return {
       id,
       dim: entry.dim,
+      async tokenize(text: string): Promise<PromptTokens> {
+        const all = tokenizeClip(tokenizer, checkText(id, text));
+        const ids = emdmClipIds(all, eot, CLIP_CONTEXT, 0); // without the zero padding
+        return { ids, tokens: all.length, maxTokens: CLIP_CONTEXT, truncated: ids.length < all.length };
+      },
       encode: serialised(async (text: string): Promise<Float32Array> => {
         const t = checkText(id, text);
         const ids = emdmClipIds(tokenizeClip(tokenizer, t), eot);

@@ -138,6 +138,18 @@ def test_empty_prompt_is_refused_like_the_page():
         make_condition(spec, "   ", None, False)
 
 
+def test_long_prompt_says_it_was_truncated(capsys):
+    from emdm.text import fixtures as fx
+
+    spec = {"type": "text", "encoder": "all-MiniLM-L6-v2", "dim": 384}
+    make_condition(spec, "a person walks forward", None, False)
+    assert capsys.readouterr().err == ""
+    a = make_condition(spec, fx.LONG_PROMPT, None, False)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("prompt truncated to 128 tokens"), err
+    np.testing.assert_array_equal(a, make_condition(spec, fx.LONG_PROMPT + " then he jumps", None, False))
+
+
 def test_unwritable_out_is_found_before_sampling(models, tmp_path, capsys, monkeypatch):
     """A path under a regular file cannot be written: refused before the model runs."""
     import emdm.sample as sample_mod

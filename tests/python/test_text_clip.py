@@ -79,6 +79,13 @@ def test_random_tower_has_the_real_shape_and_emdm_truncation(random_clip):
     # words beyond EMDM's 20-token context change nothing; an early difference does
     np.testing.assert_array_equal(v[4], v[5])
     assert np.abs(v[0] - v[1]).max() > 1e-3
+    ids, total = random_clip.token_ids(long)
+    assert random_clip.max_tokens == CONTEXT == len(ids) and total == len(random_clip.tokenizer.ids(long))
+    assert ids[-1] == EOT and ids == fx.clip_fixture(CLIP_DIR)["emdm_ids"][2][:CONTEXT]
+    from emdm.text import truncation_notice
+
+    assert truncation_notice(random_clip, long).startswith(f"prompt truncated to {CONTEXT} tokens")
+    assert truncation_notice(random_clip, "a photo of a cat") is None
 
 
 def test_exported_onnx_equals_pytorch(random_clip, tmp_path):
@@ -92,7 +99,7 @@ def test_exported_onnx_equals_pytorch(random_clip, tmp_path):
     assert export_clip.main(["--source", str(CLIP_DIR), "--random-init", "--seed", "0", "--models-dir", str(models),
                              "--reference", str(prompts)]) == 0
     entry = json.loads((models / "manifest.json").read_text())["textEncoders"]["clip-vit-b32"]
-    assert entry["kind"] == "clip" and entry["dim"] == 512
+    assert entry["kind"] == "clip" and entry["dim"] == 512 and entry["maxTokens"] == CONTEXT   # counting [SOT], [EOT]
     sess = ort.InferenceSession(str(models / entry["onnx"]), providers=["CPUExecutionProvider"])
     ids = random_clip.tokenizer.emdm_ids(fx.CLIP_PROMPTS)
     got = sess.run(["text_embeds"], {"input_ids": ids})[0]

@@ -11,6 +11,7 @@ import pytest
 from emdm import manifest as mf
 from emdm.text import TextEncoderError, encode_texts, load_encoder
 from emdm.text import fixtures as fx
+from emdm.text.minilm import MiniLMEncoder
 from emdm.text.pooling import l2_normalize, mean_pool
 
 ENC_ID = "all-MiniLM-L6-v2"
@@ -81,6 +82,29 @@ def test_long_prompt_is_truncated_not_crashing(enc):
     np.testing.assert_array_equal(a, b)
 
 
+def test_prompt_is_cut_at_the_manifests_max_tokens_with_sep_kept(enc):
+    """One limit, in word pieces counting [CLS] and [SEP]: the manifest's maxTokens (the page cuts there too)."""
+    entry = mf.load()["textEncoders"][ENC_ID]
+    assert enc.max_tokens == entry["maxTokens"] == 128
+    ids, total = enc.token_ids(fx.LONG_PROMPT)
+    assert len(ids) == 128 and total > 2000 and ids[0] == 101 and ids[-1] == 102      # [CLS] … [SEP]
+    assert enc.token_ids("a person walks") == ([101, 1037, 2711, 7365, 102], 5)
+    short = MiniLMEncoder(enc.dir, max_tokens=6)                                         # a manifest saying 6
+    assert short.token_ids("a person walks forward and waves") == ([101, 1037, 2711, 7365, 2830, 102], 8)
+    np.testing.assert_array_equal(short.encode(["a person walks forward and waves"]),
+                                  short.encode(["a person walks forward then jumps"]))
+
+
+def test_truncation_notice_names_the_limit(enc):
+    from emdm.text import truncation_notice
+
+    assert truncation_notice(enc, "a person walks") is None
+    assert truncation_notice(enc, fx.MINILM_PROMPTS[-2]) is None                          # exactly 128
+    note = truncation_notice(enc, fx.MINILM_PROMPTS[-1])                                   # 129
+    assert note is not None and note.startswith("prompt truncated to 128 tokens: all-MiniLM-L6-v2 reads at most 128")
+    assert "the prompt has 129" in note
+
+
 def test_bad_input_types_raise_clear_errors(enc):
     with pytest.raises(TextEncoderError, match=r"texts\[1\] is int"):
         enc.encode(["ok", 3])
@@ -112,5 +136,7 @@ def test_typescript_fixture_is_up_to_date():
     saved = json.loads(fx.MINILM_FIXTURE.read_text(encoding="utf-8"))
     fresh = fx.minilm_fixture()
     assert saved["prompts"] == fresh["prompts"], "fixture prompts changed: run `python -m emdm.text.fixtures`"
+    assert (saved["maxTokens"], saved["ids"], saved["tokens"]) == (fresh["maxTokens"], fresh["ids"], fresh["tokens"]), \
+        "fixture token ids are stale: run `python -m emdm.text.fixtures`"
     np.testing.assert_allclose(np.array(saved["vectors"]), np.array(fresh["vectors"]), atol=2e-7,
                                err_msg="fixture vectors are stale: run `python -m emdm.text.fixtures`")

@@ -100,6 +100,10 @@ describe.skipIf(!CAN_EXPORT)(
       expect(Array.from(await enc.encode(long + ' and then sleeps'))).toEqual(Array.from(await enc.encode(long)));
       const huge = await enc.encode('a person walks '.repeat(700));
       expect(huge.every(Number.isFinite)).toBe(true);
+      // the manifest's maxTokens (22: [SOT] + 20 + [EOT]) is what tokenize reports; EMDM's ids without padding
+      const t = await enc.tokenize!(long);
+      expect(t).toMatchObject({ maxTokens: 22, truncated: true, tokens: FIXTURE.raw_ids[2].length });
+      expect(t.ids).toEqual(FIXTURE.emdm_ids[2].slice(0, 22));
     });
   },
 );

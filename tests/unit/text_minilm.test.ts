@@ -3,6 +3,7 @@
 import { beforeAll, describe, expect, test, vi } from 'vitest';
 import fs from 'node:fs';
 import path from 'node:path';
+import { createGenerator } from '../../src/generate';
 import { loadManifest } from '../../src/manifest';
 import { cosine, createTextEncoder, type TextEncoder, TextEncoderError } from '../../src/text';
 import { loadTransformers } from '../../src/text/transformersEnv';
@@ -12,6 +13,10 @@ const FIXTURE = JSON.parse(fs.readFileSync(path.resolve(__dirname, '../fixtures/
   prompts: string[];
   vectors: number[][];
   dim: number;
+  /** Python's ids (cut to maxTokens) and whole-prompt token counts (emdm.text.fixtures) */
+  maxTokens: number;
+  ids: number[][];
+  tokens: number[];
 };
 let enc: TextEncoder;
 
@@ -60,11 +65,40 @@ describe('all-MiniLM-L6-v2 (transformers.js, Node)', () => {
     expect(dims.some((d) => /^1x\d+x384$/.test(d))).toBe(true); // last_hidden_state
   });
 
-  test('non-string and absurdly long input give a clear error, the encoder keeps working', async () => {
+  test('every prompt is cut to the same token ids as Python (manifest maxTokens, [SEP] kept)', async () => {
+    const manifest = await loadManifest(MODELS);
+    expect(FIXTURE.maxTokens).toBe(manifest.textEncoders['all-MiniLM-L6-v2'].maxTokens);
+    for (let i = 0; i < FIXTURE.prompts.length; i++) {
+      const t = await enc.tokenize!(FIXTURE.prompts[i]);
+      expect(t.ids, `prompt ${i}`).toEqual(FIXTURE.ids[i]);
+      expect(t.tokens, `prompt ${i}`).toBe(FIXTURE.tokens[i]);
+      expect(t.truncated).toBe(FIXTURE.tokens[i] > FIXTURE.maxTokens);
+      expect(t.maxTokens).toBe(FIXTURE.maxTokens);
+    }
+    expect(FIXTURE.tokens.some((n) => n > FIXTURE.maxTokens)).toBe(true); // the fixture exercises the cut
+  });
+
+  test('non-string input gives a clear error; the only length limit is in tokens', async () => {
     await expect(enc.encode(undefined as unknown as string)).rejects.toThrow(TextEncoderError);
     await expect(enc.encode(42 as unknown as string)).rejects.toThrow(/expects a string, got number/);
-    await expect(enc.encode('x'.repeat(100_001))).rejects.toThrow(/at most 100000/);
+    const huge = 'a person walks forward. '.repeat(5000); // 120,000 characters
+    expect(Array.from(await enc.encode(huge))).toEqual(Array.from(await enc.encode(huge + ' then jumps')));
     expect((await enc.encode('a person walks')).length).toBe(384);
+  });
+
+  test('generate() says when a prompt was cut (result.prompt)', async () => {
+    const manifest = await loadManifest(MODELS);
+    const name = Object.keys(manifest.models).find((k) => manifest.models[k].condition.encoder === enc.id && manifest.models[k].objective !== 'diffusion');
+    expect(name).toBeDefined();
+    const gen = await createGenerator({ manifest, baseUrl: MODELS, model: name!, backend: 'wasm', threads: 1, textEncoder: enc });
+    const o = { frames: 4, steps: manifest.models[name!].supportedSteps[0], guidance: 1, seed: 1 };
+    const long = FIXTURE.prompts.length - 1; // 129 tokens
+    const cut = await gen.generate({ ...o, condition: { type: 'text', text: FIXTURE.prompts[long] } });
+    expect(cut.prompt).toEqual({ tokens: 129, maxTokens: 128, truncated: true });
+    const fits = await gen.generate({ ...o, condition: { type: 'text', text: 'a person walks' } });
+    expect(fits.prompt).toEqual({ tokens: 5, maxTokens: 128, truncated: false });
+    expect((await gen.generate({ ...o, condition: { type: 'none' } })).prompt).toBeUndefined();
+    await gen.dispose();
   });
 });
 

@@ -23,15 +23,29 @@ from emdm.text.minilm import MiniLMEncoder, TextEncoderError
 DEFAULT_ENCODER = "all-MiniLM-L6-v2"
 CLIP_ENCODER = "clip-vit-b32"
 
-__all__ = ["DEFAULT_ENCODER", "CLIP_ENCODER", "TextEncoder", "TextEncoderError", "load_encoder", "encode_texts"]
+__all__ = ["DEFAULT_ENCODER", "CLIP_ENCODER", "TextEncoder", "TextEncoderError", "load_encoder", "encode_texts",
+           "truncation_notice"]
 
 
 class TextEncoder(Protocol):
     id: str
     kind: str
     dim: int
+    max_tokens: int          # tokens read, counting the encoder's own ([CLS] … [SEP], [SOT] … [EOT])
 
     def encode(self, texts: Sequence[str], batch_size: int = ...) -> np.ndarray: ...
+
+    def token_ids(self, text: str) -> tuple[list[int], int]: ...
+
+
+def truncation_notice(enc: TextEncoder, text: str) -> str | None:
+    """The line to show when ``text`` is longer than the encoder reads (None when it fits).
+    The page says the same under its prompt box (web/ui/controls.ts)."""
+    ids, total = enc.token_ids(text)
+    if total <= len(ids):
+        return None
+    return (f"prompt truncated to {len(ids)} tokens: {enc.id} reads at most {enc.max_tokens} "
+            f"(counting its start and end tokens); the prompt has {total}, the rest is ignored")
 
 
 _CACHE: dict[tuple[str, str], TextEncoder] = {}
@@ -69,7 +83,7 @@ def load_encoder(encoder_id: str = DEFAULT_ENCODER, *, models_dir: Path | str | 
         if entry.get("kind") != "minilm":
             raise TextEncoderError(f"manifest textEncoders.{encoder_id}: field 'kind' is {entry.get('kind')!r}, "
                                    f"this loader runs 'minilm' folders (use model_dir= for clip)")
-        enc = MiniLMEncoder(Path(models_dir) / entry["dir"], encoder_id=encoder_id)
+        enc = MiniLMEncoder(Path(models_dir) / entry["dir"], encoder_id=encoder_id, max_tokens=entry.get("maxTokens"))
     _CACHE[key] = enc
     return enc
 

@@ -126,6 +126,13 @@ class ClipTextEncoder:
         else:
             self.tokenizer = ClipTokenizer(tdir)
         self.dim = int(self.model.config.projection_dim)
+        self.max_tokens = CONTEXT
+
+    def token_ids(self, text: str) -> tuple[list[int], int]:
+        """(EMDM's ids of ``text`` without the padding, at most ``max_tokens``; how many the whole prompt has)."""
+        raw = self.tokenizer.ids(check_texts([text], self.id)[0])
+        ids = emdm_clip_ids(raw, self.tokenizer.eot_id, padded_length=0)
+        return ids, len(raw)
 
     def encode(self, texts: Sequence[str], batch_size: int = 64) -> np.ndarray:
         import torch

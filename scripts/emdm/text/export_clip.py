@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from emdm import manifest as mf
-from emdm.text.clip import PADDED_LENGTH, ClipTextEncoder, ClipTokenizer, random_text_model
+from emdm.text.clip import CONTEXT, PADDED_LENGTH, ClipTextEncoder, ClipTokenizer, random_text_model
 
 ONNX_REL = "onnx/text_model.onnx"
 FILES = ("config.json", "tokenizer.json", "tokenizer_config.json", ONNX_REL)
@@ -75,7 +75,7 @@ def main(argv: list[str] | None = None) -> int:
     export_onnx(enc.model, out / ONNX_REL)
     rel = out.resolve().relative_to(args.models_dir.resolve()).as_posix()
     entry = {
-        "kind": "clip", "dim": enc.dim, "pooling": "eos", "normalize": False, "maxTokens": 20, "dtype": "fp32",
+        "kind": "clip", "dim": enc.dim, "pooling": "eos", "normalize": False, "maxTokens": CONTEXT, "dtype": "fp32",
         "dir": rel, "onnx": f"{rel}/{ONNX_REL}",
         "source": "random init of the openai/clip-vit-base-patch32 text config (testing only)" if args.random_init
         else f"CLIP text tower from {src.name}",

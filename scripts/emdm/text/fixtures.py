@@ -3,9 +3,11 @@
     python -m emdm.text.fixtures
 
 - minilm_vectors.json: prompts (ordinary captions and hostile input: empty, 10,000 characters,
-  emoji, right-to-left scripts, HTML) and their 384-d vectors from the SHIPPED int8 ONNX file
-  (Python: onnxruntime + tokenizers). vitest runs transformers.js on the same file and requires
-  cosine >= 0.999 per prompt; pytest requires the file to match a fresh computation.
+  emoji, right-to-left scripts, HTML, one word piece under and over the token limit) and their
+  384-d vectors from the SHIPPED int8 ONNX file (Python: onnxruntime + tokenizers), with the token
+  ids the encoder runs (cut to the manifest's maxTokens) and each prompt's whole token count.
+  vitest runs transformers.js on the same file and requires the same ids and cosine >= 0.999 per
+  prompt; pytest requires the file to match a fresh computation.
 - clip_tokens.json: CLIP token ids (untruncated, and EMDM's 77 truncated/padded ids) of prompts from
   the real tokenizer in ../shared/data/clip-vit-base-patch32; transformers.js must produce the same.
 """
@@ -39,6 +41,8 @@ MINILM_PROMPTS = [
     "<b>a person</b> <script>alert('walks')</script> &amp; jumps",
     "Ünïcödé àccents: café, naïve, Übermensch",
     "人が前に歩いてから振り返る",
+    ("walk " * 126).strip(),          # 126 word pieces + [CLS] + [SEP] = 128: exactly the limit
+    ("walk " * 127).strip(),          # one over: cut to 128, [SEP] kept
 ]
 
 CLIP_PROMPTS = [
@@ -58,11 +62,15 @@ def minilm_fixture() -> dict:
 
     enc = load_encoder("all-MiniLM-L6-v2")
     vecs = enc.encode(MINILM_PROMPTS)
+    tokens = [enc.token_ids(p) for p in MINILM_PROMPTS]
     return {
         "encoder": enc.id,
         "source": "python: onnxruntime + tokenizers on public/models/text/all-MiniLM-L6-v2 (emdm.text.fixtures)",
         "dim": enc.dim,
+        "maxTokens": enc.max_tokens,
         "prompts": MINILM_PROMPTS,
+        "ids": [ids for ids, _ in tokens],
+        "tokens": [total for _, total in tokens],
         "vectors": [[round(float(x), 7) for x in v] for v in vecs],
     }
 

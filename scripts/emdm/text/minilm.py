@@ -2,7 +2,8 @@
 
 Tokenisation uses the shipped tokenizer.json through HuggingFace ``tokenizers`` (the same file
 transformers.js reads); the ONNX graph returns token vectors; sentences are mean-pooled over real
-tokens and L2-normalised (384-d).
+tokens and L2-normalised (384-d). A prompt is cut to ``max_tokens`` word pieces counting [CLS] and
+[SEP] (the manifest's ``maxTokens``; the page cuts at the same token, src/text/encoder.ts).
 """
 
 from __future__ import annotations
@@ -38,7 +39,9 @@ class MiniLMEncoder:
 
     kind = "minilm"
 
-    def __init__(self, model_dir: Path | str, *, encoder_id: str = "all-MiniLM-L6-v2", threads: int | None = None):
+    def __init__(self, model_dir: Path | str, *, encoder_id: str = "all-MiniLM-L6-v2", threads: int | None = None,
+                 max_tokens: int | None = None):
+        """``max_tokens``: the manifest's ``maxTokens`` (default: the folder's tokenizer_config.json)."""
         import onnxruntime as ort
         from tokenizers import Tokenizer
 
@@ -50,10 +53,15 @@ class MiniLMEncoder:
             if not p.is_file():
                 raise TextEncoderError(f"{p}: missing; run `python -m emdm.text.export_minilm` to build the encoder folder")
         cfg = json.loads((self.dir / "tokenizer_config.json").read_text())
-        self.max_tokens = int(cfg.get("model_max_length", 128))
+        self.max_tokens = int(max_tokens if max_tokens is not None else cfg.get("model_max_length", 128))
+        if self.max_tokens < 2:
+            raise TextEncoderError(f"{self.id}: maxTokens must be >= 2 ([CLS] and [SEP]), got {self.max_tokens}")
         self.tokenizer = Tokenizer.from_file(str(tok_path))
         self.tokenizer.no_padding()
         self.tokenizer.enable_truncation(self.max_tokens)
+        self.untruncated = Tokenizer.from_file(str(tok_path))
+        self.untruncated.no_padding()
+        self.untruncated.no_truncation()
         so = ort.SessionOptions()
         if threads:
             so.intra_op_num_threads = threads
@@ -62,6 +70,11 @@ class MiniLMEncoder:
         out = self.session.get_outputs()[0]
         self.dim = int(out.shape[-1]) if isinstance(out.shape[-1], int) else 384
         self.input_names = [i.name for i in self.session.get_inputs()]
+
+    def token_ids(self, text: str) -> tuple[list[int], int]:
+        """(the ids the encoder runs on ``text``, at most ``max_tokens``; how many the whole prompt has)."""
+        text = check_texts([text], self.id)[0]
+        return list(self.tokenizer.encode(text).ids), len(self.untruncated.encode(text).ids)
 
     def _run(self, encs) -> np.ndarray:
         n, t = len(encs), max(len(e.ids) for e in encs)
