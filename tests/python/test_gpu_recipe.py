@@ -33,3 +33,28 @@ def test_train_all_runs_the_five_generators(tmp_path):
         assert args["d_cond"] == (name != "t2m-naive" and name != "t2m-nodcond"), name
         assert args["w_bone"] == 0.0 and args["random_crop"] == 0.3 and args["ema"] == 0.999, name
     assert "train-all: done" in out.stdout
+
+
+def test_train_balanced_runs_text_action_and_ddim_one_after_another(tmp_path):
+    """scripts/gpu/train-balanced.sh (issue 12's retraining) on the CPU: three runs on the new loop, each probed
+    and then given its horizon, with α, the batch, the LR scaling and the rigidity weight in their meta."""
+    data = write_synthetic_dataset(tmp_path / "ds", n_clips=8)
+    runs = tmp_path / "runs"
+    env = {**os.environ, "PYTHON": sys.executable, "EMDM_TRAIN_EXTRA": SMOKE, "AMP": "off", "COMPILE": "0",
+           "ALPHA": "0.25", "BATCH": "3"}
+    out = subprocess.run(["bash", str(paths.REPO_ROOT / "scripts/gpu/train-balanced.sh"), str(data), str(runs), "1"],
+                         env=env, capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-3000:]
+    expect = {"t2m-bal": ("text", "ddgan"), "a2m-bal": ("action", "ddgan"), "t2m-ddim-bal": ("text", "diffusion")}
+    for name, (task, objective) in expect.items():
+        with open(runs / name / "log.csv") as f:
+            rows = list(csv.DictReader(f))
+        assert rows and int(rows[-1]["step"]) == 2, name
+        st = torch.load(runs / f"{name}.pt", weights_only=True)
+        args = st["meta"]["args"]
+        assert (st["meta"]["task"], args["objective"]) == (task, objective), name
+        assert args["balance_alpha"] == 0.25 and st["meta"]["sampling"]["balance_alpha"] == 0.25, name
+        assert args["lr_scale"] == "sqrt" and args["w_bone"] == 300.0 and args["random_crop"] == 0.3, name
+        assert args["batch"] == 2 and args["amp"] == "off" and not args["compile"], name   # EMDM_TRAIN_EXTRA wins
+        assert f"{name}: " in out.stdout and "-> --steps" in out.stdout
+    assert "train-balanced: done" in out.stdout
