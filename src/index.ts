@@ -15,7 +15,7 @@ export { smoothJoints } from './motion/smooth';
 export { cleanupFootContacts, contactsFromFeatures, footSkate } from './motion/footContact';
 export { writeBVH } from './export/bvh';
 export { SeededRandom } from './sampler/rng';
-export { computeDdimSchedule, computeSchedule, ddimScheduleFor, scheduleFor } from './sampler/schedule';
+export { computeSchedule, ddimScheduleFor, scheduleFor } from './sampler/schedule';
 export type { DdimSchedule, Schedule } from './sampler/schedule';
 export { ddimUpdate } from './sampler/ddim';
 export { AbortError } from './sampler/sampler';

@@ -5,7 +5,7 @@
  * deterministic DDIM (z drawn then zeroed, no ε) for the plain diffusion baseline.
  */
 import { ddimUpdate } from './ddim';
-import type { DdimSchedule, Schedule } from './schedule';
+import type { Schedule } from './schedule';
 
 /** One call of the denoising step model: inputs in the ONNX contract layout, returns x0 [B, L, D]. */
 export interface StepInputs {
@@ -31,9 +31,10 @@ export class AbortError extends Error {
   }
 }
 
-/** Which update rule runs: 'ddgan' (the default) takes the posterior Schedule, 'ddim' a DdimSchedule. */
-export type SamplerChoice = { method?: 'ddgan'; schedule: Schedule } | { method: 'ddim'; schedule: DdimSchedule };
+/** Which update rule runs: the DDGAN posterior ('ddgan', the default) or DDIM (η = 0, 'ddim'). */
 export type SamplerName = 'ddgan' | 'ddim';
+/** The update rule and the schedule it reads (one Schedule object holds both rules' coefficients). */
+export type SamplerChoice = { method?: SamplerName; schedule: Schedule };
 
 export type SampleOptions = SamplerChoice & {
   step: StepFn;
@@ -67,6 +68,21 @@ function throwIfAborted(signal: AbortSignal | undefined, done: number, total: nu
   }
 }
 
+/** The coefficients `method` reads must be there, sized for the schedule's step count. */
+function checkSchedule(s: Schedule, method: SamplerName): void {
+  const T = s?.steps;
+  if (!Number.isInteger(T) || T < 1) throw new Error(`sampler: schedule.steps must be a positive integer, got ${T} (see scheduleFor / computeSchedule)`);
+  const want: [keyof Schedule, number][] = method === 'ddim'
+    ? [['time', T], ['aCum', T + 1], ['sCum', T + 1]]
+    : [['time', T], ['coef1', T], ['coef2', T], ['sigma', T]];
+  for (const [key, n] of want) {
+    const v = s[key] as ArrayLike<number> | undefined;
+    if (v?.length !== n) {
+      throw new Error(`sampler: method '${method}' needs schedule.${key} of ${n} values for ${T} steps, got ${v?.length ?? 'none'} (see scheduleFor / computeSchedule)`);
+    }
+  }
+}
+
 function checkLength(a: Float32Array, n: number, what: string): void {
   if (a.length !== n) throw new Error(`sampler: ${what} has ${a.length} values, expected ${n}`);
 }
@@ -75,9 +91,7 @@ function checkLength(a: Float32Array, n: number, what: string): void {
 export async function sample(o: SampleOptions): Promise<SampleResult> {
   const { schedule, frames: L, featureDim: D, zDim, cond } = o;
   const ddim = o.method === 'ddim';
-  if (ddim && ((o.schedule as DdimSchedule).aCum?.length !== schedule.steps + 1 || (o.schedule as DdimSchedule).sCum?.length !== schedule.steps + 1)) {
-    throw new Error(`sampler: method 'ddim' needs a DdimSchedule (aCum and sCum of ${schedule.steps + 1} values; see ddimScheduleFor)`);
-  }
+  checkSchedule(schedule, ddim ? 'ddim' : 'ddgan');
   const now = o.now ?? (() => performance.now());
   if (!Number.isInteger(L) || L < 1) throw new RangeError(`sampler: frames must be a positive integer, got ${L}`);
   if (!Number.isFinite(o.guidance)) throw new RangeError(`sampler: guidance must be a finite number, got ${o.guidance}`);
@@ -117,15 +131,14 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     modelCalls++;
     checkLength(out, B * n, `model output x0 at step ${k}`);
     if (ddim) {
-      ddimUpdate(x, guided ? guidedX0(out, n, s) : out, k, o.schedule as DdimSchedule);
+      ddimUpdate(x, guided ? guidedX0(out, n, s) : out, k, schedule);
       stepMs.push(now() - t0);
       o.onStep?.(schedule.steps - k, schedule.steps);
       continue;
     }
-    const sch = o.schedule as Schedule;
-    const c1 = sch.coef1[k];
-    const c2 = sch.coef2[k];
-    const sig = sch.sigma[k];
+    const c1 = schedule.coef1[k];
+    const c2 = schedule.coef2[k];
+    const sig = schedule.sigma[k];
     const eps = sig !== 0 ? o.noise.normals(n, 'eps', k) : null;
     if (eps) checkLength(eps, n, `ε noise at step ${k}`);
     for (let i = 0; i < n; i++) {

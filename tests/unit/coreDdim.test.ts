@@ -8,7 +8,7 @@ import { getSession } from '../../src/runtime/ort';
 import { stepFunction } from '../../src/runtime/stepModel';
 import { ddimUpdate } from '../../src/sampler/ddim';
 import { sample, type StepFn } from '../../src/sampler/sampler';
-import { computeDdimSchedule, computeSchedule, ddimScheduleFor, type DdimSchedule } from '../../src/sampler/schedule';
+import { computeSchedule, ddimScheduleFor, scheduleFor, type DdimSchedule } from '../../src/sampler/schedule';
 import { PARITY_DIR, fixtureNoise, loadCase, maxAbsDiff } from './coreFixtures';
 
 const fx = loadCase('tiny-ddim');
@@ -44,7 +44,7 @@ describe('ddimUpdate', () => {
   });
 
   it('keeps x on the marginal of the predicted x0: x_{k+1} = a·x0 + s·ε gives x_k = a_k·x0 + s_k·ε (real T = 10 grid)', () => {
-    const s = computeDdimSchedule(10);
+    const s = computeSchedule(10);
     const x0 = Float32Array.of(0.3, -1.2, 2);
     const eps = [0.7, 0.1, -1.5];
     for (let k = 1; k < 10; k++) {
@@ -65,7 +65,7 @@ describe('DDIM schedule', () => {
     const marginals = fx.meta.marginals as Record<string, { a_cum: number[]; s_cum: number[] }>;
     expect(Object.keys(marginals).map(Number).sort((a, b) => a - b)).toEqual([1, 2, 4, 5, 8, 10, 20, 50, 100]);
     for (const [n, py] of Object.entries(marginals)) {
-      const s = computeDdimSchedule(Number(n));
+      const s = computeSchedule(Number(n));
       expect(s.aCum.length, `T=${n}`).toBe(Number(n) + 1);
       py.a_cum.forEach((v, i) => expect(Math.abs(s.aCum[i] - v), `T=${n} aCum[${i}]`).toBeLessThan(1e-12));
       py.s_cum.forEach((v, i) => expect(Math.abs(s.sCum[i] - v), `T=${n} sCum[${i}]`).toBeLessThan(1e-9));
@@ -74,8 +74,8 @@ describe('DDIM schedule', () => {
 
   it('shares the DDGAN time grid; aCum falls from ~1 (data) to ~0.0067 (t = 1), sCum rises', () => {
     for (const n of [1, 10, 100]) {
-      const s = computeDdimSchedule(n);
-      const g = computeSchedule(n);
+      const s = ddimScheduleFor({ supportedSteps: [n] }, n);
+      const g = scheduleFor({ supportedSteps: [n] }, n);
       expect(Array.from(s.time)).toEqual(Array.from(g.time));
       expect(s.aCum[0]).toBeCloseTo(1, 7);
       expect(s.sCum[0]).toBeCloseTo(1e-4, 9);
@@ -96,6 +96,9 @@ describe('DDIM schedule', () => {
     const bad = structuredClone(entry);
     bad.schedules['5'].time[2] = 0.5;
     expect(() => ddimScheduleFor(bad, 5, 'd')).toThrow(/models\.d\.schedules\["5"\]\.time\[2\] = 0\.5 is not the VP grid/);
+    // scheduleFor picks the check from the model's objective; a DDGAN model keeps its manifest posterior
+    expect(() => scheduleFor({ ...bad, objective: 'diffusion' }, 5, 'd')).toThrow(/time\[2\] = 0\.5 is not the VP grid/);
+    expect(scheduleFor(bad, 5, 'd').time[2]).toBe(0.5);
   });
 });
 
@@ -133,9 +136,12 @@ describe('DDIM runs of the tiny step model equal emdm.sample.sample_features(obj
     expect(maxAbsDiff(r.x, fx.get('final_x'))).toBeGreaterThan(1e-2);
   });
 
-  it("refuses method 'ddim' with a DDGAN posterior schedule", async () => {
+  it('refuses a schedule without the coefficients its method reads (marginals for DDIM, posterior for DDGAN)', async () => {
     const step = await tinyStep();
-    const o = { method: 'ddim' as const, schedule: computeSchedule(T) as unknown as DdimSchedule, step, noise: fixtureNoise(fx), frames: L, featureDim: D, zDim: Z, cond: fx.get('cond'), guidance: 2.5 };
-    await expect(sample(o)).rejects.toThrow(/method 'ddim' needs a DdimSchedule/);
+    const o = { step, noise: fixtureNoise(fx), frames: L, featureDim: D, zDim: Z, cond: fx.get('cond'), guidance: 2.5 };
+    const wrongMarginals = { ...computeSchedule(T), aCum: computeSchedule(T + 1).aCum };
+    await expect(sample({ ...o, method: 'ddim', schedule: wrongMarginals })).rejects.toThrow(/method 'ddim' needs schedule\.aCum of 6 values for 5 steps, got 7/);
+    const noPosterior = { ...computeSchedule(T), sigma: new Float64Array(0) };
+    await expect(sample({ ...o, method: 'ddgan', schedule: noPosterior })).rejects.toThrow(/method 'ddgan' needs schedule\.sigma of 5 values for 5 steps, got 0/);
   });
 });
