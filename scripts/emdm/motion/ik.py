@@ -30,6 +30,7 @@ Rotations are 3×3 matrices (column vectors: world = G · local); local = G_pare
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -107,16 +108,35 @@ def _mix(a: np.ndarray, b: np.ndarray, wa: float) -> np.ndarray:
     return _normalize(a) * wa + _normalize(b) * (1.0 - wa)
 
 
-def _bend_axis(a: np.ndarray, b: np.ndarray, c: np.ndarray, ref: np.ndarray) -> np.ndarray:
-    """Bend-plane normal (3,) of a limb a→b→c, sign-aligned with and blended towards ``ref`` when straight."""
+def _bend_axes(a: np.ndarray, b: np.ndarray, c: np.ndarray, G_parent: np.ndarray, rest_axis: np.ndarray) -> np.ndarray:
+    """Per frame (F, 3): the bend-plane normal of a limb a→b→c (each (F, 3)), sign-aligned with and blended
+    towards a reference when straight; the reference is the previous frame's axis carried by the parent's
+    rotation G_parent (F, 3, 3) (the first frame: ``rest_axis`` carried by it)."""
     u, w = b - a, c - b
     n = np.cross(u, w)
-    sin = np.linalg.norm(n) / max(np.linalg.norm(u) * np.linalg.norm(w), 1e-12)
-    nh = _normalize(n, ref)
-    if np.dot(nh, ref) < 0:
-        nh = -nh                     # never flip the hinge: a reversed bend is hyperextension
-    wgt = min(1.0, max(0.0, (sin - 0.03) / (0.2 - 0.03)))
-    return _normalize(nh * wgt + _normalize(ref) * (1.0 - wgt), ref)
+    n_len = np.linalg.norm(n, axis=-1)
+    sin = n_len / np.maximum(np.linalg.norm(u, axis=-1) * np.linalg.norm(w, axis=-1), 1e-12)
+    wgt = np.clip((sin - 0.03) / (0.2 - 0.03), 0.0, 1.0)
+    out = np.zeros_like(n)
+    prev = [float(v) for v in rest_axis]
+    for f in range(len(n)):                       # sequential: each frame's reference is the previous axis
+        g = G_parent[f].tolist()
+        ref = [g[r][0] * prev[0] + g[r][1] * prev[1] + g[r][2] * prev[2] for r in range(3)]
+        if n_len[f] > 1e-12:
+            nh = [float(v) / float(n_len[f]) for v in n[f]]
+        else:
+            nh = ref
+        if nh[0] * ref[0] + nh[1] * ref[1] + nh[2] * ref[2] < 0:
+            nh = [-v for v in nh]                 # never flip the hinge: a reversed bend is hyperextension
+        r_len = math.hypot(*ref)
+        rn = [v / r_len for v in ref] if r_len > 1e-12 else [0.0, 1.0, 0.0]
+        wf = float(wgt[f])
+        v = [nh[k] * wf + rn[k] * (1 - wf) for k in range(3)]
+        v_len = math.hypot(*v)
+        axis = [x / v_len for x in v] if v_len > 1e-12 else ref
+        prev = [g[0][k] * axis[0] + g[1][k] * axis[1] + g[2][k] * axis[2] for k in range(3)]   # Gᵀ·axis
+        out[f] = axis
+    return out
 
 
 def _rest_axis(rest: np.ndarray, a: str, b: str, default: np.ndarray) -> np.ndarray:
@@ -184,14 +204,7 @@ def solve_ik(joints: np.ndarray, offsets: np.ndarray | None = None, adapt_offset
     Q = np.zeros((F, J, 3))                            # FK positions (parents' rotations applied to offsets)
 
     def limb_axis(parent: int, a: str, b: str, c: str, rest_axis: np.ndarray) -> np.ndarray:
-        """Per frame: the bend axis, its reference the previous frame's axis carried by the parent."""
-        out = np.zeros((F, 3))
-        prev_local = rest_axis
-        for f in range(F):
-            axis = _bend_axis(P_all[f, _N[a]], P_all[f, _N[b]], P_all[f, _N[c]], G[f, parent] @ prev_local)
-            prev_local = G[f, parent].T @ axis
-            out[f] = axis
-        return out
+        return _bend_axes(P(a), P(b), P(c), G[:, parent], rest_axis)
 
     for j, name in enumerate(sk.JOINT_NAMES):        # parents precede children (SMPL order)
         p = sk.PARENTS[j]
