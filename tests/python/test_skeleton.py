@@ -52,3 +52,14 @@ def test_manifest_skeleton_entry_reads_the_module():
     e = manifest.skeleton_entry()
     assert e["joints"] == sk.JOINT_NAMES and e["footJoints"] == [7, 10, 8, 11]
     assert np.allclose(e["offsets"], sk.REFERENCE_OFFSETS, atol=1e-6)
+
+
+def test_the_shipped_manifest_carries_this_skeleton():
+    """public/models/manifest.json is what the page reads (tests/unit/coreSkeleton.test.ts checks src/skeleton.ts
+    against it): it must hold this module's skeleton, so Python and TypeScript agree through it."""
+    from emdm import paths
+
+    shipped = manifest.load(paths.MODELS_DIR, missing_ok=True)["skeleton"]
+    want = manifest.skeleton_entry()
+    assert shipped == want, ("public/models/manifest.json skeleton differs from emdm.skeleton: "
+                             f"{sorted(k for k in want if shipped.get(k) != want[k])}; rewrite the manifest with emdm.manifest")
