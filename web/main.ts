@@ -7,6 +7,7 @@ import { applyPose, createCharacter } from '../src/character/character';
 import { MotionPlayer, type PoseTrack } from '../src/character/player';
 import { writeBVH } from '../src/export/bvh';
 import type { GenerateResult } from '../src/generate';
+import { assertFinite, NonFiniteMotionError } from '../src/errors';
 import { loadManifest, ModelFileError, type Manifest } from '../src/manifest';
 import { clearModelCache, modelCacheUsage } from '../src/cache/modelCache';
 import { compareNote, compareStepChoices, planCompare, type ComparePlan } from './ui/compare';
@@ -20,7 +21,7 @@ import { ErrorPanel, Notices } from './ui/notices';
 import { PlaybackBar } from './ui/playback';
 import { Stage } from './ui/stage';
 import {
-  framesFor, MAX_PROMPT_CHARS, parseState, randomSeed, stateToSearch, stepChoices, truncatePrompt, type PageState, type StateLimits,
+  framesFor, parseState, randomSeed, stateToSearch, stepChoices, type PageState, type StateLimits,
 } from './ui/state';
 import { emptyCounters, type CompareResponse, type EmdmTestApi, type GenerateRequest, type GenerateResponse } from './ui/testapi';
 
@@ -32,17 +33,14 @@ const NOT_ISOLATED = 'This page is not cross-origin isolated, so the model runs 
 /** `?noauto` (tests): do not generate a first motion on load. Read before the URL is rewritten. */
 const AUTO_GENERATE = !new URLSearchParams(location.search).has('noauto');
 
-/** Thrown when the model's output contains NaN/Infinity: the character keeps its last good motion. */
-class BadMotionError extends Error {
-  constructor(what: string) {
-    super(`the model returned non-finite numbers (${what}); the character keeps its last good motion`);
-    this.name = 'BadMotionError';
-  }
-}
+/** generate() (in the worker) refused NaN/Infinity in a motion; the error crosses the worker by name. */
+const isNonFinite = (e: unknown) => e instanceof NonFiniteMotionError || (e instanceof Error && e.name === 'NonFiniteMotionError');
 
-function firstNonFinite(a: ArrayLike<number>): number {
-  for (let i = 0; i < a.length; i++) if (!Number.isFinite(a[i])) return i;
-  return -1;
+/** The note under the prompt when the text encoder read only its first maxTokens tokens. */
+function promptNote(p: GenerateResult['prompt']): string {
+  return p?.truncated
+    ? `Prompt truncated to ${p.maxTokens} tokens: the text encoder reads at most ${p.maxTokens} and this prompt has ${p.tokens}, so the words after that are ignored.`
+    : '';
 }
 
 function describe(e: unknown): string {
@@ -306,11 +304,10 @@ async function main(): Promise<void> {
       },
     });
     api.backend = result.info.backend;
-    const bad = firstNonFinite(result.motion.joints);
-    if (bad >= 0) throw new BadMotionError(`joint value ${bad} of ${result.motion.joints.length} is ${result.motion.joints[bad]}`);
     const pose = result.pose;
     if (!pose) throw new Error('generation worker: the result has no pose track (pose: true was asked)');
-    if (firstNonFinite(pose.quats) >= 0 || firstNonFinite(pose.rootPos) >= 0) throw new BadMotionError('the solved joint rotations');
+    assertFinite(pose.quats, 'the solved joint rotations'); // generate() already refused non-finite joints
+    assertFinite(pose.rootPos, 'the solved root positions');
     const track: PoseTrack = { frames: result.motion.frames, fps: result.motion.fps, joints: skeleton.joints.length, rootPos: pose.rootPos, quats: pose.quats };
     return { model, result, track, ikMs: pose.ikMs };
   }
@@ -332,15 +329,7 @@ async function main(): Promise<void> {
     }
     const choice = modelOverride ? { name: modelOverride, entry: manifest.models[modelOverride] } : modelForMode(models, s.mode);
     if (!choice || !choice.entry) throw new Error(modelOverride ? `no model '${modelOverride}' in the manifest` : `no ${s.mode} model is shipped with this demo`);
-    if (s.mode === 'text') {
-      const cut = truncatePrompt(s.text);
-      if (cut.truncated) {
-        notices.show('warn', `Your prompt was longer than ${MAX_PROMPT_CHARS} characters: only the first ${MAX_PROMPT_CHARS} are used.`);
-        s.text = cut.text;
-        controls.set(s);
-      }
-      if (s.text.trim() === '') throw new Error('the prompt is empty: type what the character should do');
-    }
+    if (s.mode === 'text' && s.text.trim() === '') throw new Error('the prompt is empty: type what the character should do');
     if (s.mode === 'action' && !limits.actions.includes(s.action)) throw new Error(`unknown action '${s.action}'`);
     const frames = framesFor(s.seconds, limits);
     const label = s.mode === 'text' ? s.text.trim() : s.mode === 'action' ? s.action.replace(/[_-]+/g, ' ') : 'Random motion';
@@ -371,6 +360,7 @@ async function main(): Promise<void> {
       stage.snapTo(main.track.rootPos);
       if (ddim) stage.snapTo2(ddim.track.rootPos);
       shown = { state: s, result: main.result, track: main.track, label, model: main.model, steps: main.result.steps, ikMs: main.ikMs };
+      if (s.mode === 'text') controls.setPromptNote(s.text, promptNote(main.result.prompt));
       showCaption(s, label, plan);
       if (ddim) showPanels(main, ddim);
       else showTimings(main.result, main.ikMs);
@@ -436,8 +426,8 @@ async function main(): Promise<void> {
       const why = e.reason === 'sha256' ? 'its checksum does not match the manifest (corrupt or replaced file)'
         : e.reason === 'missing' ? 'the file is missing' : e.reason === 'incompatible' ? 'the file is not a compatible model' : 'it could not be downloaded';
       errorPanel.show(`The model ${model} cannot be used`, `${e.path}: ${why}.`, `Details: ${e.message}`);
-    } else if (e instanceof BadMotionError) {
-      notices.show('error', `Generation failed: ${e.message}.`);
+    } else if (isNonFinite(e)) {
+      notices.show('error', `Generation failed: ${describe(e)}; the character keeps its last good motion.`);
     } else {
       notices.show('error', `Generation failed: ${describe(e)}`);
     }

@@ -100,7 +100,14 @@ export class GenerationHost {
       enc.catch(() => this.encoders.delete(c.encoder));
     }
     const p = enc;
-    return { ready: p, encoder: { id: c.encoder, dim: c.dim, encode: async (text: string) => (await p).encode(text) } };
+    const encoder: TextEncoder = {
+      id: c.encoder,
+      dim: c.dim,
+      encode: async (text: string) => (await p).encode(text),
+      // createTextEncoder's encoders have tokenize: generate() reports a prompt cut to maxTokens with it
+      tokenize: async (text: string) => (await p).tokenize!(text),
+    };
+    return { ready: p, encoder };
   }
 
   private async create(model: string, variant?: string, force?: 'wasm'): Promise<Generator> {

@@ -62,17 +62,20 @@ test.describe('demo page: bad input', () => {
     await expect(page.locator('#generate')).toBeEnabled();
   });
 
-  test('overlong prompt: a notice says it was truncated, and only the first 300 characters are used', async () => {
+  test('overlong prompt: the encoder reads its first maxTokens tokens (as Python) and a note under the prompt says so', async () => {
     const c0 = await counters();
-    const long = `${PROMPT} `.repeat(30); // 690 characters
+    const long = `${PROMPT} `.repeat(40); // 920 characters, 162 tokens with [CLS] and [SEP]; MiniLM reads 128
     await page.locator('#prompt').fill(long);
-    await expect(page.locator('#prompt-hint')).toContainText('Too long');
+    await expect(page.locator('#prompt-hint')).toHaveText('');
     await page.locator('#seconds').fill('1');
     await page.locator('#steps').fill('0');
     await page.locator('#generate').click();
-    await expect(page.locator('.notice.warn')).toContainText('only the first 300');
     await page.waitForFunction((n) => window.emdm.counters.generations === n + 1, c0.generations, { timeout: 120_000 });
-    expect((await page.locator('#prompt').inputValue()).length).toBe(300);
+    await expect(page.locator('#prompt-hint')).toHaveText(/^Prompt truncated to 128 tokens: .* this prompt has 162/);
+    await expect(page.locator('#prompt-hint')).toHaveClass(/warn/);
+    expect(await page.locator('#prompt').inputValue()).toBe(long); // nothing is cut by characters
+    await page.locator('#prompt').fill(PROMPT);
+    await expect(page.locator('#prompt-hint')).toHaveText('');
   });
 
   test('HTML in the prompt is shown as text, never interpreted', async () => {

@@ -88,7 +88,10 @@ describe('all-MiniLM-L6-v2 (transformers.js, Node)', () => {
 
   test('generate() says when a prompt was cut (result.prompt)', async () => {
     const manifest = await loadManifest(MODELS);
-    const name = Object.keys(manifest.models).find((k) => manifest.models[k].condition.encoder === enc.id && manifest.models[k].objective !== 'diffusion');
+    const name = Object.keys(manifest.models).find((k) => {
+      const c = manifest.models[k].condition;
+      return c.type === 'text' && c.encoder === enc.id && manifest.models[k].objective !== 'diffusion';
+    });
     expect(name).toBeDefined();
     const gen = await createGenerator({ manifest, baseUrl: MODELS, model: name!, backend: 'wasm', threads: 1, textEncoder: enc });
     const o = { frames: 4, steps: manifest.models[name!].supportedSteps[0], guidance: 1, seed: 1 };

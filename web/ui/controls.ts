@@ -2,8 +2,8 @@
 // dice, Generate. It owns the DOM of the controls and turns it into a PageState; it never runs a model itself.
 import { byId, el } from './dom';
 import {
-  MAX_GUIDANCE, MAX_PROMPT_CHARS, MAX_SECONDS, MAX_SEED, MIN_GUIDANCE, MIN_SECONDS, nearestSteps, randomSeed,
-  stepChoices, truncatePrompt, type Mode, type PageState, type StateLimits,
+  MAX_GUIDANCE, MAX_SECONDS, MAX_SEED, MIN_GUIDANCE, MIN_SECONDS, nearestSteps, randomSeed,
+  stepChoices, type Mode, type PageState, type StateLimits,
 } from './state';
 
 export interface ControlsEvents {
@@ -18,7 +18,6 @@ const COMPARE_ACTION_REASON = 'The diffusion (DDIM) model takes a text prompt or
 export class Controls {
   private readonly prompt = byId('prompt', HTMLTextAreaElement);
   private readonly promptHint = byId('prompt-hint');
-  private readonly promptCount = byId('prompt-count');
   private readonly action = byId('action', HTMLSelectElement);
   private readonly steps = byId('steps', HTMLInputElement);
   private readonly seconds = byId('seconds', HTMLInputElement);
@@ -37,6 +36,8 @@ export class Controls {
   private ready = false;
   private backend: PageState['backend'] = 'auto';
   private readonly unavailable = new Map<Mode, string>();
+  /** what the text encoder said about a prompt it cut, shown under the prompt while it reads `text` */
+  private promptNote: { text: string; note: string } | null = null;
 
   constructor(private readonly limits: StateLimits, examples: string[], private readonly on: ControlsEvents) {
     this.steps.min = '0';
@@ -135,7 +136,7 @@ export class Controls {
     this.steps.value = String(Math.max(0, choices.indexOf(nearestSteps(steps, choices))));
   }
 
-  /** The state the controls show (prompt NOT truncated: see truncatePrompt). */
+  /** The state the controls show. */
   read(): PageState {
     const compare = this.compare.checked;
     return {
@@ -153,6 +154,12 @@ export class Controls {
 
   setReady(ready: boolean): void {
     this.ready = ready;
+    this.refresh();
+  }
+
+  /** Show `note` under the prompt while the prompt still reads `text` ('' clears it). */
+  setPromptNote(text: string, note: string): void {
+    this.promptNote = note ? { text, note } : null;
     this.refresh();
   }
 
@@ -206,14 +213,12 @@ export class Controls {
     this.compare.title = why;
     byId('seconds-out').textContent = `${s.seconds.toFixed(1)} s`;
     byId('guidance-out').textContent = s.guidance.toFixed(1);
-    const chars = Array.from(s.text).length;
-    this.promptCount.textContent = chars ? `${chars} / ${MAX_PROMPT_CHARS}` : '';
     const empty = s.text.trim() === '';
     let hint = '';
     let warn = false;
     if (s.mode === 'text' && empty) hint = 'Type a prompt (or pick an example) to generate.';
-    else if (s.mode === 'text' && truncatePrompt(s.text).truncated) {
-      hint = `Too long: only the first ${MAX_PROMPT_CHARS} characters will be used.`;
+    else if (s.mode === 'text' && this.promptNote?.text === s.text) {
+      hint = this.promptNote.note;
       warn = true;
     }
     this.promptHint.textContent = hint;

@@ -36,8 +36,6 @@ export const MAX_SECONDS = 9.8;
 export const DEFAULT_SECONDS = 6;
 export const MIN_GUIDANCE = 1;
 export const MAX_GUIDANCE = 6;
-/** Longer prompts are cut here (MiniLM reads at most 128 word pieces; ~300 characters stay well inside). */
-export const MAX_PROMPT_CHARS = 300;
 export const MAX_SEED = 0xffffffff;
 
 export interface Parsed {
@@ -78,13 +76,6 @@ export function nearestSteps(n: number, supported: number[]): number {
   return best;
 }
 
-/** Cut a prompt to MAX_PROMPT_CHARS (on a code-point boundary); `truncated` says whether it was cut. */
-export function truncatePrompt(text: string): { text: string; truncated: boolean } {
-  const chars = Array.from(text);
-  if (chars.length <= MAX_PROMPT_CHARS) return { text, truncated: false };
-  return { text: chars.slice(0, MAX_PROMPT_CHARS).join(''), truncated: true };
-}
-
 const round = (x: number, step: number) => Math.round(x / step) * step;
 const fmt = (x: number) => String(Number(x.toFixed(3)));
 
@@ -100,11 +91,8 @@ export function parseState(search: string, l: StateLimits, fallbackSeed: number)
     else notices.push(`URL mode='${mode}' is not text, action or random; using text.`);
   }
   const text = q.get('text');
-  if (text !== null) {
-    const t = truncatePrompt(text);
-    s.text = t.text;
-    if (t.truncated) notices.push(`URL text was longer than ${MAX_PROMPT_CHARS} characters; it was cut.`);
-  }
+  // no length limit here: the text encoder reads at most the manifest's maxTokens and the page says when it cut
+  if (text !== null) s.text = text;
   const action = q.get('action');
   if (action !== null) {
     if (l.actions.includes(action)) s.action = action;
