@@ -11,6 +11,12 @@ x_T ~ N(0, I); per step: fresh z, x0 = G(x, z, c, time[k], mask) (with guidance 
 [c, 0] with the same x and z, x0 = x0_u + s·(x0_c − x0_u)), x = coef1·x0 + coef2·x + sigma·ε. Random
 draws come from numpy's default_rng(seed) in the order x_T, then per step z, then ε. Models trained with
 ``--objective diffusion`` are sampled with DDIM (η = 0, z = 0) on the same time grid.
+
+Arguments are checked as the page checks them (the model's supportedSteps, a finite guidance ≥ 0,
+--num ≥ 1, a known --variant, a uint32 seed, a writable --out) before any model runs; a bad one is
+answered with one line naming it and exit status 2. A motion with NaN/Infinity is an error and is
+never written. A prompt longer than the text encoder reads (the manifest's maxTokens) is cut there,
+as in the page, with a "prompt truncated to N tokens" line on stderr.
 """
 
 from __future__ import annotations
@@ -238,7 +244,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--text")
     p.add_argument("--action")
     p.add_argument("--uncond", action="store_true")
-    p.add_argument("--steps", type=int, default=None, help="denoising steps (default: the model's defaultSteps)")
+    p.add_argument("--steps", type=int, default=None, help="denoising steps: one of the model's supportedSteps (default: its defaultSteps)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--frames", type=int, default=120, help="length in frames at 20 fps (≤ 196)")
     p.add_argument("--guidance", type=float, default=None, help="classifier-free guidance scale (default: model's)")
