@@ -10,9 +10,10 @@
  *
  * One worker per client holds the models, the text encoder and ORT; requests travel as messages
  * (./protocol.ts). An AbortSignal cancels a generation at the next denoising step; `onStep` hears
- * each step; errors come back as the same classes (ModelFileError, AbortError) with their messages.
+ * each step; errors come back as the same classes (ModelFileError, NonFiniteMotionError, AbortError).
  */
 import type { FileEvent } from '../cache/modelCache';
+import { NonFiniteMotionError } from '../errors';
 import type { GenerateResult } from '../generate';
 import { ModelFileError, type Manifest, type ModelFileErrorReason } from '../manifest';
 import type { BackendRequest } from '../runtime/ort';
@@ -68,6 +69,9 @@ function rebuild(w: WireError): Error {
   let e: Error;
   if (w.name === 'ModelFileError' && w.path !== undefined) {
     e = new ModelFileError(w.path, (w.reason ?? 'network') as ModelFileErrorReason, '');
+    e.message = w.message;
+  } else if (w.name === 'NonFiniteMotionError' && w.source !== undefined) {
+    e = new NonFiniteMotionError(w.source, w.index ?? -1, w.count ?? 0, w.value ?? NaN);
     e.message = w.message;
   } else if (w.name === 'AbortError') {
     e = new AbortError(w.message);

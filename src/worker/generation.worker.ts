@@ -7,6 +7,7 @@
  * stops at the next step boundary (the runtime yields to the event loop before every model call, so the
  * message is handled between steps, not after the loop).
  */
+import { NonFiniteMotionError } from '../errors';
 import type { GenerateOptions } from '../generate';
 import { ModelFileError } from '../manifest';
 import { solveIK } from '../motion/ik';
@@ -29,6 +30,9 @@ function post(msg: FromWorker, transfer: Transferable[] = []): void {
 function wireError(e: unknown): WireError {
   if (e instanceof ModelFileError) {
     return { name: e.name, message: e.message, stack: e.stack, path: e.path, reason: e.reason };
+  }
+  if (e instanceof NonFiniteMotionError) {
+    return { name: e.name, message: e.message, stack: e.stack, source: e.source, index: e.index, count: e.count, value: e.value };
   }
   if (e instanceof Error) return { name: e.name, message: e.message, stack: e.stack };
   return { name: 'Error', message: String(e) };

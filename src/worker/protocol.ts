@@ -67,6 +67,11 @@ export interface WireError {
   /** ModelFileError */
   path?: string;
   reason?: string;
+  /** NonFiniteMotionError: what held the bad number, its index, the count and the value */
+  source?: string;
+  index?: number;
+  count?: number;
+  value?: number;
 }
 
 export type FromWorker =

@@ -49,8 +49,8 @@ async function nodeRun(req: Req) {
   }
 }
 
-async function openHarness(page: Page, threads = 1): Promise<void> {
-  await page.goto(`/harness/?threads=${threads}&backend=wasm`);
+async function openHarness(page: Page, threads = 1, via = ''): Promise<void> {
+  await page.goto(`/harness/?threads=${threads}&backend=wasm${via ? `&via=${via}` : ''}`);
   await page.waitForFunction(() => window.coreHarness?.ready === true, null, { timeout: 120_000 });
 }
 
@@ -110,6 +110,19 @@ test.describe('core determinism: Chromium == Node', () => {
       watch.assertClean();
     });
   }
+
+  test('through the generation worker (src/worker), every non-text case is bit-identical to Node', async ({ page }) => {
+    test.setTimeout(300_000);
+    await openHarness(page, 2, 'worker');
+    expect((await page.evaluate(() => window.coreHarness.info())).viaWorker).toBe(true);
+    // text prompts through the worker: tests/e2e/page-worker.spec.ts (Node gets the browser's embedding there)
+    for (const req of cases.filter((r) => r.condition.type !== 'text')) {
+      const w = await page.evaluate((r) => window.coreHarness.generate(r), req);
+      const n = await nodeRun(req);
+      expect(w.featuresSha256, `${req.model} features: worker vs Node`).toBe(n.featuresSha256);
+      expect(w.jointsSha256, `${req.model} joints: worker vs Node`).toBe(n.jointsSha256);
+    }
+  });
 
   test('2 WASM threads give the same bits as 1 thread (cross-origin isolated page)', async ({ page }) => {
     const req = shippedRequests().find((r) => r.condition.type !== 'text') ?? cases[0];

@@ -5,6 +5,7 @@ import { type Generator, type GenerateOptions, createGenerator } from '../../src
 import { type Manifest, loadManifest, sha256Hex } from '../../src/manifest';
 import { createTextEncoder } from '../../src/text';
 import { SeededRandom } from '../../src/sampler/rng';
+import { GenerationClient } from '../../src/worker/client';
 import { buildTinyManifest } from '../../tests/fixtures/parity/tinyManifest';
 import tinyMeanStdUrl from '../../tests/fixtures/parity/tiny.meanstd.f32?url&no-inline';
 import tinyOnnxUrl from '../../tests/fixtures/parity/tiny-step.onnx?url&no-inline';
@@ -14,6 +15,8 @@ const threads = params.has('threads') ? Number(params.get('threads')) : undefine
 const backend = (params.get('backend') ?? 'wasm') as 'wasm' | 'webgpu' | 'auto';
 // ?models=<url> points the harness at another models folder (the benchmark serves one at /bench-models/)
 const MODELS = params.get('models') ?? `${import.meta.env.BASE_URL}models/`;
+// ?via=worker runs generate() in the page's generation worker (src/worker) instead of on this thread
+const VIA_WORKER = params.get('via') === 'worker';
 
 export interface HarnessRequest {
   /** 'tiny' / 'tiny-ddim' (the parity fixture's tiny step model, DDGAN / DDIM) or a shipped model name */
@@ -41,6 +44,20 @@ async function tinyManifest(): Promise<{ manifest: Manifest; baseUrl: string }> 
   return { manifest, baseUrl: dirOf(tinyOnnxUrl) };
 }
 
+/** A generator whose every call runs in a generation worker (one worker per manifest, no model cache). */
+async function workerGenerator(manifest: Manifest, baseUrl: string, model: string, variant?: string): Promise<Generator> {
+  const client = new GenerationClient({ manifest, baseUrl, backend, threads, cache: false });
+  const info = await client.load(model, variant);
+  return {
+    modelName: model, backend: info.backend, threads: info.threads, entry: manifest.models[model], sampler: info.sampler,
+    generate: ({ signal, onStep, noise, ...o }) => {
+      if (noise) throw new Error('harness: a custom noise source cannot cross to the worker');
+      return client.generate(model, { ...o, signal, onStep }, variant);
+    },
+    dispose: () => client.dispose(),
+  };
+}
+
 const generators = new Map<string, Promise<Generator>>();
 function generatorFor(model: string, variant?: string): Promise<Generator> {
   const key = `${model}|${variant ?? ''}`;
@@ -48,6 +65,7 @@ function generatorFor(model: string, variant?: string): Promise<Generator> {
   if (!g) {
     g = (async () => {
       const { manifest, baseUrl } = model === 'tiny' || model === 'tiny-ddim' ? await tinyManifest() : { manifest: await loadManifest(MODELS), baseUrl: MODELS };
+      if (VIA_WORKER) return workerGenerator(manifest, baseUrl, model, variant);
       return createGenerator({ manifest, baseUrl, model, variant, backend, threads });
     })();
     generators.set(key, g);
@@ -60,7 +78,7 @@ const hex = (a: Float32Array) => sha256Hex(new Uint8Array(a.buffer, a.byteOffset
 
 const harness = {
   info() {
-    return { crossOriginIsolated: globalThis.crossOriginIsolated === true, requestedThreads: threads ?? null, backend, hardwareConcurrency: navigator.hardwareConcurrency };
+    return { crossOriginIsolated: globalThis.crossOriginIsolated === true, requestedThreads: threads ?? null, backend, hardwareConcurrency: navigator.hardwareConcurrency, viaWorker: VIA_WORKER };
   },
   /** First n seeded normals (float32), to compare the RNG bit for bit with Node. */
   rng(seed: number, n: number): number[] {
