@@ -4,6 +4,8 @@
     python -m emdm.sample --model emdm-a2m-web --action walk --seed 3 --out out/a
     python -m emdm.sample --model emdm-t2m-web --uncond --steps 4 --out out/u
     python -m emdm.sample --ckpt runs/t2m/ckpt.pt --text "..." --out out/x      # PyTorch weights (EMA)
+    python -m emdm.sample --model emdm-t2m-web --text "a person waves" --known out/walk.features.npy \
+        --keep group:root,legs --out out/walk_wave       # keep the walk's legs and root, regenerate the rest
 
 Writes <out>.npy (joints, (frames, 22, 3) metres; (n, frames, 22, 3) with --num > 1), <out>.features.npy
 (de-normalised 263-d) and <out>.bvh (one per sample). The loop is docs/ARCHITECTURE.md "Sampling":
@@ -44,10 +46,18 @@ MAX_SEED = 2**32 - 1      # the page's seeds are uint32
 
 def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10, guidance: float = 1.0,
                     seed: int = 0, num: int = 1, z_dim: int = 64, feature_dim: int = 263,
-                    objective: str = "ddgan") -> np.ndarray:
-    """Normalised x̂_0 features (num, frames, 263). ``cond`` (C,) — all zeros = unconditional."""
+                    objective: str = "ddgan", known: np.ndarray | None = None,
+                    keep: np.ndarray | None = None) -> np.ndarray:
+    """Normalised x̂_0 features (num, frames, 263). ``cond`` (C,) — all zeros = unconditional.
+
+    Inpainting (docs/ARCHITECTURE.md "Sampling with constraints"): ``known`` (frames, 263) normalised features
+    and ``keep`` (frames, 263) 0/1 (``emdm.motion.mask.keep_mask``) impose the kept entries at every step: x_T's
+    kept part is a_cum[T]·known + s_cum[T]·x_T, and x̂_0's kept part is replaced by ``known`` before each update,
+    so the model always sees the known motion noised to its step's level and the result equals ``known`` there.
+    """
     if frames < 1:
         raise SampleError(f"frames must be ≥ 1, got {frames}")
+    keep, known = check_known(known, keep, frames, feature_dim)
     sch = make_schedule(steps)
     rng = np.random.default_rng(seed)
     cond = np.asarray(cond, np.float32)
@@ -56,6 +66,8 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
     if use_cfg:
         c = np.concatenate([c, np.zeros_like(c)])
     x = rng.standard_normal((num, frames, feature_dim), dtype=np.float32)
+    if keep is not None:
+        x = np.where(keep, np.float32(sch.a_cum[steps]) * known + np.float32(sch.s_cum[steps]) * x, x)
     for k in range(steps - 1, -1, -1):
         z = rng.standard_normal((num, z_dim), dtype=np.float32)
         if objective == "diffusion":
@@ -67,6 +79,8 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
         x0 = np.asarray(step(xin, zin, c, t, mask), np.float32)
         if use_cfg:
             x0 = x0[num:] + np.float32(guidance) * (x0[:num] - x0[num:])
+        if keep is not None:
+            x0 = np.where(keep, known, x0)
         if objective == "diffusion":     # DDIM, η = 0
             eps = (x - np.float32(sch.a_cum[k + 1]) * x0) / np.float32(sch.s_cum[k + 1])
             x = (np.float32(sch.a_cum[k]) * x0 + np.float32(sch.s_cum[k]) * eps) if k > 0 else x0
@@ -75,6 +89,25 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
             if sch.sigma[k] > 0:
                 x = x + np.float32(sch.sigma[k]) * rng.standard_normal(x.shape, dtype=np.float32)
     return x.astype(np.float32)
+
+
+def check_known(known, keep, frames: int, feature_dim: int) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(keep as bool, known as float32) for ``sample_features``, or (None, None) when nothing is kept."""
+    if known is None and keep is None:
+        return None, None
+    if known is None or keep is None:
+        raise SampleError("inpainting needs both known (the motion to keep) and keep (its mask); give both or neither")
+    known = np.asarray(known, np.float32)
+    keep = np.asarray(keep)
+    for name, a in (("known", known), ("keep", keep)):
+        if a.shape != (frames, feature_dim):
+            raise SampleError(f"{name} has shape {a.shape}, expected (frames, {feature_dim}) = ({frames}, {feature_dim})")
+    if not np.isin(keep, (0, 1)).all():
+        raise SampleError("keep must hold only 0 and 1 (build it with emdm.motion.mask.keep_mask)")
+    keep = keep.astype(bool)
+    if not np.isfinite(known[keep]).all():
+        raise SampleError(f"known has NaN/Infinity in {int((~np.isfinite(known[keep])).sum())} kept entries")
+    return keep, np.where(keep, known, np.float32(0))
 
 
 def onnx_step(path: Path | str, threads: int = 1) -> StepFn:
@@ -217,6 +250,57 @@ def check_args(a) -> None:
     if a.ckpt is not None and a.variant not in (None, "fp32"):
         raise SampleError(f"--variant {a.variant!r} needs --model (a checkpoint has only its fp32 weights)")
     check_out(a.out, a.num, not a.no_bvh)
+    if a.keep or a.known is not None:
+        keep_rects(a)
+        read_known(a.known)
+
+
+def keep_rects(a) -> list:
+    """The parsed --keep rectangles (``emdm.motion.mask``); --keep and --known go together."""
+    from emdm.motion.mask import KeepSpecError, parse_keep
+
+    if a.known is None:
+        raise SampleError("--keep needs --known PATH.features.npy (the motion whose parts are kept)")
+    if not a.keep:
+        raise SampleError("--known needs --keep SPEC (what to keep, e.g. --keep frames:0-19 or --keep group:legs)")
+    try:
+        return [parse_keep(spec) for spec in a.keep]
+    except KeepSpecError as e:
+        raise SampleError(f"--keep: {e}") from None
+
+
+def read_known(path: Path) -> np.ndarray:
+    """A de-normalised (frames, 263) motion, as emdm.sample writes to <out>.features.npy."""
+    try:
+        f = np.load(path, allow_pickle=False)
+    except (OSError, ValueError) as e:
+        raise SampleError(f"--known {path}: cannot read a .npy array ({e})") from None
+    if f.ndim != 2 or f.shape[1] != 263 or f.shape[0] < 1:
+        raise SampleError(f"--known {path}: shape {f.shape}, expected (frames, 263) de-normalised features "
+                          f"(an emdm.sample <out>.features.npy of one sample)")
+    return f.astype(np.float32)
+
+
+def known_and_keep(a, frames: int, mean: np.ndarray, std: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(known normalised, keep mask), both (frames, 263): known frame i is output frame i; every kept frame
+    must lie inside the known motion."""
+    from emdm.motion.mask import KeepSpecError, keep_mask
+
+    feats = read_known(a.known)
+    try:
+        keep = keep_mask(frames, keep_rects(a))
+    except KeepSpecError as e:
+        raise SampleError(f"--keep: {e} (--frames {frames})") from None
+    kept_rows = np.flatnonzero(keep.any(1))
+    if kept_rows.size and kept_rows[-1] >= feats.shape[0]:
+        raise SampleError(f"--keep: frame {kept_rows[-1]} is kept but --known {a.known} has only "
+                          f"{feats.shape[0]} frames (0..{feats.shape[0] - 1})")
+    known = np.zeros((frames, feats.shape[1]), np.float32)
+    n = min(frames, feats.shape[0])
+    known[:n] = (feats[:n] - mean) / std
+    if not np.isfinite(known[keep.astype(bool)]).all():
+        raise SampleError(f"--known {a.known}: non-finite values in the kept part")
+    return known, keep
 
 
 def check_steps(steps: int | None, entry: dict, name: str) -> int:
@@ -252,6 +336,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--out", type=Path, required=True, help="output path prefix (.npy, .features.npy, .bvh)")
     p.add_argument("--no-bvh", action="store_true")
+    p.add_argument("--known", type=Path, default=None,
+                   help="a motion to keep parts of: (frames, 263) de-normalised features (an <out>.features.npy); "
+                        "its frame i is output frame i")
+    p.add_argument("--keep", action="append", default=[], metavar="SPEC",
+                   help="what to keep of --known, repeatable (union): frames:0-19 | group:legs | frames:0-19/group:root,legs "
+                        "(ranges A-B inclusive, A, A-; groups root, legs, upper)")
     return p
 
 
@@ -275,8 +365,9 @@ def run(a: argparse.Namespace) -> int:
     steps = check_steps(a.steps, entry, a.model or str(a.ckpt))
     cond = make_condition(entry["condition"], a.text, a.action, a.uncond)
     guidance = float(entry.get("guidance", 2.5)) if a.guidance is None else a.guidance
+    known, keep = known_and_keep(a, a.frames, mean, std) if a.keep else (None, None)
     x = sample_features(step, cond, a.frames, steps, guidance, a.seed, a.num, int(entry.get("zDim", 64)),
-                        objective=entry.get("objective", "ddgan"))
+                        objective=entry.get("objective", "ddgan"), known=known, keep=keep)
     feats = denormalise(x, mean, std)
     if not np.isfinite(feats).all():
         raise SampleError(f"the model returned non-finite numbers ({int((~np.isfinite(feats)).sum())} of {feats.size} "

@@ -1,0 +1,240 @@
+"""Inpainting (docs/ARCHITECTURE.md "Sampling with constraints"): the keep mask, sample_features(known, keep),
+`python -m emdm.sample --known/--keep`, the tiny-mask parity fixture, and stitching a continued segment."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from emdm import paths
+from emdm.fixtures import TINY_COND_DIM
+from emdm.model.schedule import make_schedule
+from emdm.motion import mask_fixture
+from emdm.motion.features import heading_angles, recover_joints
+from emdm.motion.ik_fixture import read_case_array
+from emdm.motion.mask import GROUPS, KeepRect, KeepSpecError, group_channels, keep_mask, parse_keep
+from emdm.motion.stitch import align_segment, append_segment
+from emdm.sample import SampleError, main as sample_main, onnx_step, sample_features
+
+PARITY = mask_fixture.PARITY_DIR
+
+
+@pytest.fixture(scope="module")
+def tiny_step():
+    return onnx_step(PARITY / "tiny-step.onnx")
+
+
+@pytest.fixture(scope="module")
+def real_features():
+    return read_case_array(PARITY, "recover", "features").astype(np.float32)      # (120, 263), a real clip
+
+
+# ----------------------------------------------------------------------------------------------- the mask
+
+def test_the_three_groups_split_the_263_channels_by_joint():
+    chans = {g: set(group_channels(g)) for g in GROUPS}
+    assert sum(len(c) for c in chans.values()) == 263 and set.union(*chans.values()) == set(range(263))
+    assert chans["root"] == {0, 1, 2, 3, 193, 194, 195}
+    l_knee, l_wrist = 4, 20
+    assert {4 + 3 * (l_knee - 1), 67 + 6 * (l_knee - 1), 193 + 3 * l_knee, 259, 262} <= chans["legs"]
+    assert {4 + 3 * (l_wrist - 1) + 2, 67 + 6 * (l_wrist - 1) + 5, 193 + 3 * l_wrist} <= chans["upper"]
+
+
+def test_keep_mask_is_the_union_of_frames_x_groups_rectangles():
+    legs = group_channels("legs")
+    m = keep_mask(10, [parse_keep("frames:0-2,8-"), parse_keep("frames:5/group:legs")])
+    assert m.shape == (10, 263) and m.dtype == np.float32
+    assert m[[0, 1, 2, 8, 9]].all() and not m[[3, 4, 6, 7]].any()
+    assert m[5, legs].all() and m[5].sum() == len(legs)
+    assert np.array_equal(keep_mask(4, [parse_keep("group:root,upper")]).sum(1), [263 - len(legs)] * 4)
+    assert parse_keep("group:legs/frames:3-4") == KeepRect(frames=((3, 4),), groups=("legs",))
+
+
+@pytest.mark.parametrize("spec, says", [
+    ("", "empty"), ("legs", "must be frames:RANGES or group:NAMES"), ("group:arms", "unknown group 'arms'"),
+    ("frames:5-2", "ends before it starts"), ("frames:a-3", "must be A-B"), ("frames:1,,3", "empty entry"),
+    ("frames:1/frames:2", "given twice"), ("group:legs/group:root", "given twice"),
+])
+def test_a_bad_keep_spec_is_one_line_naming_it(spec, says):
+    with pytest.raises(KeepSpecError, match=says) as e:
+        parse_keep(spec)
+    assert "\n" not in str(e.value)
+
+
+def test_a_range_past_the_motion_is_refused():
+    with pytest.raises(KeepSpecError, match="past the motion's last frame 9"):
+        keep_mask(10, [parse_keep("frames:5-10")])
+    with pytest.raises(KeepSpecError, match="past the motion's last frame 9"):
+        keep_mask(10, [parse_keep("frames:12-")])
+
+
+# ----------------------------------------------------------------------------------------------- the sampler
+
+def _known_keep(real_features, frames=16):
+    known = mask_fixture.known_motion()[:frames]
+    return known, keep_mask(frames, [parse_keep("frames:0-5"), parse_keep("group:legs")])
+
+
+@pytest.mark.parametrize("objective, steps, guidance, num", [("ddgan", 4, 2.5, 1), ("ddgan", 2, 1.0, 2),
+                                                              ("diffusion", 5, 2.5, 1)])
+def test_the_result_equals_the_known_motion_exactly_where_kept(tiny_step, real_features, objective, steps, guidance, num):
+    known, keep = _known_keep(real_features)
+    cond = np.random.default_rng(0).standard_normal(TINY_COND_DIM).astype(np.float32)
+    x = sample_features(tiny_step, cond, 16, steps=steps, guidance=guidance, seed=3, num=num, objective=objective,
+                        known=known, keep=keep)
+    kept = np.broadcast_to(keep.astype(bool), x.shape)
+    assert np.array_equal(x[kept], np.broadcast_to(known, x.shape)[kept])        # exactly, in normalised space
+    free = sample_features(tiny_step, cond, 16, steps=steps, guidance=guidance, seed=3, num=num, objective=objective)
+    assert np.abs(free - known)[kept].mean() > 0.1                                  # not kept by accident
+    assert np.abs(x - free)[~kept].mean() > 1e-3                                   # the rest follows the kept part
+
+
+def test_the_model_sees_the_known_motion_noised_to_each_steps_level(tiny_step):
+    """Kept entries of every model input are a_cum[k+1]·known + s_cum[k+1]·ε with ε standard normal
+    (DDIM: ε is x_T's noise itself; DDGAN: a fresh-looking N(0, 1) at every level)."""
+    frames = 60
+    known = np.tile(mask_fixture.known_motion(), (4, 1))[:frames]
+    keep = keep_mask(frames, [parse_keep("group:root,legs")])
+    kept = keep.astype(bool)
+    for objective, steps in (("diffusion", 5), ("ddgan", 4)):
+        inputs = []
+        def recording(x, z, c, t, mask):
+            inputs.append(x[0].copy())
+            return tiny_step(x, z, c, t, mask)
+        sample_features(recording, np.zeros(TINY_COND_DIM, np.float32), frames, steps=steps, seed=11,
+                        objective=objective, known=known, keep=keep)
+        sch = make_schedule(steps)
+        x_T = np.random.default_rng(11).standard_normal((1, frames, 263), dtype=np.float32)[0]
+        for i, k in enumerate(range(steps - 1, -1, -1)):
+            eps = ((inputs[i] - sch.a_cum[k + 1] * known) / sch.s_cum[k + 1])[kept]
+            if objective == "diffusion":
+                np.testing.assert_allclose(eps, x_T[kept], atol=2e-3)
+            else:
+                assert abs(eps.mean()) < 0.05 and abs(eps.std() - 1) < 0.05, (k, eps.mean(), eps.std())
+
+
+@pytest.mark.parametrize("known, keep, says", [
+    (np.zeros((16, 263)), None, "both known"),
+    (np.zeros((15, 263)), np.ones((16, 263)), r"known has shape \(15, 263\)"),
+    (np.zeros((16, 263)), np.full((16, 263), 0.5), "only 0 and 1"),
+    (np.full((16, 263), np.nan), np.ones((16, 263)), "NaN/Infinity in 4208 kept"),
+])
+def test_bad_inpainting_arguments_are_one_line_errors(tiny_step, known, keep, says):
+    with pytest.raises(SampleError, match=says):
+        sample_features(tiny_step, np.zeros(TINY_COND_DIM, np.float32), 16, steps=2, known=known, keep=keep)
+
+
+# ----------------------------------------------------------------------------------------------- the fixture
+
+def test_the_tiny_mask_fixture_is_current(tmp_path):
+    mask_fixture.make(tmp_path)
+    want = json.loads((PARITY / "tiny-mask.json").read_text())
+    got = json.loads((tmp_path / "tiny-mask.json").read_text())
+    fix = "regenerate it with `.venv/bin/python -m emdm.motion.mask_fixture` and commit tests/fixtures/parity/tiny-mask.*"
+    assert {k: v for k, v in want.items() if k != "arrays"} == {k: v for k, v in got.items() if k != "arrays"}, fix
+    assert want["arrays"].keys() == got["arrays"].keys(), fix
+    for key in want["arrays"]:
+        w = read_case_array(PARITY, "tiny-mask", key)
+        g = read_case_array(tmp_path, "tiny-mask", key)
+        assert w.shape == g.shape, f"tiny-mask {key}: shape {w.shape} committed, {g.shape} regenerated; {fix}"
+        scale = max(1.0, float(np.abs(w).max()))
+        assert np.abs(w - g).max() <= 1e-5 * scale, f"tiny-mask {key}: differs by {np.abs(w - g).max():.3g}; {fix}"
+
+
+# ----------------------------------------------------------------------------------------------- the CLI
+
+def _shipped(name="emdm-a2m-web"):
+    if not (paths.MODELS_DIR / "manifest.json").is_file():
+        pytest.skip(f"no {paths.MODELS_DIR / 'manifest.json'}")
+    man = json.loads((paths.MODELS_DIR / "manifest.json").read_text())
+    if name not in man["models"]:
+        pytest.skip(f"{name} not shipped")
+    return man["models"][name]
+
+
+def test_cli_keep_regenerates_around_the_kept_part(tmp_path, capsys):
+    entry = _shipped()
+    base = ["--model", "emdm-a2m-web", "--steps", "2", "--frames", "40", "--no-bvh"]
+    assert sample_main([*base, "--action", "walk", "--seed", "1", "--out", str(tmp_path / "walk")]) == 0
+    walk = np.load(tmp_path / "walk.features.npy")
+    assert sample_main([*base, "--action", "wave-both-hands", "--seed", "2", "--known", str(tmp_path / "walk.features.npy"),
+                        "--keep", "frames:0-9", "--keep", "group:root,legs", "--out", str(tmp_path / "wave")]) == 0
+    wave = np.load(tmp_path / "wave.features.npy")
+    keep = keep_mask(40, [parse_keep("frames:0-9"), parse_keep("group:root,legs")]).astype(bool)
+    ms = np.fromfile(paths.MODELS_DIR / entry["meanStd"], "<f4")
+    # de-normalise(normalise(f)) in float32: equal to a few ulps of the channel's scale
+    tol = 4e-7 * (np.abs(walk) + np.abs(ms[:263]) + ms[263:])
+    assert (np.abs(wave - walk) <= tol)[keep].all()
+    assert np.abs(wave - walk)[~keep].mean() > 1e-2
+    joints_w, joints_x = np.load(tmp_path / "walk.npy"), np.load(tmp_path / "wave.npy")
+    assert np.abs(joints_w[:10] - joints_x[:10]).max() < 1e-3         # kept frames decode to the same joints (< 1 mm)
+
+
+@pytest.mark.parametrize("args, says", [
+    (["--keep", "group:arms"], "--known PATH"),
+    (["--known", "{known}"], "--known needs --keep SPEC"),
+    (["--known", "{known}", "--keep", "group:arms"], "--keep: keep spec 'group:arms': unknown group 'arms'; groups: root, legs, upper"),
+    (["--known", "{known}", "--keep", "frames:0-40"], "past the motion's last frame 39"),
+    (["--known", "{short}", "--keep", "frames:0-20"], "frame 20 is kept but --known .* has only 12 frames"),
+    (["--known", "{bad}", "--keep", "frames:0"], r"shape \(12, 200\), expected \(frames, 263\)"),
+    (["--known", "{missing}", "--keep", "frames:0"], "cannot read a .npy array"),
+])
+def test_cli_bad_keep_arguments_exit_2_with_one_line(tmp_path, capsys, args, says):
+    _shipped()
+    files = {"known": tmp_path / "k.npy", "short": tmp_path / "s.npy", "bad": tmp_path / "b.npy", "missing": tmp_path / "nope.npy"}
+    np.save(files["known"], np.zeros((40, 263), np.float32))
+    np.save(files["short"], np.zeros((12, 263), np.float32))
+    np.save(files["bad"], np.zeros((12, 200), np.float32))
+    args = [a.format(**{k: str(v) for k, v in files.items()}) for a in args]
+    rc = sample_main(["--model", "emdm-a2m-web", "--action", "walk", "--steps", "1", "--frames", "40", "--no-bvh",
+                      "--out", str(tmp_path / "o"), *args])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and err[0].startswith("error: "), err
+    assert __import__("re").search(says, err[0]), err[0]
+    assert not (tmp_path / "o.npy").exists()
+
+
+# ----------------------------------------------------------------------------------------------- stitching
+
+def _split(real_features, cut=70, overlap=20):
+    """A real clip recovered whole, and as two segments whose overlap frames are the same features (as a segment
+    inpainted from the previous one's last frames is): each segment recovered on its own from the origin."""
+    whole = recover_joints(real_features)
+    prev = recover_joints(real_features[:cut])
+    nxt = recover_joints(real_features[cut - overlap:])
+    return whole, prev, nxt
+
+
+def test_stitching_a_real_clip_back_together_gives_the_clip(real_features):
+    whole, prev, nxt = _split(real_features)
+    assert np.abs(nxt[0, 0] - whole[50, 0]).max() > 0.1 or abs(heading_angles(whole[50:51])[0]) > 0.2   # a real move
+    joined = append_segment(prev, nxt, 20)
+    assert joined.shape == whole.shape
+    assert np.abs(joined - whole).max() < 1e-4
+    assert np.abs(align_segment(prev, nxt, 20)[:20] - prev[-20:]).max() < 1e-4     # the overlap lands on prev
+
+
+def test_no_jump_in_root_position_or_heading_at_the_seam(real_features):
+    """A continuation whose later frames differ (another clip's root motion after the overlap)."""
+    gen = read_case_array(PARITY, "model-emdm-t2m-web", "features") if (PARITY / "model-emdm-t2m-web.json").is_file() \
+        else real_features[::-1].copy()
+    prev = recover_joints(real_features[:70])
+    nxt = recover_joints(np.concatenate([real_features[50:70], gen]))
+    joined = append_segment(prev, nxt, 20)
+    root_step = np.linalg.norm(np.diff(joined[:, 0, [0, 2]], axis=0), axis=1)
+    turn = np.abs(np.angle(np.exp(1j * np.diff(heading_angles(joined)))))
+    seam = 69                                                       # step from prev's last frame to the first new one
+    assert root_step[seam] <= 1.5 * np.percentile(np.delete(root_step, seam), 95) + 1e-3
+    assert turn[seam] <= 0.05                                       # rad; the clip itself turns up to 0.46 rad a frame
+    naive = np.concatenate([prev, nxt[20:]])                          # without stitching: the segment restarts at 0
+    assert np.linalg.norm(naive[70, 0, [0, 2]] - naive[69, 0, [0, 2]]) > 10 * max(root_step[seam], 1e-2)
+    naive_turn = np.abs(np.angle(np.exp(1j * np.diff(heading_angles(naive[69:71])))))[0]
+    assert naive_turn > 1.0                                           # prev ends facing ~1.7 rad away from +Z
+
+
+def test_align_segment_refuses_a_bad_overlap(real_features):
+    _, prev, nxt = _split(real_features)
+    with pytest.raises(ValueError, match="overlap must be an integer in 1..70"):
+        align_segment(prev, nxt, 0)
