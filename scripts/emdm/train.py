@@ -88,6 +88,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--d-width", type=int, default=1024, help="D's first hidden width (released: 1024)")
     p.add_argument("--cond-drop", type=float, default=0.1, help="probability of the zero (unconditional) condition")
     p.add_argument("--supported-steps", default=",".join(map(str, SUPPORTED_STEPS)))
+    p.add_argument("--time-draw", choices=["steps", "pairs"], default="steps",
+                   help="DDGAN training times: 'steps' draws T uniformly from --supported-steps then k (most samples "
+                        "at t = 1 and at each T's last step), 'pairs' every (T, k) equally (more at 10 steps' t = 0.9..0.7)")
     p.add_argument("--min-frames", type=int, default=40)
     p.add_argument("--random-crop", type=float, default=0.0,
                    help="probability of training on a random sub-window (≥ --min-frames) of a clip; teaches short "
@@ -309,7 +312,7 @@ class Trainer:
             self.D = Discriminator(self.cond_dim if a.d_cond else 0, width=a.d_width).to(self.device)
             self.opt_d = torch.optim.Adam(self.D.parameters(), lr=self.lr_d, betas=tuple(a.betas))
         self.opt_g = torch.optim.Adam(self.G.parameters(), lr=self.lr_g, betas=tuple(a.betas))
-        self.tables = ScheduleTables(self.supported, self.device)
+        self.tables = ScheduleTables(self.supported, self.device, a.time_draw)
         g_fwd, d_fwd = self.G, self.D
         if a.compile:
             g_fwd = torch.compile(self.G, dynamic=True)

@@ -13,7 +13,8 @@
 # Each run first probes 50 steps (the last 25 timed, after compilation), then its cosine horizon (--steps) is
 # set to what fits its share of the budget, and it continues from the probe's checkpoint until the horizon or
 # its time limit. Settings (environment): ALPHA (0.5), BATCH (256), LR_SCALE (sqrt), AMP (bf16), COMPILE
-# (1: --compile), W_BONE (300: the shipped models' final rigidity weight). PYTHON and EMDM_TRAIN_EXTRA as in
+# (1: --compile), W_BONE (300: the shipped models' final rigidity weight), TIME_DRAW (steps; pairs: every
+# (T, k) equally often, see train --time-draw). PYTHON and EMDM_TRAIN_EXTRA as in
 # train-all.sh (EMDM_TRAIN_EXTRA="--device cpu ..." with AMP=off COMPILE=0 for a CPU smoke test).
 set -euo pipefail
 here="$(cd "$(dirname "$0")/../.." && pwd)"
@@ -26,7 +27,7 @@ t_begin=$(date +%s)
 source "$here/scripts/gpu/common.sh"
 alpha="${ALPHA:-0.5}"
 new_loop=(--balance-alpha "$alpha" --batch "${BATCH:-256}" --lr-scale "${LR_SCALE:-sqrt}" --amp "${AMP:-bf16}"
-          --w-bone "${W_BONE:-300}")
+          --w-bone "${W_BONE:-300}" --time-draw "${TIME_DRAW:-steps}")
 [[ "${COMPILE:-1}" == 1 ]] && new_loop+=(--compile)
 common+=("${new_loop[@]}")
 declare -A flags=(

@@ -115,3 +115,14 @@ def test_weights_out_and_init_weights_continue_a_run(dataset, tmp_path, capsys):
                      "--out", str(tmp_path / "c"), "--steps", "1", "--init-weights", str(tmp_path / "a.pt")])
     err = capsys.readouterr().err.strip().splitlines()[-1]
     assert rc == 2 and "a.pt: trained with another model/task/objective (objective 'ddgan', this run 'diffusion')" in err
+
+
+def test_bf16_autocast_and_lr_scaling(dataset, tmp_path):
+    out = tmp_path / "run"
+    assert train_main(["--data", str(dataset), "--task", "action", "--out", str(out), "--steps", "2", *TINY,
+                       "--amp", "bf16", "--lr-scale", "sqrt", "--lr-g", "4e-5", "--lr-d", "1e-4"]) == 0
+    rows = read_log(out)
+    assert all(abs(float(r["loss_g"])) < 1e6 for r in rows)
+    st = torch.load(out / "ckpt.pt", weights_only=True)
+    assert st["meta"]["lr"] == {"g": 1e-5, "d": 2.5e-5, "scale": 0.25}        # (4 / 64)^½ = 0.25
+    assert all(v.dtype == torch.float32 for v in st["G"].values())           # weights stay float32 under autocast

@@ -96,3 +96,18 @@ def test_guidance_uses_one_z_and_the_zero_condition_the_trainer_drops_to():
     for c in calls:
         assert np.array_equal(c["z"][:3], c["z"][3:]) and np.array_equal(c["x"][:3], c["x"][3:])
         assert np.array_equal(c["c"][:3], np.repeat(cond[None], 3, 0)) and not c["c"][3:].any()
+
+
+@pytest.mark.parametrize("mode", ["steps", "pairs"])
+def test_time_draw_shares(mode):
+    """--time-draw: the share of training samples at each (T, k)."""
+    torch.manual_seed(0)
+    tab = O.ScheduleTables(list(SUPPORTED_STEPS), torch.device("cpu"), mode)
+    slot, k = tab.draw(200_000, torch.device("cpu"))
+    T = tab.steps_t[slot]
+    assert (k >= 0).all() and (k < T).all()
+    top10 = float(((T == 10) & (k == 8)).float().mean())            # 10 steps' t = 0.9
+    want = 1 / 60 if mode == "steps" else 1 / 30
+    assert abs(top10 - want) < 0.002, top10
+    t1 = float((k == T - 1).float().mean())                          # t = 1, every T's first sampler step
+    assert abs(t1 - (0.3625 if mode == "steps" else 0.2)) < 0.005, t1

@@ -29,8 +29,10 @@ TABLE_KEYS = ("time", "time_prev", "coef1", "coef2", "sigma", "a_cum", "s_cum", 
 class ScheduleTables:
     """Per-T schedule coefficients stacked so a batch can mix step counts: index [T slot, i]."""
 
-    def __init__(self, steps: list[int], device: torch.device):
-        self.steps = list(steps)
+    def __init__(self, steps: list[int], device: torch.device, draw: str = "steps"):
+        if draw not in ("steps", "pairs"):
+            raise ValueError(f"time draw must be 'steps' or 'pairs', got {draw!r}")
+        self.steps, self.mode = list(steps), draw
         n = max(steps) + 1
         tab = {k: torch.zeros(len(steps), n, dtype=torch.float32) for k in TABLE_KEYS}
         for i, T in enumerate(steps):
@@ -40,10 +42,16 @@ class ScheduleTables:
                 tab[k][i, : len(v)] = v
         self.tab = {k: v.to(device) for k, v in tab.items()}
         self.steps_t = torch.tensor(self.steps, dtype=torch.int64, device=device)
+        self.pair_w = self.steps_t.double() / sum(self.steps)
 
     def draw(self, b: int, device: torch.device) -> tuple[torch.Tensor, torch.Tensor]:
-        """(slot, k) per sample: T uniform over the supported step counts, k uniform in 0..T−1 (device RNG)."""
-        slot = torch.randint(len(self.steps), (b,), device=device)
+        """(slot, k) per sample, device RNG. "steps": T uniform over the supported step counts, then k uniform in
+        0..T−1 (t = 1 gets 36 % of the samples for 1,2,4,5,8,10, and 10 steps' t = 0.9 only 1.7 %); "pairs": every
+        (T, k) equally likely (t = 1: 20 %, t = 0.9: 3.3 %)."""
+        if self.mode == "pairs":
+            slot = torch.multinomial(self.pair_w, b, replacement=True)
+        else:
+            slot = torch.randint(len(self.steps), (b,), device=device)
         T = self.steps_t[slot]
         k = torch.minimum((torch.rand(b, device=device) * T).long(), T - 1)
         return slot, k
@@ -120,8 +128,8 @@ class Nets:
     amp: torch.dtype | None = None
 
     def __post_init__(self):
-        self.g_fwd = self.g_fwd or self.G
-        self.d_fwd = self.d_fwd or self.D
+        self.g_fwd = self.G if self.g_fwd is None else self.g_fwd
+        self.d_fwd = self.D if self.d_fwd is None else self.d_fwd
 
     def autocast(self, device: torch.device):
         if self.amp is None:
