@@ -296,6 +296,8 @@ class Trainer:
                 raise SystemExit(f"{self.data_dir}: --task action needs actions.json and metadata.csv")
             self.cond_dim = len(self.ms.action_labels)
         self.clips = DeviceClips(self.ms, self.device, clip_caps)
+        if a.task == "action":      # per clip, once: F.one_hot checks its indices with a host sync on every call
+            self.action_onehot = F.one_hot(self.clips.actions, self.cond_dim).float()
         self.geo = Geo(torch.from_numpy(self.ms.mean).to(self.device), torch.from_numpy(self.ms.std).to(self.device),
                        a.lambda_geo, a.w_pos, a.w_vel, a.w_foot, a.w_bone)
 
@@ -359,7 +361,7 @@ class Trainer:
         if self.args.task == "text":
             c = self.text_emb[self.clips.pick_captions(idx)]
         else:
-            c = F.one_hot(self.clips.actions[idx], self.cond_dim).float()
+            c = self.action_onehot[idx]
         keep = (torch.rand(b, device=self.device) >= self.args.cond_drop).float()
         return c * keep[:, None]
 

@@ -12,10 +12,10 @@
 #   t2m-ddim-bal  plain diffusion, x0 objective (sampled with DDIM)     candidate for public/models/diffusion-t2m-web
 # Each run first probes 50 steps (the last 25 timed, after compilation), then its cosine horizon (--steps) is
 # set to what fits its share of the budget, and it continues from the probe's checkpoint until the horizon or
-# its time limit. Settings (environment): ALPHA (0.5), BATCH (256), LR_SCALE (sqrt), AMP (bf16), COMPILE
-# (1: --compile), W_BONE (300: the shipped models' final rigidity weight), TIME_DRAW (steps; pairs: every
-# (T, k) equally often, see train --time-draw). PYTHON and EMDM_TRAIN_EXTRA as in
-# train-all.sh (EMDM_TRAIN_EXTRA="--device cpu ..." with AMP=off COMPILE=0 for a CPU smoke test).
+# its time limit. Settings (environment): ALPHA (0.5), BATCH (256), LR_SCALE (sqrt), AMP (bf16), COMPILE (0;
+# 1: --compile, if emdm.model.bench_train shows it pays on this GPU), W_BONE (300: the shipped models' final
+# rigidity weight), TIME_DRAW (steps; pairs: every (T, k) equally often, see train --time-draw). PYTHON and
+# EMDM_TRAIN_EXTRA as in train-all.sh (EMDM_TRAIN_EXTRA="--device cpu ..." with AMP=off for a CPU smoke test).
 set -euo pipefail
 here="$(cd "$(dirname "$0")/../.." && pwd)"
 data_in="${1:?usage: train-balanced.sh DATASET RUNS MINUTES [CACHE]}"
@@ -28,7 +28,7 @@ source "$here/scripts/gpu/common.sh"
 alpha="${ALPHA:-0.5}"
 new_loop=(--balance-alpha "$alpha" --batch "${BATCH:-256}" --lr-scale "${LR_SCALE:-sqrt}" --amp "${AMP:-bf16}"
           --w-bone "${W_BONE:-300}" --time-draw "${TIME_DRAW:-steps}")
-[[ "${COMPILE:-1}" == 1 ]] && new_loop+=(--compile)
+[[ "${COMPILE:-0}" == 1 ]] && new_loop+=(--compile)
 common+=("${new_loop[@]}")
 declare -A flags=(
   [t2m-bal]="--task text --lr-g 1e-4"
