@@ -41,6 +41,12 @@ export interface GenerateOptions {
   footCleanup?: boolean;
   /** replace the seeded noise (tests: reproduce a Python run with its noise) */
   noise?: NoiseSource;
+  /**
+   * Inpainting (docs/ARCHITECTURE.md "Sampling with constraints"): keep the entries of `features`
+   * (frames × featureDim, de-normalised like `Motion.features`) where `keep` (`keepMask`) is 1; the rest is
+   * generated around them. The result's features equal `features` there (up to float rounding).
+   */
+  known?: { features: Float32Array; keep: Float32Array };
 }
 
 export type { Motion };
@@ -236,6 +242,7 @@ export async function createGenerator(opts: GeneratorOptions): Promise<Generator
     const t1 = now();
     const r = await sample({
       ...choice, step, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance, signal: o.signal, onStep: o.onStep,
+      ...(o.known ? { known: o.known.features.map((v, i) => (v - mean[i % D]) / std[i % D]), keep: o.known.keep } : {}),
     });
     const t2 = now();
     const features = denormalize(r.x, mean, std);

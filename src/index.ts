@@ -12,6 +12,7 @@ export { solveIK, forwardKinematics } from './motion/ik';
 export type { IKResult } from './motion/ik';
 export { recoverJoints, denormalize } from './motion/recover';
 export { smoothJoints } from './motion/smooth';
+export { alignSegment, appendSegment, headingAt } from './motion/stitch';
 export { cleanupFootContacts, contactsFromFeatures, footSkate } from './motion/footContact';
 export { writeBVH } from './export/bvh';
 export { SeededRandom } from './sampler/rng';
@@ -19,6 +20,8 @@ export { computeSchedule, ddimScheduleFor, scheduleFor } from './sampler/schedul
 export type { DdimSchedule, Schedule } from './sampler/schedule';
 export { ddimUpdate } from './sampler/ddim';
 export { AbortError } from './sampler/sampler';
+export { FEATURE_GROUPS, GROUP_JOINTS, KeepSpecError, groupChannels, keepMask, parseKeep } from './sampler/mask';
+export type { FeatureGroup, KeepRect } from './sampler/mask';
 export type { NoiseSource, SamplerName } from './sampler/sampler';
 export { resolveBackend, webgpuAvailable } from './runtime/ort';
 export type { Backend, BackendRequest } from './runtime/ort';

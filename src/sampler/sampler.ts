@@ -2,7 +2,8 @@
  * The sampler loop (docs/ARCHITECTURE.md "Sampling" and "DDIM sampling"), independent of ONNX: the
  * step model is a function, the noise a source, so tests can run it with fixture noise. Two update
  * rules share the loop: the few-step DDGAN posterior (fresh z and ε every step) for EMDM models and
- * deterministic DDIM (z drawn then zeroed, no ε) for the plain diffusion baseline.
+ * deterministic DDIM (z drawn then zeroed, no ε) for the plain diffusion baseline. With `known` and
+ * `keep` (src/sampler/mask.ts) the loop inpaints: docs/ARCHITECTURE.md "Sampling with constraints".
  */
 import { ddimUpdate } from './ddim';
 import type { Schedule } from './schedule';
@@ -46,6 +47,14 @@ export type SampleOptions = SamplerChoice & {
   cond: Float32Array;
   /** classifier-free guidance scale; 1 (or an all-zero cond) = a single conditional pass */
   guidance: number;
+  /**
+   * Inpainting: a known motion [L, D] in NORMALISED feature space and a 0/1 mask [L, D] (`keepMask`) of its
+   * entries to keep. x_T's kept part becomes aCum[T]·known + sCum[T]·x_T and x̂0's kept part is replaced by
+   * `known` before every update, so the model sees the known motion noised to each step's level and the
+   * result equals `known` exactly where keep = 1. Give both or neither.
+   */
+  known?: Float32Array;
+  keep?: Float32Array;
   signal?: AbortSignal;
   onStep?: (done: number, total: number) => void;
   now?: () => number;
@@ -101,10 +110,12 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
   const guided = conditioned && o.guidance !== 1;
   const B = guided ? 2 : 1;
   const s = o.guidance;
+  const constraint = checkConstraint(o.known, o.keep, L, D, schedule);
 
   throwIfAborted(o.signal, 0, schedule.steps);
   const x = Float32Array.from(o.noise.normals(n, 'xT', schedule.steps));
   checkLength(x, n, 'x_T noise');
+  if (constraint) imposeNoisedKnown(x, constraint, schedule);
 
   const condB = new Float32Array(B * C);
   condB.set(cond, 0); // guided: row 1 stays zero (unconditional)
@@ -131,7 +142,9 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     modelCalls++;
     checkLength(out, B * n, `model output x0 at step ${k}`);
     if (ddim) {
-      ddimUpdate(x, guided ? guidedX0(out, n, s) : out, k, schedule);
+      const x0 = guided ? guidedX0(out, n, s) : constraint ? Float32Array.from(out) : out;
+      if (constraint) replaceKnown(x0, constraint);
+      ddimUpdate(x, x0, k, schedule);
       stepMs.push(now() - t0);
       o.onStep?.(schedule.steps - k, schedule.steps);
       continue;
@@ -143,7 +156,8 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     if (eps) checkLength(eps, n, `ε noise at step ${k}`);
     for (let i = 0; i < n; i++) {
       // guided: x0 = x0_u + s·(x0_c − x0_u), rounded to float32 like the Python reference
-      const x0 = guided ? Math.fround(out[n + i] + Math.fround(s * Math.fround(out[i] - out[n + i]))) : out[i];
+      let x0 = guided ? Math.fround(out[n + i] + Math.fround(s * Math.fround(out[i] - out[n + i]))) : out[i];
+      if (constraint && constraint.keep[i]) x0 = constraint.known[i];
       let v = c1 * x0 + c2 * x[i];
       if (eps) v += sig * eps[i];
       x[i] = v;
@@ -152,6 +166,37 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     o.onStep?.(schedule.steps - k, schedule.steps);
   }
   return { x, stepMs, modelCalls, sampler: ddim ? 'ddim' : 'ddgan' };
+}
+
+type Constraint = { known: Float32Array; keep: Float32Array };
+
+/** Both or neither; [L, D] each; keep only 0/1; known finite where kept; the marginals the noising reads. */
+function checkConstraint(known: Float32Array | undefined, keep: Float32Array | undefined, L: number, D: number, sch: Schedule): Constraint | null {
+  if (known === undefined && keep === undefined) return null;
+  if (!known || !keep) throw new Error('sampler: inpainting needs both known (the motion to keep) and keep (its mask); give both or neither');
+  checkLength(known, L * D, `known (frames ${L} × ${D})`);
+  checkLength(keep, L * D, `keep (frames ${L} × ${D})`);
+  for (let i = 0; i < keep.length; i++) {
+    if (keep[i] !== 0 && keep[i] !== 1) throw new RangeError(`sampler: keep[${i}] is ${keep[i]}; the mask holds only 0 and 1 (build it with keepMask)`);
+    if (keep[i] && !Number.isFinite(known[i])) throw new RangeError(`sampler: known is ${known[i]} at frame ${Math.floor(i / D)}, channel ${i % D}, which keep marks as kept`);
+  }
+  if (sch.aCum?.length !== sch.steps + 1 || sch.sCum?.length !== sch.steps + 1) {
+    throw new Error(`sampler: inpainting needs schedule.aCum and schedule.sCum of ${sch.steps + 1} values (see scheduleFor / computeSchedule)`);
+  }
+  return { known, keep };
+}
+
+/** x_T's kept part := aCum[T]·known + sCum[T]·x_T (float32 operations, as numpy in emdm.sample). */
+function imposeNoisedKnown(x: Float32Array, c: Constraint, sch: Schedule): void {
+  const a = Math.fround(sch.aCum[sch.steps]);
+  const sd = Math.fround(sch.sCum[sch.steps]);
+  for (let i = 0; i < x.length; i++) {
+    if (c.keep[i]) x[i] = Math.fround(Math.fround(a * c.known[i]) + Math.fround(sd * x[i]));
+  }
+}
+
+function replaceKnown(x0: Float32Array, c: Constraint): void {
+  for (let i = 0; i < x0.length; i++) if (c.keep[i]) x0[i] = c.known[i];
 }
 
 /** x0 = x0_u + s·(x0_c − x0_u) from a batched [cond, uncond] output, rounded to float32 like Python. */

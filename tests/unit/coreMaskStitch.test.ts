@@ -1,0 +1,61 @@
+// Continuing a motion (src/motion/stitch.ts): a real clip (the recover parity fixture) cut into two segments
+// whose overlap frames are the same features — as a segment inpainted from the previous one's last frames is —
+// each recovered on its own from the origin, then stitched.
+import { describe, expect, it } from 'vitest';
+import { recoverJoints } from '../../src/motion/recover';
+import { alignSegment, appendSegment, headingAt } from '../../src/motion/stitch';
+import { fixtureExists, loadCase, maxAbsDiff } from './coreFixtures';
+
+const D = 263;
+const J3 = 22 * 3;
+const real = loadCase('recover').get('features'); // (120, 263)
+const F = real.length / D;
+const rows = (f: Float32Array, a: number, b: number) => f.subarray(a * D, b * D);
+const concat = (...parts: Float32Array[]) => {
+  const out = new Float32Array(parts.reduce((n, p) => n + p.length, 0));
+  let o = 0;
+  for (const p of parts) out.set(p, (o += p.length) - p.length);
+  return out;
+};
+const wrap = (a: number) => Math.atan2(Math.sin(a), Math.cos(a));
+const rootStep = (j: Float32Array, f: number) => Math.hypot(j[(f + 1) * J3] - j[f * J3], j[(f + 1) * J3 + 2] - j[f * J3 + 2]);
+
+describe('stitching a continued segment', () => {
+  const cut = 70;
+  const overlap = 20;
+  const prev = recoverJoints(rows(real, 0, cut), cut);
+
+  it('puts a real clip cut in two back together (≤ 0.1 mm), the overlap on the previous frames', () => {
+    const whole = recoverJoints(real, F);
+    const next = recoverJoints(rows(real, cut - overlap, F), F - cut + overlap);
+    expect(Math.hypot(next[0] - whole[50 * J3], next[2] - whole[50 * J3 + 2])).toBeGreaterThan(0.1); // it starts elsewhere
+    const joined = appendSegment(prev, cut, next, F - cut + overlap, overlap);
+    expect(joined.frames).toBe(F);
+    expect(maxAbsDiff(joined.joints, whole)).toBeLessThan(1e-4);
+    const aligned = alignSegment(prev, cut, next, F - cut + overlap, overlap);
+    expect(maxAbsDiff(aligned.subarray(0, overlap * J3), prev.subarray((cut - overlap) * J3))).toBeLessThan(1e-4);
+  });
+
+  it('no jump in root position or heading at the seam when the segment goes on differently', () => {
+    // after the overlap: a generated motion's features (the emdm-t2m-web parity run), else the clip's start
+    const other = fixtureExists('model-emdm-t2m-web') ? loadCase('model-emdm-t2m-web').get('features') : rows(real, 0, 40);
+    const nextFeatures = concat(rows(real, cut - overlap, cut), other);
+    const nF = nextFeatures.length / D;
+    const next = recoverJoints(nextFeatures, nF);
+    const { joints, frames } = appendSegment(prev, cut, next, nF, overlap);
+    const seam = cut - 1; // from prev's last frame to the first new one
+    const steps = Array.from({ length: frames - 1 }, (_, f) => rootStep(joints, f)).filter((_, f) => f !== seam).sort((a, b) => a - b);
+    expect(rootStep(joints, seam)).toBeLessThanOrEqual(1.5 * steps[Math.floor(0.95 * steps.length)] + 1e-3);
+    expect(Math.abs(wrap(headingAt(joints, seam + 1) - headingAt(joints, seam)))).toBeLessThan(0.05);
+    // without stitching the new segment restarts at the origin facing +Z: a jump of both
+    const naive = concat(prev, next.subarray(overlap * J3));
+    expect(rootStep(naive, seam)).toBeGreaterThan(10 * Math.max(rootStep(joints, seam), 1e-2));
+    expect(Math.abs(wrap(headingAt(naive, seam + 1) - headingAt(naive, seam)))).toBeGreaterThan(1);
+  });
+
+  it('refuses a bad overlap or a wrong size', () => {
+    const next = recoverJoints(rows(real, 50, F), F - 50);
+    expect(() => alignSegment(prev, cut, next, F - 50, 0)).toThrow(/overlap must be an integer in 1…70/);
+    expect(() => alignSegment(prev, cut + 1, next, F - 50, 5)).toThrow(/prev: 4620 values, expected frames \(71\) × 22 × 3/);
+  });
+});
