@@ -12,6 +12,7 @@ import pytest
 from emdm import manifest as mf
 from emdm import paths
 from emdm import skeleton as sk
+from emdm.eval import models_report
 from emdm.motion.features import recover_joints
 from emdm.sample import denormalise, make_condition, onnx_step, read_meanstd, sample_features
 
@@ -43,6 +44,11 @@ def _model_variants() -> list[tuple[str, str]]:
     except mf.ManifestError:
         models = {}
     return [(m, v) for m in MODELS for v in ["fp32", *models.get(m, {}).get("variants", {})]]
+
+
+def entry_file(label: str, entry: dict) -> str:
+    """The ONNX file a label ("<name>" or "<name>.<variant>"; model names have no dot) stands for."""
+    return models_report.onnx_files(entry)[label.split(".", 1)[1] if "." in label else "fp32"]
 
 
 def shipped(name: str) -> dict:
@@ -127,6 +133,12 @@ def test_bone_lengths_match_the_reference_skeleton(generated):
                 worst_rel, msg = rel.max(), (f"condition {i}, seed {seed}: bone to {sk.JOINT_NAMES[worst]} off by "
                                              f"{rel.max():.1%} (median over frames)")
     check(name, "bones", worst_rel <= 0.05, msg)
+    # docs/MODELS.md's bone table (docs/results/json/models-bones.json) is this measurement of the shipped files
+    row = next((r for r in models_report.load_bones()["rows"] if r["file"] == entry_file(name, entry)), None)
+    fix = "run `python -m emdm.eval.models_report measure` then `python -m emdm.eval.models_report`"
+    assert row is not None, f"{name}: not in {models_report.BONES_JSON.name}; {fix}"
+    assert abs(row["worst"] - worst_rel) < 1e-6, (f"{name}: {models_report.BONES_JSON.name} says worst bone "
+                                                  f"{row['worst']:.2%}, measured {worst_rel:.2%}; {fix}")
 
 
 def test_feet_on_the_floor_on_contact_frames(generated):
