@@ -73,6 +73,8 @@ def load_results(json_dir: Path | str) -> list[dict]:
     json_dir = Path(json_dir)
     out = []
     for path in sorted(json_dir.glob("*.json")):
+        if path.name.startswith("models-"):     # docs/MODELS.md's inputs (emdm.eval.models_report)
+            continue
         try:
             r = json.loads(path.read_text())
         except json.JSONDecodeError as e:
@@ -398,6 +400,18 @@ def missing(results: list[dict]) -> list[str]:
     return out
 
 
+def clips_per_row(rows: list[dict]) -> str:
+    """Which rows used how many test clips, e.g. '892 (Real motion, EMDM (10 steps)); 128 (Real motion, ...)',
+    largest count first: rows measured on a subset are compared with the real row of the same count."""
+    by_n: dict = {}
+    for r in sorted(rows, key=_sort_key):
+        names = by_n.setdefault(r.get("n", "?"), [])
+        if r["name"] not in names:
+            names.append(r["name"])
+    order = sorted(by_n, key=lambda n: -n if isinstance(n, int) else 0)
+    return "; ".join(f"{n} ({', '.join(by_n[n])})" for n in order)
+
+
 def _describe(results: list[dict]) -> list[str]:
     lines = []
     seen = set()
@@ -409,8 +423,9 @@ def _describe(results: list[dict]) -> list[str]:
         if key in seen:
             continue
         seen.add(key)
+        same = [q for q in results if q["task"] == r["task"] and json.dumps(q.get("dataset", {}), sort_keys=True) == key[1]]
         lines.append(f"- {r['task']}: dataset `{d.get('name', '?')}` ({d.get('description', '')}), split "
-                     f"`{d.get('split', '?')}`, {r.get('n', '?')} clips evaluated (≥ 40 frames); evaluator: "
+                     f"`{d.get('split', '?')}`, clips evaluated (≥ 40 frames): {clips_per_row(same)}; evaluator: "
                      f"{r.get('evaluator', {}).get('summary', '?')}")
     hw = sorted({r.get("hardware", "?") for r in results if r["task"] != "coverage"})
     if hw:
