@@ -69,3 +69,14 @@ def test_bad_json_is_named(tmp_path):
     (tmp_path / "json" / "broken.json").write_text('{"schema": 1, "task": "text", "name": "x"}')
     with pytest.raises(R.ReportError, match="broken.json: missing field 'kind'"):
         R.load_results(tmp_path / "json")
+
+
+def test_setup_line_states_the_clips_of_each_row_and_models_json_is_left_out(tmp_path):
+    _write(tmp_path, "real.json", _text("Real motion", "real", None, [0.01] * 3, kind="real"))
+    _write(tmp_path, "real-subset.json", {**_text("Real motion", "real", None, [0.1] * 3, kind="real"), "n": 32})
+    _write(tmp_path, "emdm10.json", {**_text("EMDM", "emdm", 10, [0.4] * 3), "n": 32})
+    _write(tmp_path, "models-bones.json", {"schema": 1, "task": "models-bones", "rows": []})   # MODELS.md's input
+    out = tmp_path / "RESULTS.md"
+    assert R.main(["--results", str(tmp_path), "--out", str(out)]) == 0
+    setup = out.read_text().split("## Setup")[1].split("\n\n")[1]
+    assert "clips evaluated (≥ 40 frames): 96 (Real motion); 32 (Real motion, EMDM)" in setup
