@@ -1,6 +1,6 @@
 /**
- * Continuing a motion with a new segment (docs/ARCHITECTURE.md "Sampling with constraints", issue 14 "Root
- * handling"). Python twin: `emdm.motion.stitch`.
+ * Continuing a motion with a new segment, and pinning a kept later part in place (docs/ARCHITECTURE.md
+ * "Sampling with constraints", issue 14 "Root handling"). Python twin: `emdm.motion.stitch`.
  *
  * ```ts
  * // next was generated with its first `overlap` frames kept from prev's last `overlap` frames (keepMask)
@@ -71,4 +71,56 @@ export function appendSegment(prev: ArrayLike<number>, prevFrames: number, next:
   joints.set(prev, 0);
   joints.set(aligned.subarray(overlap * J * 3), prevFrames * J * 3);
   return { joints, frames };
+}
+
+/** The recovered root of frame t of (frames × dim) features: x/z (metres) and heading θ (radians, about +Y,
+ * as `recoverJoints` integrates it; equal to `headingAt` of the recovered joints for a real clip). */
+export function rootPose(features: ArrayLike<number>, frames: number, t: number, dim = 263): { x: number; z: number; heading: number } {
+  if (features.length !== frames * dim) throw new RangeError(`rootPose: features has ${features.length} values, expected frames (${frames}) × ${dim}`);
+  if (!Number.isInteger(t) || t < 0 || t >= frames) throw new RangeError(`rootPose: frame ${t} outside 0…${frames - 1}`);
+  let a = 0;
+  let x = 0;
+  let z = 0;
+  for (let k = 1; k <= t; k++) {
+    a += features[(k - 1) * dim];
+    const th = -2 * a;
+    const vx = features[(k - 1) * dim + 1];
+    const vz = features[(k - 1) * dim + 2];
+    x += Math.cos(th) * vx + Math.sin(th) * vz;
+    z += -Math.sin(th) * vx + Math.cos(th) * vz;
+  }
+  return { x, z, heading: -2 * a };
+}
+
+/**
+ * Pin a kept later part of a motion to its place in the world (in-betweening, loops): features whose frames
+ * `free` = [start, end) were generated between kept frames integrate to a different root path, so the kept
+ * frames from `at` on would land elsewhere than in the known motion. This spreads the missing turn evenly over
+ * the free frames' angular velocity [0], then the missing x/z travel over their linear velocity [1:3] (each in
+ * its frame's root frame), so that `rootPose(result, at)` equals `target` (e.g. `rootPose(known, at)`). Only the
+ * free frames' root channels change; a new array is returned.
+ */
+export function pinRoot(features: ArrayLike<number>, frames: number, free: [number, number], at: number, target: { x: number; z: number; heading: number }, dim = 263): Float32Array {
+  const [s, e] = free;
+  if (!Number.isInteger(s) || !Number.isInteger(e) || s < 0 || e <= s || !Number.isInteger(at) || e > at || at >= frames) {
+    throw new RangeError(`pinRoot: free frames [${s}, ${e}) must be a non-empty range ending at or before frame ${at}, which must be < ${frames}`);
+  }
+  const out = Float32Array.from(features);
+  const n = e - s;
+  const now = rootPose(out, frames, at, dim);
+  const dTheta = Math.atan2(Math.sin(target.heading - now.heading), Math.cos(target.heading - now.heading));
+  for (let k = s; k < e; k++) out[k * dim] += -dTheta / 2 / n; // θ = −2·Σ f[·,0]
+  const turned = rootPose(out, frames, at, dim);
+  const dx = (target.x - turned.x) / n;
+  const dz = (target.z - turned.z) / n;
+  let a = 0;
+  for (let k = 0; k < e; k++) {
+    a += out[k * dim]; // a_{k+1}: f[k, 1:3] is rotated by θ_{k+1} = −2·a_{k+1}
+    if (k < s) continue;
+    const th = -2 * a;
+    // world step (dx, dz) in the root frame of k+1: Ry(−θ)
+    out[k * dim + 1] += Math.cos(th) * dx - Math.sin(th) * dz;
+    out[k * dim + 2] += Math.sin(th) * dx + Math.cos(th) * dz;
+  }
+  return out;
 }

@@ -15,7 +15,7 @@ from emdm.motion import mask_fixture
 from emdm.motion.features import heading_angles, recover_joints
 from emdm.motion.ik_fixture import read_case_array
 from emdm.motion.mask import GROUPS, KeepRect, KeepSpecError, group_channels, keep_mask, parse_keep
-from emdm.motion.stitch import align_segment, append_segment
+from emdm.motion.stitch import align_segment, append_segment, pin_root, root_pose
 from emdm.sample import SampleError, main as sample_main, onnx_step, sample_features
 
 PARITY = mask_fixture.PARITY_DIR
@@ -238,3 +238,24 @@ def test_align_segment_refuses_a_bad_overlap(real_features):
     _, prev, nxt = _split(real_features)
     with pytest.raises(ValueError, match="overlap must be an integer in 1..70"):
         align_segment(prev, nxt, 0)
+
+
+def test_pin_root_puts_the_kept_end_of_an_in_between_back_in_place(real_features):
+    """In-betweening keeps frames 0..29 and 70..119 of a real clip; the middle is another motion (a generated one
+    when its parity fixture is there). Its root path moves the kept end by metres; pinned, the kept frames decode
+    to the clip's joints (≤ 1 mm) and the free frames' root steps stay those of a real clip."""
+    other = read_case_array(PARITY, "model-emdm-t2m-web", "features")[:40] \
+        if (PARITY / "model-emdm-t2m-web.json").is_file() else real_features[::-1][:40]
+    inb = real_features.copy()
+    inb[30:70] = other
+    want = recover_joints(real_features)
+    assert np.abs(recover_joints(inb)[70:] - want[70:]).max() > 0.1
+    pinned = pin_root(inb, (30, 70), 70, root_pose(real_features, 70))
+    got = recover_joints(pinned)
+    assert np.abs(got[:30] - want[:30]).max() == 0 and np.abs(got[70:] - want[70:]).max() < 1e-3
+    changed = np.argwhere(pinned != inb)
+    assert set(changed[:, 1]) <= {0, 1, 2} and changed[:, 0].min() >= 30 and changed[:, 0].max() < 70
+    steps = np.linalg.norm(np.diff(got[:, 0, [0, 2]], axis=0), axis=1)
+    assert steps.max() <= 1.5 * np.percentile(np.linalg.norm(np.diff(want[:, 0, [0, 2]], axis=0), axis=1), 95)
+    with pytest.raises(ValueError, match=r"free frames \[30, 71\) must be a non-empty range ending at or before frame 70"):
+        pin_root(inb, (30, 71), 70, (0.0, 0.0, 0.0))

@@ -3,7 +3,7 @@
 // each recovered on its own from the origin, then stitched.
 import { describe, expect, it } from 'vitest';
 import { recoverJoints } from '../../src/motion/recover';
-import { alignSegment, appendSegment, headingAt } from '../../src/motion/stitch';
+import { alignSegment, appendSegment, headingAt, pinRoot, rootPose } from '../../src/motion/stitch';
 import { fixtureExists, loadCase, maxAbsDiff } from './coreFixtures';
 
 const D = 263;
@@ -57,5 +57,38 @@ describe('stitching a continued segment', () => {
     const next = recoverJoints(rows(real, 50, F), F - 50);
     expect(() => alignSegment(prev, cut, next, F - 50, 0)).toThrow(/overlap must be an integer in 1…70/);
     expect(() => alignSegment(prev, cut + 1, next, F - 50, 5)).toThrow(/prev: 4620 values, expected frames \(71\) × 22 × 3/);
+  });
+});
+
+describe('pinning the kept end of an in-between', () => {
+  it('puts the kept frames back where the known motion has them (≤ 1 mm); only the free frames\' root channels change', () => {
+    // keep frames 0..29 and 70..119 of the real clip; the middle is another motion
+    const other = fixtureExists('model-emdm-t2m-web') ? loadCase('model-emdm-t2m-web').get('features').subarray(0, 40 * D) : rows(real, 0, 40);
+    const inb = concat(rows(real, 0, 30), other, rows(real, 70, F));
+    const want = recoverJoints(real, F);
+    expect(maxAbsDiff(recoverJoints(inb, F).subarray(70 * J3), want.subarray(70 * J3))).toBeGreaterThan(0.1);
+    const pinned = pinRoot(inb, F, [30, 70], 70, rootPose(real, F, 70));
+    const got = recoverJoints(pinned, F);
+    expect(maxAbsDiff(got.subarray(0, 30 * J3), want.subarray(0, 30 * J3))).toBe(0);
+    expect(maxAbsDiff(got.subarray(70 * J3), want.subarray(70 * J3))).toBeLessThan(1e-3);
+    for (let i = 0; i < inb.length; i++) {
+      if (pinned[i] !== inb[i]) {
+        expect(i % D).toBeLessThan(3);
+        expect(Math.floor(i / D)).toBeGreaterThanOrEqual(30);
+        expect(Math.floor(i / D)).toBeLessThan(70);
+      }
+    }
+    const realSteps = Array.from({ length: F - 1 }, (_, f) => rootStep(want, f)).sort((a, b) => a - b);
+    for (let f = 0; f < F - 1; f++) expect(rootStep(got, f)).toBeLessThanOrEqual(1.5 * realSteps[Math.floor(0.95 * realSteps.length)]);
+    expect(() => pinRoot(inb, F, [30, 71], 70, { x: 0, z: 0, heading: 0 })).toThrow(/free frames \[30, 71\) must be a non-empty range ending at or before frame 70/);
+  });
+
+  it('rootPose is the root recoverJoints integrates', () => {
+    const j = recoverJoints(real, F);
+    for (const t of [0, 1, 37, F - 1]) {
+      const p = rootPose(real, F, t);
+      expect(Math.abs(p.x - j[t * J3]) + Math.abs(p.z - j[t * J3 + 2])).toBeLessThan(1e-5);
+      expect(Math.abs(wrap(p.heading - headingAt(j, t)))).toBeLessThan(1e-3);
+    }
   });
 });

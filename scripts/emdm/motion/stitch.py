@@ -1,5 +1,5 @@
-"""Continuing a motion with a new segment (docs/ARCHITECTURE.md "Sampling with constraints"); the TypeScript
-twin is ``src/motion/stitch.ts``.
+"""Continuing a motion with a new segment, and pinning a kept later part in place (docs/ARCHITECTURE.md
+"Sampling with constraints"); the TypeScript twin is ``src/motion/stitch.ts``.
 
     nxt = recover_joints(next_features)                 # first `overlap` frames kept from prev's last ones
     whole = append_segment(prev_joints, nxt, overlap)   # (F_prev + F_next − overlap, 22, 3)
@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from emdm.motion.features import _check_joints, heading_angles, rot_y
+from emdm.motion.features import _check_joints, heading_angles, recover_root, rot_y
 
 
 def align_segment(prev: np.ndarray, nxt: np.ndarray, overlap: int) -> np.ndarray:
@@ -36,3 +36,32 @@ def append_segment(prev: np.ndarray, nxt: np.ndarray, overlap: int) -> np.ndarra
     """``prev`` followed by ``nxt`` aligned by ``align_segment`` without its first ``overlap`` frames."""
     aligned = align_segment(prev, nxt, overlap)
     return np.concatenate([np.asarray(prev, np.float32), aligned[overlap:]])
+
+
+def root_pose(features: np.ndarray, t: int) -> tuple[float, float, float]:
+    """(x, z, heading θ) of frame t's recovered root (``recover_root``)."""
+    theta, root = recover_root(np.asarray(features)[: t + 1])
+    return float(root[t, 0]), float(root[t, 2]), float(theta[t])
+
+
+def pin_root(features: np.ndarray, free: tuple[int, int], at: int, target: tuple[float, float, float]) -> np.ndarray:
+    """Features whose root reaches ``target`` = (x, z, heading) at frame ``at`` (e.g. ``root_pose(known, at)``):
+    the missing turn is spread evenly over the free frames' [0], then the missing x/z travel over their [1:3]
+    (each in its frame's root frame). Only the free frames [start, end) change; end ≤ at (``src/motion/stitch.ts``
+    ``pinRoot``)."""
+    f = np.array(features, dtype=np.float32)
+    s, e = free
+    if not (0 <= s < e <= at < len(f)):
+        raise ValueError(f"pin_root: free frames [{s}, {e}) must be a non-empty range ending at or before frame {at}, "
+                         f"which must be < {len(f)}")
+    n = e - s
+    _, _, heading = root_pose(f, at)
+    d_theta = np.arctan2(np.sin(target[2] - heading), np.cos(target[2] - heading))
+    f[s:e, 0] += np.float32(-d_theta / 2 / n)                      # θ = −2·Σ f[·, 0]
+    x, z, _ = root_pose(f, at)
+    step = np.array([(target[0] - x) / n, 0.0, (target[1] - z) / n])
+    theta, _ = recover_root(f[: e + 1])
+    local = rot_y(-theta[s + 1:e + 1], np.broadcast_to(step, (n, 3)))   # f[k, 1:3] is turned by θ_{k+1}
+    f[s:e, 1] += local[:, 0].astype(np.float32)
+    f[s:e, 2] += local[:, 2].astype(np.float32)
+    return f
