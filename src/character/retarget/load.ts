@@ -1,0 +1,373 @@
+/**
+ * Loading a user's character (.glb, .vrm, or .gltf with its files) safely.
+ *
+ * ```ts
+ * const ch = await loadCharacter([{ name: file.name, data: await file.arrayBuffer() }, ...otherDroppedFiles]);
+ * scene.add(ch.root);                                  // the character, at rest
+ * ch.mapping, ch.unmapped                              // our 22 joints → its bones (src/character/retarget/mapping.ts)
+ * ```
+ *
+ * - Nothing from the file is executed and nothing is fetched: before three's GLTFLoader sees it, the
+ *   document is packed into ONE binary glTF whose buffers and images all live in its BIN chunk. A
+ *   buffer or image URI is accepted only as a data: URI or as the name of one of the given files;
+ *   anything else (http:, file:, blob:, an absolute path, a file that was not given) is refused with
+ *   reason 'external-resource'. The packed document (`json`, `bin`) is what export/characterGlb.ts
+ *   writes back, with the animation added.
+ * - Errors are CharacterLoadError with a `reason`: 'no-file', 'too-large' (> 100 MB in all),
+ *   'corrupt' (not glTF 2.0, bad GLB chunks, views outside buffers, a loader failure), 'unsupported'
+ *   (a required extension that needs a decoder: Draco, meshopt, KTX2), 'external-resource', 'no-skin'
+ *   (no skinned mesh), 'not-humanoid' (the mapping lacks REQUIRED_JOINTS; `bones` and `mapping` are
+ *   attached so a mapping editor can offer the rest).
+ * - VRM 0.x / 1.0: the humanoid extension gives the bone mapping (node indices), read from the JSON.
+ */
+import type { Object3D } from 'three';
+import { GLTFLoader, type GLTF } from 'three/addons/loaders/GLTFLoader.js';
+import { JOINT_NAMES, type JointName } from '../../skeleton';
+import { type BoneInfo, type BoneMapping, MappingError, autoMap, validateMapping } from './mapping';
+import { bonesOf } from './retarget';
+
+export const MAX_CHARACTER_BYTES = 100 * 1024 * 1024;
+
+export type CharacterLoadReason = 'no-file' | 'too-large' | 'corrupt' | 'unsupported' | 'external-resource' | 'no-skin' | 'not-humanoid';
+
+export class CharacterLoadError extends Error {
+  constructor(
+    readonly reason: CharacterLoadReason,
+    readonly file: string,
+    message: string,
+    readonly bones?: BoneInfo[],
+    readonly mapping?: BoneMapping,
+  ) {
+    super(`${file}: ${message}`);
+    this.name = 'CharacterLoadError';
+  }
+}
+
+export interface CharacterFile {
+  name: string;
+  data: ArrayBuffer | Uint8Array;
+}
+
+/** The glTF JSON, loosely typed (only what we read or rewrite). */
+// eslint-disable-next-line @typescript-eslint/no-explicit-any
+export type GltfJson = Record<string, any>;
+
+export interface LoadedCharacter {
+  /** the main file's name */
+  name: string;
+  /** the scene (add it to yours); at rest as loaded */
+  root: Object3D;
+  gltf: GLTF;
+  /** the packed document (everything in `bin`), what the GLB export starts from */
+  json: GltfJson;
+  bin: Uint8Array;
+  /** the bones (skin joints) and their parents */
+  bones: Object3D[];
+  boneInfos: BoneInfo[];
+  /** glTF node index of each loaded object that came from a node */
+  nodeIndex: Map<Object3D, number>;
+  mapping: BoneMapping;
+  unmapped: JointName[];
+  mappingSource: 'vrm' | 'names' | 'user';
+  vrm: '0.x' | '1.0' | null;
+  /** milliseconds spent in loadCharacter */
+  loadMs: number;
+}
+
+export interface LoadCharacterOptions {
+  /** a saved or edited mapping, used instead of the automatic one (validated) */
+  mapping?: BoneMapping;
+  /** default MAX_CHARACTER_BYTES */
+  maxBytes?: number;
+  /** decode textures (default: where the environment can, i.e. a browser) */
+  textures?: boolean;
+}
+
+const MAIN = /\.(glb|vrm|gltf)$/i;
+const GLB_MAGIC = 0x46546c67;
+const CHUNK_JSON = 0x4e4f534a;
+const CHUNK_BIN = 0x004e4942;
+const NEEDS_DECODER: Record<string, string> = {
+  KHR_draco_mesh_compression: 'Draco-compressed meshes',
+  EXT_meshopt_compression: 'meshopt-compressed buffers',
+  KHR_texture_basisu: 'KTX2/Basis textures',
+  EXT_texture_webp: 'WebP-only textures',
+};
+
+const bytesOf = (d: ArrayBuffer | Uint8Array) => (d instanceof Uint8Array ? d : new Uint8Array(d));
+
+/** Split a GLB into its JSON and BIN chunks (throws CharacterLoadError 'corrupt'). */
+export function readGlb(data: Uint8Array, file: string): { json: GltfJson; bin: Uint8Array | null } {
+  const bad = (why: string) => new CharacterLoadError('corrupt', file, `not a valid binary glTF: ${why}`);
+  if (data.byteLength < 20) throw bad(`only ${data.byteLength} bytes`);
+  const dv = new DataView(data.buffer, data.byteOffset, data.byteLength);
+  if (dv.getUint32(0, true) !== GLB_MAGIC) throw bad("it does not start with 'glTF'");
+  if (dv.getUint32(4, true) !== 2) throw bad(`container version ${dv.getUint32(4, true)}, expected 2`);
+  const total = dv.getUint32(8, true);
+  if (total > data.byteLength) throw bad(`the header says ${total} bytes, the file has ${data.byteLength} (truncated?)`);
+  let off = 12;
+  let json: GltfJson | null = null;
+  let bin: Uint8Array | null = null;
+  while (off + 8 <= total) {
+    const len = dv.getUint32(off, true);
+    const type = dv.getUint32(off + 4, true);
+    if (off + 8 + len > total) throw bad(`chunk at byte ${off} runs past the end`);
+    const body = data.subarray(off + 8, off + 8 + len);
+    if (type === CHUNK_JSON && !json) json = parseJson(new TextDecoder().decode(body), file);
+    else if (type === CHUNK_BIN && !bin) bin = body;
+    off += 8 + len;
+  }
+  if (!json) throw bad('no JSON chunk');
+  return { json, bin };
+}
+
+function parseJson(text: string, file: string): GltfJson {
+  let json: unknown;
+  try {
+    json = JSON.parse(text);
+  } catch (e) {
+    throw new CharacterLoadError('corrupt', file, `its glTF JSON does not parse (${(e as Error).message})`);
+  }
+  if (!json || typeof json !== 'object' || Array.isArray(json)) throw new CharacterLoadError('corrupt', file, 'its glTF JSON is not an object');
+  const version = String((json as GltfJson).asset?.version ?? '');
+  if (!version.startsWith('2.')) throw new CharacterLoadError('corrupt', file, `glTF version '${version || 'missing'}', only glTF 2.0 is read`);
+  return json as GltfJson;
+}
+
+function decodeDataUri(uri: string, file: string): { bytes: Uint8Array; mime: string } {
+  const m = /^data:([^,;]*)((?:;[^,;]*)*?)(;base64)?,(.*)$/s.exec(uri);
+  if (!m) throw new CharacterLoadError('corrupt', file, `malformed data: URI (${uri.slice(0, 40)}…)`);
+  try {
+    if (m[3]) {
+      const s = atob(m[4]);
+      const out = new Uint8Array(s.length);
+      for (let i = 0; i < s.length; i++) out[i] = s.charCodeAt(i);
+      return { bytes: out, mime: m[1] };
+    }
+    return { bytes: new TextEncoder().encode(decodeURIComponent(m[4])), mime: m[1] };
+  } catch {
+    throw new CharacterLoadError('corrupt', file, `undecodable data: URI (${uri.slice(0, 40)}…)`);
+  }
+}
+
+const MIME: Record<string, string> = { png: 'image/png', jpg: 'image/jpeg', jpeg: 'image/jpeg', webp: 'image/webp', ktx2: 'image/ktx2' };
+
+/**
+ * One self-contained document: every buffer and image moved into a single BIN buffer. `resolve`
+ * gives the bytes of a relative URI among the given files (or null).
+ */
+export function packDocument(json: GltfJson, glbBin: Uint8Array | null, file: string, resolve: (uri: string) => Uint8Array | null): { json: GltfJson; bin: Uint8Array } {
+  const doc: GltfJson = JSON.parse(JSON.stringify(json));
+  const external = (uri: string, what: string): Uint8Array => {
+    if (uri.startsWith('data:')) return decodeDataUri(uri, file).bytes;
+    if (/^[a-z][a-z0-9+.-]*:/i.test(uri) || uri.startsWith('/') || uri.startsWith('\\')) {
+      throw new CharacterLoadError('external-resource', file, `${what} points to '${uri}': nothing is fetched from outside the files you give`);
+    }
+    const got = resolve(uri);
+    if (!got) throw new CharacterLoadError('external-resource', file, `${what} refers to '${uri}', which is not among the files given; drop it together with ${file}`);
+    return got;
+  };
+  const parts: Uint8Array[] = [];
+  let length = 0;
+  const append = (b: Uint8Array): number => {
+    const at = length;
+    parts.push(b);
+    length += b.byteLength;
+    const pad = (4 - (length % 4)) % 4;
+    if (pad) {
+      parts.push(new Uint8Array(pad));
+      length += pad;
+    }
+    return at;
+  };
+  const buffers: GltfJson[] = Array.isArray(doc.buffers) ? doc.buffers : [];
+  const bufferStart = buffers.map((b, i) => {
+    let bytes: Uint8Array;
+    if (b.uri === undefined) {
+      if (i !== 0 || !glbBin) throw new CharacterLoadError('corrupt', file, `buffer ${i} has no uri and there is no GLB BIN chunk for it`);
+      bytes = glbBin;
+    } else bytes = external(String(b.uri), `buffer ${i}`);
+    if (!(Number.isInteger(b.byteLength) && b.byteLength <= bytes.byteLength)) {
+      throw new CharacterLoadError('corrupt', file, `buffer ${i} declares ${b.byteLength} bytes but holds ${bytes.byteLength}`);
+    }
+    return { at: append(bytes.subarray(0, b.byteLength)), len: b.byteLength as number };
+  });
+  const views: GltfJson[] = Array.isArray(doc.bufferViews) ? doc.bufferViews : [];
+  views.forEach((v, i) => {
+    const b = bufferStart[v.buffer];
+    const off = v.byteOffset ?? 0;
+    if (!b || !(Number.isInteger(off) && Number.isInteger(v.byteLength) && off >= 0 && off + v.byteLength <= b.len)) {
+      throw new CharacterLoadError('corrupt', file, `bufferView ${i} lies outside its buffer`);
+    }
+    v.buffer = 0;
+    v.byteOffset = b.at + off;
+  });
+  (Array.isArray(doc.images) ? doc.images : []).forEach((img: GltfJson, i: number) => {
+    if (img.uri === undefined) return;
+    const uri = String(img.uri);
+    const bytes = external(uri, `image ${i}`);
+    const mime = uri.startsWith('data:') ? decodeDataUri(uri, file).mime : MIME[uri.split('.').pop()!.toLowerCase()] ?? 'image/png';
+    views.push({ buffer: 0, byteOffset: append(bytes), byteLength: bytes.byteLength });
+    img.bufferView = views.length - 1;
+    img.mimeType = img.mimeType ?? mime;
+    delete img.uri;
+  });
+  if (views.length) doc.bufferViews = views;
+  const bin = new Uint8Array(length);
+  let o = 0;
+  for (const p of parts) {
+    bin.set(p, o);
+    o += p.byteLength;
+  }
+  doc.buffers = length ? [{ byteLength: length }] : [];
+  if (!length) delete doc.buffers;
+  return { json: doc, bin };
+}
+
+/** A binary glTF of a JSON document and its BIN buffer. */
+export function writeGlb(json: GltfJson, bin: Uint8Array): Uint8Array {
+  const text = new TextEncoder().encode(JSON.stringify(json));
+  const jsonLen = Math.ceil(text.byteLength / 4) * 4;
+  const binLen = Math.ceil(bin.byteLength / 4) * 4;
+  const total = 12 + 8 + jsonLen + (binLen ? 8 + binLen : 0);
+  const out = new Uint8Array(total);
+  const dv = new DataView(out.buffer);
+  dv.setUint32(0, GLB_MAGIC, true);
+  dv.setUint32(4, 2, true);
+  dv.setUint32(8, total, true);
+  dv.setUint32(12, jsonLen, true);
+  dv.setUint32(16, CHUNK_JSON, true);
+  out.set(text, 20);
+  out.fill(0x20, 20 + text.byteLength, 20 + jsonLen);
+  if (binLen) {
+    dv.setUint32(20 + jsonLen, binLen, true);
+    dv.setUint32(24 + jsonLen, CHUNK_BIN, true);
+    out.set(bin, 28 + jsonLen);
+  }
+  return out;
+}
+
+/** The JSON given to the loader when textures are not decoded: materials keep their factors. */
+function withoutTextures(json: GltfJson): GltfJson {
+  const doc: GltfJson = JSON.parse(JSON.stringify(json));
+  const strip = (o: unknown): void => {
+    if (!o || typeof o !== 'object') return;
+    for (const [k, v] of Object.entries(o as GltfJson)) {
+      if (/Texture$/.test(k) && v && typeof v === 'object' && 'index' in (v as GltfJson)) delete (o as GltfJson)[k];
+      else strip(v);
+    }
+  };
+  (doc.materials ?? []).forEach(strip);
+  delete doc.textures;
+  delete doc.images;
+  delete doc.samplers;
+  if (Array.isArray(doc.extensionsRequired)) doc.extensionsRequired = doc.extensionsRequired.filter((e: string) => e !== 'KHR_texture_transform');
+  return doc;
+}
+
+/** VRM humanoid (0.x or 1.0) → VRM bone name → node index. */
+function vrmHumanoid(json: GltfJson): { version: '0.x' | '1.0'; bones: Record<string, number> } | null {
+  const v1 = json.extensions?.VRMC_vrm?.humanoid?.humanBones;
+  if (v1 && typeof v1 === 'object') {
+    const bones: Record<string, number> = {};
+    for (const [k, b] of Object.entries(v1 as GltfJson)) if (Number.isInteger(b?.node)) bones[k] = b.node;
+    return { version: '1.0', bones };
+  }
+  const v0 = json.extensions?.VRM?.humanoid?.humanBones;
+  if (Array.isArray(v0)) {
+    const bones: Record<string, number> = {};
+    for (const b of v0) if (typeof b?.bone === 'string' && Number.isInteger(b?.node)) bones[b.bone] = b.node;
+    return { version: '0.x', bones };
+  }
+  return null;
+}
+
+export async function loadCharacter(files: CharacterFile[], opts: LoadCharacterOptions = {}): Promise<LoadedCharacter> {
+  const t0 = performance.now();
+  const main = files.find((f) => MAIN.test(f.name));
+  if (!main) throw new CharacterLoadError('no-file', files.map((f) => f.name).join(', ') || '(nothing)', 'no .glb, .gltf or .vrm file among the files given');
+  const file = main.name;
+  const maxBytes = opts.maxBytes ?? MAX_CHARACTER_BYTES;
+  const totalBytes = files.reduce((a, f) => a + f.data.byteLength, 0);
+  if (totalBytes > maxBytes) {
+    throw new CharacterLoadError('too-large', file, `${(totalBytes / 1048576).toFixed(1)} MB given; characters up to ${(maxBytes / 1048576).toFixed(0)} MB are read`);
+  }
+  const data = bytesOf(main.data);
+  const isGlb = data.byteLength >= 4 && new DataView(data.buffer, data.byteOffset, 4).getUint32(0, true) === GLB_MAGIC;
+  const { json: raw, bin: glbBin } = isGlb ? readGlb(data, file) : { json: parseJson(new TextDecoder().decode(data), file), bin: null };
+
+  const required: string[] = Array.isArray(raw.extensionsRequired) ? raw.extensionsRequired : [];
+  const needs = required.filter((e) => e in NEEDS_DECODER);
+  if (needs.length) {
+    throw new CharacterLoadError('unsupported', file, `it requires ${needs.map((e) => `${e} (${NEEDS_DECODER[e]})`).join(', ')}, which this page does not decode; export it without that compression`);
+  }
+  const byName = new Map(files.map((f) => [f.name, bytesOf(f.data)]));
+  const resolve = (uri: string): Uint8Array | null => {
+    let name: string;
+    try {
+      name = decodeURIComponent(uri);
+    } catch {
+      name = uri;
+    }
+    if (name.split(/[\\/]/).includes('..')) return null;
+    return byName.get(name) ?? byName.get(name.split(/[\\/]/).pop()!) ?? null;
+  };
+  const { json, bin } = packDocument(raw, glbBin, file, resolve);
+
+  const nodes: GltfJson[] = Array.isArray(json.nodes) ? json.nodes : [];
+  if (!Array.isArray(json.skins) || !json.skins.length || !nodes.some((n) => Number.isInteger(n?.skin) && Number.isInteger(n?.mesh))) {
+    throw new CharacterLoadError('no-skin', file, 'it has no skinned mesh (no skin on a mesh node), so there are no bones to move; export the character with its armature/skin');
+  }
+
+  const textures = opts.textures ?? (typeof document !== 'undefined' || typeof createImageBitmap !== 'undefined');
+  const forLoader = writeGlb(textures ? json : withoutTextures(json), bin);
+  let gltf: GLTF;
+  try {
+    gltf = await new GLTFLoader().parseAsync(forLoader.buffer as ArrayBuffer, '');
+  } catch (e) {
+    throw new CharacterLoadError('corrupt', file, `three.js could not read it (${(e as Error)?.message ?? e})`);
+  }
+  const root = gltf.scene;
+  const nodeIndex = new Map<Object3D, number>();
+  const byNode = new Map<number, Object3D>();
+  for (const [obj, assoc] of gltf.parser.associations as Map<Object3D, { nodes?: number }>) {
+    if (assoc && Number.isInteger(assoc.nodes) && (obj as { isObject3D?: boolean }).isObject3D) {
+      nodeIndex.set(obj, assoc.nodes!);
+      if (!byNode.has(assoc.nodes!)) byNode.set(assoc.nodes!, obj);
+    }
+  }
+  // unnamed nodes get 'node<index>' so a bone map can name them
+  for (const [obj, n] of nodeIndex) if (!obj.name) obj.name = `node${n}`;
+  // bones: every skin joint (GLTFLoader makes them Bones) under the scene
+  const { objects: bones, infos: boneInfos } = bonesOf(root);
+  if (!bones.length) throw new CharacterLoadError('no-skin', file, 'its skins have no joints in the scene');
+
+  const vrm = vrmHumanoid(json);
+  let mapping: BoneMapping;
+  let mappingSource: LoadedCharacter['mappingSource'];
+  if (opts.mapping) {
+    mapping = { ...opts.mapping };
+    mappingSource = 'user';
+  } else {
+    const vrmNames: Record<string, string> = {};
+    if (vrm) for (const [k, n] of Object.entries(vrm.bones)) if (byNode.get(n)) vrmNames[k] = byNode.get(n)!.name;
+    const auto = autoMap(boneInfos, vrm ? vrmNames : undefined);
+    mapping = auto.mapping;
+    mappingSource = auto.source;
+  }
+  try {
+    validateMapping(mapping, boneInfos);
+  } catch (e) {
+    if (!(e instanceof MappingError)) throw e;
+    const found = Object.keys(mapping).length;
+    throw new CharacterLoadError('not-humanoid', file,
+      `${opts.mapping ? 'the saved bone map does not fit' : `only ${found} of our 22 joints were recognised among its ${bones.length} bones`}: ${e.message}`,
+      boneInfos, mapping);
+  }
+  const unmapped = JOINT_NAMES.filter((j) => mapping[j] === undefined);
+  return {
+    name: file, root, gltf, json, bin, bones, boneInfos, nodeIndex, mapping, unmapped, mappingSource,
+    vrm: vrm?.version ?? null, loadMs: performance.now() - t0,
+  };
+}
+

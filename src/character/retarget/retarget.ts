@@ -1,0 +1,463 @@
+/**
+ * Retargeting: our generated motion (22 joint positions per frame) → an AnimationClip for a user's
+ * character, whatever its rest pose (T or A), bone rolls and axes.
+ *
+ * ```ts
+ * const { clip } = retargetMotion(character.root, character.mapping, { joints, frames, fps, contacts }, manifest.skeleton);
+ * new AnimationMixer(character.root).clipAction(clip).play();
+ * ```
+ *
+ * Everything is computed in the frame of `root` (the loaded scene; the character must be in its rest
+ * pose, as loaded). Per frame:
+ *  1. Our IK (src/motion/ik.ts: solveIK) gives every joint's global rotation G_j relative to our rest
+ *     T-pose, with the twist taken from body planes.
+ *  2. Facing: C = the rotation about Y that turns our rest "left" (l_hip − r_hip) onto the character's,
+ *     so a character modelled facing −Z (VRM 0.x) walks where it faces.
+ *  3. Limbs and spine (a joint j with a mapped joint k further down our chain): rest alignment
+ *     S_j = the smallest rotation turning the character's rest direction bone(j)→bone(k) onto ours
+ *     (C·(rest_k − rest_j)); the bone's world rotation is Δ_j · R_j (R_j: its rest world rotation) with
+ *     Δ_j = C·G_j·C⁻¹·S_j, then swung (smallest rotation) so bone(j)→bone(k) points exactly along our
+ *     joints' C·(P_k − P_j): the direction comes from our positions, the twist from our IK.
+ *     Pelvis and chest (spine3) use two directions: hips across + up, and up + collars (or shoulders)
+ *     across. A mapped joint with nothing mapped below (e.g. an ankle without toes) turns with G_j.
+ *  4. Every other bone (fingers, twist, hair, our leaves: head, hands, toes) keeps its rest LOCAL
+ *     rotation, so it follows its parent rigidly. Local rotation = (parent world)⁻¹ · world.
+ *  5. Root: the pelvis bone's position is ours scaled by s = character leg / our leg (hip→knee→ankle):
+ *     horizontally s·P, vertically so that the character's hip joints stand s·(our hip height above the
+ *     ankles) above its rest ankle height.
+ *  6. Feet: on our contact frames (the four contact channels, threshold 0.5; a run is a stretch of
+ *     frames where the ankle or the ball of the foot is in contact) the character's ankle, or its toe
+ *     bone when the run is mostly on the ball of the foot, is held at the run's mean position, lowered
+ *     or raised so that the lower of heel (ankle) and ball (toe) is at its rest height (on the floor) on
+ *     average over the run; a two-bone IK on thigh and shin (keeping the knee's bend plane) moves the
+ *     ankle there and the foot keeps its world rotation. The pelvis first takes the weighted mean of the
+ *     feet's moves (a planted foot alone is then held by moving the root, with no limb turning). Where the leg is nearly straight, so that
+ *     holding the foot would swing thigh or shin by more than `maxPinDeg` (8°), only the part of the
+ *     move that stays within it is made: limbs keep following our motion, the foot may then slide a little. Over `blend` frames on both sides the run's correction at its first/last frame fades
+ *     out (not a blend towards the target: the input motion, cleaned by src/motion/footContact.ts,
+ *     has made that transition already).
+ */
+import { AnimationClip, Matrix4, type Object3D, PropertyBinding, Quaternion, QuaternionKeyframeTrack, Vector3, VectorKeyframeTrack } from 'three';
+import { solveIK } from '../../motion/ik';
+import { type V3, alignFrames, quatFromMat, twoBoneIK } from '../../motion/math3';
+import { JOINT_NAMES, PARENTS, type JointName, type SkeletonLike, standardJoints } from '../../skeleton';
+import { restPositions } from '../rig';
+import { type BoneInfo, type BoneMapping, MappingError, validateMapping } from './mapping';
+
+export interface RetargetMotion {
+  /** frames × 22 × 3 world joint positions (SMPL order), metres, Y up */
+  joints: Float32Array;
+  frames: number;
+  fps: number;
+  /** frames × 4 foot contacts (l_ankle, l_foot, r_ankle, r_foot), e.g. contactsFromFeatures(features); none: no pinning */
+  contacts?: Float32Array | null;
+}
+
+export interface RetargetOptions {
+  /** contact threshold (default 0.5) */
+  threshold?: number;
+  /** frames over which a pinned foot fades in/out (default 3) */
+  blend?: number;
+  /** the most a foot pin may turn thigh or shin away from our motion's direction, degrees (default 8) */
+  maxPinDeg?: number;
+  /** clip name (default 'emdm') */
+  name?: string;
+}
+
+export interface RetargetResult {
+  clip: AnimationClip;
+  frames: number;
+  fps: number;
+  /** the animated objects (quaternion tracks), in hierarchy order; bones[0] is the pelvis bone */
+  bones: Object3D[];
+  /** per animated object: frames × 4 local quaternions (x, y, z, w) */
+  rotations: Float32Array[];
+  /** frames × 3: the pelvis bone's local position */
+  rootPositions: Float32Array;
+  /** leg length ratio (character / ours) applied to the root translation */
+  scale: number;
+  /** yaw (radians about +Y) from our facing to the character's rest facing */
+  yaw: number;
+  /** number of frames on which a foot was pinned (both feet counted) */
+  pinnedFrames: number;
+}
+
+/** The bones (isBone objects) under `root` with parent indices (nearest bone ancestor; −1: none). */
+export function bonesOf(root: Object3D): { objects: Object3D[]; infos: BoneInfo[] } {
+  const objects: Object3D[] = [];
+  root.traverse((o) => {
+    if ((o as { isBone?: boolean }).isBone) objects.push(o);
+  });
+  const index = new Map(objects.map((o, i) => [o, i]));
+  const infos = objects.map((o) => {
+    let p = o.parent;
+    while (p && !index.has(p)) p = p.parent;
+    return { name: o.name, parent: p ? index.get(p)! : -1 };
+  });
+  return { objects, infos };
+}
+
+const v = (a: V3) => new Vector3(a[0], a[1], a[2]);
+const arr = (a: Vector3): V3 => [a.x, a.y, a.z];
+/** The smallest rotation taking direction a onto direction b. */
+const swing = (a: Vector3, b: Vector3) => new Quaternion().setFromUnitVectors(a.clone().normalize(), b.clone().normalize());
+const quatOfM3 = (m: number[]) => {
+  const q = quatFromMat(m);
+  return new Quaternion(q[0], q[1], q[2], q[3]);
+};
+
+/** Our joint → the next joint down its chain whose direction drives it (PRIMARY child). */
+const PRIMARY: Partial<Record<JointName, JointName>> = {
+  pelvis: 'spine1', spine1: 'spine2', spine2: 'spine3', spine3: 'neck', neck: 'head',
+  l_hip: 'l_knee', l_knee: 'l_ankle', l_ankle: 'l_foot', r_hip: 'r_knee', r_knee: 'r_ankle', r_ankle: 'r_foot',
+  l_collar: 'l_shoulder', l_shoulder: 'l_elbow', l_elbow: 'l_wrist', r_collar: 'r_shoulder', r_shoulder: 'r_elbow', r_elbow: 'r_wrist',
+};
+
+export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: RetargetMotion, skeleton: SkeletonLike, opts: RetargetOptions = {}): RetargetResult {
+  const { joints, frames, fps } = motion;
+  const threshold = opts.threshold ?? 0.5;
+  const blend = opts.blend ?? 3;
+  const maxPin = ((opts.maxPinDeg ?? 8) * Math.PI) / 180;
+  if (!(frames >= 1)) throw new RangeError('retargetMotion: the motion has no frames');
+  if (!(fps > 0)) throw new RangeError(`retargetMotion: fps must be > 0, got ${fps}`);
+  const I = standardJoints(skeleton, 'retargetMotion');
+  const J = skeleton.joints.length;
+  if (joints.length !== frames * J * 3) throw new RangeError(`retargetMotion: joints has ${joints.length} values, expected ${frames} × ${J} × 3`);
+  if (motion.contacts && motion.contacts.length !== frames * 4) throw new RangeError(`retargetMotion: contacts has ${motion.contacts.length} values, expected ${frames} × 4`);
+  for (let i = 0; i < joints.length; i++) {
+    if (!Number.isFinite(joints[i])) throw new RangeError(`retargetMotion: joint value ${i} is ${joints[i]}; the motion must be finite`);
+  }
+  const { objects, infos } = bonesOf(root);
+  validateMapping(mapping, infos);
+  const byName = new Map<string, Object3D>();
+  objects.forEach((o) => {
+    if (!byName.has(o.name)) byName.set(o.name, o);
+  });
+  const bone = (j: JointName): Object3D | undefined => (mapping[j] !== undefined ? byName.get(mapping[j]!) : undefined);
+  const mapped = (j: JointName) => mapping[j] !== undefined;
+
+  // ---- rest pose, in the frame of `root`
+  root.updateMatrixWorld(true);
+  const rootInv = root.matrixWorld.clone().invert();
+  const relWorld = (o: Object3D) => new Matrix4().multiplyMatrices(rootInv, o.matrixWorld);
+  const pelvisBone = bone('pelvis')!;
+  const subtree: Object3D[] = [];
+  pelvisBone.traverse((o) => subtree.push(o)); // parents before children
+  const slot = new Map(subtree.map((o, i) => [o, i]));
+  const parentSlot = subtree.map((o) => (o === pelvisBone ? -1 : slot.get(o.parent!)!));
+  const restLocalQ = subtree.map((o) => o.quaternion.clone());
+  const restLocalP = subtree.map((o) => o.position.clone());
+  const restLocalS = subtree.map((o) => o.scale.clone());
+  const restWorldM = subtree.map((o) => relWorld(o));
+  const restWorldQ = restWorldM.map((m) => new Quaternion().setFromRotationMatrix(new Matrix4().extractRotation(m)));
+  const restWorldP = restWorldM.map((m) => new Vector3().setFromMatrixPosition(m));
+  const pelvisParentM = pelvisBone.parent ? relWorld(pelvisBone.parent) : new Matrix4();
+  const pelvisParentInv = pelvisParentM.clone().invert();
+  const pelvisParentQ = new Quaternion().setFromRotationMatrix(new Matrix4().extractRotation(pelvisParentM));
+  const S = (j: JointName): number => slot.get(bone(j)!)!;
+  const restPos = (j: JointName) => restWorldP[S(j)];
+
+  // ---- our side: rest (reference T-pose) and the IK's global rotations
+  const ours = restPositions(skeleton).map((p) => p.clone());
+  const ik = solveIK(joints, frames, skeleton);
+  const P = (f: number, j: JointName) => new Vector3(joints[(f * J + I(j)) * 3], joints[(f * J + I(j)) * 3 + 1], joints[(f * J + I(j)) * 3 + 2]);
+
+  // ---- facing: C turns our rest left (+X) onto the character's
+  const yawOf = (a: Vector3) => Math.atan2(-a.z, a.x);
+  const charAcross = restPos('l_hip').clone().sub(restPos('r_hip'));
+  const ourAcross = ours[I('l_hip')].clone().sub(ours[I('r_hip')]);
+  const yaw = yawOf(charAcross) - yawOf(ourAcross);
+  const C = new Quaternion().setFromAxisAngle(new Vector3(0, 1, 0), yaw);
+  const Cinv = C.clone().invert();
+
+  // ---- what drives each mapped joint
+  const descendant = (j: JointName): JointName | null => {
+    for (let k = PRIMARY[j]; k; k = PRIMARY[k]) if (mapped(k)) return k;
+    return null;
+  };
+  type Drive =
+    | { kind: 'frame'; j: JointName; a: [JointName, JointName]; b: [JointName, JointName] }
+    | { kind: 'limb'; j: JointName; k: JointName; S: Quaternion }
+    | { kind: 'turn'; j: JointName; S: Quaternion };
+  const drives: Drive[] = [];
+  const restAlign = new Map<JointName, Quaternion>();
+  JOINT_NAMES.forEach((j) => {
+    if (!mapped(j)) return;
+    const k = descendant(j);
+    if (j === 'pelvis') {
+      const up = k ?? 'neck';
+      if (!mapped(up)) throw new MappingError('bone map: the pelvis needs a mapped spine joint, neck or head above it');
+      drives.push({ kind: 'frame', j, a: ['r_hip', 'l_hip'], b: [j, up] });
+      restAlign.set(j, new Quaternion());
+      return;
+    }
+    if (j === 'spine3' && k) {
+      const across: [JointName, JointName] | null = mapped('l_collar') && mapped('r_collar') ? ['r_collar', 'l_collar']
+        : mapped('l_shoulder') && mapped('r_shoulder') ? ['r_shoulder', 'l_shoulder'] : null;
+      if (across) {
+        drives.push({ kind: 'frame', j, a: [j, k], b: across });
+        restAlign.set(j, new Quaternion());
+        return;
+      }
+    }
+    // nearest mapped ancestor's rest alignment (for joints with nothing mapped below)
+    let a = skeletonParent(j);
+    while (a && !restAlign.has(a)) a = skeletonParent(a);
+    if (k) {
+      const e = restPos(k).clone().sub(restPos(j));
+      const d = ours[I(k)].clone().sub(ours[I(j)]).applyQuaternion(C);
+      if (e.lengthSq() < 1e-12) throw new MappingError(`bone map: ${j} → '${mapping[j]}' and ${k} → '${mapping[k]}' are at the same place in the rest pose; map ${k} to a bone further along the limb`);
+      const Sj = swing(e, d);
+      restAlign.set(j, Sj);
+      drives.push({ kind: 'limb', j, k, S: Sj });
+    } else if (PRIMARY[j]) {
+      const Sa = a ? restAlign.get(a)! : new Quaternion();
+      restAlign.set(j, Sa);
+      drives.push({ kind: 'turn', j, S: Sa });
+    }
+    // our leaves (head, wrists, toes) keep their rest local rotation
+  });
+  const animated = new Set(drives.map((d) => S(d.j)));
+
+  // ---- root translation
+  const legLen = (hip: Vector3, knee: Vector3, ankle: Vector3) => hip.distanceTo(knee) + knee.distanceTo(ankle);
+  const side = (s: 'l' | 'r') => [`${s}_hip`, `${s}_knee`, `${s}_ankle`] as JointName[];
+  const charLeg = (['l', 'r'] as const).reduce((acc, s) => acc + legLen(...(side(s).map((j) => restPos(j)) as [Vector3, Vector3, Vector3])), 0) / 2;
+  const offLen = (j: JointName) => Math.hypot(...(ik.offsets[I(j)] as V3));
+  const ourLeg = (offLen('l_knee') + offLen('l_ankle') + offLen('r_knee') + offLen('r_ankle')) / 2;
+  const scale = charLeg / ourLeg;
+  const contact = (f: number, c: number) => (motion.contacts ? motion.contacts[f * 4 + c] > threshold : false);
+  const ankleHeights: number[] = [];
+  for (let f = 0; f < frames; f++) {
+    if (contact(f, 0)) ankleHeights.push(P(f, 'l_ankle').y);
+    if (contact(f, 2)) ankleHeights.push(P(f, 'r_ankle').y);
+  }
+  if (!ankleHeights.length) for (let f = 0; f < frames; f++) ankleHeights.push(Math.min(P(f, 'l_ankle').y, P(f, 'r_ankle').y));
+  ankleHeights.sort((a, b) => a - b);
+  const ho = ankleHeights[Math.floor((ankleHeights.length - 1) * (motion.contacts && ankleHeights.length ? 0.5 : 0.05))];
+  const hc = (restPos('l_ankle').y + restPos('r_ankle').y) / 2;
+  const ourPelvisAboveHips = -(ik.offsets[I('l_hip')][1] + ik.offsets[I('r_hip')][1]) / 2;
+  const charPelvisAboveHips = restPos('pelvis').y - (restPos('l_hip').y + restPos('r_hip').y) / 2;
+  const pelvisRest = restPos('pelvis');
+  const rootWorld = (f: number) => {
+    const p = P(f, 'pelvis');
+    const h = new Vector3(p.x * scale, 0, p.z * scale).applyQuaternion(C);
+    return new Vector3(pelvisRest.x + h.x, hc + scale * (p.y - ourPelvisAboveHips - ho) + charPelvisAboveHips, pelvisRest.z + h.z);
+  };
+
+  // ---- per frame: Δ (world delta rotation) of every animated slot
+  const ourGlobal = (f: number): Quaternion[] => {
+    const G: Quaternion[] = new Array(J);
+    for (let j = 0; j < J; j++) {
+      const o = (f * J + j) * 4;
+      const L = new Quaternion(ik.quats[o], ik.quats[o + 1], ik.quats[o + 2], ik.quats[o + 3]);
+      const p = skeleton.parents[j];
+      G[j] = p < 0 ? L : G[p].clone().multiply(L);
+    }
+    return G;
+  };
+  const deltas = (f: number): Map<number, Quaternion> => {
+    const G = ourGlobal(f);
+    const out = new Map<number, Quaternion>();
+    const dir = (a: JointName, b: JointName) => P(f, b).sub(P(f, a)).applyQuaternion(C);
+    const rdir = (a: JointName, b: JointName) => restPos(b).clone().sub(restPos(a));
+    for (const d of drives) {
+      let D: Quaternion;
+      if (d.kind === 'frame') {
+        // primary a (exact), secondary b (its part across a)
+        D = quatOfM3(alignFrames(arr(rdir(...d.a)), arr(rdir(...d.b)), arr(dir(...d.a)), arr(dir(...d.b))));
+      } else {
+        D = C.clone().multiply(G[I(d.j)]).multiply(Cinv).multiply(d.S);
+        if (d.kind === 'limb') {
+          const cur = rdir(d.j, d.k).applyQuaternion(D);
+          D = swing(cur, dir(d.j, d.k)).multiply(D);
+        }
+      }
+      out.set(S(d.j), D);
+    }
+    return out;
+  };
+
+  /** Local rotations of the subtree (and world matrices when `withPositions`) for one frame. */
+  const pose = (delta: Map<number, Quaternion>, rootP: Vector3, withPositions: boolean) => {
+    const n = subtree.length;
+    const W: Quaternion[] = new Array(n);
+    const L: Quaternion[] = new Array(n);
+    const M: Matrix4[] = withPositions ? new Array(n) : [];
+    for (let i = 0; i < n; i++) {
+      const pW = parentSlot[i] < 0 ? pelvisParentQ : W[parentSlot[i]];
+      const D = delta.get(i);
+      if (D) {
+        W[i] = D.clone().multiply(restWorldQ[i]);
+        L[i] = pW.clone().invert().multiply(W[i]).normalize();
+      } else {
+        L[i] = restLocalQ[i];
+        W[i] = pW.clone().multiply(L[i]);
+      }
+      if (withPositions) {
+        const pos = i === 0 ? rootP.clone().applyMatrix4(pelvisParentInv) : restLocalP[i];
+        const local = new Matrix4().compose(pos, L[i], restLocalS[i]);
+        M[i] = new Matrix4().multiplyMatrices(parentSlot[i] < 0 ? pelvisParentM : M[parentSlot[i]], local);
+      }
+    }
+    return { L, M };
+  };
+  const posOf = (M: Matrix4[], j: JointName) => new Vector3().setFromMatrixPosition(M[S(j)]);
+
+  const allDeltas: Map<number, Quaternion>[] = [];
+  const rootPs: Vector3[] = [];
+  for (let f = 0; f < frames; f++) {
+    allDeltas.push(deltas(f));
+    rootPs.push(rootWorld(f));
+  }
+
+  // ---- feet: pin the ankle on contact frames (two-bone IK on thigh and shin)
+  let pinnedFrames = 0;
+  if (motion.contacts) {
+    const legs = (['l', 'r'] as const).map((s, c) => ({ s, c: c * 2 }));
+    const ankles = legs.map(() => [] as Vector3[]);
+    const toes = legs.map(() => [] as Vector3[]);
+    for (let f = 0; f < frames; f++) {
+      const { M } = pose(allDeltas[f], rootPs[f], true);
+      legs.forEach(({ s }, li) => {
+        ankles[li].push(posOf(M, `${s}_ankle`));
+        if (mapped(`${s}_foot`)) toes[li].push(posOf(M, `${s}_foot`));
+      });
+    }
+    // per frame: how far the ankle should move (in a run: onto the run's target; in the fades: the
+    // run's correction at its first/last frame, scaled down, so a fade our own clean-up already made
+    // is not made twice)
+    const plans = legs.map(({ s, c }, li) => {
+      const move: (Vector3 | null)[] = new Array(frames).fill(null);
+      const wgt = new Float64Array(frames);
+      const restA = restPos(`${s}_ankle`).y;
+      const restT = mapped(`${s}_foot`) ? restPos(`${s}_foot`).y : null;
+      const hasToe = restT !== null;
+      let start = -1;
+      for (let f = 0; f <= frames; f++) {
+        const on = f < frames && (contact(f, c) || (hasToe && contact(f, c + 1)));
+        if (on && start < 0) start = f;
+        if (!on && start >= 0) {
+          const e = f - 1;
+          // the point held still: the ankle (heel down) unless the run is mostly on the ball of the foot
+          let heel = 0;
+          for (let g = start; g <= e; g++) heel += contact(g, c) ? 1 : 0;
+          const pts = !hasToe || heel * 2 >= e - start + 1 ? ankles[li] : toes[li];
+          const T = new Vector3();
+          const low = { a: 0, t: 0 };
+          for (let g = start; g <= e; g++) {
+            T.add(pts[g]);
+            low.a += ankles[li][g].y - restA;
+            if (hasToe) low.t += toes[li][g].y - restT!;
+          }
+          const n = e - start + 1;
+          T.divideScalar(n);
+          // on the floor: the lower of heel (ankle) and ball (toe) at its rest height, on average
+          T.y -= Math.min(low.a / n, hasToe ? low.t / n : Infinity);
+          for (let g = Math.max(0, start - blend); g <= Math.min(frames - 1, e + blend); g++) {
+            const w = g < start ? 1 - (start - g) / (blend + 1) : g > e ? 1 - (g - e) / (blend + 1) : 1;
+            if (w > wgt[g]) {
+              wgt[g] = w;
+              const edge = g < start ? start : g > e ? e : g;
+              move[g] = T.clone().sub(pts[edge]).multiplyScalar(w);
+            }
+          }
+          start = -1;
+        }
+      }
+      return { s, move, wgt };
+    });
+    // the root takes the weighted mean of the feet's moves (no limb turns for that); the legs the rest
+    for (let f = 0; f < frames; f++) {
+      const corr = new Vector3();
+      let sw = 0;
+      for (const p of plans) {
+        if (p.wgt[f] > 0) {
+          corr.addScaledVector(p.move[f]!, p.wgt[f]);
+          sw += p.wgt[f];
+        }
+      }
+      if (!(sw > 0)) continue;
+      corr.divideScalar(sw);
+      rootPs[f].add(corr);
+      for (const p of plans) if (p.wgt[f] > 0) p.move[f] = p.move[f]!.clone().sub(corr);
+    }
+    for (let f = 0; f < frames; f++) {
+      if (!plans.some((p) => p.wgt[f] > 0)) continue;
+      const { M } = pose(allDeltas[f], rootPs[f], true);
+      for (const { s, move, wgt } of plans) {
+        if (!(wgt[f] > 0)) continue;
+        pinnedFrames++;
+        const H = posOf(M, `${s}_hip`);
+        const K = posOf(M, `${s}_knee`);
+        const A = posOf(M, `${s}_ankle`);
+        // the largest part of the move (all of it where possible) that turns thigh and shin by at
+        // most maxPinDeg: near a straight leg a small move of the ankle would swing the whole leg
+        const solve = (t: number) => {
+          const r = twoBoneIK(arr(H), arr(A.clone().addScaledVector(move[f]!, t)), arr(K), H.distanceTo(K), K.distanceTo(A));
+          const q1 = swing(K.clone().sub(H), v(r.knee).sub(H));
+          const shin = A.clone().sub(K).applyQuaternion(q1);
+          const q2 = swing(shin, v(r.ankle).sub(v(r.knee)));
+          const turn = Math.max(K.clone().sub(H).angleTo(v(r.knee).sub(H)), A.clone().sub(K).angleTo(v(r.ankle).sub(v(r.knee))));
+          return { q1, q2, turn };
+        };
+        let best = solve(1);
+        if (best.turn > maxPin) {
+          let lo = 0;
+          let hi = 1;
+          best = solve(0);
+          for (let it = 0; it < 10; it++) {
+            const mid = (lo + hi) / 2;
+            const m = solve(mid);
+            if (m.turn > maxPin) hi = mid;
+            else {
+              lo = mid;
+              best = m;
+            }
+          }
+        }
+        const { q1, q2 } = best;
+        // thigh and shin turn; every other driven bone (the ankle's too) keeps its world rotation
+        const d = allDeltas[f];
+        const hipSlot = S(`${s}_hip`);
+        const kneeSlot = S(`${s}_knee`);
+        d.set(hipSlot, q1.clone().multiply(d.get(hipSlot)!));
+        d.set(kneeSlot, q2.clone().multiply(q1).multiply(d.get(kneeSlot)!));
+      }
+    }
+  }
+
+  // ---- tracks
+  const tracked = subtree.map((_, i) => i).filter((i) => animated.has(i) || allDeltas.some((d) => d.has(i)));
+  if (!tracked.includes(0)) tracked.unshift(0);
+  const rotations = tracked.map(() => new Float32Array(frames * 4));
+  const rootPositions = new Float32Array(frames * 3);
+  for (let f = 0; f < frames; f++) {
+    const { L } = pose(allDeltas[f], rootPs[f], false);
+    tracked.forEach((i, t) => {
+      const q = L[i];
+      const o = f * 4;
+      const r = rotations[t];
+      const flip = f > 0 && r[o - 4] * q.x + r[o - 3] * q.y + r[o - 2] * q.z + r[o - 1] * q.w < 0 ? -1 : 1;
+      r.set([q.x * flip, q.y * flip, q.z * flip, q.w * flip], o);
+    });
+    const lp = rootPs[f].clone().applyMatrix4(pelvisParentInv);
+    rootPositions.set([lp.x, lp.y, lp.z], f * 3);
+  }
+  for (const r of rotations) for (let i = 0; i < r.length; i++) if (!Number.isFinite(r[i])) throw new Error('retargetMotion: a bone rotation came out non-finite (degenerate rest pose?)');
+
+  const bones = tracked.map((i) => subtree[i]);
+  const names = new Map<string, number>();
+  root.traverse((o) => names.set(o.name, (names.get(o.name) ?? 0) + 1));
+  const target = (o: Object3D) => (o.name && names.get(o.name) === 1 && PropertyBinding.sanitizeNodeName(o.name) === o.name ? o.name : o.uuid);
+  const times = Array.from({ length: frames }, (_, f) => f / fps);
+  const tracks = [new VectorKeyframeTrack(`${target(pelvisBone)}.position`, times, Array.from(rootPositions))];
+  bones.forEach((o, t) => tracks.push(new QuaternionKeyframeTrack(`${target(o)}.quaternion`, times, Array.from(rotations[t]))));
+  const clip = new AnimationClip(opts.name ?? 'emdm', (frames - 1) / fps, tracks);
+  return { clip, frames, fps, bones, rotations, rootPositions, scale, yaw, pinnedFrames };
+}
+
+function skeletonParent(j: JointName): JointName | null {
+  const p = PARENTS[JOINT_NAMES.indexOf(j)];
+  return p >= 0 ? JOINT_NAMES[p] : null;
+}

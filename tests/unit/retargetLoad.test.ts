@@ -1,0 +1,107 @@
+// Loading users' characters (src/character/retarget/load.ts): bad files get a typed error that says what
+// is wrong; nothing outside the given files is fetched; .gltf + .bin + images are packed into one GLB.
+import { describe, expect, it } from 'vitest';
+import { CharacterLoadError, type CharacterFile, loadCharacter, readGlb, writeGlb } from '../../src/character/retarget/load';
+import { mappingToJSON, mappingFromJSON } from '../../src/character/retarget/mapping';
+import { manifestSkeleton } from './coreFixtures';
+import { RIGS, buildRigGlb } from './retargetRigs';
+
+const sk = manifestSkeleton();
+const mixamo = buildRigGlb(sk, RIGS[0]);
+
+async function reason(files: CharacterFile[], opts = {}): Promise<[string, string]> {
+  try {
+    await loadCharacter(files, opts);
+  } catch (e) {
+    expect(e).toBeInstanceOf(CharacterLoadError);
+    return [(e as CharacterLoadError).reason, (e as Error).message];
+  }
+  throw new Error('loaded without an error');
+}
+
+/** The rig's document with `edit` applied, as a GLB. */
+function edited(edit: (json: Record<string, any>) => void): Uint8Array {
+  const { json, bin } = readGlb(mixamo, 'x');
+  edit(json);
+  return writeGlb(json, bin!);
+}
+
+describe('loading a character', () => {
+  it('reads a GLB: bones, automatic map, node indices, load time', async () => {
+    const ch = await loadCharacter([{ name: 'hero.glb', data: mixamo }]);
+    expect(ch.name).toBe('hero.glb');
+    expect(ch.bones.length).toBeGreaterThan(50); // 22 + fingers + ends
+    expect(ch.mapping.pelvis).toBe('mixamorigHips'); // three's loader drops ':' from names
+    expect(ch.unmapped).toEqual([]);
+    expect(ch.vrm).toBeNull();
+    expect(ch.nodeIndex.get(ch.bones[0])).toBeTypeOf('number');
+    expect(ch.loadMs).toBeGreaterThan(0);
+  });
+
+  it('refuses what is too large, corrupt, compressed, unskinned or not a humanoid, saying so', async () => {
+    expect(await reason([{ name: 'a.txt', data: new Uint8Array(4) }])).toEqual(['no-file', expect.stringMatching(/no \.glb, \.gltf or \.vrm/)]);
+    expect(await reason([{ name: 'big.glb', data: mixamo }], { maxBytes: 1000 })).toEqual(['too-large', expect.stringMatching(/big\.glb: 0\.0 MB given; characters up to 0 MB/)]);
+    expect((await reason([{ name: 'cut.glb', data: mixamo.slice(0, 200) }]))[1]).toMatch(/cut\.glb: not a valid binary glTF: the header says \d+ bytes, the file has 200/);
+    expect(await reason([{ name: 'junk.vrm', data: new TextEncoder().encode('hello, I am not a model') }])).toEqual(['corrupt', expect.stringMatching(/does not parse/)]);
+    expect((await reason([{ name: 'old.gltf', data: new TextEncoder().encode('{"asset":{"version":"1.0"}}') }]))[1]).toMatch(/glTF version '1\.0', only glTF 2\.0/);
+    expect((await reason([{ name: 'views.glb', data: edited((j) => (j.bufferViews[0].byteLength = 1e9)) }]))).toEqual(['corrupt', expect.stringMatching(/bufferView 0 lies outside its buffer/)]);
+    expect(await reason([{ name: 'draco.glb', data: edited((j) => (j.extensionsRequired = ['KHR_draco_mesh_compression'])) }])).toEqual(['unsupported', expect.stringMatching(/Draco.*export it without/)]);
+    expect(await reason([{ name: 'statue.glb', data: edited((j) => delete j.nodes.find((n: any) => n.skin !== undefined).skin) }])).toEqual(['no-skin', expect.stringMatching(/no skinned mesh/)]);
+    // a snake: five bones in a row, nothing humanoid about the names
+    const snake = edited((j) => j.nodes.forEach((n: any, i: number) => (n.name = `segment${i}`)));
+    const [r, msg] = await reason([{ name: 'snake.glb', data: snake }]);
+    expect(r).toBe('not-humanoid');
+    expect(msg).toMatch(/only 0 of our 22 joints were recognised among its \d+ bones: .*pelvis, l_hip/);
+  });
+
+  it('a not-humanoid error carries the bones, and a hand-made map (saved JSON) makes it load', async () => {
+    const renamed = edited((j) => j.nodes.forEach((n: any, i: number) => (n.name = `segment${i}`)));
+    let err: CharacterLoadError | null = null;
+    try {
+      await loadCharacter([{ name: 'odd.glb', data: renamed }]);
+    } catch (e) {
+      err = e as CharacterLoadError;
+    }
+    expect(err?.bones?.length).toBeGreaterThan(22);
+    // the user maps each joint to the node that played it in the original file
+    const orig = await loadCharacter([{ name: 'hero.glb', data: mixamo }]);
+    const byIndex = new Map([...orig.nodeIndex].map(([o, i]) => [o.name, i]));
+    const map = Object.fromEntries(Object.entries(orig.mapping).map(([j, name]) => [j, `segment${byIndex.get(name!)}`]));
+    const ch = await loadCharacter([{ name: 'odd.glb', data: renamed }], { mapping: mappingFromJSON(mappingToJSON(map)) });
+    expect(ch.mappingSource).toBe('user');
+    expect(ch.unmapped).toEqual([]);
+    // a saved map that no longer fits says so
+    const [r, msg] = await reason([{ name: 'odd.glb', data: renamed }], { mapping: { ...map, head: 'nothing' } });
+    expect(r).toBe('not-humanoid');
+    expect(msg).toMatch(/the saved bone map does not fit: bone map: head → 'nothing': the character has no bone of that name/);
+  });
+
+  it('.gltf with its .bin: packed from the given files; remote and missing URIs are refused, nothing fetched', async () => {
+    const { json, bin } = readGlb(mixamo, 'x');
+    const gltf = (uri: string) => new TextEncoder().encode(JSON.stringify({ ...json, buffers: [{ ...json.buffers[0], uri }] }));
+    const ch = await loadCharacter([{ name: 'rig.gltf', data: gltf('rig%20data.bin') }, { name: 'rig data.bin', data: bin! }]);
+    expect(ch.unmapped).toEqual([]);
+    expect(ch.json.buffers).toEqual([{ byteLength: ch.bin.byteLength }]);
+    expect(await reason([{ name: 'rig.gltf', data: gltf('https://example.com/rig.bin') }])).toEqual(['external-resource', expect.stringMatching(/buffer 0 points to 'https:\/\/example\.com\/rig\.bin': nothing is fetched/)]);
+    expect(await reason([{ name: 'rig.gltf', data: gltf('/etc/rig.bin') }])).toEqual(['external-resource', expect.any(String)]);
+    expect(await reason([{ name: 'rig.gltf', data: gltf('../rig.bin') }, { name: 'rig.bin', data: bin! }])).toEqual(['external-resource', expect.stringMatching(/not among the files given/)]);
+    expect(await reason([{ name: 'rig.gltf', data: gltf('rig.bin') }])).toEqual(['external-resource', expect.stringMatching(/refers to 'rig\.bin', which is not among the files given; drop it together with rig\.gltf/)]);
+    // an image by URI: packed into the BIN chunk (the loader never sees a URI)
+    const png = new Uint8Array([137, 80, 78, 71, 13, 10, 26, 10]);
+    const withImage = { ...json, buffers: [{ ...json.buffers[0], uri: 'rig.bin' }], images: [{ uri: 'skin.png' }] };
+    const packed = await loadCharacter([{ name: 'rig.gltf', data: new TextEncoder().encode(JSON.stringify(withImage)) }, { name: 'rig.bin', data: bin! }, { name: 'skin.png', data: png }], { textures: false });
+    const img = packed.json.images[0];
+    expect(img.uri).toBeUndefined();
+    expect(img.mimeType).toBe('image/png');
+    const view = packed.json.bufferViews[img.bufferView];
+    expect(Array.from(packed.bin.subarray(view.byteOffset, view.byteOffset + view.byteLength))).toEqual(Array.from(png));
+    expect(await reason([{ name: 'rig.gltf', data: new TextEncoder().encode(JSON.stringify({ ...withImage, images: [{ uri: 'http://x/skin.png' }] })) }, { name: 'rig.bin', data: bin! }])).toEqual(['external-resource', expect.stringMatching(/image 0 points to 'http:\/\/x\/skin\.png'/)]);
+  });
+
+  it('reads the VRM humanoid of VRM 1.0 and 0.x files', async () => {
+    const v1 = await loadCharacter([{ name: 'a.vrm', data: buildRigGlb(sk, RIGS[2]) }]);
+    expect([v1.vrm, v1.mappingSource]).toEqual(['1.0', 'vrm']);
+    const v0 = await loadCharacter([{ name: 'b.vrm', data: buildRigGlb(sk, RIGS[3]) }]);
+    expect([v0.vrm, v0.mappingSource, v0.unmapped]).toEqual(['0.x', 'vrm', []]);
+  });
+});
