@@ -8,6 +8,7 @@ import { type Manifest, type ModelEntry, ModelFileError, fetchVerified } from '.
 import { cleanupFootContacts, contactsFromFeatures } from './motion/footContact';
 import { denormalize, parseMeanStd, recoverJoints } from './motion/recover';
 import { smoothJoints } from './motion/smooth';
+import { pinKeptRoot } from './motion/stitch';
 import type { Motion } from './motion/types';
 import { type Backend, type BackendRequest, type OrtSession, getSession, resolveBackend } from './runtime/ort';
 import { IncompatibleModelError, stepFunction } from './runtime/stepModel';
@@ -44,7 +45,8 @@ export interface GenerateOptions {
   /**
    * Inpainting (docs/ARCHITECTURE.md "Sampling with constraints"): keep the entries of `features`
    * (frames × featureDim, de-normalised like `Motion.features`) where `keep` (`keepMask`) is 1; the rest is
-   * generated around them. The result's features equal `features` there (up to float rounding).
+   * generated around them. The result's features equal `features` there (up to float rounding), and kept
+   * frames decode to `recoverJoints(features)`'s joints (free frames' root velocities are adjusted: `pinKeptRoot`).
    */
   known?: { features: Float32Array; keep: Float32Array };
 }
@@ -245,7 +247,8 @@ export async function createGenerator(opts: GeneratorOptions): Promise<Generator
       ...(o.known ? { known: o.known.features.map((v, i) => (v - mean[i % D]) / std[i % D]), keep: o.known.keep } : {}),
     });
     const t2 = now();
-    const features = denormalize(r.x, mean, std);
+    // kept frames after free ones: their root is pinned where the known motion has it (src/motion/stitch.ts)
+    const features = o.known ? pinKeptRoot(denormalize(r.x, mean, std), o.frames, o.known.keep, o.known.features, D) : denormalize(r.x, mean, std);
     assertFinite(features, `model ${model} (${onnxPath}) output features`);
     let joints = recoverJoints(features, o.frames, D);
     if (o.smooth) joints = smoothJoints(joints, o.frames, 1);

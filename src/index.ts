@@ -12,7 +12,7 @@ export { solveIK, forwardKinematics } from './motion/ik';
 export type { IKResult } from './motion/ik';
 export { recoverJoints, denormalize } from './motion/recover';
 export { smoothJoints } from './motion/smooth';
-export { alignSegment, appendSegment, headingAt, pinRoot, rootPose } from './motion/stitch';
+export { alignSegment, appendSegment, headingAt, pinKeptRoot, pinRoot, rootPose } from './motion/stitch';
 export { cleanupFootContacts, contactsFromFeatures, footSkate } from './motion/footContact';
 export { writeBVH } from './export/bvh';
 export { SeededRandom } from './sampler/rng';

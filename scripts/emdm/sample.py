@@ -373,6 +373,10 @@ def run(a: argparse.Namespace) -> int:
         raise SampleError(f"the model returned non-finite numbers ({int((~np.isfinite(feats)).sum())} of {feats.size} "
                           f"feature values); nothing written. Check the model file and its meanStd against the "
                           f"manifest's sha256, or try --variant fp32")
+    if keep is not None:      # kept frames after free ones decode where the known motion has them (pin_kept_root)
+        from emdm.motion.stitch import pin_kept_root
+
+        feats = np.stack([pin_kept_root(f, keep, denormalise(known, mean, std)) for f in feats])
     joints = np.stack([recover_joints(f) for f in feats]).astype(np.float32)
     if not np.isfinite(joints).all():
         raise SampleError("recovering joints gave non-finite positions; nothing written")

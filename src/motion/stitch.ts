@@ -124,3 +124,28 @@ export function pinRoot(features: ArrayLike<number>, frames: number, free: [numb
   }
   return out;
 }
+
+/**
+ * `pinRoot` for every stretch of frames whose root velocities [0:3] are free (no channel kept) and that is
+ * followed by a frame whose root is kept: that frame is pinned to `rootPose(known, ·)`. So every kept frame
+ * decodes where `recoverJoints(known)` has it. `keep` and `known` as given to `generate({known})`
+ * (frames × dim, de-normalised); frames before the first free stretch and after the last kept one are untouched.
+ */
+export function pinKeptRoot(features: ArrayLike<number>, frames: number, keep: ArrayLike<number>, known: ArrayLike<number>, dim = 263): Float32Array {
+  for (const [a, what] of [[features, 'features'], [keep, 'keep'], [known, 'known']] as const) {
+    if (a.length !== frames * dim) throw new RangeError(`pinKeptRoot: ${what} has ${a.length} values, expected frames (${frames}) × ${dim}`);
+  }
+  const rootKept = (t: number) => keep[t * dim] === 1 || keep[t * dim + 1] === 1 || keep[t * dim + 2] === 1;
+  let out = Float32Array.from(features);
+  for (let t = 0; t < frames; ) {
+    if (rootKept(t)) {
+      t++;
+      continue;
+    }
+    let e = t;
+    while (e < frames && !rootKept(e)) e++;
+    if (e < frames) out = pinRoot(out, frames, [t, e], e, rootPose(known, frames, e, dim), dim);
+    t = e;
+  }
+  return out;
+}

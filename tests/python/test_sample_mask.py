@@ -15,7 +15,7 @@ from emdm.motion import mask_fixture
 from emdm.motion.features import heading_angles, recover_joints
 from emdm.motion.ik_fixture import read_case_array
 from emdm.motion.mask import GROUPS, KeepRect, KeepSpecError, group_channels, keep_mask, parse_keep
-from emdm.motion.stitch import align_segment, append_segment, pin_root, root_pose
+from emdm.motion.stitch import align_segment, append_segment, pin_kept_root, pin_root, root_pose
 from emdm.sample import SampleError, main as sample_main, onnx_step, sample_features
 
 PARITY = mask_fixture.PARITY_DIR
@@ -160,16 +160,18 @@ def test_cli_keep_regenerates_around_the_kept_part(tmp_path, capsys):
     assert sample_main([*base, "--action", "walk", "--seed", "1", "--out", str(tmp_path / "walk")]) == 0
     walk = np.load(tmp_path / "walk.features.npy")
     assert sample_main([*base, "--action", "wave-both-hands", "--seed", "2", "--known", str(tmp_path / "walk.features.npy"),
-                        "--keep", "frames:0-9", "--keep", "group:root,legs", "--out", str(tmp_path / "wave")]) == 0
+                        "--keep", "frames:0-9,30-39", "--keep", "group:legs", "--out", str(tmp_path / "wave")]) == 0
     wave = np.load(tmp_path / "wave.features.npy")
-    keep = keep_mask(40, [parse_keep("frames:0-9"), parse_keep("group:root,legs")]).astype(bool)
+    keep = keep_mask(40, [parse_keep("frames:0-9,30-39"), parse_keep("group:legs")]).astype(bool)
     ms = np.fromfile(paths.MODELS_DIR / entry["meanStd"], "<f4")
     # de-normalise(normalise(f)) in float32: equal to a few ulps of the channel's scale
     tol = 4e-7 * (np.abs(walk) + np.abs(ms[:263]) + ms[263:])
     assert (np.abs(wave - walk) <= tol)[keep].all()
     assert np.abs(wave - walk)[~keep].mean() > 1e-2
     joints_w, joints_x = np.load(tmp_path / "walk.npy"), np.load(tmp_path / "wave.npy")
-    assert np.abs(joints_w[:10] - joints_x[:10]).max() < 1e-3         # kept frames decode to the same joints (< 1 mm)
+    kept_frames = np.r_[0:10, 30:40]                                    # decoded where the walk has them (pin_kept_root)
+    assert np.abs(joints_w[kept_frames] - joints_x[kept_frames]).max() < 1e-3      # < 1 mm
+    assert np.abs(joints_w[10:30] - joints_x[10:30]).max() > 1e-2
 
 
 @pytest.mark.parametrize("args, says", [
@@ -259,3 +261,12 @@ def test_pin_root_puts_the_kept_end_of_an_in_between_back_in_place(real_features
     assert steps.max() <= 1.5 * np.percentile(np.linalg.norm(np.diff(want[:, 0, [0, 2]], axis=0), axis=1), 95)
     with pytest.raises(ValueError, match=r"free frames \[30, 71\) must be a non-empty range ending at or before frame 70"):
         pin_root(inb, (30, 71), 70, (0.0, 0.0, 0.0))
+
+
+def test_pin_kept_root_finds_the_free_stretch_from_the_mask(real_features):
+    inb = real_features.copy()
+    inb[30:70] = real_features[:40]
+    keep = keep_mask(len(inb), [parse_keep("frames:0-29,70-"), parse_keep("group:legs,upper")])
+    assert np.array_equal(pin_kept_root(inb, keep, real_features), pin_root(inb, (30, 70), 70, root_pose(real_features, 70)))
+    prefix = keep_mask(len(inb), [parse_keep("frames:0-29")])       # a continuation: nothing kept after the free frames
+    assert np.array_equal(pin_kept_root(inb, prefix, real_features), inb)

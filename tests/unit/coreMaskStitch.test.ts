@@ -3,7 +3,8 @@
 // each recovered on its own from the origin, then stitched.
 import { describe, expect, it } from 'vitest';
 import { recoverJoints } from '../../src/motion/recover';
-import { alignSegment, appendSegment, headingAt, pinRoot, rootPose } from '../../src/motion/stitch';
+import { alignSegment, appendSegment, headingAt, pinKeptRoot, pinRoot, rootPose } from '../../src/motion/stitch';
+import { keepMask, parseKeep } from '../../src/sampler/mask';
 import { fixtureExists, loadCase, maxAbsDiff } from './coreFixtures';
 
 const D = 263;
@@ -81,6 +82,18 @@ describe('pinning the kept end of an in-between', () => {
     const realSteps = Array.from({ length: F - 1 }, (_, f) => rootStep(want, f)).sort((a, b) => a - b);
     for (let f = 0; f < F - 1; f++) expect(rootStep(got, f)).toBeLessThanOrEqual(1.5 * realSteps[Math.floor(0.95 * realSteps.length)]);
     expect(() => pinRoot(inb, F, [30, 71], 70, { x: 0, z: 0, heading: 0 })).toThrow(/free frames \[30, 71\) must be a non-empty range ending at or before frame 70/);
+  });
+
+  it('pinKeptRoot finds the free stretch from the mask and pins the next kept frame (= pinRoot)', () => {
+    const other = rows(real, 0, 40);
+    const inb = concat(rows(real, 0, 30), other, rows(real, 70, F));
+    const keep = keepMask(F, [parseKeep('frames:0-29,70-'), parseKeep('group:legs,upper')]);
+    const byMask = pinKeptRoot(inb, F, keep, real);
+    expect(maxAbsDiff(byMask, pinRoot(inb, F, [30, 70], 70, rootPose(real, F, 70)))).toBe(0);
+    expect(maxAbsDiff(recoverJoints(byMask, F).subarray(70 * J3), recoverJoints(real, F).subarray(70 * J3))).toBeLessThan(1e-3);
+    // nothing kept after the free frames (a continuation): nothing to pin
+    const prefix = keepMask(F, [parseKeep('frames:0-29')]);
+    expect(maxAbsDiff(pinKeptRoot(inb, F, prefix, real), inb)).toBe(0);
   });
 
   it('rootPose is the root recoverJoints integrates', () => {

@@ -65,3 +65,26 @@ def pin_root(features: np.ndarray, free: tuple[int, int], at: int, target: tuple
     f[s:e, 1] += local[:, 0].astype(np.float32)
     f[s:e, 2] += local[:, 2].astype(np.float32)
     return f
+
+
+def pin_kept_root(features: np.ndarray, keep: np.ndarray, known: np.ndarray) -> np.ndarray:
+    """``pin_root`` for every stretch of frames whose root velocities [0:3] are free, followed by a frame whose
+    root is kept (pinned to ``root_pose(known, ·)``), so every kept frame decodes where ``recover_joints(known)``
+    has it. ``keep``/``known`` (frames, 263), ``known`` de-normalised (``src/motion/stitch.ts`` ``pinKeptRoot``)."""
+    f = np.array(features, np.float32)
+    for name, a in (("keep", keep), ("known", known)):
+        if np.shape(a) != f.shape:
+            raise ValueError(f"pin_kept_root: {name} has shape {np.shape(a)}, features {f.shape}")
+    root_kept = np.asarray(keep)[:, :3].astype(bool).any(1)
+    t = 0
+    while t < len(f):
+        if root_kept[t]:
+            t += 1
+            continue
+        e = t
+        while e < len(f) and not root_kept[e]:
+            e += 1
+        if e < len(f):
+            f = pin_root(f, (t, e), e, root_pose(known, e))
+        t = e
+    return f
