@@ -102,6 +102,7 @@ def main(argv=None) -> int:
     ap.add_argument("--device", default=None)
     ap.add_argument("--threads", type=int, default=None)
     ap.add_argument("--extra", default="", help="flags for every run, old and new (e.g. '--d-width 64')")
+    ap.add_argument("--cache", type=Path, default=None, help="folder of caption embeddings (text-*.npy) to start from")
     ap.add_argument("--json", type=Path, default=None, help="also write the results here")
     a = ap.parse_args(argv)
 
@@ -117,6 +118,9 @@ def main(argv=None) -> int:
         tmp = Path(tmp)
         data = write_synthetic(tmp / "data", a.synthetic) if a.synthetic else Path(a.data or paths.DATASET_DIR)
         cache = tmp / "cache"
+        cache.mkdir()
+        for f in (a.cache.glob("text-*.npy") if a.cache else []):
+            (cache / f.name).write_bytes(f.read_bytes())
         runs: list[tuple[str, Path, list[str]]] = []
         old = a.old_src or (extract_rev(a.old_rev, tmp / "old") if a.old_rev else None)
         if old is not None:
@@ -129,7 +133,6 @@ def main(argv=None) -> int:
             for f in cache.glob("text-*.npy"):               # caption embeddings once for all runs
                 (out / f.name).write_bytes(f.read_bytes())
             r = run_loop(src, data, out, flags, {})
-            cache.mkdir(exist_ok=True)
             for f in out.glob("text-*.npy"):
                 (cache / f.name).write_bytes(f.read_bytes())
             r["loop"] = label
