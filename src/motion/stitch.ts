@@ -136,7 +136,7 @@ export function pinKeptRoot(features: ArrayLike<number>, frames: number, keep: A
     if (a.length !== frames * dim) throw new RangeError(`pinKeptRoot: ${what} has ${a.length} values, expected frames (${frames}) × ${dim}`);
   }
   const rootKept = (t: number) => keep[t * dim] === 1 || keep[t * dim + 1] === 1 || keep[t * dim + 2] === 1;
-  let out = Float32Array.from(features);
+  let out: Float32Array = Float32Array.from(features);
   for (let t = 0; t < frames; ) {
     if (rootKept(t)) {
       t++;
