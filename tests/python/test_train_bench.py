@@ -13,7 +13,10 @@ def test_bench_reports_samples_per_second_for_each_loop(tmp_path, capsys):
                              "--extra", "--d-width 32", "--old-src", str(paths.REPO_ROOT / "scripts"),
                              "--new", "--balance-alpha 0", "--json", str(out)]) == 0
     lines = capsys.readouterr().out.strip().splitlines()
-    assert lines[0].startswith("old (") and lines[1].startswith("new --balance-alpha 0") and "samples/s" in lines[1]
+    assert lines[0].startswith("new --balance-alpha 0") and lines[1].startswith("old (") and "samples/s" in lines[0]
+    assert lines[2].startswith("samples/s relative to the old loop: new --balance-alpha 0 ×")
     res = json.loads(out.read_text())["results"]
+    assert res[1]["vs_old"] == 1.0
     assert [r["batch"] for r in res] == [4, 4] and all(r["samples_per_s"] > 0 and r["steps_timed"] == 1 for r in res)
     assert abs(res[0]["samples_per_s"] - 4 / res[0]["sec_per_step"]) < 1e-9
+    assert abs(res[0]["vs_old"] - res[0]["samples_per_s"] / res[1]["samples_per_s"]) < 1e-9
