@@ -4,7 +4,7 @@
  *
  * The GLB is the character's own document (as packed by loadCharacter: every buffer and image in one
  * BIN chunk) with ONE animation appended: a LINEAR sampler per animated node (rotation; translation
- * of the pelvis bone), keyed at the motion's frame times. Nodes, skins, meshes, materials, textures,
+ * of the pelvis bone and of feet rigged as IK targets), keyed at the motion's frame times. Nodes, skins, meshes, materials, textures,
  * extensions (VRM included) and the character's own animations are written back byte for byte, so
  * nothing is lost in a round trip through three's scene graph (which is why this does not go through
  * GLTFExporter as the built-in character's download does: that would re-encode textures and drop the
@@ -60,6 +60,7 @@ export function characterToGLB(ch: Pick<LoadedCharacter, 'json' | 'bin' | 'nodeI
   };
   add(node(result.bones[0]), 'translation', result.rootPositions, 'VEC3');
   result.bones.forEach((b, i) => add(node(b), 'rotation', result.rotations[i], 'VEC4'));
+  for (const p of result.positions) add(node(p.bone), 'translation', p.data, 'VEC3');
   json.animations = [...(json.animations ?? []), { name, samplers, channels }];
 
   const bin = new Uint8Array(length);

@@ -13,7 +13,9 @@ import { characterToBVH, characterToGLB } from '../../src/export/characterGlb';
 import { cleanupFootContacts, contactsFromFeatures } from '../../src/motion/footContact';
 import { restPositions } from '../../src/character/rig';
 import { JOINT_NAMES, type JointName } from '../../src/skeleton';
-import { fixtureExists, loadCase, manifestSkeleton } from './coreFixtures';
+import fs from 'node:fs';
+import path from 'node:path';
+import { ROOT, fixtureExists, loadCase, manifestSkeleton } from './coreFixtures';
 import { RIGS, buildRigGlb } from './retargetRigs';
 
 const sk = manifestSkeleton();
@@ -144,16 +146,14 @@ async function reload(glb: Uint8Array) {
   return new GLTFLoader().parseAsync(glb.buffer.slice(glb.byteOffset, glb.byteOffset + glb.byteLength) as ArrayBuffer, '');
 }
 
-describe('retargeting onto rigs of other conventions', () => {
-  if (!MOTIONS.length) it.skip('no motion fixtures (tests/fixtures/parity/model-*.json, recover.json)', () => {});
-  for (const spec of RIGS) {
-    it(spec.label, async () => {
-      const glb = buildRigGlb(sk, spec);
+/** Load → map → retarget every motion → check, export GLB (reload, replay) and BVH. */
+async function checkCharacter(label: string, file: string, glb: Uint8Array, unmapped: string[], source: string, vrm?: string) {
       const t0 = performance.now();
-      const ch = await loadCharacter([{ name: `${spec.label.split(' ')[0]}.${spec.vrm ? 'vrm' : 'glb'}`, data: glb }]);
+      const ch = await loadCharacter([{ name: file, data: glb }]);
       const loadMs = performance.now() - t0;
-      expect(ch.unmapped, 'joints the automatic map missed').toEqual(spec.vrm === '1.0' ? ['spine2'] : []);
-      expect(ch.mappingSource).toBe(spec.vrm ? 'vrm' : 'names');
+      expect(ch.unmapped, 'joints the automatic map missed').toEqual(unmapped);
+      expect(ch.mappingSource).toBe(source);
+      const spec = { label, vrm };
       for (const motion of MOTIONS) {
         const t1 = performance.now();
         const res: RetargetResult = retargetMotion(ch.root, ch.mapping, motion, sk);
@@ -166,22 +166,28 @@ describe('retargeting onto rigs of other conventions', () => {
         if (motion.label.startsWith('model-')) {
           expect(m.footMaxCm).toBeLessThan(3);
           expect(m.slideMaxCm).toBeLessThan(1);
-        } else {
-          // the real clip: feet no further from the floor than our own skeleton's (in our units)
-          expect(m.footMaxCm / res.scale).toBeLessThan(m.ourFootMaxCm);
         }
+        // the real kick clip: only the directions are held to the bar. Its stances are on a nearly
+        // straight leg, where holding the foot would swing the leg past the 10° above, so the pin is
+        // capped (maxPinDeg) and feet float/slide by a few cm; the figures are printed above.
+
 
         // the GLB download: the character's own document + the clip; three reads it back with skin and animation
         const out = characterToGLB(ch, res);
         const back = await reload(out);
-        let skinned = 0;
-        back.scene.traverse((o) => {
-          if ((o as { isSkinnedMesh?: boolean }).isSkinnedMesh) skinned++;
-        });
-        expect(skinned).toBe(1);
+        const skinned = (r: Object3D) => {
+          let n = 0;
+          r.traverse((o) => {
+            if ((o as { isSkinnedMesh?: boolean }).isSkinnedMesh) n++;
+          });
+          return n;
+        };
+        expect(skinned(back.scene)).toBeGreaterThan(0);
+        expect(skinned(back.scene)).toBe(skinned(ch.root));
+        expect(back.animations.length).toBe(ch.gltf.animations.length + 1); // its own animations are kept
         const anim = back.animations.find((a) => a.name === 'emdm')!;
         expect(anim).toBeTruthy();
-        expect(anim.tracks.length).toBe(res.bones.length + 1);
+        expect(anim.tracks.length).toBe(res.bones.length + 1 + res.positions.length);
         expect(anim.duration).toBeCloseTo((motion.frames - 1) / motion.fps, 5);
         if (spec.vrm) expect(JSON.stringify(back.parser.json.extensions)).toContain(spec.vrm === '1.0' ? 'VRMC_vrm' : '"VRM"');
         const again = measure(back.scene, anim, ch.mapping, motion, res.yaw);
@@ -202,6 +208,19 @@ describe('retargeting onto rigs of other conventions', () => {
           expect(v.every(Number.isFinite)).toBe(true);
         }
       }
-    });
+}
+
+describe('retargeting onto rigs of other conventions', () => {
+  if (!MOTIONS.length) it.skip('no motion fixtures (tests/fixtures/parity/model-*.json, recover.json)', () => {});
+  for (const spec of RIGS) {
+    it(spec.label, () =>
+      checkCharacter(spec.label, `${spec.label.split(' ')[0]}.${spec.vrm ? 'vrm' : 'glb'}`, buildRigGlb(sk, spec), spec.vrm === '1.0' ? ['spine2'] : [], spec.vrm ? 'vrm' : 'names', spec.vrm));
   }
+});
+
+describe('retargeting onto real characters (tests/fixtures/rigs)', () => {
+  it("three.js's RobotExpressive (CC0): Blender names, feet as IK targets, rigid parts, its own 14 animations", async () => {
+    const file = path.join(ROOT, 'tests', 'fixtures', 'rigs', 'RobotExpressive.glb');
+    await checkCharacter('RobotExpressive', 'RobotExpressive.glb', new Uint8Array(fs.readFileSync(file)), ['l_foot', 'r_foot', 'l_wrist', 'r_wrist'], 'names');
+  });
 });

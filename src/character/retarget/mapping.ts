@@ -16,7 +16,8 @@
  *    (`DEF-thigh.L`, `shin.L`, `upper_arm.L`, `spine.003`, …), VRoid (`J_Bip_L_UpperLeg`), Reallusion
  *    CC (`CC_Base_L_Thigh`, the CMU BVH rig of our data) and plain names (`Hips`, `LeftUpLeg`,
  *    `LeftLeg`, `LeftFoot`, `LeftToeBase`, `Spine1`, `LeftArm`, `LeftForeArm`, `LeftHand`, …).
- * Limbs are found by name and must hang one below the other (a knee under its hip, …); the pelvis is
+ * Limbs are found by name and must hang one below the other (a knee under its hip, …; an ankle may also
+ * be a foot IK target outside the pelvis's tree, as in three.js's RobotExpressive); the pelvis is
  * the lowest common ancestor of both thighs and the neck; spine1..spine3 are taken from the bones
  * between the pelvis and the neck (spine3 = where the collars hang), so 1 to 5 spine bones all work.
  */
@@ -159,7 +160,9 @@ export function autoMap(bones: BoneInfo[], vrm?: Record<string, string>): AutoMa
     for (const chain of LIMB_ORDER) {
       let above = -1;
       for (const limb of chain) {
-        const c = candidates(LIMB_KEYS[limb], side).filter((i) => above < 0 || isAncestor(above, i));
+        let c = candidates(LIMB_KEYS[limb], side).filter((i) => above < 0 || isAncestor(above, i));
+        // a foot rigged as an IK target elsewhere in the hierarchy (not in the leg's chain)
+        if (!c.length && limb === 'ankle' && above >= 0) c = candidates(LIMB_KEYS.ankle, side).filter((i) => !isAncestor(i, above) && !isAncestor(above, i));
         // among same-key bones prefer the one nearest the chain (highest), e.g. thigh.L before thigh.L.001
         const pick = c.length ? c.reduce((best, i) => (LIMB_KEYS[limb].indexOf(parsed[i]!.key) < LIMB_KEYS[limb].indexOf(parsed[best]!.key) ? i : best), c[0]) : -1;
         if (pick < 0) continue;
@@ -286,7 +289,11 @@ export function validateMapping(mapping: BoneMapping, bones: BoneInfo[], opts: {
     while (a >= 0 && mapping[JOINT_NAMES[a]] === undefined) a = PARENTS[a];
     if (a < 0) return;
     const above = JOINT_NAMES[a];
-    if (!isAncestor(index.get(mapping[above]!)!, index.get(name)!)) {
+    const i = index.get(name)!;
+    // an ankle may be a foot IK target outside the pelvis's tree (retargetMotion places it at the shin's end)
+    const pelvis = mapping.pelvis !== undefined ? index.get(mapping.pelvis) : undefined;
+    const detachedFoot = (joint === 'l_ankle' || joint === 'r_ankle') && pelvis !== undefined && !isAncestor(pelvis, i) && !isAncestor(i, pelvis) && i !== pelvis;
+    if (!detachedFoot && !isAncestor(index.get(mapping[above]!)!, i)) {
       throw new MappingError(`bone map: ${joint} → '${name}' is not below ${above} → '${mapping[above]}' in the character's hierarchy; map ${joint} to a bone under '${mapping[above]}'`);
     }
   });

@@ -20,6 +20,8 @@
  *     joints' C·(P_k − P_j): the direction comes from our positions, the twist from our IK.
  *     Pelvis and chest (spine3) use two directions: hips across + up, and up + collars (or shoulders)
  *     across. A mapped joint with nothing mapped below (e.g. an ankle without toes) turns with G_j.
+ *     A foot rigged as an IK target outside the pelvis's tree (three.js's RobotExpressive) is placed
+ *     where the character's shin ends (position track) and turned like a mapped ankle.
  *  4. Every other bone (fingers, twist, hair, our leaves: head, hands, toes) keeps its rest LOCAL
  *     rotation, so it follows its parent rigidly. Local rotation = (parent world)⁻¹ · world.
  *  5. Root: the pelvis bone's position is ours scaled by s = character leg / our leg (hip→knee→ankle):
@@ -74,6 +76,8 @@ export interface RetargetResult {
   rotations: Float32Array[];
   /** frames × 3: the pelvis bone's local position */
   rootPositions: Float32Array;
+  /** other animated positions (frames × 3, local): feet rigged as IK targets outside the pelvis's tree */
+  positions: { bone: Object3D; data: Float32Array }[];
   /** leg length ratio (character / ours) applied to the root translation */
   scale: number;
   /** yaw (radians about +Y) from our facing to the character's rest facing */
@@ -143,8 +147,19 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
   const pelvisBone = bone('pelvis')!;
   const subtree: Object3D[] = [];
   pelvisBone.traverse((o) => subtree.push(o)); // parents before children
+  // feet rigged as IK targets outside the pelvis's tree (validateMapping allows that for ankles): their
+  // subtrees follow, and their roots are placed where the shin ends
+  const inPelvis = new Set(subtree);
+  const detached = (['l', 'r'] as const).filter((s) => mapped(`${s}_ankle`) && !inPelvis.has(bone(`${s}_ankle`)!));
+  for (const s of detached) bone(`${s}_ankle`)!.traverse((o) => subtree.push(o));
+  const chainRoots = [pelvisBone, ...detached.map((s) => bone(`${s}_ankle`)!)];
   const slot = new Map(subtree.map((o, i) => [o, i]));
-  const parentSlot = subtree.map((o) => (o === pelvisBone ? -1 : slot.get(o.parent!)!));
+  const parentSlot = subtree.map((o) => (chainRoots.includes(o) ? -1 : slot.get(o.parent!)!));
+  const constParent = new Map(chainRoots.map((o) => {
+    const m = o.parent ? relWorld(o.parent) : new Matrix4();
+    return [slot.get(o)!, { m, inv: m.clone().invert(), q: new Quaternion().setFromRotationMatrix(new Matrix4().extractRotation(m)) }];
+  }));
+  const detachedSlots = detached.map((s) => ({ s, slot: slot.get(bone(`${s}_ankle`)!)! }));
   const restLocalQ = subtree.map((o) => o.quaternion.clone());
   const restLocalP = subtree.map((o) => o.position.clone());
   const restLocalS = subtree.map((o) => o.scale.clone());
@@ -153,7 +168,6 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
   const restWorldP = restWorldM.map((m) => new Vector3().setFromMatrixPosition(m));
   const pelvisParentM = pelvisBone.parent ? relWorld(pelvisBone.parent) : new Matrix4();
   const pelvisParentInv = pelvisParentM.clone().invert();
-  const pelvisParentQ = new Quaternion().setFromRotationMatrix(new Matrix4().extractRotation(pelvisParentM));
   const S = (j: JointName): number => slot.get(bone(j)!)!;
   const restPos = (j: JointName) => restWorldP[S(j)];
 
@@ -278,14 +292,21 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
     return out;
   };
 
-  /** Local rotations of the subtree (and world matrices when `withPositions`) for one frame. */
+  /** Where a detached ankle goes: the end of the shin (knee + its rest offset turned with the knee). */
+  const detachedAt = (s: 'l' | 'r', M: Matrix4[], delta: Map<number, Quaternion>) =>
+    new Vector3().setFromMatrixPosition(M[S(`${s}_knee`)]).add(restPos(`${s}_ankle`).clone().sub(restPos(`${s}_knee`)).applyQuaternion(delta.get(S(`${s}_knee`)) ?? new Quaternion()));
+
+  /** Local rotations of the subtree (and world matrices, detached ankle positions when `withPositions`) for one frame. */
   const pose = (delta: Map<number, Quaternion>, rootP: Vector3, withPositions: boolean) => {
     const n = subtree.length;
     const W: Quaternion[] = new Array(n);
     const L: Quaternion[] = new Array(n);
-    const M: Matrix4[] = withPositions ? new Array(n) : [];
+    const M: Matrix4[] = new Array(n);
+    const P: Vector3[] = [];
+    withPositions ||= detached.length > 0;
     for (let i = 0; i < n; i++) {
-      const pW = parentSlot[i] < 0 ? pelvisParentQ : W[parentSlot[i]];
+      const cp = constParent.get(i);
+      const pW = cp ? cp.q : W[parentSlot[i]];
       const D = delta.get(i);
       if (D) {
         W[i] = D.clone().multiply(restWorldQ[i]);
@@ -295,12 +316,18 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
         W[i] = pW.clone().multiply(L[i]);
       }
       if (withPositions) {
-        const pos = i === 0 ? rootP.clone().applyMatrix4(pelvisParentInv) : restLocalP[i];
+        let pos = restLocalP[i];
+        if (i === 0) pos = rootP.clone().applyMatrix4(pelvisParentInv);
+        else if (cp) {
+          const at = detachedAt(detachedSlots.find((d) => d.slot === i)!.s, M, delta);
+          pos = at.applyMatrix4(cp.inv);
+          P.push(pos);
+        }
         const local = new Matrix4().compose(pos, L[i], restLocalS[i]);
-        M[i] = new Matrix4().multiplyMatrices(parentSlot[i] < 0 ? pelvisParentM : M[parentSlot[i]], local);
+        M[i] = new Matrix4().multiplyMatrices(cp ? cp.m : M[parentSlot[i]], local);
       }
     }
-    return { L, M };
+    return { L, M, P };
   };
   const posOf = (M: Matrix4[], j: JointName) => new Vector3().setFromMatrixPosition(M[S(j)]);
 
@@ -432,8 +459,10 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
   if (!tracked.includes(0)) tracked.unshift(0);
   const rotations = tracked.map(() => new Float32Array(frames * 4));
   const rootPositions = new Float32Array(frames * 3);
+  const positions = detachedSlots.map(({ slot: i }) => ({ bone: subtree[i], data: new Float32Array(frames * 3) }));
   for (let f = 0; f < frames; f++) {
-    const { L } = pose(allDeltas[f], rootPs[f], false);
+    const { L, P: detachedP } = pose(allDeltas[f], rootPs[f], false);
+    detachedP.forEach((p, k) => positions[k].data.set([p.x, p.y, p.z], f * 3));
     tracked.forEach((i, t) => {
       const q = L[i];
       const o = f * 4;
@@ -453,8 +482,9 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
   const times = Array.from({ length: frames }, (_, f) => f / fps);
   const tracks = [new VectorKeyframeTrack(`${target(pelvisBone)}.position`, times, Array.from(rootPositions))];
   bones.forEach((o, t) => tracks.push(new QuaternionKeyframeTrack(`${target(o)}.quaternion`, times, Array.from(rotations[t]))));
+  for (const p of positions) tracks.push(new VectorKeyframeTrack(`${target(p.bone)}.position`, times, Array.from(p.data)));
   const clip = new AnimationClip(opts.name ?? 'emdm', (frames - 1) / fps, tracks);
-  return { clip, frames, fps, bones, rotations, rootPositions, scale, yaw, pinnedFrames };
+  return { clip, frames, fps, bones, rotations, rootPositions, positions, scale, yaw, pinnedFrames };
 }
 
 function skeletonParent(j: JointName): JointName | null {
