@@ -147,6 +147,7 @@ class Dist:
     """torchrun environment (rank/world) and a gradient all-reduce (average) for plain modules."""
 
     def __init__(self, device: torch.device):
+        self.device = device                  # collectives on this device's tensors (gloo: CPU, nccl: CUDA)
         self.world = int(os.environ.get("WORLD_SIZE", "1"))
         self.rank = int(os.environ.get("RANK", "0"))
         if self.world > 1 and not torch.distributed.is_initialized():
@@ -179,7 +180,7 @@ class Dist:
         if self.world == 1:
             return values
         keys = sorted(values)
-        t = self.all_reduce(torch.tensor([values[k] for k in keys], dtype=torch.float64))
+        t = self.all_reduce(torch.tensor([values[k] for k in keys], dtype=torch.float64, device=self.device)).tolist()
         return {k: float(v) / self.world for k, v in zip(keys, t)}
 
     def gather(self, obj):
@@ -538,12 +539,14 @@ class Trainer:
                     if bar:
                         bar.set_postfix({k: f"{means[k]:.3g}" for k in ("loss_d", "g_adv", "recon") if k in means})
                     self.check_finite()
-                timed_out = a.time_limit_min is not None and (time.time() - t_start) > a.time_limit_min * 60
-                due = (a.ckpt_every and self.step % a.ckpt_every == 0) or (time.time() - t_ckpt) > a.ckpt_minutes * 60
-                if self.dist.world > 1:      # all ranks must agree (save gathers RNG states)
-                    flag = self.dist.all_reduce(torch.tensor([float(bool(due)), float(bool(timed_out))]),
-                                                torch.distributed.ReduceOp.MAX)
-                    due, timed_out = bool(flag[0]), bool(flag[1])
+                timed_out, due = False, bool(a.ckpt_every and self.step % a.ckpt_every == 0)
+                if self.dist.world == 1 or self.step % a.log_every == 0:     # DDP: the clocks agreed on at log steps
+                    timed_out = a.time_limit_min is not None and (time.time() - t_start) > a.time_limit_min * 60
+                    due = due or (time.time() - t_ckpt) > a.ckpt_minutes * 60
+                if self.dist.world > 1 and self.step % a.log_every == 0:    # all ranks must agree (save gathers RNG)
+                    flag = self.dist.all_reduce(torch.tensor([float(bool(due)), float(bool(timed_out))],
+                                                             device=self.device), torch.distributed.ReduceOp.MAX)
+                    due, timed_out = (bool(v) for v in flag.tolist())
                 if due or timed_out or self.step == stop_at:
                     self.save()
                     t_ckpt = time.time()
