@@ -36,6 +36,18 @@ describe('loading a character', () => {
     expect(ch.vrm).toBeNull();
     expect(ch.nodeIndex.get(ch.bones[0])).toBeTypeOf('number');
     expect(ch.loadMs).toBeGreaterThan(0);
+    // restPose() undoes any posing (retargetMotion reads the rest pose from the scene)
+    const hips = ch.bones.find((b) => b.name === 'mixamorigHips')!;
+    const q = hips.quaternion.clone();
+    const knee = ch.bones.find((b) => b.name === 'mixamorigLeftLeg')!;
+    const kq = knee.quaternion.clone();
+    const kp = knee.position.clone();
+    hips.quaternion.set(0, 1, 0, 0);
+    knee.position.x += 1;
+    ch.restPose();
+    expect(hips.quaternion.equals(q)).toBe(true);
+    expect(knee.quaternion.equals(kq)).toBe(true);
+    expect(knee.position.equals(kp)).toBe(true);
   });
 
   it('refuses what is too large, corrupt, compressed, unskinned or not a humanoid, saying so', async () => {

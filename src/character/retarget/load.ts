@@ -72,6 +72,8 @@ export interface LoadedCharacter {
   vrm: '0.x' | '1.0' | null;
   /** milliseconds spent in loadCharacter */
   loadMs: number;
+  /** put every node back to its rest transform as loaded (retargetMotion reads the rest pose from the scene) */
+  restPose(): void;
 }
 
 export interface LoadCharacterOptions {
@@ -365,9 +367,19 @@ export async function loadCharacter(files: CharacterFile[], opts: LoadCharacterO
       boneInfos, mapping);
   }
   const unmapped = JOINT_NAMES.filter((j) => mapping[j] === undefined);
+  const rest: [Object3D, Object3D['position'], Object3D['quaternion'], Object3D['scale']][] = [];
+  root.traverse((o) => rest.push([o, o.position.clone(), o.quaternion.clone(), o.scale.clone()]));
   return {
     name: file, root, gltf, json, bin, bones, boneInfos, nodeIndex, mapping, unmapped, mappingSource,
     vrm: vrm?.version ?? null, loadMs: performance.now() - t0,
+    restPose() {
+      for (const [o, p, q, s] of rest) {
+        o.position.copy(p);
+        o.quaternion.copy(q);
+        o.scale.copy(s);
+      }
+      root.updateMatrixWorld(true);
+    },
   };
 }
 

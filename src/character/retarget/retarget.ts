@@ -8,7 +8,7 @@
  * ```
  *
  * Everything is computed in the frame of `root` (the loaded scene; the character must be in its rest
- * pose, as loaded). Per frame:
+ * pose, as loaded: stop its mixer and call LoadedCharacter.restPose() first). Per frame:
  *  1. Our IK (src/motion/ik.ts: solveIK) gives every joint's global rotation G_j relative to our rest
  *     T-pose, with the twist taken from body planes.
  *  2. Facing: C = the rotation about Y that turns our rest "left" (l_hip − r_hip) onto the character's,
