@@ -5,7 +5,6 @@ import { MeshStandardMaterial, Quaternion, Vector3 } from 'three';
 import { HEAD_PITCH } from '../src/character/body';
 import { applyPose, createCharacter } from '../src/character/character';
 import { MotionPlayer, type PoseTrack } from '../src/character/player';
-import { writeBVH } from '../src/export/bvh';
 import type { GenerateResult } from '../src/generate';
 import { assertFinite, NonFiniteMotionError } from '../src/errors';
 import { loadManifest, ModelFileError, type Manifest } from '../src/manifest';
@@ -13,7 +12,7 @@ import { clearModelCache, modelCacheUsage } from '../src/cache/modelCache';
 import { compareNote, compareStepChoices, planCompare, type ComparePlan } from './ui/compare';
 import { Controls } from './ui/controls';
 import { byId, formatBytes, formatMs, saveBlob } from './ui/dom';
-import { fileStem, motionToGLB, motionToJSON } from './ui/downloads';
+import { fileStem, motionToBVH, motionToGLB, motionToJSON } from './ui/downloads';
 import { Engine, isAbort, modelForMode, pickModels } from './ui/engine';
 import { examplePrompts } from './ui/examples';
 import { CacheControl, FileList } from './ui/files';
@@ -206,7 +205,10 @@ async function main(): Promise<void> {
     fallback(model, reason) {
       notices.show('info', `${reason}: ${model} runs on WebAssembly (CPU) instead.`, 12000);
     },
-    file: (e) => fileList.update(e),
+    file: (e) => {
+      fileList.update(e);
+      if (e.state === 'done' && api.ready) void cacheControl.refresh(); // a model loaded later (compare view)
+    },
     notice: (kind, text) => notices.show(kind, text, 14000),
   });
   void engine.client.environment.then((env) => {
@@ -443,8 +445,8 @@ async function main(): Promise<void> {
     }
   };
   byId('dl-bvh').addEventListener('click', guard((s) => {
-    const text = writeBVH(s.result.motion, skeleton, { fps: 20 });
-    saveBlob(new Blob([text], { type: 'text/plain' }), `${fileStem(s.label, s.state.seed)}.bvh`);
+    const { blob, filename } = motionToBVH(skeleton, s.result.motion, fileStem(s.label, s.state.seed), byId('dl-bvh-units', HTMLSelectElement).value);
+    saveBlob(blob, filename);
   }));
   byId('dl-glb').addEventListener('click', guard(async (s) => {
     const glb = await motionToGLB(skeleton, s.track);
