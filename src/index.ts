@@ -14,7 +14,7 @@ export { recoverJoints, denormalize } from './motion/recover';
 export { smoothJoints } from './motion/smooth';
 export { alignSegment, appendSegment, headingAt, pinKeptRoot, pinRoot, rootPose } from './motion/stitch';
 export { cleanupFootContacts, contactsFromFeatures, footSkate } from './motion/footContact';
-export { writeBVH } from './export/bvh';
+export { type BvhUnits, bvhFileName, writeBVH } from './export/bvh';
 export { SeededRandom } from './sampler/rng';
 export { computeSchedule, ddimScheduleFor, scheduleFor } from './sampler/schedule';
 export type { DdimSchedule, Schedule } from './sampler/schedule';

@@ -2,9 +2,14 @@
  * BVH export of a motion on the reference skeleton.
  *
  * - Hierarchy: the manifest skeleton (22 SMPL-order joints, rest T-pose offsets; the children of
- *   pelvis and spine3 at the motion's own mean offsets, see solveIK), in CENTIMETRES
- *   (the usual BVH unit; import at scale 0.01 for metres). Root OFFSET is 0 0 0 and its position
- *   channels carry the pelvis's world position, so readers that add or ignore the root offset agree.
+ *   pelvis and spine3 at the motion's own mean offsets, see solveIK). Root OFFSET is 0 0 0 and its
+ *   position channels carry the pelvis's world position, so readers that add or ignore the root offset agree.
+ * - Units (`units`): metres by default — Blender's importer (scale 1.0) and three's BVHLoader take the
+ *   numbers as scene units, i.e. metres, so the pelvis stands ~0.9 high — or centimetres (the older BVH
+ *   habit; MotionBuilder-style tools). Lengths get 6 decimals in metres, 4 in centimetres (1 µm either
+ *   way). BVH has no comment syntax both readers skip (three's BVHLoader and Blender's importer both
+ *   want `HIERARCHY` first and read every later line as data), so the unit goes in the file name:
+ *   `bvhFileName`.
  * - Rotations: local joint rotations from `solveIK` (twist from body planes), written as Euler
  *   angles in degrees with the rotation order declared per joint: `Zrotation Xrotation Yrotation`,
  *   i.e. R = Rz·Rx·Ry. Leaf joints (feet, head, wrists) get an `End Site` continuing their bone.
@@ -16,7 +21,23 @@ import { type M3, type Q4, matFromQuat, slerp } from '../motion/math3';
 import type { Motion } from '../motion/types';
 import { childrenOf, type SkeletonLike } from '../skeleton';
 
-const CM = 100;
+/** Length unit of a BVH file: metres (the default: Blender at import scale 1.0) or centimetres. */
+export type BvhUnits = 'm' | 'cm';
+const UNIT: Record<BvhUnits, { scale: number; digits: number; word: string }> = {
+  m: { scale: 1, digits: 6, word: 'metres' },
+  cm: { scale: 100, digits: 4, word: 'centimetres' },
+};
+
+/** `stem` + the unit + `.bvh`: 'emdm-walk-seed7' → 'emdm-walk-seed7-metres.bvh' (or '-centimetres.bvh'). */
+export function bvhFileName(stem: string, units: BvhUnits = 'm'): string {
+  return `${stem}-${unitOf(units).word}.bvh`;
+}
+
+function unitOf(units: unknown) {
+  if (units !== 'm' && units !== 'cm') throw new RangeError(`writeBVH: units must be 'm' or 'cm', got ${String(units)}`);
+  return UNIT[units];
+}
+
 const DEG = 180 / Math.PI;
 
 /** Euler angles (radians) [z, x, y] with R = Rz(z)·Rx(x)·Ry(y). */
@@ -54,8 +75,9 @@ const num = (v: number, digits: number) => {
   return s === `-${(0).toFixed(digits)}` ? (0).toFixed(digits) : s;
 };
 
-export function writeBVH(motion: Motion, skeleton: SkeletonLike, opts: { fps?: 20 | 30 | 60 } = {}): string {
+export function writeBVH(motion: Motion, skeleton: SkeletonLike, opts: { fps?: 20 | 30 | 60; units?: BvhUnits } = {}): string {
   const J = skeleton.joints.length;
+  const { scale, digits } = unitOf(opts.units ?? 'm');
   const fpsIn = motion.fps;
   const fpsOut = opts.fps ?? fpsIn;
   if (![20, 30, 60].includes(fpsOut)) throw new RangeError(`writeBVH: fps must be 20, 30 or 60, got ${fpsOut}`);
@@ -74,13 +96,13 @@ export function writeBVH(motion: Motion, skeleton: SkeletonLike, opts: { fps?: 2
     const ind = '  '.repeat(depth);
     const o = j === root ? [0, 0, 0] : ik.offsets[j];
     lines.push(`${ind}${j === root ? 'ROOT' : 'JOINT'} ${skeleton.joints[j]}`, `${ind}{`);
-    lines.push(`${ind}  OFFSET ${o.map((v) => num(v * CM, 4)).join(' ')}`);
+    lines.push(`${ind}  OFFSET ${o.map((v) => num(v * scale, digits)).join(' ')}`);
     lines.push(`${ind}  CHANNELS ${j === root ? '6 Xposition Yposition Zposition ' : '3 '}Zrotation Xrotation Yrotation`);
     if (children[j].length === 0) {
       const ob = skeleton.offsets[j];
       const len = Math.hypot(ob[0], ob[1], ob[2]) || 1;
-      const end = ob.map((v) => (v / len) * 0.05 * CM); // 5 cm along the bone
-      lines.push(`${ind}  End Site`, `${ind}  {`, `${ind}    OFFSET ${end.map((v) => num(v, 4)).join(' ')}`, `${ind}  }`);
+      const end = ob.map((v) => (v / len) * 0.05 * scale); // 5 cm along the bone
+      lines.push(`${ind}  End Site`, `${ind}  {`, `${ind}    OFFSET ${end.map((v) => num(v, digits)).join(' ')}`, `${ind}  }`);
     }
     for (const c of children[j]) walk(c, depth + 1);
     lines.push(`${ind}}`);
@@ -91,7 +113,7 @@ export function writeBVH(motion: Motion, skeleton: SkeletonLike, opts: { fps?: 2
   for (let f = 0; f < frames; f++) {
     const vals: string[] = [];
     for (const j of order) {
-      if (j === root) for (let c = 0; c < 3; c++) vals.push(num(rootPos[f * 3 + c] * CM, 4));
+      if (j === root) for (let c = 0; c < 3; c++) vals.push(num(rootPos[f * 3 + c] * scale, digits));
       const [z, x, y] = eulerZXY(matFromQuat(quats, (f * J + j) * 4));
       vals.push(num(z * DEG, 4), num(x * DEG, 4), num(y * DEG, 4));
     }

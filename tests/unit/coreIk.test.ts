@@ -188,7 +188,7 @@ describe('the same IK as Python (emdm.motion.ik, fixture tests/fixtures/parity/i
   it("writeBVH writes Python's BVH (emdm.mocap.bvh_writer) line for line, numbers within rounding", () => {
     const name = fx.meta.bvhCase as string;
     const frames = cases[name].frames;
-    const mine = writeBVH({ frames, fps: fx.meta.fps as number, joints: fx.get(`${name}_joints`), features: new Float32Array(0) }, sk).split('\n');
+    const mine = writeBVH({ frames, fps: fx.meta.fps as number, joints: fx.get(`${name}_joints`), features: new Float32Array(0) }, sk, { units: 'cm' }).split('\n'); // ik.bvh is in cm (ik_fixture)
     const theirs = fs.readFileSync(path.join(PARITY_DIR, fx.meta.bvh as string), 'utf8').split('\n');
     expect(mine.length).toBe(theirs.length);
     let worst = 0;
