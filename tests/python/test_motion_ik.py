@@ -15,7 +15,7 @@ import pytest
 from emdm import skeleton as sk
 from emdm.mocap.bvh import forward_kinematics as bvh_fk
 from emdm.mocap.bvh import parse_bvh_text
-from emdm.mocap.bvh_writer import bvh_text
+from emdm.mocap.bvh_writer import bvh_path, bvh_text
 from emdm.motion import ik
 from emdm.motion import ik_fixture
 
@@ -134,15 +134,51 @@ def test_a_real_clip_is_followed_within_1_cm_with_the_adapted_offsets():
     assert err < 0.01 < err_ref, (err, err_ref)   # the clip's pelvis/chest differ from the reference by cm
 
 
-def test_the_bvh_writer_uses_it_and_reads_back_within_1_cm_on_a_real_clip():
+@pytest.mark.parametrize("units,per_metre", [("m", 1.0), ("cm", 100.0)])
+def test_the_bvh_writer_uses_it_and_reads_back_within_1_cm_on_a_real_clip(units, per_metre):
+    """Metres by default: the project's reader puts the pelvis ~0.9 (m) up, as Blender at import scale 1.0
+    would; in centimetres ~90."""
     joints = ik_fixture.read_case_array(COMMITTED, "recover", "joints")
-    text = bvh_text(joints)
+    text = bvh_text(joints, units=units) if units != "m" else bvh_text(joints)   # "m": the default
     bvh = parse_bvh_text(text, "real.bvh")
-    pos = bvh_fk(bvh)[:, [bvh.index(n) for n in sk.JOINT_NAMES]] / 100.0
-    assert np.linalg.norm(pos - joints, axis=-1).max() < 0.01
+    fk = bvh_fk(bvh)[:, [bvh.index(n) for n in sk.JOINT_NAMES]]          # file units
+    pelvis_y = joints[:, N["pelvis"], 1]
+    assert 0.7 < pelvis_y.mean() < 1.1                                   # a standing clip, metres
+    np.testing.assert_allclose(fk[:, N["pelvis"], 1], per_metre * pelvis_y, atol=1e-3 * per_metre)
+    assert np.linalg.norm(fk / per_metre - joints, axis=-1).max() < 0.01
     res = ik.solve_ik(joints)
     l_hip = text.split("JOINT l_hip", 1)[1].split("OFFSET", 1)[1].split("\n", 1)[0].split()
-    np.testing.assert_allclose([float(v) for v in l_hip], res.offsets[N["l_hip"]] * 100, atol=1e-4)
+    np.testing.assert_allclose([float(v) for v in l_hip], res.offsets[N["l_hip"]] * per_metre, atol=1e-4)
+
+
+def test_the_metres_bvh_is_the_centimetres_one_divided_by_100():
+    """Same lines and rotations; every length (OFFSETs, root position channels) ÷ 100, with 6 decimals for 4."""
+    joints = ik_fixture.read_case_array(COMMITTED, "recover", "joints")[:8]
+    m, cm = bvh_text(joints, fps=30).splitlines(), bvh_text(joints, fps=30, units="cm").splitlines()
+    assert len(m) == len(cm)
+    start = m.index("MOTION") + 3
+    worst = 0.0
+    for i, (a, b) in enumerate(zip(m, cm)):
+        ta, tb = a.split(), b.split()
+        assert len(ta) == len(tb), i
+        is_length = [ta[0] == "OFFSET" or (i >= start and k < 3) for k in range(len(ta))]
+        for k, (x, y) in enumerate(zip(ta, tb)):
+            try:
+                u, v = float(x), float(y)
+            except ValueError:
+                assert x == y, (i, a, b)
+                continue
+            worst = max(worst, abs(u * 100 - v) if is_length[k] else abs(u - v))
+        if ta[0] == "OFFSET":
+            assert all(len(t.split(".")[1]) == 6 for t in ta[1:]), a
+    assert worst <= 1e-4 + 1e-9, worst
+
+
+def test_bvh_file_names_say_the_unit_and_other_units_are_refused(tmp_path):
+    assert bvh_path(tmp_path / "walk").name == "walk.metres.bvh"
+    assert bvh_path(tmp_path / "walk_0", "cm").name == "walk_0.centimetres.bvh"
+    with pytest.raises(ValueError, match="BVH units must be 'm' or 'cm', got 'mm'"):
+        bvh_text(np.zeros((2, 22, 3)), units="mm")
 
 
 def test_bad_joints_are_refused_with_the_shape_or_the_values():

@@ -4,7 +4,11 @@ The same file as the page's ``writeBVH`` (src/export/bvh.ts) at the motion's own
 (twist from body planes; tests/fixtures/parity/ik.bvh is this writer's output, which the TypeScript test
 reads back number by number), the same hierarchy and number format.
 
-Units: centimetres (offsets and root position ×100), Y up. Hierarchy: the reference skeleton with the
+Units (``units``): metres by default — Blender's importer (scale 1.0) and three.js read the numbers as scene
+units, i.e. metres, so the pelvis stands ~0.9 high — or centimetres ("cm": offsets and root position ×100).
+Lengths get 6 decimals in metres, 4 in centimetres (1 µm either way). BVH has no comment line that both
+three's BVHLoader and Blender's importer skip (both want HIERARCHY first), so the unit goes in the file
+name: ``bvh_path``. Y up. Hierarchy: the reference skeleton with the
 offsets ``solve_ik`` adapts to the motion (the children of pelvis and spine3 at the motion's mean offsets,
 every other bone at its mean length); the root OFFSET is 0 0 0 and its position channels carry the
 pelvis's world position. Root: 6 channels (Xposition Yposition Zposition Zrotation Xrotation Yrotation),
@@ -21,8 +25,21 @@ import numpy as np
 from emdm import skeleton as sk
 from emdm.motion.ik import solve_ik
 
-SCALE = 100.0   # metres → centimetres
+UNITS = {"m": (1.0, 6, "metres"), "cm": (100.0, 4, "centimetres")}   # unit → (per metre, decimals, word)
 END_SITE = 0.05  # metres along a leaf's bone
+
+
+def _unit(units: str) -> tuple[float, int, str]:
+    if units not in UNITS:
+        raise ValueError(f"BVH units must be 'm' or 'cm', got {units!r}")
+    return UNITS[units]
+
+
+def bvh_path(prefix: Path | str, units: str = "m") -> Path:
+    """``out/walk`` → ``out/walk.metres.bvh`` (or ``.centimetres.bvh``): the unit in the file name (appended:
+    nothing of ``prefix`` is taken for a suffix)."""
+    prefix = Path(prefix)
+    return prefix.with_name(f"{prefix.name}.{_unit(units)[2]}.bvh")
 
 
 def matrix_to_euler_zxy(R: np.ndarray) -> np.ndarray:
@@ -53,14 +70,15 @@ def _children(j: int) -> list[int]:
     return [c for c, p in enumerate(sk.PARENTS) if p == j]
 
 
-def _num(v: float) -> str:
-    """4 decimals, never "-0.0000" (as the page writes numbers)."""
-    s = f"{v:.4f}"
-    return "0.0000" if s == "-0.0000" else s
+def _num(v: float, digits: int = 4) -> str:
+    """``digits`` decimals, never "-0.0000" (as the page writes numbers)."""
+    s = f"{v:.{digits}f}"
+    return s[1:] if s.startswith("-") and float(s) == 0 else s
 
 
-def bvh_text(joints: np.ndarray, fps: float = sk.FPS) -> str:
-    """(F, 22, 3) joint positions (metres) → BVH text."""
+def bvh_text(joints: np.ndarray, fps: float = sk.FPS, units: str = "m") -> str:
+    """(F, 22, 3) joint positions (metres) → BVH text in ``units`` ("m" or "cm")."""
+    scale, digits, _ = _unit(units)
     if np.asarray(joints).shape[0] < 1:
         raise ValueError("bvh_text: the motion has no frames")
     ik = solve_ik(joints)
@@ -70,10 +88,10 @@ def bvh_text(joints: np.ndarray, fps: float = sk.FPS) -> str:
 
     def emit(j: int, depth: int) -> None:
         pad = "  " * depth
-        off = (np.zeros(3) if j == 0 else ik.offsets[j]) * SCALE
+        off = (np.zeros(3) if j == 0 else ik.offsets[j]) * scale
         lines.append(f"{pad}{'ROOT' if j == 0 else 'JOINT'} {sk.JOINT_NAMES[j]}")
         lines.append(f"{pad}{{")
-        lines.append(f"{pad}  OFFSET {' '.join(_num(v) for v in off)}")
+        lines.append(f"{pad}  OFFSET {' '.join(_num(v, digits) for v in off)}")
         if j == 0:
             lines.append(f"{pad}  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation")
         else:
@@ -82,10 +100,10 @@ def bvh_text(joints: np.ndarray, fps: float = sk.FPS) -> str:
         kids = _children(j)
         if not kids:
             d = sk.REFERENCE_OFFSETS[j]
-            end = d / max(np.linalg.norm(d), 1e-9) * END_SITE * SCALE
+            end = d / max(np.linalg.norm(d), 1e-9) * END_SITE * scale
             lines.append(f"{pad}  End Site")
             lines.append(f"{pad}  {{")
-            lines.append(f"{pad}    OFFSET {' '.join(_num(v) for v in end)}")
+            lines.append(f"{pad}    OFFSET {' '.join(_num(v, digits) for v in end)}")
             lines.append(f"{pad}  }}")
         for c in kids:
             emit(c, depth + 1)
@@ -95,14 +113,15 @@ def bvh_text(joints: np.ndarray, fps: float = sk.FPS) -> str:
     n = len(ik.root)
     lines += ["MOTION", f"Frames: {n}", f"Frame Time: {1.0 / fps:.7f}"]
     for f in range(n):
-        vals = list(ik.root[f] * SCALE)
+        vals = [_num(v, digits) for v in ik.root[f] * scale]
         for j in order:
-            vals += list(euler[f, j])
-        lines.append(" ".join(_num(v) for v in vals))
+            vals += [_num(v) for v in euler[f, j]]
+        lines.append(" ".join(vals))
     return "\n".join(lines) + "\n"
 
 
-def write_bvh(joints: np.ndarray, path: Path | str, fps: float = sk.FPS) -> Path:
+def write_bvh(joints: np.ndarray, path: Path | str, fps: float = sk.FPS, units: str = "m") -> Path:
+    """Write ``bvh_text`` to ``path`` (name it with ``bvh_path`` so that it says the unit)."""
     path = Path(path)
-    path.write_text(bvh_text(joints, fps))
+    path.write_text(bvh_text(joints, fps, units))
     return path

@@ -1,5 +1,5 @@
 """The IK parity fixture: joint positions → root, local rotations and offsets by ``emdm.motion.ik.solve_ik``,
-and the BVH ``emdm.mocap.bvh_writer`` makes of one of them, which the page's ``solveIK`` / ``writeBVH`` must
+and the BVH (in centimetres) ``emdm.mocap.bvh_writer`` makes of one of them, which the page's ``solveIK`` / ``writeBVH`` must
 reproduce (tests/unit/coreIk.test.ts) and Python's must still give (tests/python/test_motion_ik.py):
 
     .venv/bin/python -m emdm.motion.ik_fixture        # writes tests/fixtures/parity/ik.{json,bin,bvh}
@@ -101,7 +101,10 @@ def make(out_dir: Path = PARITY_DIR, inputs: dict[str, tuple[np.ndarray, str]] |
             arrays[f"{case}_{key}"] = value
         meta["cases"][case] = {"frames": int(joints.shape[0]), "source": source}
     path = write_case(out_dir, NAME, meta, arrays)
-    (out_dir / f"{NAME}.bvh").write_text(bvh_text(np.asarray(inputs[BVH_CASE][0], dtype=np.float32)))
+    # in centimetres (4 decimals, as it has been written since the fixture began); tests/unit/coreIk.test.ts
+    # asks writeBVH for cm too, and both sides test that the metres file is this one ÷ 100
+    bvh = bvh_text(np.asarray(inputs[BVH_CASE][0], dtype=np.float32), units="cm")
+    (out_dir / f"{NAME}.bvh").write_text(bvh)
     return path
 
 
