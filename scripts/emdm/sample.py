@@ -8,7 +8,9 @@
         --keep group:root,legs --out out/walk_wave       # keep the walk's legs and root, regenerate the rest
 
 Writes <out>.npy (joints, (frames, 22, 3) metres; (n, frames, 22, 3) with --num > 1), <out>.features.npy
-(de-normalised 263-d) and <out>.bvh (one per sample). The loop is docs/ARCHITECTURE.md "Sampling":
+(de-normalised 263-d) and <out>.metres.bvh (one per sample, <out>_<i>.metres.bvh with --num > 1;
+.centimetres.bvh with --bvh-units cm; metres are what Blender's BVH import expects at its scale 1.0).
+The loop is docs/ARCHITECTURE.md "Sampling":
 x_T ~ N(0, I); per step: fresh z, x0 = G(x, z, c, time[k], mask) (with guidance s ≠ 1 one batched call
 [c, 0] with the same x and z, x0 = x0_u + s·(x0_c − x0_u)), x = coef1·x0 + coef2·x + sigma·ε. Random
 draws come from numpy's default_rng(seed) in the order x_T, then per step z, then ε. Models trained with
@@ -214,12 +216,21 @@ def variant_file(entry: dict, name: str, variant: str | None) -> str:
     return variants[variant]
 
 
-def check_out(out: Path, num: int, bvh: bool) -> None:
+def bvh_paths(out: Path, num: int, units: str) -> list[Path]:
+    """<out>.metres.bvh, or <out>_<i>.metres.bvh per sample with --num > 1 (.centimetres.bvh for units "cm")."""
+    from emdm.mocap.bvh_writer import bvh_path
+
+    if num == 1:
+        return [bvh_path(out.with_suffix(""), units)]
+    return [bvh_path(out.with_name(f"{out.name}_{i}"), units) for i in range(num)]
+
+
+def check_out(out: Path, num: int, bvh_units: str | None) -> None:
     """Refuse an output prefix that cannot be written, before any sampling: the nearest existing folder
-    must take a new file, and no output name may be an existing folder."""
+    must take a new file, and no output name may be an existing folder. ``bvh_units`` None: no BVH."""
     names = [out.with_suffix(".npy"), out.with_suffix(".features.npy")]
-    if bvh:
-        names += [out.with_suffix(".bvh")] if num == 1 else [out.with_name(f"{out.name}_{i}.bvh") for i in range(num)]
+    if bvh_units is not None:
+        names += bvh_paths(out, num, bvh_units)
     for p in names:
         if p.is_dir():
             raise SampleError(f"--out: {p} is a folder; give a path prefix such as out/walk (writes .npy, .bvh)")
@@ -249,7 +260,7 @@ def check_args(a) -> None:
         raise SampleError(f"--threads must be ≥ 1, got {a.threads}")
     if a.ckpt is not None and a.variant not in (None, "fp32"):
         raise SampleError(f"--variant {a.variant!r} needs --model (a checkpoint has only its fp32 weights)")
-    check_out(a.out, a.num, not a.no_bvh)
+    check_out(a.out, a.num, None if a.no_bvh else a.bvh_units)
     if a.keep or a.known is not None:
         keep_rects(a)
         read_known(a.known)
@@ -334,8 +345,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--guidance", type=float, default=None, help="classifier-free guidance scale (default: model's)")
     p.add_argument("--num", type=int, default=1, help="number of samples")
     p.add_argument("--threads", type=int, default=1)
-    p.add_argument("--out", type=Path, required=True, help="output path prefix (.npy, .features.npy, .bvh)")
+    p.add_argument("--out", type=Path, required=True, help="output path prefix (.npy, .features.npy, .metres.bvh)")
     p.add_argument("--no-bvh", action="store_true")
+    p.add_argument("--bvh-units", choices=["m", "cm"], default="m",
+                   help="BVH length unit, also in the file name: m (default; Blender's import at scale 1.0) or cm")
     p.add_argument("--known", type=Path, default=None,
                    help="a motion to keep parts of: (frames, 263) de-normalised features (an <out>.features.npy); "
                         "its frame i is output frame i")
@@ -387,9 +400,8 @@ def run(a: argparse.Namespace) -> int:
     if not a.no_bvh:
         from emdm.mocap.bvh_writer import write_bvh
 
-        for i in range(a.num):
-            path = a.out.with_suffix(".bvh") if a.num == 1 else a.out.with_name(f"{a.out.name}_{i}.bvh")
-            written.append(write_bvh(joints[i], path))
+        for i, path in enumerate(bvh_paths(a.out, a.num, a.bvh_units)):
+            written.append(write_bvh(joints[i], path, units=a.bvh_units))
     print("wrote " + ", ".join(map(str, written)))
     return 0
 

@@ -73,9 +73,21 @@ def test_cli_writes_joints_features_and_bvh(models, tmp_path):
                         "--steps", "4", "--seed", "3", "--out", str(out)]) == 0
     joints = np.load(out.with_suffix(".npy"))
     assert joints.shape == (40, 22, 3) and np.isfinite(joints).all()
-    bvh = read_bvh(out.with_suffix(".bvh"))
+    assert not out.with_suffix(".bvh").exists()                    # the file name says the unit
+    bvh = read_bvh(out.with_suffix(".metres.bvh"))
     assert bvh.num_frames == 40 and abs(bvh.fps - 20) < 1e-6
     assert sorted(n for n, end in zip(bvh.names, bvh.end_site) if not end) == sorted(sk.JOINT_NAMES)
+    # metres by default (Blender imports BVH at scale 1.0): the project's reader puts the pelvis where the
+    # joints have it; --bvh-units cm gives 100× that, one file per sample
+    pelvis = bvh_fk(bvh)[:, bvh.index("pelvis")]
+    np.testing.assert_allclose(pelvis, joints[:, 0], atol=1e-3)
+    cm = tmp_path / "s" / "wave2"
+    assert sample_main(["--model", "m", "--models-dir", str(models), "--action", "wave", "--frames", "40",
+                        "--steps", "4", "--seed", "3", "--num", "2", "--bvh-units", "cm", "--out", str(cm)]) == 0
+    joints2 = np.load(cm.with_suffix(".npy"))
+    for i in range(2):
+        b = read_bvh(tmp_path / "s" / f"wave2_{i}.centimetres.bvh")
+        np.testing.assert_allclose(bvh_fk(b)[:, b.index("pelvis")], 100 * joints2[i, :, 0], atol=0.1)
 
 
 def test_bad_condition_is_explained():
@@ -87,7 +99,7 @@ def test_bad_condition_is_explained():
 
 
 def test_bvh_round_trip_through_the_project_reader(tmp_path):
-    """Joints on the reference skeleton → IK → BVH → reader + FK gives the same joints (cm → m)."""
+    """Joints on the reference skeleton → IK → BVH (metres, the default) → reader + FK gives the same joints."""
     from scipy.spatial.transform import Rotation
 
     rng = np.random.default_rng(0)
@@ -99,8 +111,8 @@ def test_bvh_round_trip_through_the_project_reader(tmp_path):
     bvh = read_bvh(path)
     from emdm import skeleton as sk
 
-    pos = bvh_fk(bvh)[:, [bvh.index(n) for n in sk.JOINT_NAMES]] / 100.0
-    np.testing.assert_allclose(pos, joints, atol=2e-4)      # 4 decimals in cm
+    pos = bvh_fk(bvh)[:, [bvh.index(n) for n in sk.JOINT_NAMES]]
+    np.testing.assert_allclose(pos, joints, atol=2e-4)      # 4 decimals of degrees
 
 
 # --- bad arguments: one line naming the argument and what is allowed, exit status 2, nothing written ---
