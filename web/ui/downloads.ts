@@ -1,11 +1,21 @@
-// What the visitor can download for the motion on screen: BVH (writeBVH of the TypeScript core), a
-// binary glTF of the skinned character with the motion as an animation (three's GLTFExporter), and
-// the joint positions as JSON.
+// What the visitor can download for the motion on screen: BVH (writeBVH of the TypeScript core, in
+// metres or centimetres, the unit in the file name), a binary glTF of the skinned character with the
+// motion as an animation (three's GLTFExporter; metres, as glTF requires), and the joint positions as JSON.
 import { AnimationClip, QuaternionKeyframeTrack, VectorKeyframeTrack } from 'three';
 import { GLTFExporter } from 'three/addons/exporters/GLTFExporter.js';
 import { createCharacter } from '../../src/character/character';
 import type { PoseTrack } from '../../src/character/player';
+import { type BvhUnits, bvhFileName, writeBVH } from '../../src/export/bvh';
+import type { Motion } from '../../src/motion/types';
 import type { SkeletonLike } from '../../src/skeleton';
+
+/** The BVH file of a motion at its own 20 fps in `units` ('m' | 'cm', from the page's unit select), named
+ * `<stem>-metres.bvh` / `<stem>-centimetres.bvh`. Another value is a RangeError naming it. */
+export function motionToBVH(s: SkeletonLike, motion: Motion, stem: string, units: string): { blob: Blob; filename: string } {
+  const u = units as BvhUnits; // writeBVH checks it
+  const text = writeBVH(motion, s, { fps: 20, units: u });
+  return { blob: new Blob([text], { type: 'text/plain' }), filename: bvhFileName(stem, u) };
+}
 
 /** An AnimationClip of a pose track for bones named after the skeleton's joints. */
 export function trackToClip(s: SkeletonLike, t: PoseTrack, name = 'emdm'): AnimationClip {
