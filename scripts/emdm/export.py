@@ -7,6 +7,10 @@ manifest entry (docs/ARCHITECTURE.md "ONNX step model", docs/MANIFEST.md).
 The exported weights are the EMA weights. Export uses the dynamo exporter (opset 18) with an example
 batch of 2 so batch and length stay dynamic; parity against PyTorch is checked on several batch sizes and
 lengths and the export fails if the max abs error exceeds ``--tolerance`` (1e-4).
+
+The checkpoint is read by ``emdm.model.open`` (weights_only=True). A checkpoint that cannot be used, an ``--out``
+that cannot be written, an unknown ``--variants`` entry or a malformed manifest in ``--out`` is answered with one
+line naming it and exit status 2, before anything is exported.
 """
 
 from __future__ import annotations
@@ -22,9 +26,9 @@ import numpy as np
 import torch
 
 from emdm.model.generator import Generator
+from emdm.model.open import INPUTS, ModelError, load_generator as open_generator, ort_session
 from emdm.model.schedule import DEFAULT_STEPS, make_schedule
 
-INPUTS = ["x_t", "z", "cond", "t", "mask"]
 PARITY_CASES = ((1, 1), (1, 60), (2, 17), (3, 120), (2, 196))
 
 
@@ -33,26 +37,12 @@ class ExportError(RuntimeError):
 
 
 def load_generator(ckpt_path: Path | str, weights: str = "G_ema") -> tuple[Generator, dict, dict]:
-    """(generator in eval mode with the chosen weights, meta, checkpoint summary)."""
-    ckpt_path = Path(ckpt_path)
-    if not ckpt_path.is_file():
-        raise ExportError(f"{ckpt_path}: checkpoint not found")
-    from emdm.checkpoints import CheckpointError, load_file
-
-    try:                                     # tensors and plain values only: a checkpoint cannot run code
-        st = load_file(ckpt_path, need=())
-    except CheckpointError as e:
-        raise ExportError(str(e)) from e
-    for key in ("meta", weights, "step"):
-        if key not in st:
-            raise ExportError(f"{ckpt_path}: not an emdm.train checkpoint (missing {key!r})")
-    meta = st["meta"]
-    gcfg = meta["generator"]
-    G = Generator(gcfg["cond_dim"], gcfg["preset"], gcfg["feature_dim"], gcfg["z_dim"], gcfg["max_frames"])
-    G.load_state_dict({k: v.float() for k, v in st[weights].items()})   # --weights-dtype float16 files too
-    G.eval()
-    summary = {"steps": int(st["step"]), "wall_s": float(st.get("wall", 0.0)), "losses": st.get("last_losses", {})}
-    return G, meta, summary
+    """(generator in eval mode with the chosen weights, meta, checkpoint summary), read by the one opener of models
+    (``emdm.model.open.load_generator``, weights_only=True); a file that cannot be used is an ExportError."""
+    try:
+        return open_generator(ckpt_path, weights)
+    except ModelError as e:
+        raise ExportError(str(e)) from None
 
 
 def example_inputs(G: Generator, batch: int, length: int, seed: int = 0, padded: bool = True) -> tuple[torch.Tensor, ...]:
@@ -93,16 +83,6 @@ def export_onnx(G: Generator, path: Path | str, opset: int = 18) -> Path:
     onnx.save(model, str(path), save_as_external_data=False)
     onnx.checker.check_model(str(path))
     return path
-
-
-def ort_session(path: Path | str, threads: int = 1):
-    import onnxruntime as ort
-
-    so = ort.SessionOptions()
-    so.intra_op_num_threads = threads
-    so.inter_op_num_threads = 1
-    so.log_severity_level = 3
-    return ort.InferenceSession(str(path), so, providers=["CPUExecutionProvider"])
 
 
 def parity(G: Generator, onnx_path: Path | str, cases=PARITY_CASES) -> dict[str, float]:
@@ -249,12 +229,35 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+VARIANT_MAKERS = {"int8": make_int8, "fp16": make_fp16}
+
+
 def main(argv: list[str] | None = None) -> int:
-    from emdm import manifest as mf
+    """The CLI: an unusable --ckpt, --out or --variants is one line naming it, exit status 2."""
+    from emdm.manifest import ManifestError
+    from emdm.outdir import OutputRefused
 
     a = build_parser().parse_args(argv)
+    try:
+        return run(a)
+    except (ExportError, OutputRefused, ManifestError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+
+
+def run(a: argparse.Namespace) -> int:
+    from emdm import manifest as mf
+    from emdm.outdir import check_writable
+
+    variants = [s.strip() for s in a.variants.split(",") if s.strip()]
+    unknown = [v for v in variants if v not in VARIANT_MAKERS]
+    if unknown:
+        raise ExportError(f"--variants: unknown {', '.join(map(repr, unknown))}; use a comma list of "
+                          f"{', '.join(VARIANT_MAKERS)} (empty for none)")
+    out = check_writable(a.out, folder=True)               # before the checkpoint is read or anything exported
+    if not a.no_manifest:
+        mf.load(out, missing_ok=True)                      # a malformed manifest there is found now, not at the end
     G, meta, summary = load_generator(a.ckpt, a.weights)
-    out = a.out
     out.mkdir(parents=True, exist_ok=True)
     onnx_path = export_onnx(G, out / f"{a.name}.onnx")
     par = parity(G, onnx_path)
@@ -265,9 +268,9 @@ def main(argv: list[str] | None = None) -> int:
     files = {"onnx": onnx_path.name}
     extra: dict = {"parityMaxAbsErr": float(f"{worst:.3g}")}
     var_err = {}
-    for v in [s.strip() for s in a.variants.split(",") if s.strip()]:
+    for v in variants:
         dst = out / f"{a.name}.{v}.onnx"
-        {"int8": make_int8, "fp16": make_fp16}[v](onnx_path, dst)
+        VARIANT_MAKERS[v](onnx_path, dst)
         var_err[v] = variant_error(G, dst)
         files[v] = dst.name
         print(f"{dst}: {dst.stat().st_size / 1e6:.2f} MB, max abs err / output std {var_err[v]:.3g}")
@@ -298,8 +301,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    try:
-        raise SystemExit(main())
-    except ExportError as e:
-        print(f"error: {e}", file=sys.stderr)
-        raise SystemExit(2)
+    raise SystemExit(main())

@@ -19,6 +19,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import tempfile
 from pathlib import Path
 from typing import Callable, Iterable
 
@@ -83,6 +84,32 @@ def check_out(out: Path | str, *, inputs: Iterable[tuple[str, Path | str]] = (),
             raise OutputRefused(f"{given}: exists and is a file, not {what} this tool wrote; nothing was "
                                 "changed (give --force to replace it, or choose a new path)")
     return out
+
+
+def check_writable(path: Path | str, *, folder: bool = False, option: str = "--out") -> Path:
+    """``path`` if this run can write it (a file; ``folder=True``: a folder to write files in), else
+    OutputRefused: a file path must not be a folder and a folder path not a file, and the nearest existing
+    folder must take a new file. Asked before any work, so a run never fails at its end for want of a place
+    to write."""
+    path = Path(path)
+    given = f"{option} {path}"
+    if folder and path.exists() and not path.is_dir():
+        raise OutputRefused(f"{given}: is a file, not a folder; give a folder to write in")
+    if not folder and path.is_dir():
+        raise OutputRefused(f"{given}: is a folder; give a file path")
+    d = path if folder and path.is_dir() else path.parent
+    while not d.exists():
+        if d.is_symlink():
+            raise OutputRefused(f"{given}: {d} is a broken symbolic link; give a path in a writable folder")
+        d = d.parent
+    if not d.is_dir():
+        raise OutputRefused(f"{given}: {d} is a file, not a folder; give a path in a writable folder")
+    try:
+        with tempfile.TemporaryFile(dir=d):
+            pass
+    except OSError as e:
+        raise OutputRefused(f"{given}: cannot write in {d} ({e.strerror}); give a path in a writable folder") from None
+    return path
 
 
 def replace_dir(tmp: Path, out: Path) -> None:

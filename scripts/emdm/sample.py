@@ -34,6 +34,7 @@ from typing import Callable
 
 import numpy as np
 
+from emdm.model.open import onnx_step, read_meanstd, torch_step  # noqa: F401 - the step functions, re-exported
 from emdm.model.schedule import make_schedule
 
 StepFn = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -112,30 +113,6 @@ def check_known(known, keep, frames: int, feature_dim: int) -> tuple[np.ndarray 
     return keep, np.where(keep, known, np.float32(0))
 
 
-def onnx_step(path: Path | str, threads: int = 1) -> StepFn:
-    from emdm.export import ort_session
-
-    sess = ort_session(path, threads)
-
-    def step(x, z, c, t, mask):
-        return sess.run(["x0"], {"x_t": x, "z": z, "cond": c, "t": t, "mask": mask})[0]
-    return step
-
-
-def torch_step(G, device: str = "cpu") -> StepFn:
-    """A step function over a PyTorch generator; ``device`` "cuda" moves G there (numpy in, numpy out)."""
-    import torch
-
-    dev = torch.device(device)
-    G = G.to(dev)
-
-    def step(x, z, c, t, mask):
-        with torch.no_grad():
-            args = (torch.from_numpy(np.ascontiguousarray(a)).to(dev) for a in (x, z, c, t, mask))
-            return G(*args).cpu().numpy()
-    return step
-
-
 def make_condition(spec: dict, text: str | None, action: str | None, uncond: bool) -> np.ndarray:
     """The condition vector for a model's ``condition`` spec (manifest format)."""
     dim = int(spec["dim"])
@@ -177,43 +154,17 @@ def denormalise(x: np.ndarray, mean: np.ndarray, std: np.ndarray) -> np.ndarray:
     return x * std + mean
 
 
-def read_meanstd(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    arr = np.fromfile(path, dtype="<f4")
-    if arr.shape != (526,):
-        raise SampleError(f"{path}: expected 526 float32 values (mean[263], std[263]), got {arr.shape[0]}")
-    return arr[:263], arr[263:]
-
-
 def load_model(args) -> tuple[StepFn, dict, np.ndarray, np.ndarray]:
-    """(step function, model entry (manifest-like), mean, std)."""
-    if args.ckpt is not None:
-        from emdm.export import load_generator
+    """(step function, model entry (manifest-like), mean, std), opened by emdm.model.open: a corrupt or missing
+    file, a name not in the manifest or a file whose sha256 differs from it is a SampleError naming it."""
+    from emdm.model.open import ModelError, open_model
 
-        G, meta, _ = load_generator(args.ckpt)
-        entry = {"condition": meta["condition"], "objective": meta.get("objective", "ddgan"), "zDim": G.z_dim,
-                 "guidance": 2.5, "defaultSteps": 10, "maxFrames": G.max_frames}
-        return torch_step(G), entry, np.array(meta["mean"], np.float32), np.array(meta["std"], np.float32)
-    from emdm import manifest as mf
-
-    man = mf.load(args.models_dir)
-    if args.model not in man["models"]:
-        raise SampleError(f"{Path(args.models_dir) / mf.MANIFEST_NAME}: no model {args.model!r} "
-                          f"(have: {', '.join(man['models']) or 'none'})")
-    entry = man["models"][args.model]
-    onnx_file = variant_file(entry, args.model, args.variant)
-    mean, std = read_meanstd(Path(args.models_dir) / entry["meanStd"])
-    return onnx_step(Path(args.models_dir) / onnx_file, args.threads), entry, mean, std
-
-
-def variant_file(entry: dict, name: str, variant: str | None) -> str:
-    """The ONNX file of ``variant`` (None/"fp32": the model's ``onnx``); an unknown one is a SampleError."""
-    if variant in (None, "fp32"):
-        return entry["onnx"]
-    variants = entry.get("variants") or {}
-    if variant not in variants:
-        raise SampleError(f"--variant: model {name!r} has no variant {variant!r}; use one of "
-                          f"{', '.join(['fp32', *variants])}")
-    return variants[variant]
+    try:
+        m = open_model(args.ckpt if args.ckpt is not None else args.model, models_dir=args.models_dir,
+                       variant=args.variant, threads=args.threads)
+    except ModelError as e:
+        raise SampleError(str(e)) from None
+    return m.step, m.meta, m.mean, m.std
 
 
 def bvh_paths(out: Path, num: int, units: str) -> list[Path]:

@@ -164,11 +164,11 @@ def test_long_prompt_says_it_was_truncated(capsys):
 
 def test_unwritable_out_is_found_before_sampling(models, tmp_path, capsys, monkeypatch):
     """A path under a regular file cannot be written: refused before the model runs."""
-    import emdm.sample as sample_mod
+    import emdm.model.open as opener            # where emdm.sample opens its model
 
     calls = []
-    real = sample_mod.onnx_step
-    monkeypatch.setattr(sample_mod, "onnx_step", lambda *a, **k: (calls.append(1), real(*a, **k))[1])
+    real = opener.onnx_step
+    monkeypatch.setattr(opener, "onnx_step", lambda *a, **k: (calls.append(1), real(*a, **k))[1])
     blocker = tmp_path / "file.txt"
     blocker.write_text("not a folder")
     assert sample_main(_cli(models, blocker / "sub" / "x")) == 2
@@ -181,11 +181,11 @@ def test_unwritable_out_is_found_before_sampling(models, tmp_path, capsys, monke
 
 
 def test_non_finite_motion_is_an_error_and_not_written(models, tmp_path, capsys, monkeypatch):
-    import emdm.sample as sample_mod
+    import emdm.model.open as opener            # where emdm.sample opens its model
 
     def nan_step(path, threads=1):
         return lambda x, z, c, t, mask: np.full_like(x, np.nan)
-    monkeypatch.setattr(sample_mod, "onnx_step", nan_step)
+    monkeypatch.setattr(opener, "onnx_step", nan_step)
     out = tmp_path / "o" / "nan"
     assert sample_main(_cli(models, out, "--steps", "2")) == 2
     err = capsys.readouterr().err.strip().splitlines()

@@ -170,7 +170,10 @@ class Benchmark:
         self.labels = list(self.test.action_labels)
         if not self.labels:
             raise CoverageError(f"{dataset}: no actions.json/metadata.csv, so no actions to cover")
-        self.classifier = E.load(classifier, "classifier")
+        try:
+            self.classifier = E.load(classifier, "classifier")
+        except ValueError as e:                # unreadable or not a classifier: one line naming the file
+            raise CoverageError(str(e)) from None
         self.classifier_path = classifier
         have = self.classifier.meta.get("labels")
         if have is not None and list(have) != self.labels:
@@ -239,19 +242,10 @@ class Benchmark:
         return run
 
 
-def model_defaults(a) -> tuple[float, int]:
-    """(guidance, default steps): the manifest entry's for a shipped model, the sampler's for a checkpoint."""
-    if a.model:
-        from emdm import manifest as mf
-        from emdm.paths import MODELS_DIR
-
-        e = mf.load(a.models_dir or MODELS_DIR)["models"].get(a.model)
-        if e is None:
-            raise CoverageError(f"{a.models_dir or MODELS_DIR}/manifest.json: no model {a.model!r}")
-        return float(e.get("guidance", 2.5)), int(e.get("defaultSteps", 10))
-    from emdm.eval.sources import DEFAULT_GUIDANCE
-
-    return DEFAULT_GUIDANCE, 10
+def model_defaults(opened) -> tuple[float, int]:
+    """(guidance, default steps) of an opened model (emdm.model.open): the manifest entry's for a shipped model,
+    the sampler's for a checkpoint."""
+    return float(opened.meta.get("guidance", 2.5)), int(opened.meta.get("defaultSteps", 10))
 
 
 def _key(a, guidance: float) -> dict:
@@ -283,22 +277,26 @@ def run(a) -> Path:
     from emdm.eval.evaluate import _evaluator_info, dataset_info, hardware, write_result
     from emdm.eval.report import SCHEMA
     from emdm.eval.sources import ModelSource
+    from emdm.model.open import open_model
+    from emdm.outdir import check_writable
 
-    guidance, default_steps = model_defaults(a)
+    out = check_writable(a.out or default_out(a))          # before anything is measured
+    opened = open_model(a.ckpt if a.ckpt is not None else a.model, models_dir=a.models_dir, variant=a.variant,
+                        device=a.device, threads=a.threads)  # once, for every step count
+    guidance, default_steps = model_defaults(opened)
     guidance = guidance if a.guidance is None else a.guidance
     bench = Benchmark(a.dataset, a.split, a.classifier, a.prompts, a.seeds, a.seed, a.min_clips)
     seen = seen_paraphrases(load_prompts(a.prompts, bench.labels), dataset_captions(a.dataset))
     if seen:
         raise CoverageError(f"{a.prompts}: {len(seen)} paraphrase(s) are captions of the dataset {a.dataset}, so they "
                             f"do not test generalisation: " + "; ".join(seen[:5]))
-    out = a.out or default_out(a)
     key = _key(a, guidance)
     old = read_result(out)
     runs = {r["steps"]: r for r in (old or {}).get("runs", [])} if old and old.get("key") == key else {}
     result = {}
     for T in a.steps:
-        src = ModelSource(ckpt=a.ckpt, model=a.model, onnx_variant=a.variant, models_dir=a.models_dir, steps=T,
-                          guidance=guidance, batch_size=a.batch, threads=a.threads, device=a.device)
+        src = ModelSource(opened=opened, steps=T, guidance=guidance, batch_size=a.batch, threads=a.threads,
+                          device=a.device)
         runs[T] = bench.measure(src)
         info = {k: v for k, v in src.info.items() if k != "steps"}
         result = {"schema": SCHEMA, "task": "coverage", "name": a.name or a.model or display_path(a.ckpt),
@@ -356,13 +354,16 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     import torch
 
+    from emdm.model.open import ModelError
+    from emdm.outdir import OutputRefused
+
     a = build_parser().parse_args(argv)
     torch.set_num_threads(a.threads)
     try:
         if a.chips:
             return print_chips(a)
         print(f"wrote {run(a)}")
-    except (CoverageError, FileNotFoundError) as e:
+    except (CoverageError, FileNotFoundError, ModelError, OutputRefused) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     return 0

@@ -29,6 +29,7 @@ from emdm.eval import data as evdata
 from emdm.eval import evaluators as E
 from emdm.eval.protocol import Conditions, RealSource, evaluate_action, evaluate_text
 from emdm.eval.report import RESULTS_DIR, SCHEMA
+from emdm.outdir import OutputRefused, check_writable
 from emdm.paths import DATASET_DIR, RUNS_DIR, display_path
 
 
@@ -85,53 +86,69 @@ def _evaluator_info(model, path: Path) -> dict:
                        f"({meta.get('minutes', 0) or 0:.1f} min{'; val ' + val if val else ''})"}
 
 
+class EvaluateError(ValueError):
+    """An input of an evaluation cannot be used; one line naming the file and what is wrong."""
+
+
+def load_evaluator(path: Path, kind: str):
+    """``evaluators.load``, with a missing or unreadable checkpoint as an EvaluateError."""
+    try:
+        return E.load(path, kind)
+    except (OSError, ValueError) as e:
+        raise EvaluateError(str(e)) from None
+
+
 def run_quality(a) -> Path:
-    test = evdata.load_split(a.dataset, a.split, max_items=a.max_items or None,
-                             require_action=a.task == "action")
-    if a.source == "real":
-        source = RealSource(test, info={"variant": "real"})
-    else:
+    if a.out:
+        check_writable(a.out)                             # before anything is measured
+    source = None
+    if a.source != "real":
         from emdm.eval.sources import ModelSource
 
         source = ModelSource(ckpt=a.ckpt, model=a.model, onnx_variant=a.variant, models_dir=a.models_dir, steps=a.steps, guidance=a.guidance,
                              batch_size=a.batch, threads=a.threads, device=a.device, name=a.name or "")
         if source.task != a.task:
             raise SystemExit(f"error: {a.ckpt or a.model} is a {source.task} model, not {a.task}")
+    test = evdata.load_split(a.dataset, a.split, max_items=a.max_items or None,
+                             require_action=a.task == "action")
+    if source is None:
+        source = RealSource(test, info={"variant": "real"})
     if a.name:
         source.name = a.name
+    out = a.out or RESULTS_DIR / "json" / (slug(a.task, source.info.get("variant"), source.info.get("steps")) + ".json")
+    check_writable(out)
+    path = a.matcher if a.task == "text" else a.classifier
+    ev = load_evaluator(path, "matcher" if a.task == "text" else "classifier")
     t0 = time.time()
     if a.task == "text":
-        path = a.matcher
-        ev = E.load(path, "matcher")
         caps = evdata.caption_embeddings(test)
         res = evaluate_text(ev, test, caps, source, repeats=a.repeats, seed=a.seed, mm_texts=a.mm_texts,
                             mm_repeats=a.mm_repeats, plaus_n=a.plaus_n)
     else:
-        path = a.classifier
-        ev = E.load(path, "classifier")
         res = evaluate_action(ev, test, source, repeats=a.repeats, seed=a.seed, plaus_n=a.plaus_n)
     result = {"schema": SCHEMA, "name": source.name, "kind": source.kind, "info": source.info,
               "dataset": dataset_info(Path(a.dataset), a.split), "hardware": hardware(),
               "load_avg_1min_end": os.getloadavg()[0],
               "evaluator": _evaluator_info(ev, path), "minutes": (time.time() - t0) / 60,
               "created": datetime.now(timezone.utc).isoformat(timespec="seconds"), **res}
-    out = a.out or RESULTS_DIR / "json" / (slug(a.task, source.info.get("variant"), source.info.get("steps")) + ".json")
     return write_result(result, out)
 
 
 def run_timing(a) -> Path:
     from emdm.eval.sources import ModelSource
+    from emdm.model.open import is_checkpoint, open_model
 
+    out = check_writable(a.out or RESULTS_DIR / "json" / f"timing-{a.runtime}.json")
     rows = []
     load_before = os.getloadavg()[0]
     for spec in a.model:
         if "=" not in spec:
             raise SystemExit(f"error: --model {spec!r}: expected CKPT=STEPS[,STEPS...]")
         ckpt, steps = spec.rsplit("=", 1)
+        is_ckpt = is_checkpoint(ckpt)
+        opened = open_model(Path(ckpt) if is_ckpt else ckpt, threads=a.threads, device=a.device)
         for T in [int(s) for s in steps.split(",")]:
-            is_ckpt = Path(ckpt).suffix == ".pt"
-            where = {"ckpt": Path(ckpt)} if is_ckpt else {"model": ckpt}
-            src = ModelSource(**where, steps=T, guidance=a.guidance, batch_size=1, threads=a.threads, device=a.device)
+            src = ModelSource(opened=opened, steps=T, guidance=a.guidance, batch_size=1, threads=a.threads, device=a.device)
             if src.task == "text":
                 from emdm.data.dataset import cached_text_embeddings
 
@@ -154,7 +171,7 @@ def run_timing(a) -> Path:
               "load_avg_1min": [load_before, os.getloadavg()[0]],
               "note": "batch 1 (with guidance: one batched call of 2), one warm-up run; emdm.sample loop",
               "created": datetime.now(timezone.utc).isoformat(timespec="seconds"), "rows": rows}
-    return write_result(result, a.out or RESULTS_DIR / "json" / f"timing-{a.runtime}.json")
+    return write_result(result, out)
 
 
 def import_bench(a) -> Path:
@@ -267,14 +284,22 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The CLI: an unusable model, evaluator checkpoint or --out is one line naming it, exit status 2."""
+    from emdm.manifest import ManifestError
+    from emdm.model.open import ModelError
+
     a = build_parser().parse_args(argv)
     torch.set_num_threads(a.threads)
-    if a.task == "timing":
-        out = run_timing(a)
-    elif a.task == "import-bench":
-        out = import_bench(a)
-    else:
-        out = run_quality(a)
+    try:
+        if a.task == "timing":
+            out = run_timing(a)
+        elif a.task == "import-bench":
+            out = import_bench(a)
+        else:
+            out = run_quality(a)
+    except (ModelError, EvaluateError, OutputRefused, ManifestError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     print(f"wrote {out}")
     return 0
 

@@ -18,8 +18,7 @@ import numpy as np
 
 from emdm.eval.data import TEXT_ENCODER
 from emdm.eval.protocol import Conditions
-
-DEFAULT_GUIDANCE = 2.5
+from emdm.model.open import DEFAULT_GUIDANCE, OpenedModel, open_model
 
 
 def variant_of(meta: dict) -> str:
@@ -71,7 +70,9 @@ def batched_features(step, conds: np.ndarray, lengths: np.ndarray, *, steps: int
 class ModelSource:
     """A trained generator sampled with ``steps`` steps and guidance: either an ``emdm.train``
     checkpoint (``ckpt``, EMA weights through PyTorch) or a shipped model of the manifest (``model``,
-    its ONNX step file through onnxruntime, ``onnx_variant`` e.g. "int8" — what the browser runs)."""
+    its ONNX step file through onnxruntime, ``onnx_variant`` e.g. "int8" — what the browser runs), opened by
+    ``emdm.model.open`` (a bad file or name is its ModelError, one line); or ``opened``, a model already opened
+    there (several step counts of one model share it)."""
     ckpt: Path | None = None
     model: str | None = None
     onnx_variant: str | None = None
@@ -84,14 +85,23 @@ class ModelSource:
     name: str = ""
     kind: str = "model"
     info: dict = field(default_factory=dict)
+    opened: OpenedModel | None = None
 
     def __post_init__(self):
-        if (self.ckpt is None) == (self.model is None):
-            raise ValueError("ModelSource: give exactly one of ckpt= or model=")
-        if self.ckpt is not None:
-            self._from_checkpoint(Path(self.ckpt))
+        if self.opened is None:
+            if (self.ckpt is None) == (self.model is None):
+                raise ValueError("ModelSource: give exactly one of ckpt=, model= or opened=")
+            self.opened = open_model(Path(self.ckpt) if self.ckpt is not None else self.model,
+                                     models_dir=self.models_dir, variant=self.onnx_variant, device=self.device,
+                                     threads=self.threads)
+        m = self.opened
+        if m.kind == "checkpoint":
+            self.ckpt, self.model = m.path, None
         else:
-            self._from_manifest(self.model)
+            self.ckpt, self.model = None, m.name
+        self.step, self.task, self.objective, self.cond_spec = m.step, m.task, m.objective, m.condition
+        self.mean, self.std, self.z_dim, self.max_frames = m.mean, m.std, m.z_dim, m.max_frames
+        self.flags, self.origin = m.flags, m.info
         variant = variant_of({"objective": self.objective, "args": self.flags})
         sampler = "DDIM" if self.objective == "diffusion" else "DDGAN"
         if not self.name:
@@ -101,52 +111,6 @@ class ModelSource:
         self.info = {"variant": variant, "sampler": sampler, "steps": self.steps, "guidance": self.guidance,
                      "geo_weight": self.flags.get("geo_weight"), "d_cond": self.flags.get("d_cond"),
                      **self.origin, **self.info}
-
-    def _from_checkpoint(self, ckpt: Path) -> None:
-        from emdm.export import load_generator
-        from emdm.sample import torch_step
-
-        G, meta, summary = load_generator(ckpt)
-        self.step = torch_step(G, self.device)
-        self.task, self.objective, self.cond_spec = meta["task"], meta.get("objective", "ddgan"), meta["condition"]
-        self.mean, self.std = np.asarray(meta["mean"], np.float32), np.asarray(meta["std"], np.float32)
-        self.z_dim, self.max_frames = G.z_dim, G.max_frames
-        self.flags = meta.get("args", {})
-        from emdm.paths import display_path
-
-        self.origin = {"checkpoint": display_path(ckpt), "runtime": "pytorch" + ("-cuda" if self.device.startswith("cuda") else ""), "train_steps": summary["steps"] + int((meta.get("init") or {}).get("steps", 0)),
-                       "train_wall_min": round(summary["wall_s"] / 60, 1), "device": meta.get("device"),
-                       "preset": meta["generator"]["preset"], "dataset": meta.get("dataset")}
-
-    def _from_manifest(self, name: str) -> None:
-        if self.device != "cpu":
-            raise ValueError(f"ModelSource: model={name!r} runs through onnxruntime on the CPU; device={self.device!r} "
-                             "needs a checkpoint (ckpt=)")
-        from emdm import manifest as mf
-        from emdm.paths import MODELS_DIR
-        from emdm.sample import onnx_step, read_meanstd
-
-        models_dir = Path(self.models_dir or MODELS_DIR)
-        man = mf.load(models_dir)
-        if name not in man["models"]:
-            raise ValueError(f"{models_dir / mf.MANIFEST_NAME}: no model {name!r} (have: {', '.join(man['models'])})")
-        e = man["models"][name]
-        if self.onnx_variant in (None, "fp32"):
-            onnx_file = e["onnx"]
-        elif self.onnx_variant in e.get("variants", {}):
-            onnx_file = e["variants"][self.onnx_variant]
-        else:
-            raise ValueError(f"{models_dir / mf.MANIFEST_NAME}: model {name!r} has no variant {self.onnx_variant!r} "
-                             f"(have: fp32, {', '.join(e.get('variants', {}))})")
-        self.step = onnx_step(models_dir / onnx_file, self.threads)
-        self.task, self.objective, self.cond_spec = e["task"], e.get("objective", "ddgan"), e["condition"]
-        self.mean, self.std = read_meanstd(models_dir / e["meanStd"])
-        self.z_dim, self.max_frames = int(e.get("zDim", 64)), int(e.get("maxFrames", 196))
-        tr = e.get("training", {})
-        self.flags = {**tr.get("flags", {})}
-        self.origin = {"model": name, "onnx": onnx_file, "runtime": "onnxruntime", "train_steps": (tr.get("steps") or 0) + int(tr.get("continuedFrom", {}).get("steps", 0)) or None,
-                       "train_wall_min": round(tr.get("wallSeconds", 0) / 60, 1), "device": tr.get("device"),
-                       "preset": e.get("preset"), "dataset": tr.get("dataset")}
 
     def conditions_of(self, cond: Conditions) -> np.ndarray:
         spec = self.cond_spec

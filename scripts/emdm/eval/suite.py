@@ -6,8 +6,9 @@ Python CPU timings, then docs/RESULTS.md.
         [--repeats 20] [--max-items 0] [--skip-real] [--device cuda --batch 512]
 
 A model is an ``emdm.train`` checkpoint (``.pt``) or the name of a shipped model in
-public/models/manifest.json. EMDM-style models are evaluated at ``--steps`` (default 10); the
-diffusion baseline at ``--ddim-steps`` (default 10,50,100). Each run writes its JSON under
+public/models/manifest.json, opened by ``emdm.model.open`` in each evaluation; the suite stops at the first
+evaluation that cannot run (a bad file or name: its one-line error, and the same exit status 2). EMDM-style
+models are evaluated at ``--steps`` (default 10); the diffusion baseline at ``--ddim-steps`` (default 10,50,100). Each run writes its JSON under
 docs/results/json/ as it finishes, so an interrupted suite keeps what it measured.
 """
 
@@ -21,7 +22,9 @@ from emdm.eval import evaluate, report
 
 
 def _where(model: str) -> list[str]:
-    return ["--ckpt", model] if model.endswith(".pt") else ["--model", model]
+    from emdm.model.open import is_checkpoint
+
+    return ["--ckpt", model] if is_checkpoint(model) else ["--model", model]
 
 
 def plan(a) -> list[list[str]]:
@@ -81,7 +84,9 @@ def main(argv: list[str] | None = None) -> int:
     for r in runs:
         print("python -m emdm.eval.evaluate " + " ".join(r), flush=True)
         if not a.dry_run:
-            evaluate.main(r)
+            rc = evaluate.main(r)
+            if rc:                  # its one-line error is printed under its command; later rows would fail alike
+                return rc
     if not a.dry_run:
         report.main([])
     return 0
