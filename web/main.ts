@@ -15,6 +15,7 @@ import { byId, formatBytes, formatMs, saveBlob } from './ui/dom';
 import { fileStem, motionToBVH, motionToGLB, motionToJSON } from './ui/downloads';
 import { Engine, isAbort, modelForMode, pickModels } from './ui/engine';
 import { examplePrompts } from './ui/examples';
+import { CharacterPicker } from './ui/character-picker';
 import { CacheControl, FileList } from './ui/files';
 import { ErrorPanel, Notices } from './ui/notices';
 import { PlaybackBar } from './ui/playback';
@@ -169,6 +170,11 @@ async function main(): Promise<void> {
   ddimCharacter.object.name = 'ddim-character';
   stage.add(ddimCharacter.object);
   ddimBones = ddimCharacter.bones;
+  // a character the visitor drops replaces the built-in one (web/ui/character-picker.ts)
+  const picker = new CharacterPicker({
+    add: (o) => stage.add(o), builtIn: character.object, skeleton, time: () => player.time,
+    notify: (kind, text) => notices.show(kind, text), before: document.querySelector<HTMLElement>('section.downloads')!,
+  });
 
   const models = pickModels(manifest);
   const base = models.text ?? models.action;
@@ -362,6 +368,7 @@ async function main(): Promise<void> {
       stage.snapTo(main.track.rootPos);
       if (ddim) stage.snapTo2(ddim.track.rootPos);
       shown = { state: s, result: main.result, track: main.track, label, model: main.model, steps: main.result.steps, ikMs: main.ikMs };
+      picker.setMotion(main.result.motion, fileStem(label, s.seed));
       if (s.mode === 'text') controls.setPromptNote(s.text, promptNote(main.result.prompt));
       showCaption(s, label, plan);
       if (ddim) showPanels(main, ddim);

@@ -54,7 +54,8 @@ describe('loading a character', () => {
     expect(await reason([{ name: 'a.txt', data: new Uint8Array(4) }])).toEqual(['no-file', expect.stringMatching(/no \.glb, \.gltf or \.vrm/)]);
     expect(await reason([{ name: 'big.glb', data: mixamo }], { maxBytes: 1000 })).toEqual(['too-large', expect.stringMatching(/big\.glb: 0\.0 MB given; characters up to 0 MB/)]);
     expect((await reason([{ name: 'cut.glb', data: mixamo.slice(0, 200) }]))[1]).toMatch(/cut\.glb: not a valid binary glTF: the header says \d+ bytes, the file has 200/);
-    expect(await reason([{ name: 'junk.vrm', data: new TextEncoder().encode('hello, I am not a model') }])).toEqual(['corrupt', expect.stringMatching(/does not parse/)]);
+    expect(await reason([{ name: 'junk.vrm', data: new TextEncoder().encode('hello, I am not a model') }])).toEqual(['corrupt', expect.stringMatching(/junk\.vrm: not a valid binary glTF: it does not start with 'glTF'/)]);
+    expect(await reason([{ name: 'junk.gltf', data: new TextEncoder().encode('hello, I am not a model') }])).toEqual(['corrupt', expect.stringMatching(/its glTF JSON does not parse/)]);
     expect((await reason([{ name: 'old.gltf', data: new TextEncoder().encode('{"asset":{"version":"1.0"}}') }]))[1]).toMatch(/glTF version '1\.0', only glTF 2\.0/);
     expect((await reason([{ name: 'views.glb', data: edited((j) => (j.bufferViews[0].byteLength = 1e9)) }]))).toEqual(['corrupt', expect.stringMatching(/bufferView 0 lies outside its buffer/)]);
     expect(await reason([{ name: 'draco.glb', data: edited((j) => (j.extensionsRequired = ['KHR_draco_mesh_compression'])) }])).toEqual(['unsupported', expect.stringMatching(/Draco.*export it without/)]);

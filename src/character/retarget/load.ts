@@ -295,7 +295,7 @@ export async function loadCharacter(files: CharacterFile[], opts: LoadCharacterO
     throw new CharacterLoadError('too-large', file, `${(totalBytes / 1048576).toFixed(1)} MB given; characters up to ${(maxBytes / 1048576).toFixed(0)} MB are read`);
   }
   const data = bytesOf(main.data);
-  const isGlb = data.byteLength >= 4 && new DataView(data.buffer, data.byteOffset, 4).getUint32(0, true) === GLB_MAGIC;
+  const isGlb = /\.(glb|vrm)$/i.test(file) || (data.byteLength >= 4 && new DataView(data.buffer, data.byteOffset, 4).getUint32(0, true) === GLB_MAGIC);
   const { json: raw, bin: glbBin } = isGlb ? readGlb(data, file) : { json: parseJson(new TextDecoder().decode(data), file), bin: null };
 
   const required: string[] = Array.isArray(raw.extensionsRequired) ? raw.extensionsRequired : [];

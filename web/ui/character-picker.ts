@@ -1,0 +1,323 @@
+// "Your character": drop (or pick) a .glb/.gltf/.vrm and it replaces the built-in character on the
+// stage, performing the motion on screen (src/character/retarget: load → bone map → retarget); one
+// click brings the built-in character back. Joints the automatic map missed can be picked in a small
+// editor; the map is kept per file name in localStorage and can be exported as JSON. Downloads: the
+// character with the clip as GLB, and the clip as BVH on its bone names.
+import { AnimationMixer, Group, LoopOnce, type AnimationAction, type Object3D } from 'three';
+import { type CharacterFile, CharacterLoadError, type LoadedCharacter, loadCharacter } from '../../src/character/retarget/load';
+import { type BoneInfo, type BoneMapping, MappingError, mappingFromJSON, mappingToJSON, validateMapping } from '../../src/character/retarget/mapping';
+import { type RetargetResult, retargetMotion } from '../../src/character/retarget/retarget';
+import { characterToBVH, characterToGLB } from '../../src/export/characterGlb';
+import { contactsFromFeatures } from '../../src/motion/footContact';
+import type { Motion } from '../../src/motion/types';
+import { JOINT_NAMES, type JointName, type Skeleton } from '../../src/skeleton';
+import { saveBlob } from './dom';
+
+export interface PickerHost {
+  /** adds an object to the stage's scene */
+  add(o: Object3D): void;
+  /** the built-in character (hidden while the user's is shown) */
+  builtIn: Object3D;
+  skeleton: Skeleton;
+  /** the playback clock, seconds */
+  time(): number;
+  notify(kind: 'info' | 'warn' | 'error', text: string): void;
+  /** the panel section the picker's controls go before */
+  before: HTMLElement;
+}
+
+const STORE = 'emdm.boneMap.';
+const ACCEPT = '.glb,.gltf,.vrm,.bin,.png,.jpg,.jpeg,.webp,.ktx2';
+
+interface Shown {
+  ch: LoadedCharacter;
+  holder: Group;
+  mixer: AnimationMixer | null;
+  action: AnimationAction | null;
+  result: RetargetResult | null;
+}
+
+/** What the page's tests read (window.emdmCharacter). */
+export interface CharacterProbe {
+  active: boolean;
+  builtInVisible: boolean;
+  name: string;
+  mapped: number;
+  status: string;
+  /** world position of the bone playing `joint`, or null */
+  jointWorld(joint: JointName): [number, number, number] | null;
+}
+
+export class CharacterPicker {
+  private shown: Shown | null = null;
+  private motion: Motion | null = null;
+  private stem = 'emdm';
+  private files: CharacterFile[] = [];
+  private readonly el: HTMLElement;
+  private readonly status: HTMLElement;
+  private readonly back: HTMLButtonElement;
+  private readonly editor: HTMLDetailsElement;
+  private readonly rows: HTMLElement;
+  private readonly dlGlb: HTMLButtonElement;
+  private readonly dlBvh: HTMLButtonElement;
+
+  constructor(private readonly host: PickerHost) {
+    const el = document.createElement('section');
+    el.className = 'character-picker';
+    el.id = 'character-picker';
+    el.innerHTML = `
+      <h3>Character</h3>
+      <div class="download-row">
+        <button type="button" id="char-open" class="ghost" title="A rigged humanoid: .glb, .vrm, or .gltf with its files (or drop them on the page)">Your character…</button>
+        <input type="file" id="char-file" accept="${ACCEPT}" multiple hidden>
+        <button type="button" id="char-builtin" class="ghost" hidden>Built-in</button>
+      </div>
+      <p id="char-status" class="hint" role="status"></p>
+      <details id="char-map" hidden>
+        <summary>Bone map</summary>
+        <div id="char-map-rows" class="char-map-rows"></div>
+        <div class="download-row">
+          <button type="button" id="char-map-apply" class="ghost">Apply</button>
+          <button type="button" id="char-map-export" class="ghost">Export JSON</button>
+        </div>
+      </details>
+      <div class="download-row">
+        <button type="button" id="dl-char-glb" class="ghost" disabled title="Your character with the motion (binary glTF)">GLB on it</button>
+        <button type="button" id="dl-char-bvh" class="ghost" disabled title="The motion on your character's bone names (BVH, cm)">BVH on it</button>
+      </div>`;
+    host.before.parentElement!.insertBefore(el, host.before);
+    this.el = el;
+    const q = <T extends HTMLElement>(id: string) => el.querySelector<T>(`#${id}`)!;
+    this.status = q('char-status');
+    this.back = q<HTMLButtonElement>('char-builtin');
+    this.editor = q<HTMLDetailsElement>('char-map');
+    this.rows = q('char-map-rows');
+    this.dlGlb = q<HTMLButtonElement>('dl-char-glb');
+    this.dlBvh = q<HTMLButtonElement>('dl-char-bvh');
+    const input = q<HTMLInputElement>('char-file');
+    q('char-open').addEventListener('click', () => input.click());
+    input.addEventListener('change', () => {
+      if (input.files?.length) void this.open(Array.from(input.files));
+      input.value = '';
+    });
+    this.back.addEventListener('click', () => this.useBuiltIn());
+    q('char-map-apply').addEventListener('click', () => void this.applyEditor());
+    q('char-map-export').addEventListener('click', () => this.exportMap());
+    this.dlGlb.addEventListener('click', () => this.download('glb'));
+    this.dlBvh.addEventListener('click', () => this.download('bvh'));
+    // drop anywhere on the page
+    document.addEventListener('dragover', (e) => {
+      if (e.dataTransfer?.types.includes('Files')) e.preventDefault();
+    });
+    document.addEventListener('drop', (e) => {
+      const files = e.dataTransfer?.files;
+      if (!files?.length) return;
+      e.preventDefault();
+      void this.open(Array.from(files));
+    });
+    const tick = () => {
+      this.update();
+      requestAnimationFrame(tick);
+    };
+    requestAnimationFrame(tick);
+    (window as unknown as { emdmCharacter: CharacterProbe }).emdmCharacter = this.probe();
+  }
+
+  /** The motion on screen changed: put it on the user's character (if one is shown). */
+  setMotion(motion: Motion, stem: string): void {
+    this.motion = motion;
+    this.stem = stem;
+    if (this.shown) this.retarget();
+  }
+
+  private say(text: string): void {
+    this.status.textContent = text;
+  }
+
+  private savedMap(name: string): BoneMapping | undefined {
+    try {
+      const s = localStorage.getItem(STORE + name);
+      return s ? mappingFromJSON(s) : undefined;
+    } catch {
+      return undefined;
+    }
+  }
+
+  async open(list: File[]): Promise<void> {
+    this.say(`Reading ${list.map((f) => f.name).join(', ')}…`);
+    try {
+      this.files = await Promise.all(list.map(async (f) => ({ name: f.name, data: await f.arrayBuffer() })));
+      await this.load(this.savedMap(this.mainName()));
+    } catch (e) {
+      this.fail(e);
+    }
+  }
+
+  private mainName(): string {
+    return this.files.find((f) => /\.(glb|gltf|vrm)$/i.test(f.name))?.name ?? '';
+  }
+
+  private async load(mapping?: BoneMapping): Promise<void> {
+    let ch: LoadedCharacter;
+    try {
+      ch = await loadCharacter(this.files, { mapping });
+    } catch (e) {
+      if (e instanceof CharacterLoadError && e.reason === 'not-humanoid' && e.bones && !mapping) {
+        // offer the editor with what was recognised
+        this.showEditor(e.bones, e.mapping ?? {});
+      }
+      throw e;
+    }
+    this.useBuiltIn(false);
+    const holder = new Group();
+    holder.name = 'user-character';
+    holder.add(ch.root);
+    this.host.add(holder);
+    this.shown = { ch, holder, mixer: null, action: null, result: null };
+    this.host.builtIn.visible = false;
+    this.back.hidden = false;
+    this.showEditor(ch.boneInfos, ch.mapping);
+    this.say(`${ch.name}: ${22 - ch.unmapped.length}/22 joints mapped (${ch.mappingSource === 'vrm' ? `VRM ${ch.vrm} humanoid` : ch.mappingSource === 'user' ? 'your map' : 'by bone names'}), read in ${Math.round(ch.loadMs)} ms`);
+    this.retarget();
+  }
+
+  private retarget(): void {
+    const s = this.shown;
+    if (!s || !this.motion) return;
+    s.mixer?.stopAllAction();
+    s.mixer?.uncacheRoot(s.ch.root);
+    s.ch.restPose();
+    const m = this.motion;
+    const contacts = m.features.length === m.frames * 263 ? contactsFromFeatures(m.features, m.frames) : null;
+    const res = retargetMotion(s.ch.root, s.ch.mapping, { joints: m.joints, frames: m.frames, fps: m.fps, contacts }, this.host.skeleton);
+    // shown at our size and facing, so the camera that follows our pelvis follows it too
+    s.holder.scale.setScalar(1 / res.scale);
+    s.holder.rotation.y = -res.yaw;
+    s.mixer = new AnimationMixer(s.ch.root);
+    s.action = s.mixer.clipAction(res.clip);
+    s.action.setLoop(LoopOnce, 1);
+    s.action.clampWhenFinished = true;
+    s.action.play();
+    s.result = res;
+    this.dlGlb.disabled = false;
+    this.dlBvh.disabled = false;
+  }
+
+  private update(): void {
+    const s = this.shown;
+    if (!s?.mixer || !s.action || !s.result) return;
+    s.action.time = Math.min(Math.max(this.host.time(), 0), s.result.clip.duration);
+    s.mixer.update(0);
+  }
+
+  useBuiltIn(say = true): void {
+    const s = this.shown;
+    if (s) {
+      s.mixer?.stopAllAction();
+      s.holder.removeFromParent();
+      this.shown = null;
+    }
+    this.host.builtIn.visible = true;
+    this.back.hidden = true;
+    this.dlGlb.disabled = true;
+    this.dlBvh.disabled = true;
+    if (say) {
+      this.editor.hidden = true;
+      this.say('');
+    }
+  }
+
+  private showEditor(bones: BoneInfo[], mapping: BoneMapping): void {
+    this.rows.replaceChildren();
+    const names = bones.map((b) => b.name);
+    for (const j of JOINT_NAMES) {
+      const row = document.createElement('label');
+      row.className = mapping[j] ? 'char-map-row' : 'char-map-row unmapped';
+      const sel = document.createElement('select');
+      sel.dataset.joint = j;
+      sel.append(new Option('(none)', ''));
+      for (const n of names) sel.append(new Option(n, n, false, mapping[j] === n));
+      row.append(document.createTextNode(j), sel);
+      this.rows.append(row);
+    }
+    this.editor.hidden = false;
+    if (JOINT_NAMES.some((j) => !mapping[j])) this.editor.open = true;
+  }
+
+  private editedMap(): BoneMapping {
+    const m: BoneMapping = {};
+    this.rows.querySelectorAll('select').forEach((sel) => {
+      if (sel.value) m[sel.dataset.joint as JointName] = sel.value;
+    });
+    return m;
+  }
+
+  private async applyEditor(): Promise<void> {
+    const m = this.editedMap();
+    try {
+      const bones = this.shown?.ch.boneInfos;
+      if (bones) validateMapping(m, bones);
+      await this.load(m);
+      localStorage.setItem(STORE + this.mainName(), mappingToJSON(m));
+    } catch (e) {
+      this.fail(e);
+    }
+  }
+
+  private exportMap(): void {
+    const m = this.editedMap();
+    saveBlob(new Blob([mappingToJSON(m)], { type: 'application/json' }), `${this.mainName().replace(/\.[^.]+$/, '') || 'character'}.bonemap.json`);
+  }
+
+  private download(kind: 'glb' | 'bvh'): void {
+    const s = this.shown;
+    if (!s?.result) return;
+    const base = `${this.stem}-${s.ch.name.replace(/\.[^.]+$/, '')}`;
+    if (kind === 'glb') {
+      saveBlob(new Blob([characterToGLB(s.ch, s.result) as BlobPart], { type: 'model/gltf-binary' }), `${base}.glb`);
+    } else {
+      const bvh = characterToBVH(s.ch.root, s.result, (o) => s.ch.json.nodes?.[s.ch.nodeIndex.get(o) ?? -1]?.name ?? o.name);
+      saveBlob(new Blob([bvh], { type: 'text/plain' }), `${base}.bvh`);
+    }
+  }
+
+  private fail(e: unknown): void {
+    const msg = e instanceof CharacterLoadError || e instanceof MappingError ? e.message : `could not use that character (${(e as Error)?.message ?? e})`;
+    this.say(msg);
+    this.host.notify('error', `${msg}${this.shown ? '; the current character stays' : '; the built-in character stays'}.`);
+  }
+
+  private probe(): CharacterProbe {
+    const self = this;
+    return {
+      get active() {
+        return !!self.shown?.result;
+      },
+      get builtInVisible() {
+        return self.host.builtIn.visible;
+      },
+      get name() {
+        return self.shown?.ch.name ?? '';
+      },
+      get mapped() {
+        return self.shown ? 22 - self.shown.ch.unmapped.length : 0;
+      },
+      get status() {
+        return self.status.textContent ?? '';
+      },
+      jointWorld(j) {
+        const s = self.shown;
+        const name = s?.ch.mapping[j];
+        const o = name ? s!.ch.root.getObjectByName(name) : undefined;
+        if (!o) return null;
+        o.updateWorldMatrix(true, false);
+        const e = o.matrixWorld.elements;
+        return [e[12], e[13], e[14]];
+      },
+    };
+  }
+
+  get element(): HTMLElement {
+    return this.el;
+  }
+}
