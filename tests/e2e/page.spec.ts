@@ -169,12 +169,24 @@ test.describe('demo page: generating', () => {
       return { name: dl.suggestedFilename(), bytes: fs.readFileSync((await dl.path())!) };
     };
 
+    // BVH in metres by default (Blender imports at scale 1.0: the pelvis stands ~0.9 m up, not 90 m),
+    // centimetres on request; the file name says which
+    const pelvisY = r.joints[1];
+    expect(await page.locator('#dl-bvh-units').inputValue()).toBe('m');
     const bvh = await grab('#dl-bvh');
-    expect(bvh.name).toMatch(/^emdm-a-person-walks-forward-seed7\.bvh$/);
+    expect(bvh.name).toMatch(/^emdm-a-person-walks-forward-seed7-metres\.bvh$/);
     const parsed = new BVHLoader().parse(bvh.bytes.toString('utf8'));
     expect(parsed.skeleton.bones.length).toBeGreaterThanOrEqual(22);
     const bvhTimes = parsed.clip.tracks[0].times;
     expect(bvhTimes.length).toBe(r.frames);
+    expect(parsed.clip.tracks[0].name).toBe('pelvis.position');
+    expect(Math.abs(parsed.clip.tracks[0].values[1] - pelvisY), 'pelvis height, metres').toBeLessThan(1e-3);
+    await page.locator('#dl-bvh-units').selectOption('cm');
+    const bvhCm = await grab('#dl-bvh');
+    expect(bvhCm.name).toMatch(/^emdm-a-person-walks-forward-seed7-centimetres\.bvh$/);
+    const parsedCm = new BVHLoader().parse(bvhCm.bytes.toString('utf8'));
+    expect(Math.abs(parsedCm.clip.tracks[0].values[1] - 100 * pelvisY), 'pelvis height, centimetres').toBeLessThan(0.1);
+    await page.locator('#dl-bvh-units').selectOption('m');
 
     const glb = await grab('#dl-glb');
     expect(glb.name.endsWith('.glb')).toBe(true);
@@ -191,6 +203,8 @@ test.describe('demo page: generating', () => {
     expect(gltf.animations.length).toBe(1);
     for (const track of gltf.animations[0].tracks) expect(track.times.length).toBe(r.frames);
     expect(gltf.animations[0].tracks.length).toBe(23); // root position + 22 rotations
+    const rootTrack = gltf.animations[0].tracks.find((t) => t.name.endsWith('.position'))!;
+    expect(Math.abs(rootTrack.values[1] - pelvisY), 'glTF pelvis height stays in metres').toBeLessThan(1e-3);
 
     const json = await grab('#dl-json');
     const doc = JSON.parse(json.bytes.toString('utf8'));
