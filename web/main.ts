@@ -1,6 +1,7 @@
 // The demo page: type a prompt (or pick an action, or nothing), watch the skinned character move.
-// Wiring only: models come from src/ (createGenerator, solveIK, writeBVH), the character from
-// src/character, the controls/URL/panels/downloads from web/ui.
+// Wiring only: motions come from the generation worker (src/worker, through web/ui/engine.ts: encoder,
+// sampler and IK run there, never on this thread), the character from src/character, the
+// controls/URL/panels/downloads from web/ui.
 import { MeshStandardMaterial, Quaternion, Vector3 } from 'three';
 import { HEAD_PITCH } from '../src/character/body';
 import { applyPose, createCharacter } from '../src/character/character';
