@@ -19,6 +19,7 @@ import csv
 import json
 import os
 import shlex
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -121,13 +122,19 @@ def main(argv=None) -> int:
         cache.mkdir()
         for f in (a.cache.glob("text-*.npy") if a.cache else []):
             (cache / f.name).write_bytes(f.read_bytes())
-        # new loops first: they embed the captions (an old scripts/ tree has no public/models) into the cache
+        # new loops first (they embed the captions once, into the cache), the old one last
         runs: list[tuple[str, Path, list[str]]] = []
         for extra in (a.new or [""]):
             runs.append((f"new {extra}".strip(), paths.REPO_ROOT / "scripts", base + shlex.split(extra)))
-        old = a.old_src or (extract_rev(a.old_rev, tmp / "old") if a.old_rev else None)
-        if old is not None:
-            runs.append((f"old ({a.old_rev or a.old_src})", Path(old), base))
+        old = None
+        if a.old_src or a.old_rev:         # beside it this checkout's public/ (text encoder, manifest: same cache key)
+            if a.old_src:
+                shutil.copytree(a.old_src, tmp / "old" / "scripts")
+                old = tmp / "old" / "scripts"
+            else:
+                old = extract_rev(a.old_rev, tmp / "old")
+            (tmp / "old" / "public").symlink_to(paths.REPO_ROOT / "public", target_is_directory=True)
+            runs.append((f"old ({a.old_rev or a.old_src})", old, base))
         for i, (label, src, flags) in enumerate(runs):
             out = tmp / f"run{i}"
             out.mkdir()
