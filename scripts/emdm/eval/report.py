@@ -278,8 +278,8 @@ def plot_coverage(r: dict, path: Path) -> bool:
     ax.invert_yaxis()
     ax.set_xlim(0, 1)
     ax.set_xlabel("share of motions the classifier names as the action (dashed: covered)")
-    ax.set_title(f"Coverage per action: {r['name']} (* = too few real test clips)", fontsize=9)
-    ax.legend(fontsize=7, loc="lower right")
+    fig.suptitle(f"Coverage per action: {r['name']} (* = too few real test clips)", fontsize=9)
+    ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=len(series), frameon=False)
     ax.grid(alpha=0.3, axis="x")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -547,6 +547,8 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
             "python -m emdm.train --task text --no-d-cond --out runs/t2m-nodcond                # Tab. D4",
             "python -m emdm.eval.suite --text runs/t2m-web/ckpt.pt --action runs/a2m-web/ckpt.pt \\",
             "    --diffusion runs/t2m-diffusion/ckpt.pt --naive runs/t2m-naive/ckpt.pt --nodcond runs/t2m-nodcond/ckpt.pt",
+            "python -m emdm.eval.coverage --model emdm-t2m-web   # coverage per action, 1/2/4/10 steps (--seeds, default 8)",
+            "python -m emdm.eval.coverage --model emdm-a2m-web",
             "node scripts/bench/core-bench.mjs --json bench.json && python -m emdm.eval.evaluate import-bench bench.json",
             "# browser-wasm, issue 7: EMDM at 1/2/4/5/8/10 and diffusion + DDIM at 10/50/100 steps in one run of the demo",
             "# page (window.emdm.generate, needs diffusion-t2m-web in public/models); replaces the browser-wasm rows above",
