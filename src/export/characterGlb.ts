@@ -14,7 +14,7 @@ import { Matrix4, type Object3D, Quaternion, Vector3 } from 'three';
 import { type GltfJson, type LoadedCharacter, writeGlb } from '../character/retarget/load';
 import type { RetargetResult } from '../character/retarget/retarget';
 import { matFromQuat } from '../motion/math3';
-import { eulerZXY } from './bvh';
+import { type BvhUnits, eulerZXY } from './bvh';
 
 const FLOAT = 5126;
 
@@ -73,22 +73,27 @@ export function characterToGLB(ch: Pick<LoadedCharacter, 'json' | 'bin' | 'nodeI
   return writeGlb(json, bin);
 }
 
-const CM = 100;
 const DEG = 180 / Math.PI;
-const num = (v: number) => {
-  const s = v.toFixed(4);
-  return s === '-0.0000' ? '0.0000' : s;
+/** length scale and digits per unit, as writeBVH writes them */
+const UNITS: Record<BvhUnits, [number, number]> = { m: [1, 6], cm: [100, 4] };
+const fmt = (digits: number) => (v: number) => {
+  const s = v.toFixed(digits);
+  return /^-0\.0*$/.test(s) ? s.slice(1) : s;
 };
 
 /**
  * The clip as BVH on the character's skeleton: the bones under (and including) the pelvis bone, named
- * as in the file (`names`, e.g. the glTF node names; spaces become '_'), offsets in centimetres in the
- * parent bone's rest frame, channels `Zrotation Xrotation Yrotation` (R = Rz·Rx·Ry, as writeBVH) holding
+ * as in the file (`names`, e.g. the glTF node names; spaces become '_'), offsets in metres (or
+ * centimetres: `units`, as writeBVH) in the parent bone's rest frame, channels `Zrotation Xrotation Yrotation` (R = Rz·Rx·Ry, as writeBVH) holding
  * each bone's rotation relative to its parent bone, and the root's position and rotation in the frame
  * of `root` (any node above the pelvis bone baked in). Poses `root` frame by frame and restores its
  * rest pose afterwards.
  */
-export function characterToBVH(root: Object3D, result: RetargetResult, names: (o: Object3D) => string = (o) => o.name): string {
+export function characterToBVH(root: Object3D, result: RetargetResult, names: (o: Object3D) => string = (o) => o.name, units: BvhUnits = 'm'): string {
+  if (!(units in UNITS)) throw new RangeError(`characterToBVH: units must be 'm' or 'cm', got ${String(units)}`);
+  const [CM, digits] = UNITS[units];
+  const num = fmt(digits);
+  const end = 0.05 * CM; // End Site: 5 cm along the bone
   const pelvis = result.bones[0];
   const bones: Object3D[] = [];
   const parentOf = new Map<Object3D, Object3D | null>();
@@ -135,7 +140,7 @@ export function characterToBVH(root: Object3D, result: RetargetResult, names: (o
     lines.push(`${ind}  CHANNELS ${pb ? '3' : '6 Xposition Yposition Zposition'} Zrotation Xrotation Yrotation`);
     const cs = kids.get(b)!;
     if (!cs.length) {
-      const dir = pb ? off.clone().normalize().multiplyScalar(5) : new Vector3(0, 5, 0);
+      const dir = pb ? off.clone().normalize().multiplyScalar(end) : new Vector3(0, end, 0);
       lines.push(`${ind}  End Site`, `${ind}  {`, `${ind}    OFFSET ${[dir.x, dir.y, dir.z].map(num).join(' ')}`, `${ind}  }`);
     }
     for (const c of cs) emit(c, depth + 1);

@@ -1,10 +1,12 @@
 // "Your character" on the demo page (web/ui/character-picker.ts): a dropped rig replaces the built-in
 // character and performs the generated motion; a file that is not a character leaves the built-in one
-// with a message; one click brings the built-in character back; the GLB download reloads with the clip.
+// with a message; unreadable bone names are mapped in the editor (kept in localStorage); one click
+// brings the built-in character back; the GLB download reloads with the clip.
 import fs from 'node:fs';
 import path from 'node:path';
 import { expect, test, type Page } from '@playwright/test';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { readGlb, writeGlb } from '../../src/character/retarget/load';
 import { RIGS, buildRigGlb } from '../unit/retargetRigs';
 import { watchPage } from './helpers';
 
@@ -66,6 +68,22 @@ test('a dropped character performs the motion; bad files keep the built-in one; 
     if ((o as { isSkinnedMesh?: boolean }).isSkinnedMesh) skinned++;
   });
   expect(skinned).toBe(1);
+
+  // bones the automatic map cannot read: the editor opens, the visitor picks each joint's bone, the map
+  // is applied and kept per file name
+  const { json, bin } = readGlb(rig, 'hero.glb');
+  const nodeOf = new Map<string, number>(json.nodes.map((n: { name: string }, i: number) => [n.name, i]));
+  json.nodes.forEach((n: { name: string }, i: number) => (n.name = `segment${i}`));
+  await drop(page, [{ name: 'odd.glb', bytes: writeGlb(json, bin!) }]);
+  await expect(page.locator('#char-status')).toContainText('odd.glb: only 0 of our 22 joints were recognised');
+  await expect(page.locator('#char-map')).toHaveAttribute('open', '');
+  const spec = RIGS[0];
+  const bones: Record<string, string> = { ...spec.names, spine1: spec.spine[0], spine2: spec.spine[1], spine3: spec.spine[2] } as Record<string, string>;
+  for (const [joint, bone] of Object.entries(bones)) await page.selectOption(`#char-map select[data-joint="${joint}"]`, `segment${nodeOf.get(bone)}`);
+  await page.locator('#char-map-apply').click();
+  await expect(page.locator('#char-status')).toContainText('odd.glb: 22/22 joints mapped (your map)');
+  expect(await page.evaluate(() => window.emdmCharacter.active)).toBe(true);
+  expect(await page.evaluate(() => JSON.parse(localStorage.getItem('emdm.boneMap.odd.glb') ?? '{}').joints?.pelvis)).toBe(`segment${nodeOf.get(spec.names.pelvis!)}`);
 
   // the real CC0 robot through the file picker, then back to the built-in character
   await page.locator('#char-file').setInputFiles(path.join(process.cwd(), 'tests/fixtures/rigs/RobotExpressive.glb'));

@@ -198,6 +198,10 @@ async function checkCharacter(label: string, file: string, glb: Uint8Array, unma
         // the BVH download on the rig's names
         const bvh = characterToBVH(ch.root, res, (o) => ch.json.nodes[ch.nodeIndex.get(o)!]?.name ?? o.name);
         const lines = bvh.split('\n');
+        // metres by default, like writeBVH; centimetres on request: every number ×100 but the angles
+        const cm = characterToBVH(ch.root, res, (o) => ch.json.nodes[ch.nodeIndex.get(o)!]?.name ?? o.name, 'cm').split('\n');
+        const off = (l: string[]) => l.find((x) => /^\s+OFFSET/.test(x) && !/OFFSET 0\.0+ 0\.0+ 0\.0+$/.test(x.trim()))!.trim().split(/\s+/).slice(1).map(Number);
+        off(cm).forEach((v, k) => expect(v).toBeCloseTo(off(lines)[k] * 100, 2));
         expect(lines[1]).toBe(`ROOT ${ch.json.nodes[ch.nodeIndex.get(res.bones[0])!].name.replace(/\s+/g, '_')}`);
         const channels = (bvh.match(/CHANNELS (\d)/g) ?? []).reduce((a, c) => a + Number(c.slice(-1)), 0);
         const motionLines = lines.slice(lines.indexOf('MOTION') + 3).filter(Boolean);

@@ -7,6 +7,7 @@ import { AnimationMixer, Group, LoopOnce, type AnimationAction, type Object3D } 
 import { type CharacterFile, CharacterLoadError, type LoadedCharacter, loadCharacter } from '../../src/character/retarget/load';
 import { type BoneInfo, type BoneMapping, MappingError, mappingFromJSON, mappingToJSON, validateMapping } from '../../src/character/retarget/mapping';
 import { type RetargetResult, retargetMotion } from '../../src/character/retarget/retarget';
+import { type BvhUnits, bvhFileName } from '../../src/export/bvh';
 import { characterToBVH, characterToGLB } from '../../src/export/characterGlb';
 import { contactsFromFeatures } from '../../src/motion/footContact';
 import type { Motion } from '../../src/motion/types';
@@ -53,6 +54,8 @@ export class CharacterPicker {
   private motion: Motion | null = null;
   private stem = 'emdm';
   private files: CharacterFile[] = [];
+  /** the bones the editor offers (of the last file read, shown or refused) */
+  private editorBones: BoneInfo[] = [];
   private readonly el: HTMLElement;
   private readonly status: HTMLElement;
   private readonly back: HTMLButtonElement;
@@ -83,7 +86,7 @@ export class CharacterPicker {
       </details>
       <div class="download-row">
         <button type="button" id="dl-char-glb" class="ghost" disabled title="Your character with the motion (binary glTF)">GLB on it</button>
-        <button type="button" id="dl-char-bvh" class="ghost" disabled title="The motion on your character's bone names (BVH, cm)">BVH on it</button>
+        <button type="button" id="dl-char-bvh" class="ghost" disabled title="The motion on your character's bone names (BVH, in the unit chosen under Download)">BVH on it</button>
       </div>`;
     host.before.parentElement!.insertBefore(el, host.before);
     this.el = el;
@@ -229,6 +232,7 @@ export class CharacterPicker {
 
   private showEditor(bones: BoneInfo[], mapping: BoneMapping): void {
     this.rows.replaceChildren();
+    this.editorBones = bones;
     const names = bones.map((b) => b.name);
     for (const j of JOINT_NAMES) {
       const row = document.createElement('label');
@@ -255,8 +259,7 @@ export class CharacterPicker {
   private async applyEditor(): Promise<void> {
     const m = this.editedMap();
     try {
-      const bones = this.shown?.ch.boneInfos;
-      if (bones) validateMapping(m, bones);
+      validateMapping(m, this.editorBones);
       await this.load(m);
       localStorage.setItem(STORE + this.mainName(), mappingToJSON(m));
     } catch (e) {
@@ -276,8 +279,10 @@ export class CharacterPicker {
     if (kind === 'glb') {
       saveBlob(new Blob([characterToGLB(s.ch, s.result) as BlobPart], { type: 'model/gltf-binary' }), `${base}.glb`);
     } else {
-      const bvh = characterToBVH(s.ch.root, s.result, (o) => s.ch.json.nodes?.[s.ch.nodeIndex.get(o) ?? -1]?.name ?? o.name);
-      saveBlob(new Blob([bvh], { type: 'text/plain' }), `${base}.bvh`);
+      // the unit the page's BVH download is set to (metres unless chosen otherwise)
+      const units: BvhUnits = document.querySelector<HTMLSelectElement>('#dl-bvh-units')?.value === 'cm' ? 'cm' : 'm';
+      const bvh = characterToBVH(s.ch.root, s.result, (o) => s.ch.json.nodes?.[s.ch.nodeIndex.get(o) ?? -1]?.name ?? o.name, units);
+      saveBlob(new Blob([bvh], { type: 'text/plain' }), bvhFileName(base, units));
     }
   }
 
