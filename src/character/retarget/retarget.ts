@@ -24,9 +24,9 @@
  *     where the character's shin ends (position track) and turned like a mapped ankle.
  *  4. Every other bone (fingers, twist, hair, our leaves: head, hands, toes) keeps its rest LOCAL
  *     rotation, so it follows its parent rigidly. Local rotation = (parent world)⁻¹ · world.
- *  5. Root: the pelvis bone's position is ours scaled by s = character leg / our leg (hip→knee→ankle):
- *     horizontally s·P, vertically so that the character's hip joints stand s·(our hip height above the
- *     ankles) above its rest ankle height.
+ *  5. Root: the midpoint of the character's hip joints follows ours scaled by s = character leg / our
+ *     leg (hip→knee→ankle): horizontally s·P, vertically s·(our hip height above our standing ankle
+ *     height) above its rest ankle height; the pelvis bone hangs off it with its rest offset, turned.
  *  6. Feet: on our contact frames (the four contact channels, threshold 0.5; a run is a stretch of
  *     frames where the ankle or the ball of the foot is in contact) the character's ankle, or its toe
  *     bone when the run is mostly on the ball of the foot, is held at the run's mean position, lowered
@@ -250,13 +250,16 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
   ankleHeights.sort((a, b) => a - b);
   const ho = ankleHeights[Math.floor((ankleHeights.length - 1) * (motion.contacts && ankleHeights.length ? 0.5 : 0.05))];
   const hc = (restPos('l_ankle').y + restPos('r_ankle').y) / 2;
-  const ourPelvisAboveHips = -(ik.offsets[I('l_hip')][1] + ik.offsets[I('r_hip')][1]) / 2;
-  const charPelvisAboveHips = restPos('pelvis').y - (restPos('l_hip').y + restPos('r_hip').y) / 2;
-  const pelvisRest = restPos('pelvis');
-  const rootWorld = (f: number) => {
-    const p = P(f, 'pelvis');
-    const h = new Vector3(p.x * scale, 0, p.z * scale).applyQuaternion(C);
-    return new Vector3(pelvisRest.x + h.x, hc + scale * (p.y - ourPelvisAboveHips - ho) + charPelvisAboveHips, pelvisRest.z + h.z);
+  // the root is placed through the hip joints' midpoint (rigs put their pelvis bone at different
+  // places around the hips; a lever between them would move the feet as the pelvis turns)
+  const hipMid = (f: number) => P(f, 'l_hip').add(P(f, 'r_hip')).multiplyScalar(0.5);
+  const charHipMid = restPos('l_hip').clone().add(restPos('r_hip')).multiplyScalar(0.5);
+  const hipToPelvis = restPos('pelvis').clone().sub(charHipMid);
+  const rootWorld = (f: number, pelvisDelta: Quaternion) => {
+    const m = hipMid(f);
+    const h = new Vector3(m.x * scale, 0, m.z * scale).applyQuaternion(C);
+    const mid = new Vector3(charHipMid.x + h.x, hc + scale * (m.y - ho), charHipMid.z + h.z);
+    return mid.add(hipToPelvis.clone().applyQuaternion(pelvisDelta));
   };
 
   // ---- per frame: Δ (world delta rotation) of every animated slot
@@ -335,7 +338,7 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
   const rootPs: Vector3[] = [];
   for (let f = 0; f < frames; f++) {
     allDeltas.push(deltas(f));
-    rootPs.push(rootWorld(f));
+    rootPs.push(rootWorld(f, allDeltas[f].get(0) ?? new Quaternion()));
   }
 
   // ---- feet: pin the ankle on contact frames (two-bone IK on thigh and shin)
