@@ -115,7 +115,7 @@ const api: EmdmTestApi = {
   frame: () => -1,
   startup: { manifestMs: NaN, readyMs: NaN },
   environment: null,
-  files: () => [...fileList.states.values()].map((f) => ({ path: f.path, state: f.state, cached: f.cached, total: f.total })),
+  files: () => [...fileList.states.values()].map((f) => ({ path: f.path, state: f.state, cached: f.cached, total: f.total, at: f.at })),
   cache: {
     usage: modelCacheUsage,
     async clear() {

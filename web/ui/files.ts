@@ -9,12 +9,12 @@ export class FileList {
   private readonly box = byId('file-list');
   private readonly rows = new Map<string, HTMLElement>();
   /** the last state of every file seen (the test API exposes it) */
-  readonly states = new Map<string, FileEvent & { cached: boolean }>();
+  readonly states = new Map<string, FileEvent & { cached: boolean; at: number }>();
 
   update(e: FileEvent): void {
     const prev = this.states.get(e.path);
     const cached = e.state === 'cache' || (e.state === 'done' && !!prev?.cached);
-    this.states.set(e.path, { ...e, cached });
+    this.states.set(e.path, { ...e, cached, at: performance.now() });
     let row = this.rows.get(e.path);
     if (!row) {
       row = el('li', 'file');

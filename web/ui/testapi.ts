@@ -106,8 +106,8 @@ export interface EmdmTestApi {
   startup: { manifestMs: number; readyMs: number };
   /** where the generation worker runs (null until it reports): isolated or not, ORT's WASM threads */
   environment: { crossOriginIsolated: boolean; threads: number; hardwareConcurrency: number } | null;
-  /** the last state of each model file loaded this visit ('cache' = read from Cache Storage) */
-  files(): Array<{ path: string; state: string; cached: boolean; total: number }>;
+  /** the last state of each model file loaded this visit ('cache' = read from Cache Storage), `at` = when (ms) */
+  files(): Array<{ path: string; state: string; cached: boolean; total: number; at: number }>;
   /** the model cache (Cache Storage): its size, and clearing it (as the page's button does) */
   cache: { usage(): Promise<{ files: number; bytes: number }>; clear(): Promise<void> };
 }
