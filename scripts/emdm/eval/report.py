@@ -248,7 +248,7 @@ def coverage_section(r: dict, plot: str | None) -> list[str]:
         c = r["chips"]
         out += [f"Prompts recognised in ≥ {c['threshold']:.0%} of their motions at {c['steps']} steps (the page's "
                 f"example chips come from these): " + (", ".join(f"\"{p}\"" for p in c["prompts"]) or "none") + ".", ""]
-    secs = ", ".join(f"{x['steps']} step{'s' if x['steps'] > 1 else ''} {x['seconds'] / 60:.1f} min ({x['motions']} motions)" for x in runs)
+    secs = ", ".join(f"{x['steps']} step{'s' if x['steps'] > 1 else ''} {x['seconds'] / 60:.1f} min ({x['motions']} motions, load average {x.get('load_avg_1min_end', 0):.0f} at the end)" for x in runs)
     out += [f"Measured on {r.get('hardware', '?')}; {secs}. Classifier: {r.get('classifier', {}).get('summary', '?')}.", ""]
     if plot:
         out += [f"![coverage of {r['name']}]({plot})", ""]
@@ -275,7 +275,7 @@ def plot_coverage(r: dict, path: Path) -> bool:
                 label=name, color=color)
     ax.axvline(COVERED, color="k", lw=0.8, ls="--")
     ax.set_yticks(y, [a + (" *" if a in r["real"].get("too_few", {}) else "") for a in labels], fontsize=7)
-    ax.invert_yaxis()
+    ax.set_ylim(len(labels) - 0.5, -0.5)                 # first action on top, no empty margin
     ax.set_xlim(0, 1)
     ax.set_xlabel("share of motions the classifier names as the action (dashed: covered)")
     fig.suptitle(f"Coverage per action: {r['name']} (* = too few real test clips)", fontsize=9)
