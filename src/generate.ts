@@ -1,7 +1,9 @@
 /**
- * createGenerator: text / action / nothing → 3-D motion, the public entry point of the library
- * (docs/ARCHITECTURE.md "TypeScript library"). Wires the manifest (verified downloads), the text
- * encoder, the ONNX step model (src/runtime), the sampler (src/sampler) and decoding (src/motion).
+ * openModel: one model on one backend — text / action / nothing → 3-D motion. Wires the manifest
+ * (verified downloads), the text encoder, the ONNX step model (src/runtime), the sampler (src/sampler)
+ * and decoding (src/motion). Which backend, and falling back from WebGPU to WASM, is decided in ONE
+ * place, src/backends.ts (loadModel, runWithFallback), which the library's entry createGenerator
+ * (src/createGenerator.ts) runs through.
  */
 import { assertFinite } from './errors';
 import { type Manifest, type ModelEntry, ModelFileError, fetchVerified } from './manifest';
@@ -10,7 +12,7 @@ import { denormalize, parseMeanStd, recoverJoints } from './motion/recover';
 import { smoothJoints } from './motion/smooth';
 import { pinKeptRoot } from './motion/stitch';
 import type { Motion } from './motion/types';
-import { type Backend, type BackendRequest, type OrtSession, getSession, resolveBackend } from './runtime/ort';
+import { type Backend, type OrtSession, getSession } from './runtime/ort';
 import { IncompatibleModelError, stepFunction } from './runtime/stepModel';
 import { SeededRandom } from './sampler/rng';
 import { type NoiseSource, type SamplerChoice, type SamplerName, type StepFn, sample } from './sampler/sampler';
@@ -81,7 +83,8 @@ export interface GeneratorOptions {
   manifest: Manifest;
   baseUrl: string;
   model: string;
-  backend?: BackendRequest;
+  /** the backend to open the model on (default 'wasm'); choosing and falling back: src/backends.ts */
+  backend?: Backend;
   threads?: number;
   /** a variant key of the model entry (e.g. 'int8') instead of the fp32 `onnx` file */
   variant?: string;
@@ -115,7 +118,12 @@ function modelEntry(manifest: Manifest, name: string): ModelEntry {
   return entry;
 }
 
-export async function createGenerator(opts: GeneratorOptions): Promise<Generator> {
+/**
+ * Open a model on exactly `opts.backend`. Fails with ModelFileError when a file is missing, corrupt or
+ * does not fit the manifest; a WebGPU session that cannot run fails with a plain Error (a backend
+ * problem: src/backends.ts then opens WASM).
+ */
+export async function openModel(opts: GeneratorOptions): Promise<Generator> {
   const { manifest, baseUrl, model } = opts;
   const entry = modelEntry(manifest, model);
   const onnxPath = opts.variant ? entry.variants?.[opts.variant] : entry.onnx;
@@ -167,17 +175,9 @@ export async function createGenerator(opts: GeneratorOptions): Promise<Generator
     }
   }
 
-  let backend = await resolveBackend(opts.backend ?? 'auto');
-  let opened: { session: OrtSession; step: StepFn };
-  try {
-    opened = await open(backend);
-  } catch (e) {
-    // 'auto': WebGPU could not run this model → WASM (a broken file fails there too, with its name)
-    if (backend !== 'webgpu' || opts.backend === 'webgpu' || e instanceof ModelFileError) throw e;
-    backend = 'wasm';
-    opened = await open(backend);
-  }
-  const { session, step } = opened;
+  const backend: Backend = opts.backend ?? 'wasm';
+  if (backend !== 'wasm' && backend !== 'webgpu') throw new RangeError(`openModel: backend must be 'wasm' or 'webgpu', got ${JSON.stringify(backend)} (choosing one: loadModel in src/backends.ts)`);
+  const { session, step } = await open(backend);
 
   let encoder: Promise<TextEncoder> | null = opts.textEncoder ? Promise.resolve(opts.textEncoder) : null;
   let queue: Promise<unknown> = Promise.resolve();

@@ -53,7 +53,7 @@ async function nodeWorker() {
   const { createServer } = await import('vite');
   const server = await createServer({ configFile: path.join(ROOT, 'vite.config.ts'), server: { middlewareMode: true, hmr: false, ws: false }, appType: 'custom', logLevel: 'error' });
   try {
-    const { createGenerator } = await server.ssrLoadModule(path.join(ROOT, 'src/generate.ts'));
+    const { openModel } = await server.ssrLoadModule(path.join(ROOT, 'src/generate.ts'));
     const { loadManifest } = await server.ssrLoadModule(path.join(ROOT, 'src/manifest.ts'));
     const { computeSchedule } = await server.ssrLoadModule(path.join(ROOT, 'src/sampler/schedule.ts'));
     const out = [];
@@ -62,7 +62,7 @@ async function nodeWorker() {
       let baseUrl = MODELS_DIR + '/';
       if (model === 'tiny') ({ manifest, baseUrl } = await tinyManifest(manifest, computeSchedule));
       const entry = manifest.models[model];
-      const gen = await createGenerator({ manifest, baseUrl, model, variant, backend: 'wasm', threads });
+      const gen = await openModel({ manifest, baseUrl, model, variant, backend: 'wasm', threads });
       const condition = conditionFor(entry);
       const steps = stepCounts.filter((s) => entry.supportedSteps.includes(s));
       // warm-up: V8 tiers WASM up (Liftoff → TurboFan) over the first runs

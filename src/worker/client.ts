@@ -5,7 +5,7 @@
  * const manifest = await loadManifest('/models/');
  * const client = new GenerationClient({ manifest, baseUrl: '/models/' });
  * const r = await client.generate('emdm-t2m-web', { condition: { type: 'text', text: 'a person waves' }, frames: 120, steps: 4, guidance: 2.5, seed: 1 });
- * r.motion.joints; // frames × 22 × 3, bit-identical to createGenerator(...).generate() on the same backend
+ * r.motion.joints; // frames × 22 × 3, bit-identical to openModel(...).generate() (src/generate.ts) on the same backend
  * ```
  *
  * One worker per client holds the models, the text encoder and ORT; requests travel as messages

@@ -1,12 +1,14 @@
 /**
  * The generation worker's state, without the messaging: the generators it has loaded (lazily, once
- * each), the text encoders they share, and the backend choice with its fallbacks — WebGPU missing or
- * failing at load → WASM, WebGPU failing while generating → reload on WASM and run again. Events say
- * what happened (downloads, fallbacks) so the page can tell the user. Runs wherever createGenerator
- * runs (the worker in the browser; Node in tests).
+ * each) and the text encoders they share. The backend choice with its fallbacks (WebGPU missing or
+ * failing at load → WASM, WebGPU failing while generating → reload on WASM and run again) is
+ * src/backends.ts's; events say what happened (downloads, fallbacks) so the page can tell the user.
+ * Runs wherever createGenerator (src/createGenerator.ts) runs it: the worker in the browser, or
+ * in-process (Node, `{worker: false}`).
  */
-import { createGenerator, type GenerateOptions, type GenerateResult, type Generator } from '../generate';
-import { ModelFileError, type Manifest } from '../manifest';
+import { loadModel, runWithFallback } from '../backends';
+import type { GenerateOptions, GenerateResult, Generator } from '../generate';
+import type { Manifest } from '../manifest';
 import type { BackendRequest } from '../runtime/ort';
 import { createTextEncoder, type TextEncoder } from '../text';
 
@@ -21,13 +23,6 @@ export interface HostOptions {
   backend: BackendRequest;
   threads?: number;
 }
-
-const hasWebGpu = () => {
-  const nav = (globalThis as { navigator?: { gpu?: unknown } }).navigator;
-  return !!nav && 'gpu' in nav && !!nav.gpu;
-};
-
-const isAbort = (e: unknown) => e instanceof Error && e.name === 'AbortError';
 
 export class GenerationHost {
   private readonly generators = new Map<string, Promise<Generator>>();
@@ -56,18 +51,10 @@ export class GenerationHost {
   /** Generate with a model; a WebGPU failure reloads the model on WASM (said with a fallback event) and runs again. */
   async generate(model: string, o: GenerateOptions, variant?: string): Promise<{ gen: Generator; result: GenerateResult }> {
     const gen = await this.load(model, variant);
-    if (o.signal?.aborted) throw o.signal.reason;
-    try {
-      return { gen, result: await gen.generate(o) };
-    } catch (e) {
-      if (isAbort(e) || gen.backend !== 'webgpu' || e instanceof ModelFileError) throw e;
-      const wasm = await this.reloadOnWasm(model, variant, e instanceof Error ? e.message : String(e));
-      return { gen: wasm, result: await wasm.generate(o) };
-    }
+    return runWithFallback(gen, o, () => this.reloadOnWasm(model, variant), (reason) => this.events.fallback(model, reason));
   }
 
-  private async reloadOnWasm(model: string, variant: string | undefined, reason: string): Promise<Generator> {
-    this.events.fallback(model, `WebGPU failed while generating (${reason})`);
+  private reloadOnWasm(model: string, variant: string | undefined): Promise<Generator> {
     const key = `${model}|${variant ?? ''}`;
     this.generators.get(key)?.then((g) => g.dispose()).catch(() => undefined);
     const g = this.create(model, variant, 'wasm');
@@ -126,20 +113,7 @@ export class GenerationHost {
       manifest: this.opts.manifest, baseUrl: this.opts.baseUrl, model, variant, threads: this.opts.threads,
       onDownload: this.progress(`model:${model}|${variant ?? ''}`, model), textEncoder,
     };
-    if (this.opts.backend === 'wasm' || force === 'wasm') return createGenerator({ ...common, backend: 'wasm' });
-    if (!hasWebGpu()) {
-      this.events.fallback(model, 'WebGPU is not available in this browser');
-      return createGenerator({ ...common, backend: 'wasm' });
-    }
-    try {
-      const g = await createGenerator({ ...common, backend: this.opts.backend });
-      if (g.backend !== 'webgpu') this.events.fallback(model, 'WebGPU is not available (no usable GPU adapter)');
-      return g;
-    } catch (e) {
-      if (e instanceof ModelFileError) throw e; // a bad file is not a backend problem
-      this.events.fallback(model, `WebGPU failed (${e instanceof Error ? e.message : String(e)})`);
-      return createGenerator({ ...common, backend: 'wasm' });
-    }
+    return loadModel({ ...common, backend: force ?? this.opts.backend }, (reason) => this.events.fallback(model, reason));
   }
 
   async dispose(): Promise<void> {

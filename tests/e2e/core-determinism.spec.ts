@@ -9,7 +9,7 @@ import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import crypto from 'node:crypto';
 import { expect, test, type Page } from '@playwright/test';
-import { createGenerator, type GenerateOptions } from '../../src/generate';
+import { openModel, type GenerateOptions } from '../../src/generate';
 import { type Manifest, loadManifest } from '../../src/manifest';
 import { SeededRandom } from '../../src/sampler/rng';
 import { buildTinyManifest } from '../fixtures/parity/tinyManifest';
@@ -40,7 +40,7 @@ interface Req { model: string; condition: GenerateOptions['condition']; frames: 
 
 async function nodeRun(req: Req) {
   const { manifest, baseUrl } = req.model === 'tiny' || req.model === 'tiny-ddim' ? await tinyNode() : { manifest: await loadManifest(MODELS), baseUrl: MODELS };
-  const gen = await createGenerator({ manifest, baseUrl, model: req.model, backend: 'wasm', threads: 1 });
+  const gen = await openModel({ manifest, baseUrl, model: req.model, backend: 'wasm', threads: 1 });
   try {
     const r = await gen.generate(req);
     return { featuresSha256: sha(r.motion.features), jointsSha256: sha(r.motion.joints) };

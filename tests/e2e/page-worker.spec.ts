@@ -8,7 +8,7 @@ import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { expect, test, type Page } from '@playwright/test';
-import { createGenerator, type GenerateOptions } from '../../src/generate';
+import { openModel, type GenerateOptions } from '../../src/generate';
 import { loadManifest } from '../../src/manifest';
 import { watchPage } from './helpers';
 
@@ -151,7 +151,7 @@ test.describe('generation worker', () => {
     await openReady(page);
     const common = { frames: 60, steps: 4, guidance: 2.5, seed: 31, smooth: true, footCleanup: true };
     const node = async (model: string, condition: GenerateOptions['condition']) => {
-      const gen = await createGenerator({ manifest, baseUrl: MODELS, model, backend: 'wasm', threads: 1 });
+      const gen = await openModel({ manifest, baseUrl: MODELS, model, backend: 'wasm', threads: 1 });
       try {
         return Array.from((await gen.generate({ ...common, condition })).motion.joints);
       } finally {

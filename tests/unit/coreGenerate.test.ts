@@ -1,11 +1,11 @@
-// createGenerator end to end in Node (ORT-web WASM): on a temporary models folder holding the
+// openModel end to end in Node (ORT-web WASM): on a temporary models folder holding the
 // tiny step model, and on the shipped models (parity with the Python fixtures) when present.
 import crypto from 'node:crypto';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
-import { createGenerator } from '../../src/generate';
+import { openModel } from '../../src/generate';
 import { assertFinite, NonFiniteMotionError } from '../../src/index';
 import { type Manifest, ModelFileError, loadManifest } from '../../src/manifest';
 import { getSession } from '../../src/runtime/ort';
@@ -37,12 +37,12 @@ function tinyModels(): { dir: string; manifest: Manifest } {
   return { dir: dir + '/', manifest };
 }
 
-describe('createGenerator on the tiny model', () => {
+describe('openModel on the tiny model', () => {
   it('generates a motion with timings; same seed is bit-identical; progress per step', async () => {
     const { dir } = tinyModels();
     const manifest = await loadManifest(dir);
     const downloads: number[] = [];
-    const gen = await createGenerator({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1, onDownload: (l) => downloads.push(l) });
+    const gen = await openModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1, onDownload: (l) => downloads.push(l) });
     expect(gen.backend).toBe('wasm');
     expect(downloads.at(-1)).toBe(manifest.files['tiny.onnx'].bytes + manifest.files['tiny.meanstd.f32'].bytes);
     const steps: number[] = [];
@@ -65,7 +65,7 @@ describe('createGenerator on the tiny model', () => {
 
   it('rejects bad requests with clear errors', async () => {
     const { dir, manifest } = tinyModels();
-    const gen = await createGenerator({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
+    const gen = await openModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
     const o = { condition: { type: 'none' as const }, frames: 30, steps: 4, guidance: 1, seed: 1 };
     await expect(gen.generate({ ...o, steps: 3 })).rejects.toThrow(/3 steps not supported \(supportedSteps = \[2, 4\]\)/);
     await expect(gen.generate({ ...o, frames: 197 })).rejects.toThrow(/frames must be an integer in 1…196/);
@@ -81,11 +81,11 @@ describe('createGenerator on the tiny model', () => {
   it('refuses a corrupt or missing model file, naming it', async () => {
     const { dir, manifest } = tinyModels();
     fs.writeFileSync(path.join(dir, 'tiny.onnx'), Buffer.from('not a model'));
-    await expect(createGenerator({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(ModelFileError);
-    await expect(createGenerator({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(/tiny\.onnx: size 11 bytes differs/);
+    await expect(openModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(ModelFileError);
+    await expect(openModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(/tiny\.onnx: size 11 bytes differs/);
     fs.rmSync(path.join(dir, 'tiny.onnx'));
-    await expect(createGenerator({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(/tiny\.onnx: not found/);
-    await expect(createGenerator({ manifest, baseUrl: dir, model: 'nope', backend: 'wasm', threads: 1 })).rejects.toThrow(/models\.nope' not found \(models: tiny, tiny-ddim\)/);
+    await expect(openModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(/tiny\.onnx: not found/);
+    await expect(openModel({ manifest, baseUrl: dir, model: 'nope', backend: 'wasm', threads: 1 })).rejects.toThrow(/models\.nope' not found \(models: tiny, tiny-ddim\)/);
   });
 
   it('refuses NaN from the model with NonFiniteMotionError (exported by the library); the generator keeps working', async () => {
@@ -100,13 +100,13 @@ describe('createGenerator on the tiny model', () => {
     m.files['nan.onnx'] = { bytes: nanModel.length, sha256: sha(nanModel) };
     m.models.tiny.variants = { nan: 'nan.onnx' };
     const o = { condition: { type: 'action' as const, label: 1 }, frames: 10, steps: 2, guidance: 2.5, seed: 3 };
-    const bad = await createGenerator({ manifest: m, baseUrl: dir, model: 'tiny', variant: 'nan', backend: 'wasm', threads: 1 });
+    const bad = await openModel({ manifest: m, baseUrl: dir, model: 'tiny', variant: 'nan', backend: 'wasm', threads: 1 });
     const err = await bad.generate(o).catch((e: unknown) => e);
     expect(err).toBeInstanceOf(NonFiniteMotionError);
     expect(err).toMatchObject({ name: 'NonFiniteMotionError', index: 0, count: 10 * 263 });
     expect((err as Error).message).toMatch(/^model tiny \(nan\.onnx\) output features: non-finite numbers \(value 0 of 2630 is NaN\)/);
     await bad.dispose();
-    const good = await createGenerator({ manifest: m, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
+    const good = await openModel({ manifest: m, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
     expect((await good.generate(o)).motion.joints.every(Number.isFinite)).toBe(true);
     await good.dispose();
     expect(() => assertFinite(Float32Array.of(0, 1, Infinity), 'x')).toThrow(/^x: non-finite numbers \(value 2 of 3 is Infinity\)/);
@@ -116,18 +116,18 @@ describe('createGenerator on the tiny model', () => {
     const { dir, manifest } = tinyModels();
     const bad = structuredClone(manifest);
     bad.models.tiny.condition = { type: 'action', labels: ['a', 'b'], dim: 2 };
-    await expect(createGenerator({ manifest: bad, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toMatchObject({
+    await expect(openModel({ manifest: bad, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toMatchObject({
       name: 'ModelFileError', reason: 'incompatible', path: 'tiny.onnx',
     });
   });
 });
 
-describe('createGenerator on a diffusion-objective model (DDIM)', () => {
+describe('openModel on a diffusion-objective model (DDIM)', () => {
   it('samples with DDIM and says so; a fixture run equals emdm.sample.sample_features(objective="diffusion")', async () => {
     const { dir } = tinyModels();
     const manifest = await loadManifest(dir);
-    const ddim = await createGenerator({ manifest, baseUrl: dir, model: 'tiny-ddim', backend: 'wasm', threads: 1 });
-    const ddgan = await createGenerator({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
+    const ddim = await openModel({ manifest, baseUrl: dir, model: 'tiny-ddim', backend: 'wasm', threads: 1 });
+    const ddgan = await openModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
     expect(ddim.sampler).toBe('ddim');
     expect(ddgan.sampler).toBe('ddgan');
     const fx = loadCase('tiny-ddim');
@@ -159,7 +159,7 @@ describe('createGenerator on a diffusion-objective model (DDIM)', () => {
     const { dir, manifest } = tinyModels();
     const bad = structuredClone(manifest);
     (bad.models.tiny as { objective: string }).objective = 'flow';
-    await expect(createGenerator({ manifest: bad, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(
+    await expect(openModel({ manifest: bad, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(
       /models\.tiny\.objective' is "flow"; expected "ddgan" .* or "diffusion" \(sampled with DDIM\)/,
     );
   });
@@ -187,7 +187,7 @@ describe('parity with Python on the shipped models', () => {
       });
       expect(maxAbsDiff(x0, fx.get('step_x0'))).toBeLessThan(1e-4);
       await session.release();
-      const gen = await createGenerator({ manifest, baseUrl: MODELS_DIR + '/', model: name, backend: 'wasm', threads: 1 });
+      const gen = await openModel({ manifest, baseUrl: MODELS_DIR + '/', model: name, backend: 'wasm', threads: 1 });
       // whole run with the fixture's noise and condition vector
       const r = await gen.generate({
         condition: { type: 'vector', vector: fx.get('cond') }, frames: L, steps: fx.meta.steps as number, guidance: fx.meta.guidance as number,

@@ -6,7 +6,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
-import { createGenerator } from '../../src/generate';
+import { openModel } from '../../src/generate';
 import type { Manifest } from '../../src/manifest';
 import { getSession } from '../../src/runtime/ort';
 import { stepFunction } from '../../src/runtime/stepModel';
@@ -154,7 +154,7 @@ describe('generate() with known features', () => {
   afterAll(() => fs.rmSync(dir, { recursive: true, force: true }));
 
   it('keeps the given de-normalised features where keep = 1; kept frames decode to the same joints, also after a free stretch', async () => {
-    const gen = await createGenerator({ manifest, baseUrl: dir + '/', model: 'tiny', backend: 'wasm', threads: 1 });
+    const gen = await openModel({ manifest, baseUrl: dir + '/', model: 'tiny', backend: 'wasm', threads: 1 });
     try {
       const first = await gen.generate({ condition: { type: 'action', label: 1 }, frames: L, steps: 4, guidance: 2.5, seed: 3 });
       const keep = keepMask(L, [parseKeep('frames:0-5,12-15'), parseKeep('group:legs')]);

@@ -3,7 +3,7 @@
 import { beforeAll, describe, expect, test, vi } from 'vitest';
 import fs from 'node:fs';
 import path from 'node:path';
-import { createGenerator } from '../../src/generate';
+import { openModel } from '../../src/generate';
 import { loadManifest } from '../../src/manifest';
 import { cosine, createTextEncoder, type TextEncoder, TextEncoderError } from '../../src/text';
 import { loadTransformers } from '../../src/text/transformersEnv';
@@ -93,7 +93,7 @@ describe('all-MiniLM-L6-v2 (transformers.js, Node)', () => {
       return c.type === 'text' && c.encoder === enc.id && manifest.models[k].objective !== 'diffusion';
     });
     expect(name).toBeDefined();
-    const gen = await createGenerator({ manifest, baseUrl: MODELS, model: name!, backend: 'wasm', threads: 1, textEncoder: enc });
+    const gen = await openModel({ manifest, baseUrl: MODELS, model: name!, backend: 'wasm', threads: 1, textEncoder: enc });
     const o = { frames: 4, steps: manifest.models[name!].supportedSteps[0], guidance: 1, seed: 1 };
     const long = FIXTURE.prompts.length - 1; // 129 tokens
     const cut = await gen.generate({ ...o, condition: { type: 'text', text: FIXTURE.prompts[long] } });

@@ -1,11 +1,12 @@
 // Core harness page: runs the TypeScript core in the browser exactly as in Node, for the
 // determinism spec (tests/e2e/core-determinism.spec.ts) and the browser benchmark
 // (scripts/bench/core-bench.mjs). Exposes window.coreHarness; no UI.
-import { type Generator, type GenerateOptions, createGenerator } from '../../src/generate';
-import { type Manifest, loadManifest, sha256Hex } from '../../src/manifest';
-import { createTextEncoder } from '../../src/text';
-import { SeededRandom } from '../../src/sampler/rng';
-import { GenerationClient } from '../../src/worker/client';
+import { loadModel } from '../../src/index';
+import type { Generator, GenerateOptions } from '../../src/index';
+import { type Manifest, loadManifest, sha256Hex } from '../../src/index';
+import { createTextEncoder } from '../../src/index';
+import { SeededRandom } from '../../src/index';
+import { GenerationClient } from '../../src/index';
 import { buildTinyManifest } from '../../tests/fixtures/parity/tinyManifest';
 import tinyMeanStdUrl from '../../tests/fixtures/parity/tiny.meanstd.f32?url&no-inline';
 import tinyOnnxUrl from '../../tests/fixtures/parity/tiny-step.onnx?url&no-inline';
@@ -66,7 +67,7 @@ function generatorFor(model: string, variant?: string): Promise<Generator> {
     g = (async () => {
       const { manifest, baseUrl } = model === 'tiny' || model === 'tiny-ddim' ? await tinyManifest() : { manifest: await loadManifest(MODELS), baseUrl: MODELS };
       if (VIA_WORKER) return workerGenerator(manifest, baseUrl, model, variant);
-      return createGenerator({ manifest, baseUrl, model, variant, backend, threads });
+      return loadModel({ manifest, baseUrl, model, variant, backend, threads });
     })();
     generators.set(key, g);
     g.catch(() => generators.delete(key));

@@ -1,0 +1,72 @@
+/**
+ * Backend choice and fallback, in ONE place (docs/ARCHITECTURE.md "TypeScript library"):
+ * - at load (`loadModel`): 'wasm' opens WASM; 'auto' or 'webgpu' opens WebGPU when this environment has
+ *   an adapter, else WASM; a WebGPU session that fails to open or to run its warm-up falls back to WASM
+ *   (a broken model file is not a backend problem: that ModelFileError is thrown as is);
+ * - while generating (`runWithFallback`): a WebGPU run that fails is run again on WASM.
+ * Each fallback is reported with its reason, so a page can tell the user. createGenerator
+ * (src/createGenerator.ts) runs this through GenerationHost, in the generation worker or in-process.
+ */
+import { type GenerateOptions, type GenerateResult, type Generator, type GeneratorOptions, openModel } from './generate';
+import { ModelFileError } from './manifest';
+import { type BackendRequest, webgpuAvailable } from './runtime/ort';
+
+export interface LoadModelOptions extends Omit<GeneratorOptions, 'backend'> {
+  /** 'auto' (default) or 'webgpu': WebGPU where it works, else WASM; 'wasm': WASM only */
+  backend?: BackendRequest;
+}
+
+const hasNavigatorGpu = (): boolean => {
+  const nav = (globalThis as { navigator?: { gpu?: unknown } }).navigator;
+  return !!nav && 'gpu' in nav && !!nav.gpu;
+};
+
+const message = (e: unknown): string => (e instanceof Error ? e.message : String(e));
+
+/** Open `opts.model` on the requested backend, falling back to WASM (and saying why through `onFallback`). */
+export async function loadModel(opts: LoadModelOptions, onFallback: (reason: string) => void = () => undefined): Promise<Generator> {
+  const request = opts.backend ?? 'auto';
+  if (request !== 'auto' && request !== 'wasm' && request !== 'webgpu') {
+    throw new RangeError(`loadModel: backend must be 'auto', 'webgpu' or 'wasm', got ${JSON.stringify(request)}`);
+  }
+  const wasm = () => openModel({ ...opts, backend: 'wasm' });
+  if (request === 'wasm') return wasm();
+  if (!hasNavigatorGpu()) {
+    onFallback('WebGPU is not available in this browser');
+    return wasm();
+  }
+  if (!(await webgpuAvailable())) {
+    onFallback('WebGPU is not available (no usable GPU adapter)');
+    return wasm();
+  }
+  try {
+    return await openModel({ ...opts, backend: 'webgpu' });
+  } catch (e) {
+    if (e instanceof ModelFileError) throw e; // a bad file fails on WASM too, with its name
+    onFallback(`WebGPU failed (${message(e)})`);
+    return wasm();
+  }
+}
+
+const isAbort = (e: unknown) => e instanceof Error && e.name === 'AbortError';
+
+/**
+ * Run one generation; when it fails on WebGPU (not a cancel, not a bad file), say so through
+ * `onFallback`, get a WASM generator from `reloadOnWasm` and run the same request there.
+ */
+export async function runWithFallback(
+  gen: Generator,
+  o: GenerateOptions,
+  reloadOnWasm: () => Promise<Generator>,
+  onFallback: (reason: string) => void = () => undefined,
+): Promise<{ gen: Generator; result: GenerateResult }> {
+  if (o.signal?.aborted) throw o.signal.reason;
+  try {
+    return { gen, result: await gen.generate(o) };
+  } catch (e) {
+    if (isAbort(e) || gen.backend !== 'webgpu' || e instanceof ModelFileError) throw e;
+    onFallback(`WebGPU failed while generating (${message(e)})`);
+    const wasm = await reloadOnWasm();
+    return { gen: wasm, result: await wasm.generate(o) };
+  }
+}

@@ -1,0 +1,120 @@
+// The library's entry createGenerator (src/createGenerator.ts) in Node (in-process, WASM) on the tiny
+// step model, and the backend choice / fallbacks it runs through (src/backends.ts).
+import crypto from 'node:crypto';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { afterAll, describe, expect, it } from 'vitest';
+import { loadModel, runWithFallback } from '../../src/backends';
+import { createGenerator, resolveRequest } from '../../src/createGenerator';
+import { type GenerateOptions, type GenerateResult, type Generator, openModel } from '../../src/generate';
+import { ModelFileError, loadManifest } from '../../src/manifest';
+import { AbortError } from '../../src/sampler/sampler';
+import { poseTrack } from '../../src/three';
+import { buildTinyManifest } from '../fixtures/parity/tinyManifest';
+import { MODELS_DIR, PARITY_DIR } from './coreFixtures';
+
+const sha = (b: Buffer) => crypto.createHash('sha256').update(b).digest('hex');
+const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-create-'));
+afterAll(() => fs.rmSync(tmp, { recursive: true, force: true }));
+
+/** A models folder with the tiny step model as an 8-action model (labels a…h). */
+function tinyModels(): string {
+  const onnx = fs.readFileSync(path.join(PARITY_DIR, 'tiny-step.onnx'));
+  const ms = new Float32Array(2 * 263);
+  ms.fill(1, 263);
+  ms[3] = 0.9;
+  const msBuf = Buffer.from(ms.buffer);
+  const real = JSON.parse(fs.readFileSync(path.join(MODELS_DIR, 'manifest.json'), 'utf8'));
+  const manifest = buildTinyManifest(
+    real.skeleton,
+    { path: 'tiny.onnx', bytes: onnx.length, sha256: sha(onnx) },
+    { path: 'tiny.meanstd.f32', bytes: msBuf.length, sha256: sha(msBuf) },
+  );
+  fs.writeFileSync(path.join(tmp, 'tiny.onnx'), onnx);
+  fs.writeFileSync(path.join(tmp, 'tiny.meanstd.f32'), msBuf);
+  fs.writeFileSync(path.join(tmp, 'manifest.json'), JSON.stringify(manifest));
+  return tmp + '/';
+}
+
+describe('createGenerator', () => {
+  it('fills a request from the manifest: model by task, steps, guidance, length, action by name', async () => {
+    const manifest = await loadManifest(tinyModels());
+    const r = resolveRequest(manifest, { action: 'c', seed: 9 });
+    expect(r).toEqual({ model: 'tiny', options: { condition: { type: 'action', label: 2 }, frames: 196, steps: 4, guidance: 2.5, seed: 9, smooth: undefined, footCleanup: undefined } });
+    expect(resolveRequest(manifest, { action: 1, seconds: 1.5, model: 'tiny-ddim' }).options).toMatchObject({ frames: 30, steps: 5 });
+    expect(resolveRequest(manifest, { action: 1, seconds: 60 }).options.frames).toBe(196);
+    expect(() => resolveRequest(manifest, { action: 'zz' })).toThrow(/action 'zz' is not a label of tiny \(a, b, c, d, e, f, g, h\)/);
+    expect(() => resolveRequest(manifest, { prompt: 'a person walks' })).toThrow(/no text model \(models: tiny, tiny-ddim\)/);
+    expect(() => resolveRequest(manifest, { action: 1, seconds: 0 })).toThrow(/seconds must be > 0/);
+    expect(() => resolveRequest(manifest, { action: 1, model: 'big' })).toThrow(/model 'big' is not in the manifest/);
+  });
+
+  it('in-process (Node): the same motion as openModel, with its pose (IK) for the character', async () => {
+    const dir = tinyModels();
+    const manifest = await loadManifest(dir);
+    const fallbacks: string[] = [];
+    const g = await createGenerator({ baseUrl: dir, threads: 1, onFallback: (_m, r) => fallbacks.push(r) });
+    expect(g.inWorker).toBe(false); // Node has no Worker: in-process by default
+    const steps: number[] = [];
+    const m = await g.generate({ action: 2, seconds: 1.5, seed: 7, onStep: (d) => steps.push(d) });
+    expect(steps).toEqual([1, 2, 3, 4]);
+    expect([m.model, m.backend, m.frames, m.fps, m.seed, m.steps, m.guidance]).toEqual(['tiny', 'wasm', 30, 20, 7, 4, 2.5]);
+    expect(fallbacks).toEqual(['WebGPU is not available in this browser']); // 'auto' in Node: WASM, said once
+    const ref = await openModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
+    const want = await ref.generate({ condition: { type: 'action', label: 2 }, frames: 30, steps: 4, guidance: 2.5, seed: 7 });
+    expect(Buffer.from(m.joints.buffer).equals(Buffer.from(want.motion.joints.buffer))).toBe(true);
+    expect(m.pose.rootPos.length).toBe(30 * 3);
+    expect(m.pose.quats.length).toBe(30 * 22 * 4);
+    const track = poseTrack(m, manifest.skeleton);
+    expect(track.rootPos).toBe(m.pose.rootPos);
+    // without a pose, the track is solved from the joints: the same numbers
+    const solved = poseTrack({ frames: m.frames, fps: m.fps, joints: m.joints, features: m.features }, manifest.skeleton);
+    expect(Array.from(solved.quats)).toEqual(Array.from(m.pose.quats));
+    await ref.dispose();
+    await g.dispose();
+  });
+
+  it('names the missing folder setting in Node', async () => {
+    await expect(createGenerator()).rejects.toThrow(/no baseUrl given; pass the models folder/);
+  });
+});
+
+/** A generator stand-in whose generate() runs `run`. */
+function fake(backend: 'webgpu' | 'wasm', run: (o: GenerateOptions) => Promise<GenerateResult>): Generator {
+  return { modelName: 'm', backend, threads: 1, entry: {} as Generator['entry'], sampler: 'ddgan', generate: run, dispose: async () => undefined };
+}
+const OK = { steps: 1 } as GenerateResult;
+const O: GenerateOptions = { condition: { type: 'none' }, frames: 2, steps: 1, guidance: 1, seed: 1 };
+
+describe('backends: one place for WebGPU → WASM', () => {
+  it('loadModel: WASM when asked; WebGPU missing → WASM, said once', async () => {
+    const dir = tinyModels();
+    const manifest = await loadManifest(dir);
+    const said: string[] = [];
+    const w = await loadModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 }, (r) => said.push(r));
+    expect([w.backend, said]).toEqual(['wasm', []]);
+    const a = await loadModel({ manifest, baseUrl: dir, model: 'tiny', threads: 1 }, (r) => said.push(r));
+    expect([a.backend, said]).toEqual(['wasm', ['WebGPU is not available in this browser']]);
+    await expect(loadModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'gpu' as never })).rejects.toThrow(/backend must be 'auto', 'webgpu' or 'wasm', got "gpu"/);
+    await Promise.all([w.dispose(), a.dispose()]);
+  });
+
+  it('runWithFallback: a WebGPU failure runs again on WASM; cancels, bad files and WASM failures are not retried', async () => {
+    const said: string[] = [];
+    const wasm = fake('wasm', async () => OK);
+    const broken = fake('webgpu', async () => {
+      throw new Error('device lost');
+    });
+    const r = await runWithFallback(broken, O, async () => wasm, (s) => said.push(s));
+    expect(r.gen).toBe(wasm);
+    expect(r.result).toBe(OK);
+    expect(said).toEqual(['WebGPU failed while generating (device lost)']);
+    const never = async () => {
+      throw new Error('must not reload');
+    };
+    await expect(runWithFallback(fake('webgpu', async () => { throw new AbortError('stop'); }), O, never)).rejects.toThrow('stop');
+    await expect(runWithFallback(fake('webgpu', async () => { throw new ModelFileError('x.onnx', 'incompatible', 'bad'); }), O, never)).rejects.toThrow(ModelFileError);
+    await expect(runWithFallback(fake('wasm', async () => { throw new Error('oom'); }), O, never)).rejects.toThrow('oom');
+  });
+});
