@@ -29,6 +29,78 @@ function onnxFiles(m: ModelInfo): string[] {
   return [m.onnx, ...Object.values(m.variants ?? {})];
 }
 
+/**
+ * Remembers every WebAssembly memory created in the realm it runs in (ORT-web's emscripten glue creates its
+ * shared memory with `new WebAssembly.Memory`; a module that exports its own memory is caught at
+ * instantiation), labelled with the script that made it; `globalThis.__wasmMemories()` lists their sizes.
+ * ORT keeps its module private (no handle in `ort.env`), and CDP's JS heap does not include wasm memory.
+ */
+function trackWasmMemory(): void {
+  type Listed = { by: string; bytes: number };
+  const g = globalThis as unknown as { __wasmMemories?: () => Listed[] };
+  if (g.__wasmMemories) return;
+  const OrigMemory = WebAssembly.Memory;
+  const seen: { memory: WebAssembly.Memory; by: string }[] = [];
+  // the script that called (stack: message, by, the wrapper, then the caller)
+  const by = () => (new Error().stack ?? '').split('\n').slice(3).map((l) => /([\w.-]+\.m?js)\b/.exec(l)?.[1]).find(Boolean) ?? '?';
+  const add = (memory: unknown, label: string) => {
+    if (memory instanceof OrigMemory && !seen.some((t) => t.memory === memory)) seen.push({ memory, by: label });
+  };
+  WebAssembly.Memory = new Proxy(OrigMemory, {
+    construct(target, args) {
+      const m = Reflect.construct(target, args) as WebAssembly.Memory;
+      add(m, by());
+      return m;
+    },
+  });
+  const fromExports = (inst: WebAssembly.Instance, label: string) => Object.values(inst.exports).forEach((v) => add(v, label));
+  const origInstantiate = WebAssembly.instantiate.bind(WebAssembly);
+  WebAssembly.instantiate = (async (...args: Parameters<typeof WebAssembly.instantiate>) => {
+    const label = by();
+    const r: unknown = await origInstantiate(...args);
+    fromExports(r instanceof WebAssembly.Instance ? r : (r as WebAssembly.WebAssemblyInstantiatedSource).instance, label);
+    return r;
+  }) as typeof WebAssembly.instantiate;
+  const origStreaming = WebAssembly.instantiateStreaming?.bind(WebAssembly);
+  if (origStreaming) {
+    WebAssembly.instantiateStreaming = async (...args: Parameters<typeof WebAssembly.instantiateStreaming>) => {
+      const label = by();
+      const r = await origStreaming(...args);
+      fromExports(r.instance, label);
+      return r;
+    };
+  }
+  g.__wasmMemories = () => seen.map((t) => ({ by: t.by, bytes: t.memory.buffer.byteLength })).filter((t) => t.bytes > 0);
+}
+
+/**
+ * Tracks WebAssembly memory on the page's thread (init script) and in its workers (ORT may run in a Web
+ * Worker, where init scripts do not reach): every same-origin script is served with the tracker prepended
+ * (plain statements, so an ES module's imports stay valid; it installs itself once per realm).
+ */
+async function trackWasmMemoryEverywhere(page: Page): Promise<void> {
+  await page.addInitScript(trackWasmMemory);
+  const prelude = `(${trackWasmMemory.toString()})();\n`;
+  await page.route(/\/[^/?#]+\.m?js(\?[^#]*)?$/, async (route: Route) => {
+    const res = await route.fetch();
+    await route.fulfill({ response: res, body: prelude + (await res.text()) });
+  });
+}
+
+/** The WebAssembly memories of the page and of every worker, e.g. [{ by: 'ort-wasm-simd-threaded.mjs', bytes }]. */
+async function wasmMemories(page: Page): Promise<{ where: string; by: string; bytes: number }[]> {
+  type Listed = { by: string; bytes: number };
+  const list = () => (globalThis as unknown as { __wasmMemories?: () => Listed[] }).__wasmMemories?.() ?? [];
+  const out = (await page.evaluate(list)).map((m) => ({ where: 'page', ...m }));
+  // ORT's own thread-pool workers (scripts ort-wasm-*.mjs) wait in Atomics.wait and never answer an evaluate
+  // (it would hang the test and stall their threads); they share the memory of the realm that made them.
+  for (const w of page.workers().filter((x) => !/\/ort-wasm[^/]*\.mjs/.test(x.url()))) {
+    const name = w.url().split('/').pop() ?? w.url();
+    out.push(...(await w.evaluate(list).catch(() => [] as Listed[])).map((m) => ({ where: name, ...m })));
+  }
+  return out;
+}
+
 async function open(page: Page, query = 'noauto=1&backend=wasm'): Promise<void> {
   await page.goto(`/?${query}`);
   await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
@@ -44,6 +116,7 @@ test.describe('demo page: bad input', () => {
     test.setTimeout(300_000);
     page = await browser.newPage();
     watch = watchPage(page);
+    await trackWasmMemoryEverywhere(page);
     await open(page);
   });
   test.afterAll(async () => {
@@ -115,27 +188,45 @@ test.describe('demo page: bad input', () => {
     expect(c2.generations - c1.generations).toBe(1);
   });
 
-  test('no leak over 100 generations (JS heap after GC)', async () => {
+  test('no leak over 100 generations (JS heap after GC, and ORT\'s WASM memory)', async () => {
     test.setTimeout(600_000);
     const cdp = await page.context().newCDPSession(page);
     const heap = async () => {
       await cdp.send('HeapProfiler.collectGarbage');
       return (await cdp.send('Runtime.getHeapUsage')).usedSize;
     };
-    await page.evaluate((t) => window.emdm.generate({ mode: 'text', text: t, seconds: 1, steps: 1, seed: 1 }), PROMPT);
-    const before = await heap();
-    const n = await page.evaluate(async (t) => {
+    // WASM memories only grow (a freed tensor is reused, never returned), so a leak inside ORT (sessions,
+    // tensors or outputs not released) shows as growth of their total size over many generations.
+    const wasm = () => wasmMemories(page);
+    const total = (ms: { bytes: number }[]) => ms.reduce((a, m) => a + m.bytes, 0);
+    const mb = (b: number) => `${(b / 2 ** 20).toFixed(1)} MB`;
+    const generate = (from: number, count: number) => page.evaluate(async ([t, from, count]) => {
       let done = 0;
-      for (let i = 0; i < 100; i++) {
+      for (let i = from; i < from + count; i++) {
         await window.emdm.generate({ mode: 'text', text: t, seconds: 1 + (i % 3), steps: 1, seed: i });
         done++;
       }
       return done;
-    }, PROMPT);
+    }, [PROMPT, from, count] as const);
+    await generate(0, 3);                           // every length once: ORT's arena reaches its working size
+    const before = await heap();
+    const wasmBefore = await wasm();
+    expect(wasmBefore.some((m) => /ort/i.test(m.by)), `ORT's wasm memory not found: ${JSON.stringify(wasmBefore)}`).toBe(true);
+    console.log(`WASM memory after 3 generations: ${wasmBefore.map((m) => `${m.where}: ${m.by} ${mb(m.bytes)}`).join(', ')}`);
+    const n1 = await generate(3, 50);
+    const wasmMid = total(await wasm());
+    console.log(`WASM memory after 53 generations: ${mb(wasmMid)}`);
+    const n = n1 + (await generate(53, 50));
     const after = await heap();
+    const wasmAfter = await wasm();
     expect(n).toBe(100);
-    console.log(`JS heap: ${(before / 2 ** 20).toFixed(1)} MB before, ${(after / 2 ** 20).toFixed(1)} MB after 100 generations`);
+    const per = wasmAfter.map((m) => `${m.where}: ${m.by} ${mb(m.bytes)}`).join(', ');
+    console.log(`JS heap: ${mb(before)} before, ${mb(after)} after 100 generations; WASM memory: ${mb(total(wasmBefore))} before, `
+      + `${mb(wasmMid)} after 50, ${mb(total(wasmAfter))} after 100 (${per})`);
     expect(after - before).toBeLessThan(8 * 2 ** 20);
+    expect(wasmAfter.length, 'no WASM memory appeared or vanished during the generations').toBe(wasmBefore.length);
+    expect(total(wasmAfter) - total(wasmBefore), `WASM memory grew: ${per}`).toBeLessThan(16 * 2 ** 20);
+    expect(total(wasmAfter) - wasmMid, 'WASM memory still growing in the second 50 generations').toBeLessThan(8 * 2 ** 20);
   });
 
   test('out-of-range URL values are clamped with a notice', async ({ page: fresh }) => {
