@@ -1,7 +1,9 @@
 /// <reference types="vitest/config" />
 // Vite (dev/build/preview) and vitest configuration.
 // - root is web/ (the pages), static files come from public/ (models, self-hosted ORT wasm).
-// - `vite build` (production, dist/) contains the demo only (web/index.html). The test pages
+// - `vite build` (production, dist/) contains the demo (web/index.html) and the library's examples
+//   (web/examples/*.html, e.g. /examples/minimal.html; they import 'emdm-web' = src/index.ts and
+//   'emdm-web/three' = src/three.ts, the aliases below, as package.json's exports). The test pages
 //   (web/harness/: no CSP, takes ?models=<any URL>) are built only in the test mode
 //   (`vite build --mode e2e`, into dist-e2e/), which Playwright's test server builds and serves;
 //   the dev server serves every page.
@@ -27,15 +29,19 @@ export const CROSS_ORIGIN_ISOLATION_HEADERS = {
 export const E2E_MODE = 'e2e';
 
 /**
- * The pages of a build, keyed by folder ('main' for web/index.html): the demo only, or with
- * `testPages` every web/**\/index.html (the demo and the test harness).
+ * The pages of a build, keyed by folder ('main' for web/index.html) or by path without .html for the
+ * examples ('examples/minimal'): the demo and the examples, plus with `testPages` every
+ * web/**\/index.html (the test harness).
  */
 export function pageInputs(webDir: string = WEB, { testPages = false }: { testPages?: boolean } = {}): Record<string, string> {
   const inputs: Record<string, string> = {};
   if (!fs.existsSync(webDir)) return inputs;
+  const examples = path.join(webDir, 'examples');
+  const examplePages = fs.existsSync(examples) ? fs.readdirSync(examples).filter((f) => f.endsWith('.html')).sort() : [];
+  for (const f of examplePages) inputs[`examples/${f.slice(0, -'.html'.length)}`] = path.join(examples, f);
   if (!testPages) {
     const demo = path.join(webDir, 'index.html');
-    return fs.existsSync(demo) ? { main: demo } : inputs;
+    return fs.existsSync(demo) ? { main: demo, ...inputs } : inputs;
   }
   const entries = fs.readdirSync(webDir, { recursive: true, encoding: 'utf8' });
   for (const rel of entries.sort()) {
@@ -81,6 +87,13 @@ export default defineConfig(({ mode }) => {
     root: WEB,
     publicDir: path.join(ROOT, 'public'),
     plugins: [serveOrtRaw()],
+    resolve: {
+      // the library as its users import it (package.json "exports"): the examples use these names
+      alias: [
+        { find: /^emdm-web$/, replacement: path.join(ROOT, 'src/index.ts') },
+        { find: /^emdm-web\/three$/, replacement: path.join(ROOT, 'src/three.ts') },
+      ],
+    },
     build: {
       outDir: path.join(ROOT, mode === E2E_MODE ? 'dist-e2e' : 'dist'),
       emptyOutDir: true,

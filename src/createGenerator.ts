@@ -17,11 +17,9 @@
  */
 import type { GenerateResult } from './generate';
 import { type Manifest, type ModelEntry, loadManifest } from './manifest';
-import { solveIK } from './motion/ik';
 import type { Motion } from './motion/types';
 import type { Backend, BackendRequest } from './runtime/ort';
 import type { Skeleton } from './skeleton';
-import { GenerationHost } from './worker/host';
 import { GenerationClient, type ClientEvents } from './worker/client';
 import type { WireGenerateOptions } from './worker/protocol';
 
@@ -170,6 +168,8 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
     };
   }
 
+  // in-process: loaded on demand, so a page that uses the worker does not carry the sampler and ORT glue
+  const [{ GenerationHost }, { solveIK }] = await Promise.all([import('./worker/host'), import('./motion/ik')]);
   const host = new GenerationHost({ manifest, baseUrl, backend, threads: opts.threads }, {
     download: (m, l, t) => events.download?.(m, l, t),
     fallback: (m, r) => events.fallback?.(m, r),

@@ -3,13 +3,8 @@
 // sampler and IK run there, never on this thread), the character from src/character, the
 // controls/URL/panels/downloads from web/ui.
 import { MeshStandardMaterial, Quaternion, Vector3 } from 'three';
-import { HEAD_PITCH } from '../src/character/body';
-import { applyPose, createCharacter } from '../src/character/character';
-import { MotionPlayer, type PoseTrack } from '../src/character/player';
-import type { GenerateResult } from '../src/generate';
-import { assertFinite, NonFiniteMotionError } from '../src/errors';
-import { loadManifest, ModelFileError, type Manifest } from '../src/manifest';
-import { clearModelCache, modelCacheUsage } from '../src/cache/modelCache';
+import { HEAD_PITCH, applyPose, createCharacter, MotionPlayer, type PoseTrack } from '../src/three';
+import { type GenerateResult, assertFinite, NonFiniteMotionError, loadManifest, ModelFileError, type Manifest, clearModelCache, modelCacheUsage } from '../src/index';
 import { compareNote, compareStepChoices, planCompare, type ComparePlan } from './ui/compare';
 import { Controls } from './ui/controls';
 import { byId, formatBytes, formatMs, saveBlob } from './ui/dom';

@@ -1,12 +1,7 @@
 // Core harness page: runs the TypeScript core in the browser exactly as in Node, for the
 // determinism spec (tests/e2e/core-determinism.spec.ts) and the browser benchmark
 // (scripts/bench/core-bench.mjs). Exposes window.coreHarness; no UI.
-import { loadModel } from '../../src/index';
-import type { Generator, GenerateOptions } from '../../src/index';
-import { type Manifest, loadManifest, sha256Hex } from '../../src/index';
-import { createTextEncoder } from '../../src/index';
-import { SeededRandom } from '../../src/index';
-import { GenerationClient } from '../../src/index';
+import { loadModel, type Generator, type GenerateOptions, type Manifest, loadManifest, sha256Hex, createTextEncoder, SeededRandom, GenerationClient } from '../../src/index';
 import { buildTinyManifest } from '../../tests/fixtures/parity/tinyManifest';
 import tinyMeanStdUrl from '../../tests/fixtures/parity/tiny.meanstd.f32?url&no-inline';
 import tinyOnnxUrl from '../../tests/fixtures/parity/tiny-step.onnx?url&no-inline';

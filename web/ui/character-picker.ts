@@ -4,14 +4,7 @@
 // editor; the map is kept per file name in localStorage and can be exported as JSON. Downloads: the
 // character with the clip as GLB, and the clip as BVH on its bone names.
 import { AnimationMixer, Group, LoopOnce, type AnimationAction, type Object3D } from 'three';
-import { type CharacterFile, CharacterLoadError, type LoadedCharacter, loadCharacter } from '../../src/character/retarget/load';
-import { type BoneInfo, type BoneMapping, MappingError, mappingFromJSON, mappingToJSON, validateMapping } from '../../src/character/retarget/mapping';
-import { type RetargetResult, retargetMotion } from '../../src/character/retarget/retarget';
-import { type BvhUnits, bvhFileName } from '../../src/export/bvh';
-import { characterToBVH, characterToGLB } from '../../src/export/characterGlb';
-import { contactsFromFeatures } from '../../src/motion/footContact';
-import type { Motion } from '../../src/motion/types';
-import { JOINT_NAMES, type JointName, type Skeleton } from '../../src/skeleton';
+import { type CharacterFile, CharacterLoadError, type LoadedCharacter, loadCharacter, type BoneInfo, type BoneMapping, MappingError, mappingFromJSON, mappingToJSON, validateMapping, type RetargetResult, retargetMotion, type BvhUnits, bvhFileName, characterToBVH, characterToGLB, contactsFromFeatures, type Motion, JOINT_NAMES, type JointName, type Skeleton } from '../../src/index';
 import { saveBlob } from './dom';
 
 export interface PickerHost {

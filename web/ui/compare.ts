@@ -2,7 +2,7 @@
 // the label of each panel. EMDM (a few-step DDGAN model) is trained for at most 10 steps; the plain
 // diffusion baseline sampled with DDIM needs 50–100 for quality, so the compare slider goes further
 // and EMDM stays at its maximum there (and says so).
-import type { ModelEntry } from '../../src/manifest';
+import type { ModelEntry } from '../../src/index';
 
 export interface ComparePlan {
   /** steps EMDM runs (its largest supported count ≤ the slider, else its smallest) */

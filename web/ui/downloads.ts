@@ -3,11 +3,8 @@
 // motion as an animation (three's GLTFExporter; metres, as glTF requires), and the joint positions as JSON.
 import { AnimationClip, QuaternionKeyframeTrack, VectorKeyframeTrack } from 'three';
 import { GLTFExporter } from 'three/addons/exporters/GLTFExporter.js';
-import { createCharacter } from '../../src/character/character';
-import type { PoseTrack } from '../../src/character/player';
-import { type BvhUnits, bvhFileName, writeBVH } from '../../src/export/bvh';
-import type { Motion } from '../../src/motion/types';
-import type { SkeletonLike } from '../../src/skeleton';
+import { createCharacter, type PoseTrack } from '../../src/three';
+import { type BvhUnits, bvhFileName, writeBVH, type Motion, type SkeletonLike } from '../../src/index';
 
 /** The BVH file of a motion at its own 20 fps in `units` ('m' | 'cm', from the page's unit select), named
  * `<stem>-metres.bvh` / `<stem>-centimetres.bvh`. Another value is a RangeError naming it. */

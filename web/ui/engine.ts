@@ -1,8 +1,7 @@
 // The models the page needs, loaded lazily in the generation worker (which also falls back from
 // WebGPU to WASM), and generations run so that the NEWEST request wins: starting one aborts the one
 // before it (the worker stops it at the next denoising step) and waits for it to stop before running.
-import type { Manifest, ModelEntry } from '../../src/manifest';
-import { GenerationClient, type ClientEvents, type ModelInfo, type RemoteGenerateOptions, type RemoteResult } from '../../src/worker/client';
+import { type Manifest, type ModelEntry, GenerationClient, type ClientEvents, type ModelInfo, type RemoteGenerateOptions, type RemoteResult } from '../../src/index';
 import type { BackendChoice, Mode } from './state';
 
 export interface ModelChoice {

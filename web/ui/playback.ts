@@ -1,5 +1,5 @@
 // The playback bar: play/pause (also the space bar), scrubber, time, speed.
-import type { MotionPlayer } from '../../src/character/player';
+import type { MotionPlayer } from '../../src/three';
 import { byId } from './dom';
 
 export class PlaybackBar {
