@@ -39,5 +39,5 @@ export { AbortError } from './sampler/sampler';
 export { FEATURE_GROUPS, GROUP_JOINTS, KeepSpecError, groupChannels, keepMask, parseKeep } from './sampler/mask';
 export type { FeatureGroup, KeepRect } from './sampler/mask';
 export type { NoiseSource, SamplerName } from './sampler/sampler';
-export { resolveBackend, webgpuAvailable } from './runtime/ort';
+export { webgpuAvailable } from './runtime/ort';
 export type { Backend, BackendRequest } from './runtime/ort';

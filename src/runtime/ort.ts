@@ -6,7 +6,8 @@
  *   are bit-identical between Node and Chromium.
  * - Browser: WASM via `onnxruntime-web/wasm` with self-hosted binaries (`wasmPaths`, default
  *   `<BASE_URL>ort/`), threads when the page is cross-origin isolated; WebGPU via
- *   `onnxruntime-web/webgpu` when `navigator.gpu` gives an adapter.
+ *   `onnxruntime-web/webgpu` when `navigator.gpu` gives an adapter (which backend, and falling back
+ *   from WebGPU to WASM, is decided in src/backends.ts only).
  * - ORT's wasm flags (thread count, paths) are global and fixed by the first session: a later
  *   request for a different thread count fails loudly instead of silently running with another.
  * - Sessions are cached by (key, backend), so every generator for the same model file reuses one.
@@ -85,13 +86,6 @@ export async function webgpuAvailable(): Promise<boolean> {
   } catch {
     return false;
   }
-}
-
-export async function resolveBackend(request: BackendRequest = 'auto'): Promise<Backend> {
-  if (request === 'wasm') return 'wasm';
-  const ok = await webgpuAvailable();
-  if (request === 'webgpu' && !ok) throw new Error('runtime: WebGPU was requested but this browser offers no WebGPU adapter');
-  return ok ? 'webgpu' : 'wasm';
 }
 
 export interface OrtSession {
