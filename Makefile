@@ -7,7 +7,7 @@ PORT ?= 5173
 .PHONY: demo test setup setup-node setup-python setup-chromium build typecheck unit pytest e2e bench-text export-minilm fixtures-text
 
 demo: setup-node build
-	@echo "EMDM demo: http://127.0.0.1:$(PORT)/  (Ctrl-C to stop)"
+	@echo "EMDM demo: http://127.0.0.1:$(PORT)/  library example: http://127.0.0.1:$(PORT)/examples/minimal.html  (Ctrl-C to stop)"
 	npx vite preview --host 127.0.0.1 --port $(PORT) --strictPort
 
 test: setup

@@ -1,7 +1,7 @@
 // Example prompts the shipped text model knows. The model's manifest entry may list them
 // (`examples`: captions from its training set); otherwise they are the coverage benchmark's passing
 // prompts (CHIPS) of the actions the dataset has, or, for a vocabulary without any, its labels as captions.
-import type { Manifest } from '../../src/manifest';
+import type { Manifest } from '../../src/index';
 
 const MAX_EXAMPLES = 6;
 
