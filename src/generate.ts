@@ -51,6 +51,23 @@ export interface GenerateOptions {
    * frames decode to `recoverJoints(features)`'s joints (free frames' root velocities are adjusted: `pinKeptRoot`).
    */
   known?: { features: Float32Array; keep: Float32Array };
+  /**
+   * Watch it denoise: each step's prediction x̂0, decoded to a motion exactly as the final result is
+   * (de-normalised, joints recovered, smoothed and cleaned up as asked), after the step and before the
+   * next one runs. It draws no random numbers: the final result is bit-identical with or without it.
+   * Costs nothing when absent.
+   */
+  onPreview?: (p: StepPreview) => void;
+}
+
+/** One step's prediction x̂0 as a motion (GenerateOptions.onPreview). */
+export interface StepPreview {
+  /** steps done (1 … steps) */
+  step: number;
+  steps: number;
+  motion: Motion;
+  /** time to decode it, ms */
+  decodeMs: number;
 }
 
 export type { Motion };
@@ -228,6 +245,23 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     return t && { tokens: t.tokens, maxTokens: t.maxTokens, truncated: t.truncated };
   }
 
+  /** Normalised features x [L, D] (the sampler's x0) → de-normalised features and joints, checked: the final result's and every step preview's one path. */
+  function decode(x: Float32Array, o: GenerateOptions): { features: Float32Array; joints: Float32Array } {
+    // kept frames after free ones: their root is pinned where the known motion has it (src/motion/stitch.ts)
+    const features = o.known ? pinKeptRoot(denormalize(x, mean, std), o.frames, o.known.keep, o.known.features, D) : denormalize(x, mean, std);
+    assertFinite(features, `model ${model} (${onnxPath}) output features`);
+    let joints = recoverJoints(features, o.frames, D);
+    if (o.smooth) joints = smoothJoints(joints, o.frames, 1);
+    if (o.footCleanup) {
+      joints = cleanupFootContacts(joints, o.frames, contactsFromFeatures(features, o.frames, D), {
+        parents: manifest.skeleton.parents,
+        footJoints: manifest.skeleton.footJoints,
+      });
+    }
+    assertFinite(joints, `joints decoded from model ${model}'s output`);
+    return { features, joints };
+  }
+
   async function run(o: GenerateOptions): Promise<GenerateResult> {
     if (disposed) throw new Error(`generator for ${model} was disposed`);
     const t0 = now();
@@ -242,23 +276,19 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     const cond = await conditionVector(o.condition);
     const prompt = o.condition.type === 'text' ? await promptTokens(o.condition.text) : undefined;
     const t1 = now();
+    const onPreview = o.onPreview;
+    const onX0 = onPreview && ((x0: Float32Array, done: number, total: number) => {
+      const p0 = now();
+      const { features, joints } = decode(x0, o);
+      onPreview({ step: done, steps: total, motion: { frames: o.frames, fps: entry.fps, joints, features }, decodeMs: now() - p0 });
+    });
     const r = await sample({
       ...choice, step, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance, signal: o.signal, onStep: o.onStep,
+      ...(onX0 ? { onX0 } : {}),
       ...(o.known ? { known: o.known.features.map((v, i) => (v - mean[i % D]) / std[i % D]), keep: o.known.keep } : {}),
     });
     const t2 = now();
-    // kept frames after free ones: their root is pinned where the known motion has it (src/motion/stitch.ts)
-    const features = o.known ? pinKeptRoot(denormalize(r.x, mean, std), o.frames, o.known.keep, o.known.features, D) : denormalize(r.x, mean, std);
-    assertFinite(features, `model ${model} (${onnxPath}) output features`);
-    let joints = recoverJoints(features, o.frames, D);
-    if (o.smooth) joints = smoothJoints(joints, o.frames, 1);
-    if (o.footCleanup) {
-      joints = cleanupFootContacts(joints, o.frames, contactsFromFeatures(features, o.frames, D), {
-        parents: manifest.skeleton.parents,
-        footJoints: manifest.skeleton.footJoints,
-      });
-    }
-    assertFinite(joints, `joints decoded from model ${model}'s output`);
+    const { features, joints } = decode(r.x, o);
     const t3 = now();
     return {
       motion: { frames: o.frames, fps: entry.fps, joints, features },

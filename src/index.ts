@@ -3,12 +3,12 @@ export { createGenerator, modelFor, resolveRequest } from './createGenerator';
 export type { CreateGeneratorOptions, GeneratedMotion, MotionGenerator, MotionRequest } from './createGenerator';
 // one model on one backend, and the backend choice / fallback (used by createGenerator's host)
 export { openModel } from './generate';
-export type { Condition, GenerateOptions, GenerateResult, Generator, GeneratorOptions, Motion } from './generate';
+export type { Condition, GenerateOptions, GenerateResult, Generator, GeneratorOptions, Motion, StepPreview } from './generate';
 export { loadModel, runWithFallback } from './backends';
 export type { LoadModelOptions } from './backends';
 // the generation worker's page side (createGenerator uses it; the demo page drives it directly)
 export { GenerationClient } from './worker/client';
-export type { ClientEvents, FileEvent, GenerationClientOptions, ModelInfo, RemoteGenerateOptions, RemoteResult, WorkerEnvironment } from './worker/client';
+export type { ClientEvents, FileEvent, GenerationClientOptions, ModelInfo, RemoteGenerateOptions, RemoteResult, WireStepPreview, WorkerEnvironment } from './worker/client';
 export { clearModelCache, modelCacheUsage } from './cache/modelCache';
 export { loadManifest, fetchVerified, ModelFileError, sha256Hex } from './manifest';
 export { assertFinite, NonFiniteMotionError } from './errors';

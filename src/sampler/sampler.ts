@@ -57,6 +57,12 @@ export type SampleOptions = SamplerChoice & {
   keep?: Float32Array;
   signal?: AbortSignal;
   onStep?: (done: number, total: number) => void;
+  /**
+   * Each step's prediction x̂0 [L, D] (normalised, guided and inpainted as the update reads it), before
+   * onStep. Only read when given (no copy otherwise); it draws no random numbers, so the result is the
+   * same with or without it. The array is the caller's to keep.
+   */
+  onX0?: (x0: Float32Array, done: number, total: number) => void;
   now?: () => number;
 };
 
@@ -144,8 +150,10 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     if (ddim) {
       const x0 = guided ? guidedX0(out, n, s) : constraint ? Float32Array.from(out) : out;
       if (constraint) replaceKnown(x0, constraint);
+      const x0copy = o.onX0 ? Float32Array.from(x0) : null;
       ddimUpdate(x, x0, k, schedule);
       stepMs.push(now() - t0);
+      if (x0copy) o.onX0!(x0copy, schedule.steps - k, schedule.steps);
       o.onStep?.(schedule.steps - k, schedule.steps);
       continue;
     }
@@ -154,15 +162,18 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     const sig = schedule.sigma[k];
     const eps = sig !== 0 ? o.noise.normals(n, 'eps', k) : null;
     if (eps) checkLength(eps, n, `ε noise at step ${k}`);
+    const x0s = o.onX0 ? new Float32Array(n) : null;
     for (let i = 0; i < n; i++) {
       // guided: x0 = x0_u + s·(x0_c − x0_u), rounded to float32 like the Python reference
       let x0 = guided ? Math.fround(out[n + i] + Math.fround(s * Math.fround(out[i] - out[n + i]))) : out[i];
       if (constraint && constraint.keep[i]) x0 = constraint.known[i];
+      if (x0s) x0s[i] = x0;
       let v = c1 * x0 + c2 * x[i];
       if (eps) v += sig * eps[i];
       x[i] = v;
     }
     stepMs.push(now() - t0);
+    if (x0s) o.onX0!(x0s, schedule.steps - k, schedule.steps);
     o.onStep?.(schedule.steps - k, schedule.steps);
   }
   return { x, stepMs, modelCalls, sampler: ddim ? 'ddim' : 'ddgan' };

@@ -10,7 +10,7 @@
  *
  * One worker per client holds the models, the text encoder and ORT; requests travel as messages
  * (./protocol.ts). An AbortSignal cancels a generation at the next denoising step; `onStep` hears
- * each step; errors come back as the same classes (ModelFileError, NonFiniteMotionError, AbortError).
+ * each step; with `previewSteps: true`, `onPreview` gets each step's x̂0 as joints (and pose); errors come back as the same classes (ModelFileError, NonFiniteMotionError, AbortError).
  */
 import type { FileEvent } from '../cache/modelCache';
 import { NonFiniteMotionError } from '../errors';
@@ -18,9 +18,9 @@ import type { GenerateResult } from '../generate';
 import { ModelFileError, type Manifest, type ModelFileErrorReason } from '../manifest';
 import type { BackendRequest } from '../runtime/ort';
 import { AbortError } from '../sampler/sampler';
-import type { FromWorker, ModelInfo, ToWorker, WireError, WireGenerateOptions, WirePose } from './protocol';
+import type { FromWorker, ModelInfo, ToWorker, WireError, WireGenerateOptions, WirePose, WireStepPreview } from './protocol';
 
-export type { FileEvent, ModelInfo, WireGenerateOptions, WirePose };
+export type { FileEvent, ModelInfo, WireGenerateOptions, WirePose, WireStepPreview };
 
 export interface WorkerEnvironment {
   crossOriginIsolated: boolean;
@@ -56,6 +56,8 @@ export interface GenerationClientOptions {
 export interface RemoteGenerateOptions extends WireGenerateOptions {
   signal?: AbortSignal;
   onStep?: (done: number, total: number) => void;
+  /** each step's decoded x̂0 (only with `previewSteps: true`), before the next step runs */
+  onPreview?: (p: WireStepPreview) => void;
 }
 
 export interface RemoteResult extends GenerateResult {
@@ -87,6 +89,7 @@ interface Pending {
   resolve(m: FromWorker): void;
   reject(e: Error): void;
   onStep?: (done: number, total: number) => void;
+  onPreview?: (p: WireStepPreview) => void;
 }
 
 export class GenerationClient {
@@ -124,6 +127,9 @@ export class GenerationClient {
         case 'step':
           this.pending.get(m.id)?.onStep?.(m.done, m.total);
           return;
+        case 'step-preview':
+          this.pending.get(m.id)?.onPreview?.(m.preview);
+          return;
         default: {
           const p = this.pending.get(m.id);
           if (!p) return;
@@ -152,10 +158,10 @@ export class GenerationClient {
     this.worker.postMessage(msg);
   }
 
-  private request(msg: ToWorker & { id: number }, onStep?: Pending['onStep']): Promise<FromWorker> {
+  private request(msg: ToWorker & { id: number }, onStep?: Pending['onStep'], onPreview?: Pending['onPreview']): Promise<FromWorker> {
     if (this.broken) return Promise.reject(this.broken);
     return new Promise((resolve, reject) => {
-      this.pending.set(msg.id, { resolve, reject, onStep });
+      this.pending.set(msg.id, { resolve, reject, onStep, onPreview });
       this.send(msg);
     });
   }
@@ -169,13 +175,13 @@ export class GenerationClient {
 
   /** One motion; the signal cancels it at the next denoising step (rejecting with an AbortError). */
   async generate(model: string, o: RemoteGenerateOptions, variant?: string): Promise<RemoteResult> {
-    const { signal, onStep, ...options } = o;
+    const { signal, onStep, onPreview, ...options } = o;
     if (signal?.aborted) throw new AbortError('generation cancelled before it started');
     const id = this.nextId++;
     const cancel = () => this.send({ type: 'cancel', id });
     signal?.addEventListener('abort', cancel, { once: true });
     try {
-      const m = await this.request({ type: 'generate', id, model, variant, options }, onStep);
+      const m = await this.request({ type: 'generate', id, model, variant, options }, onStep, onPreview);
       if (m.type !== 'result') throw new Error(`generation worker answered '${m.type}' to generate`);
       return { ...m.result, info: m.info, pose: m.pose };
     } finally {

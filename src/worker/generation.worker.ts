@@ -8,13 +8,13 @@
  * message is handled between steps, not after the loop).
  */
 import { NonFiniteMotionError } from '../errors';
-import type { GenerateOptions } from '../generate';
+import type { GenerateOptions, Motion } from '../generate';
 import { ModelFileError } from '../manifest';
 import { solveIK } from '../motion/ik';
 import { defaultThreads } from '../runtime/ort';
 import { useModelCache } from '../cache/modelCache';
 import { GenerationHost } from './host';
-import type { FromWorker, ModelInfo, ToWorker, WireError, WirePose } from './protocol';
+import type { FromWorker, ModelInfo, ToWorker, WireError, WirePose, WireStepPreview } from './protocol';
 
 interface WorkerScope {
   postMessage(message: unknown, options?: { transfer?: Transferable[] }): void;
@@ -86,15 +86,27 @@ async function handle(msg: ToWorker): Promise<void> {
       running.set(msg.id, ctrl);
       try {
         const h = needHost();
-        const { pose: wantPose, ...wire } = msg.options;
-        const o: GenerateOptions = { ...wire, signal: ctrl.signal, onStep: (done, total) => post({ type: 'step', id: msg.id, done, total }) };
-        const { gen, result } = await h.generate(msg.model, o, msg.variant);
-        let pose: WirePose | undefined;
-        if (wantPose) {
+        const { pose: wantPose, previewSteps, ...wire } = msg.options;
+        const solve = (m: Motion): WirePose => {
           const t0 = performance.now();
-          const ik = solveIK(result.motion.joints, result.motion.frames, h.manifest.skeleton);
-          pose = { rootPos: ik.rootPos, quats: ik.quats, ikMs: performance.now() - t0 };
+          const ik = solveIK(m.joints, m.frames, h.manifest.skeleton);
+          return { rootPos: ik.rootPos, quats: ik.quats, ikMs: performance.now() - t0 };
+        };
+        const o: GenerateOptions = { ...wire, signal: ctrl.signal, onStep: (done, total) => post({ type: 'step', id: msg.id, done, total }) };
+        if (previewSteps) {
+          // each step's x̂0, decoded by generate() like the result and solved here like the result
+          o.onPreview = (p) => {
+            const t0 = performance.now();
+            const ppose = wantPose ? solve(p.motion) : undefined;
+            const preview: WireStepPreview = {
+              step: p.step, steps: p.steps, frames: p.motion.frames, fps: p.motion.fps, joints: p.motion.joints, pose: ppose,
+              ms: p.decodeMs + performance.now() - t0,
+            };
+            post({ type: 'step-preview', id: msg.id, preview }, buffersOf(p.motion.joints, ppose?.rootPos, ppose?.quats));
+          };
         }
+        const { gen, result } = await h.generate(msg.model, o, msg.variant);
+        const pose = wantPose ? solve(result.motion) : undefined;
         const transfer = buffersOf(result.motion.joints, result.motion.features, pose?.rootPos, pose?.quats);
         post({ type: 'result', id: msg.id, info: infoOf(msg.model, gen), result, pose }, transfer);
       } catch (e) {

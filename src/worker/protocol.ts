@@ -36,6 +36,11 @@ export interface WireGenerateOptions {
   footCleanup?: boolean;
   /** also solve the joints into bone rotations (IK) in the worker: the result carries `pose` */
   pose?: boolean;
+  /**
+   * Watch it denoise: after each step, send its prediction x̂0 decoded to joints (and solved to a pose
+   * when `pose` is asked) as a `step-preview` message. Off by default; the result is the same either way.
+   */
+  previewSteps?: boolean;
 }
 
 export type ToWorker =
@@ -50,6 +55,20 @@ export interface WirePose {
   rootPos: Float32Array;
   quats: Float32Array;
   ikMs: number;
+}
+
+/** One step's prediction x̂0, decoded and solved by the same code as the result (transferred buffers). */
+export interface WireStepPreview {
+  /** steps done (1 … steps) */
+  step: number;
+  steps: number;
+  frames: number;
+  fps: number;
+  /** frames × 22 × 3 */
+  joints: Float32Array;
+  pose?: WirePose;
+  /** decode + IK time of this preview in the worker, ms (the cost of watching) */
+  ms: number;
 }
 
 export interface ModelInfo {
@@ -79,6 +98,7 @@ export type FromWorker =
   | { type: 'result'; id: number; info: ModelInfo; result: GenerateResult; pose?: WirePose }
   | { type: 'error'; id: number; error: WireError }
   | { type: 'step'; id: number; done: number; total: number }
+  | { type: 'step-preview'; id: number; preview: WireStepPreview }
   | { type: 'download'; model: string; loaded: number; total: number }
   | { type: 'file'; file: FileEvent }
   | { type: 'fallback'; model: string; reason: string }

@@ -67,6 +67,35 @@ describe('runtime + sampler on the tiny step model', () => {
     expect(maxAbsDiff(a.x, c.x)).toBeGreaterThan(1e-3);
   });
 
+  it('onX0 hands over each step\'s guided x̂0, draws nothing, and leaves the result bit-identical', async () => {
+    const step = await tinyStep();
+    const schedule = scheduleFromEntry(tiny.meta.schedule!, 4, 'tiny.schedule');
+    const outs: Float32Array[] = [];
+    const recording: StepFn = async (i) => {
+      const o = await step(i);
+      outs.push(Float32Array.from(o));
+      return o;
+    };
+    const plain = await sample({ step, schedule, noise: fixtureNoise(tiny), frames: L, featureDim: D, zDim: Z, cond: tiny.get('cond'), guidance: 2.5 });
+    const noise = fixtureNoise(tiny);
+    const seen: Array<[number, number, Float32Array]> = [];
+    const order: string[] = [];
+    const r = await sample({
+      step: recording, schedule, noise, frames: L, featureDim: D, zDim: Z, cond: tiny.get('cond'), guidance: 2.5,
+      onX0: (x0, done, total) => (order.push(`x0 ${done}`), seen.push([done, total, x0])), onStep: (d) => order.push(`step ${d}`),
+    });
+    expect(Buffer.from(r.x.buffer).equals(Buffer.from(plain.x.buffer))).toBe(true);
+    expect(noise.calls).toEqual(['x_T', 'z_3', 'eps_3', 'z_2', 'eps_2', 'z_1', 'eps_1', 'z_0']);
+    expect(seen.map(([d, t]) => [d, t])).toEqual([[1, 4], [2, 4], [3, 4], [4, 4]]);
+    expect(order).toEqual(['x0 1', 'step 1', 'x0 2', 'step 2', 'x0 3', 'step 3', 'x0 4', 'step 4']);
+    const n = L * D;
+    seen.forEach(([, , x0], k) => {
+      expect(x0).toHaveLength(n);
+      const o = outs[k];
+      for (let i = 0; i < n; i += 97) expect(x0[i]).toBe(Math.fround(o[n + i] + Math.fround(2.5 * Math.fround(o[i] - o[n + i]))));
+    });
+  });
+
   it('cancels between steps with an AbortSignal', async () => {
     const step = await tinyStep();
     const schedule = scheduleFromEntry(tiny.meta.schedule!, 4, 'tiny.schedule');

@@ -46,8 +46,9 @@ async function workerGenerator(manifest: Manifest, baseUrl: string, model: strin
   const info = await client.load(model, variant);
   return {
     modelName: model, backend: info.backend, threads: info.threads, entry: manifest.models[model], sampler: info.sampler,
-    generate: ({ signal, onStep, noise, ...o }) => {
+    generate: ({ signal, onStep, noise, onPreview, ...o }) => {
       if (noise) throw new Error('harness: a custom noise source cannot cross to the worker');
+      if (onPreview) throw new Error('harness: step previews are not wired through the worker here (use GenerationClient with previewSteps)');
       return client.generate(model, { ...o, signal, onStep }, variant);
     },
     dispose: () => client.dispose(),
