@@ -4,7 +4,7 @@
 // controls/URL/panels/downloads from web/ui.
 import { MeshStandardMaterial, Quaternion, Vector3 } from 'three';
 import { HEAD_PITCH, applyPose, createCharacter, MotionPlayer, type PoseTrack } from '../src/three';
-import { type GenerateResult, assertFinite, NonFiniteMotionError, loadManifest, ModelFileError, type Manifest, clearModelCache, modelCacheUsage } from '../src/index';
+import { type GenerateResult, type WireStepPreview, assertFinite, NonFiniteMotionError, loadManifest, ModelFileError, type Manifest, clearModelCache, modelCacheUsage } from '../src/index';
 import { compareNote, compareStepChoices, planCompare, type ComparePlan } from './ui/compare';
 import { Controls } from './ui/controls';
 import { byId, formatBytes, formatMs, saveBlob } from './ui/dom';
@@ -16,6 +16,7 @@ import { CacheControl, FileList } from './ui/files';
 import { ErrorPanel, Notices } from './ui/notices';
 import { PlaybackBar } from './ui/playback';
 import { Stage } from './ui/stage';
+import { StepStrip } from './ui/step-strip';
 import {
   framesFor, parseState, randomSeed, stateToSearch, stepChoices, type PageState, type StateLimits,
 } from './ui/state';
@@ -111,6 +112,7 @@ const api: EmdmTestApi = {
   startup: { manifestMs: NaN, readyMs: NaN },
   environment: null,
   files: () => [...fileList.states.values()].map((f) => ({ path: f.path, state: f.state, cached: f.cached, total: f.total, at: f.at })),
+  previews: () => [],
   cache: {
     usage: modelCacheUsage,
     async clear() {
@@ -295,7 +297,7 @@ async function main(): Promise<void> {
 
   /** One model's motion for a state, checked and solved (WebGPU failures retry on WASM). */
   async function produce(model: string, s: PageState, steps: number, frames: number, signal: AbortSignal,
-    progressLabel: (done: number, total: number) => string): Promise<Produced> {
+    progressLabel: (done: number, total: number) => string, watch = false): Promise<Produced> {
     const info = await engine.load(model);
     api.backend = info.backend;
     if (signal.aborted) throw signal.reason;
@@ -306,6 +308,7 @@ async function main(): Promise<void> {
         api.counters.stepsRun++;
         showProgressText(done, total, progressLabel(done, total));
       },
+      ...(watch ? { previewSteps: true, onPreview: (p: WireStepPreview) => showPreview(p, signal) } : {}),
     });
     api.backend = result.info.backend;
     const pose = result.pose;
@@ -316,6 +319,29 @@ async function main(): Promise<void> {
     return { model, result, track, ikMs: pose.ikMs };
   }
   let showProgressText: (done: number, total: number, text: string) => void = () => undefined;
+
+  // ------------------------------------------------------------ show steps: each step's x̂0 on the character and in the strip
+  const showSteps = byId('show-steps', HTMLInputElement);
+  const stepStrip = new StepStrip(byId('step-strip'), skeleton.parents);
+  let previews: ReturnType<EmdmTestApi['previews']> = [];
+  api.previews = () => previews.map((p) => ({ ...p, joints: [...p.joints] }));
+  showSteps.addEventListener('change', () => {
+    if (!showSteps.checked) stepStrip.reset();
+  });
+  /** A step preview from the worker: into the strip, and onto the character until the next one (or the result). */
+  function showPreview(p: WireStepPreview, signal: AbortSignal): void {
+    if (signal.aborted) return;
+    const entry = { step: p.step, steps: p.steps, frames: p.frames, joints: Array.from(p.joints), ms: p.ms, at: performance.now(), played: false };
+    previews.push(entry);
+    stepStrip.add(p.step, p.steps, p.joints, p.frames);
+    const pose = p.pose;
+    // a non-finite prediction is not shown; the final result reports it if it stays so
+    if (!pose || !pose.quats.every(Number.isFinite) || !pose.rootPos.every(Number.isFinite)) return;
+    player.setTrack({ frames: p.frames, fps: p.fps, joints: skeleton.joints.length, rootPos: pose.rootPos, quats: pose.quats });
+    player.playing = true;
+    entry.played = true;
+    if (p.step === 1) stage.snapTo(pose.rootPos);
+  }
 
   const respond = (s: PageState, p: Produced): GenerateResponse => ({
     state: s, frames: p.track.frames, fps: p.track.fps, joints: Array.from(p.result.motion.joints),
@@ -346,7 +372,10 @@ async function main(): Promise<void> {
         showProgress(0, s.mode === 'text' ? 'Encoding the prompt…' : 'Sampling…');
         if (!plan) {
           showProgressText = (d, t, text) => showProgress(d / t, text);
-          return { main: await produce(choice.name, s, s.steps, frames, signal, (d, t) => `Denoising step ${d} / ${t}`), ddim: null };
+          const watch = showSteps.checked;
+          previews = [];
+          stepStrip.reset();
+          return { main: await produce(choice.name, s, s.steps, frames, signal, (d, t) => `Denoising step ${d} / ${t}`, watch), ddim: null };
         }
         // compare: EMDM first, then DDIM, one after the other (fair timings on a shared CPU)
         const total = plan.emdm + plan.ddim;

@@ -3,7 +3,8 @@
 // - the newest request wins: five requests 30 ms apart finish only the last, a click on Generate
 //   during a generation stops it at the next step boundary;
 // - the motions are bit-identical to the same code run on the page's thread (the core harness) and in
-//   Node: the worker changes where the sampler runs, not what it computes.
+//   Node: the worker changes where the sampler runs, not what it computes;
+// - "Show steps": each step's x̂0 comes back (character + strip), and the final motion is unchanged.
 import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -176,5 +177,50 @@ test.describe('generation worker', () => {
       expect(a.model).toBe(name);
       expect(a.joints).toEqual(await node(name, { type: 'action', label: 1 }));
     }
+  });
+
+  test('show steps: one preview per step, a strip of thumbnails, the same final motion', async ({ page }) => {
+    await openReady(page);
+    const req = { mode: 'text' as const, text: PROMPT, seconds: 3, steps: 4, guidance: 2.5, seed: 23 };
+    await page.evaluate((r) => window.emdm.generate(r), req); // warm-up: WASM tiers up
+    const off = await page.evaluate((r) => window.emdm.generate(r), req);
+    expect(await page.evaluate(() => window.emdm.previews().length)).toBe(0); // off by default: none sent
+    await expect(page.locator('#step-strip')).toBeHidden();
+    // the toggle is labelled and reachable from the keyboard
+    const box = page.getByLabel('Show steps');
+    await box.focus();
+    await page.keyboard.press('Space');
+    await expect(box).toBeChecked();
+    const r = await page.evaluate(async (q) => {
+      const out = await window.emdm.generate(q);
+      return { out, previews: window.emdm.previews(), end: performance.now() };
+    }, req);
+    expect(r.previews.map((p) => p.step)).toEqual([1, 2, 3, 4]);
+    expect(r.previews.every((p) => p.steps === 4 && p.frames === 60 && p.joints.length === 60 * 22 * 3)).toBe(true);
+    expect(r.previews.every((p) => p.joints.every(Number.isFinite))).toBe(true);
+    // the predictions change from step to step and come closer to the final motion (it sharpens)
+    const dist = (j: number[]) => j.reduce((acc, v, i) => acc + Math.abs(v - r.out.joints[i]), 0) / j.length;
+    const d = r.previews.map((p) => dist(p.joints));
+    console.log(`show steps: mean |x̂0 joints − final| per step ${d.map((v) => v.toFixed(4)).join(', ')} m`);
+    expect(r.previews[0].joints).not.toEqual(r.previews[3].joints);
+    expect(d[3]).toBeLessThan(d[0]);
+    // each arrived on its own, as its step ended (not all at once with the result), and the character played it
+    for (let i = 1; i < 4; i++) expect(r.previews[i].at).toBeGreaterThan(r.previews[i - 1].at);
+    expect(r.previews[0].at).toBeLessThan(r.end);
+    expect(r.previews.every((p) => p.played)).toBe(true);
+    console.log(`show steps: previews arrived ${r.previews.map((p) => (r.end - p.at).toFixed(0)).join(', ')} ms before the result was shown`);
+    await expect(page.locator('#step-strip .step-thumb canvas')).toHaveCount(4);
+    await expect(page.locator('#step-strip')).toBeVisible();
+    // the final motion is bit-identical with and without previews (they draw no random numbers)
+    expect(r.out.joints).toEqual(off.joints);
+    const ms = r.previews.map((p) => p.ms);
+    const mean = (a: number[]) => a.reduce((x, y) => x + y, 0) / a.length;
+    console.log(`show steps: preview decode + IK ${mean(ms).toFixed(1)} ms per step in the worker (max ${Math.max(...ms).toFixed(1)}); `
+      + `total ${r.out.timings.totalMs.toFixed(0)} ms with previews, ${off.timings.totalMs.toFixed(0)} ms without; step ${mean(r.out.timings.stepMs).toFixed(1)} vs ${mean(off.timings.stepMs).toFixed(1)} ms`);
+    // turning it off clears the strip, and the next generation sends none
+    await box.uncheck();
+    await expect(page.locator('#step-strip')).toBeHidden();
+    await page.evaluate((q) => window.emdm.generate(q), req);
+    expect(await page.evaluate(() => window.emdm.previews().length)).toBe(0);
   });
 });

@@ -110,6 +110,8 @@ export interface EmdmTestApi {
   files(): Array<{ path: string; state: string; cached: boolean; total: number; at: number }>;
   /** the model cache (Cache Storage): its size, and clearing it (as the page's button does) */
   cache: { usage(): Promise<{ files: number; bytes: number }>; clear(): Promise<void> };
+  /** "Show steps": the step previews of the last generation as they arrived (x̂0 joints, worker decode + IK ms, arrival time, put on the character) */
+  previews(): Array<{ step: number; steps: number; frames: number; joints: number[]; ms: number; at: number; played: boolean }>;
 }
 
 declare global {
