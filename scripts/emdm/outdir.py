@@ -97,19 +97,28 @@ def check_writable(path: Path | str, *, folder: bool = False, option: str = "--o
         raise OutputRefused(f"{given}: is a file, not a folder; give a folder to write in")
     if not folder and path.is_dir():
         raise OutputRefused(f"{given}: is a folder; give a file path")
-    d = path if folder and path.is_dir() else path.parent
+    try:
+        writable_folder(path if folder and path.is_dir() else path.parent)
+    except OutputRefused as e:
+        raise OutputRefused(f"{given}: {e}") from None
+    return path
+
+
+def writable_folder(d: Path) -> Path:
+    """The nearest existing folder at or above ``d`` if a new file can be made in it, else OutputRefused
+    with the reason alone (the caller puts its option in front)."""
     while not d.exists():
         if d.is_symlink():
-            raise OutputRefused(f"{given}: {d} is a broken symbolic link; give a path in a writable folder")
+            raise OutputRefused(f"{d} is a broken symbolic link; give a path in a writable folder")
         d = d.parent
     if not d.is_dir():
-        raise OutputRefused(f"{given}: {d} is a file, not a folder; give a path in a writable folder")
+        raise OutputRefused(f"{d} is a file, not a folder; give a path in a writable folder")
     try:
         with tempfile.TemporaryFile(dir=d):
             pass
     except OSError as e:
-        raise OutputRefused(f"{given}: cannot write in {d} ({e.strerror}); give a path in a writable folder") from None
-    return path
+        raise OutputRefused(f"cannot write in {d} ({e.strerror}); give a path in a writable folder") from None
+    return d
 
 
 def replace_dir(tmp: Path, out: Path) -> None:

@@ -28,7 +28,6 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-import tempfile
 from pathlib import Path
 from typing import Callable
 
@@ -185,18 +184,12 @@ def check_out(out: Path, num: int, bvh_units: str | None) -> None:
     for p in names:
         if p.is_dir():
             raise SampleError(f"--out: {p} is a folder; give a path prefix such as out/walk (writes .npy, .bvh)")
-    folder = out.parent
-    while not folder.exists():
-        if folder.is_symlink():
-            raise SampleError(f"--out: {folder} is a broken symbolic link; give a writable folder")
-        folder = folder.parent
-    if not folder.is_dir():
-        raise SampleError(f"--out: {folder} is a file, not a folder; give a path in a writable folder")
+    from emdm.outdir import OutputRefused, writable_folder
+
     try:
-        with tempfile.TemporaryFile(dir=folder):
-            pass
-    except OSError as e:
-        raise SampleError(f"--out: cannot write in {folder} ({e.strerror}); give a path in a writable folder") from None
+        writable_folder(out.parent)
+    except OutputRefused as e:
+        raise SampleError(f"--out: {e}") from None
 
 
 def check_args(a) -> None:
