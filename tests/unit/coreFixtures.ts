@@ -1,14 +1,39 @@
 // Reader of the parity fixtures written by `python -m emdm.fixtures` (tests/fixtures/parity/).
+import crypto from 'node:crypto';
 import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
+import type { Manifest } from '../../src/manifest';
 import type { NoiseSource } from '../../src/sampler/sampler';
+import { buildTinyManifest } from '../fixtures/parity/tinyManifest';
 
 export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
 // overridable to check another export, e.g. `python -m emdm.fixtures --models-dir D --out P`, then
 // EMDM_MODELS_DIR=D EMDM_PARITY_DIR=P npx vitest run tests/unit/coreGenerate.test.ts
 export const PARITY_DIR = process.env.EMDM_PARITY_DIR ?? path.join(ROOT, 'tests', 'fixtures', 'parity');
 export const MODELS_DIR = process.env.EMDM_MODELS_DIR ?? path.join(ROOT, 'public', 'models');
+
+/** A new models folder under `parent` with the tiny step model as an 8-action model (labels a…h; mean 0,
+ * std 1 except the root height), its manifest listing the files with their sha256. */
+export function tinyModels(parent: string): { dir: string; manifest: Manifest } {
+  const sha = (b: Buffer) => crypto.createHash('sha256').update(b).digest('hex');
+  const onnx = fs.readFileSync(path.join(PARITY_DIR, 'tiny-step.onnx'));
+  const ms = new Float32Array(2 * 263);
+  ms.fill(1, 263);
+  ms[3] = 0.9; // mean root height
+  const msBuf = Buffer.from(ms.buffer);
+  const real = JSON.parse(fs.readFileSync(path.join(MODELS_DIR, 'manifest.json'), 'utf8'));
+  const manifest = buildTinyManifest(
+    real.skeleton,
+    { path: 'tiny.onnx', bytes: onnx.length, sha256: sha(onnx) },
+    { path: 'tiny.meanstd.f32', bytes: msBuf.length, sha256: sha(msBuf) },
+  );
+  const dir = fs.mkdtempSync(path.join(parent, 'models-'));
+  fs.writeFileSync(path.join(dir, 'tiny.onnx'), onnx);
+  fs.writeFileSync(path.join(dir, 'tiny.meanstd.f32'), msBuf);
+  fs.writeFileSync(path.join(dir, 'manifest.json'), JSON.stringify(manifest));
+  return { dir: dir + '/', manifest };
+}
 
 export interface FixtureCase {
   meta: Record<string, unknown> & { frames: number; schedule?: { time: number[]; coef1: number[]; coef2: number[]; sigma: number[] } };

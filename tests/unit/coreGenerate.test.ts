@@ -7,39 +7,19 @@ import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
 import { openModel } from '../../src/generate';
 import { assertFinite, NonFiniteMotionError } from '../../src/index';
-import { type Manifest, ModelFileError, loadManifest } from '../../src/manifest';
+import { ModelFileError, loadManifest } from '../../src/manifest';
 import { getSession } from '../../src/runtime/ort';
 import { stepFunction } from '../../src/runtime/stepModel';
-import { buildTinyManifest } from '../fixtures/parity/tinyManifest';
-import { MODELS_DIR, PARITY_DIR, fixtureExists, fixtureNoise, loadCase, maxAbsDiff, maxJointDist } from './coreFixtures';
+import { MODELS_DIR, fixtureExists, fixtureNoise, loadCase, maxAbsDiff, maxJointDist, tinyModels } from './coreFixtures';
 
 const sha = (b: Buffer) => crypto.createHash('sha256').update(b).digest('hex');
 const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-gen-'));
 afterAll(() => fs.rmSync(tmp, { recursive: true, force: true }));
 
-/** A models folder with the tiny step model as an 8-action model (mean 0, std 1 except the height). */
-function tinyModels(): { dir: string; manifest: Manifest } {
-  const onnx = fs.readFileSync(path.join(PARITY_DIR, 'tiny-step.onnx'));
-  const ms = new Float32Array(2 * 263);
-  ms.fill(1, 263);
-  ms[3] = 0.9; // mean root height
-  const msBuf = Buffer.from(ms.buffer);
-  const real = JSON.parse(fs.readFileSync(path.join(MODELS_DIR, 'manifest.json'), 'utf8'));
-  const manifest = buildTinyManifest(
-    real.skeleton,
-    { path: 'tiny.onnx', bytes: onnx.length, sha256: sha(onnx) },
-    { path: 'tiny.meanstd.f32', bytes: msBuf.length, sha256: sha(msBuf) },
-  );
-  const dir = fs.mkdtempSync(path.join(tmp, 'models-'));
-  fs.writeFileSync(path.join(dir, 'tiny.onnx'), onnx);
-  fs.writeFileSync(path.join(dir, 'tiny.meanstd.f32'), msBuf);
-  fs.writeFileSync(path.join(dir, 'manifest.json'), JSON.stringify(manifest));
-  return { dir: dir + '/', manifest };
-}
 
 describe('openModel on the tiny model', () => {
   it('generates a motion with timings; same seed is bit-identical; progress per step', async () => {
-    const { dir } = tinyModels();
+    const { dir } = tinyModels(tmp);
     const manifest = await loadManifest(dir);
     const downloads: number[] = [];
     const gen = await openModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1, onDownload: (l) => downloads.push(l) });
@@ -64,7 +44,7 @@ describe('openModel on the tiny model', () => {
   });
 
   it('rejects bad requests with clear errors', async () => {
-    const { dir, manifest } = tinyModels();
+    const { dir, manifest } = tinyModels(tmp);
     const gen = await openModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
     const o = { condition: { type: 'none' as const }, frames: 30, steps: 4, guidance: 1, seed: 1 };
     await expect(gen.generate({ ...o, steps: 3 })).rejects.toThrow(/3 steps not supported \(supportedSteps = \[2, 4\]\)/);
@@ -79,7 +59,7 @@ describe('openModel on the tiny model', () => {
   });
 
   it('refuses a corrupt or missing model file, naming it', async () => {
-    const { dir, manifest } = tinyModels();
+    const { dir, manifest } = tinyModels(tmp);
     fs.writeFileSync(path.join(dir, 'tiny.onnx'), Buffer.from('not a model'));
     await expect(openModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(ModelFileError);
     await expect(openModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(/tiny\.onnx: size 11 bytes differs/);
@@ -94,7 +74,7 @@ describe('openModel on the tiny model', () => {
       'CAgSCGVtZG0tZTJlOsUBChMKA3hfdAoDbmFuEgJ4MCIDTXVsEghuYW5fc3RlcCoNEAEiBAAAwH9CA25hblocCgN4X3QSFQoTCAESDwoDEgFCCgMSAUwKAwiHAloUCgF6Eg8KDQgBEgkKAxIBQgoCCEBaGAoEY29uZBIQCg4IARIKCgMSAUIKAxIBQ1oQCgF0EgsKCQgBEgUKAxIBQloYCgRtYXNrEhAKDggBEgoKAxIBQgoDEgFMYhsKAngwEhUKEwgBEg8KAxIBQgoDEgFMCgMIhwJCBAoAEBI=',
       'base64',
     );
-    const { dir, manifest } = tinyModels();
+    const { dir, manifest } = tinyModels(tmp);
     const m = structuredClone(manifest);
     fs.writeFileSync(path.join(dir, 'nan.onnx'), nanModel);
     m.files['nan.onnx'] = { bytes: nanModel.length, sha256: sha(nanModel) };
@@ -113,7 +93,7 @@ describe('openModel on the tiny model', () => {
   });
 
   it('refuses a model whose shapes do not match the manifest (incompatible)', async () => {
-    const { dir, manifest } = tinyModels();
+    const { dir, manifest } = tinyModels(tmp);
     const bad = structuredClone(manifest);
     bad.models.tiny.condition = { type: 'action', labels: ['a', 'b'], dim: 2 };
     await expect(openModel({ manifest: bad, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toMatchObject({
@@ -124,7 +104,7 @@ describe('openModel on the tiny model', () => {
 
 describe('openModel on a diffusion-objective model (DDIM)', () => {
   it('samples with DDIM and says so; a fixture run equals emdm.sample.sample_features(objective="diffusion")', async () => {
-    const { dir } = tinyModels();
+    const { dir } = tinyModels(tmp);
     const manifest = await loadManifest(dir);
     const ddim = await openModel({ manifest, baseUrl: dir, model: 'tiny-ddim', backend: 'wasm', threads: 1 });
     const ddgan = await openModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
@@ -156,7 +136,7 @@ describe('openModel on a diffusion-objective model (DDIM)', () => {
   });
 
   it('refuses an unknown objective, naming the field', async () => {
-    const { dir, manifest } = tinyModels();
+    const { dir, manifest } = tinyModels(tmp);
     const bad = structuredClone(manifest);
     (bad.models.tiny as { objective: string }).objective = 'flow';
     await expect(openModel({ manifest: bad, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 })).rejects.toThrow(

@@ -1,6 +1,5 @@
 // The library's entry createGenerator (src/createGenerator.ts) in Node (in-process, WASM) on the tiny
 // step model, and the backend choice / fallbacks it runs through (src/backends.ts).
-import crypto from 'node:crypto';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -11,35 +10,15 @@ import { type GenerateOptions, type GenerateResult, type Generator, openModel } 
 import { ModelFileError, loadManifest } from '../../src/manifest';
 import { AbortError } from '../../src/sampler/sampler';
 import { poseTrack } from '../../src/three';
-import { buildTinyManifest } from '../fixtures/parity/tinyManifest';
-import { MODELS_DIR, PARITY_DIR } from './coreFixtures';
+import { tinyModels } from './coreFixtures';
 
-const sha = (b: Buffer) => crypto.createHash('sha256').update(b).digest('hex');
 const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-create-'));
 afterAll(() => fs.rmSync(tmp, { recursive: true, force: true }));
 
-/** A models folder with the tiny step model as an 8-action model (labels a…h). */
-function tinyModels(): string {
-  const onnx = fs.readFileSync(path.join(PARITY_DIR, 'tiny-step.onnx'));
-  const ms = new Float32Array(2 * 263);
-  ms.fill(1, 263);
-  ms[3] = 0.9;
-  const msBuf = Buffer.from(ms.buffer);
-  const real = JSON.parse(fs.readFileSync(path.join(MODELS_DIR, 'manifest.json'), 'utf8'));
-  const manifest = buildTinyManifest(
-    real.skeleton,
-    { path: 'tiny.onnx', bytes: onnx.length, sha256: sha(onnx) },
-    { path: 'tiny.meanstd.f32', bytes: msBuf.length, sha256: sha(msBuf) },
-  );
-  fs.writeFileSync(path.join(tmp, 'tiny.onnx'), onnx);
-  fs.writeFileSync(path.join(tmp, 'tiny.meanstd.f32'), msBuf);
-  fs.writeFileSync(path.join(tmp, 'manifest.json'), JSON.stringify(manifest));
-  return tmp + '/';
-}
 
 describe('createGenerator', () => {
   it('fills a request from the manifest: model by task, steps, guidance, length, action by name', async () => {
-    const manifest = await loadManifest(tinyModels());
+    const manifest = await loadManifest(tinyModels(tmp).dir);
     const r = resolveRequest(manifest, { action: 'c', seed: 9 });
     expect(r).toEqual({ model: 'tiny', options: { condition: { type: 'action', label: 2 }, frames: 196, steps: 4, guidance: 2.5, seed: 9, smooth: undefined, footCleanup: undefined } });
     expect(resolveRequest(manifest, { action: 1, seconds: 1.5, model: 'tiny-ddim' }).options).toMatchObject({ frames: 30, steps: 5 });
@@ -51,7 +30,7 @@ describe('createGenerator', () => {
   });
 
   it('in-process (Node): the same motion as openModel, with its pose (IK) for the character', async () => {
-    const dir = tinyModels();
+    const dir = tinyModels(tmp).dir;
     const manifest = await loadManifest(dir);
     const fallbacks: string[] = [];
     const g = await createGenerator({ baseUrl: dir, threads: 1, onFallback: (_m, r) => fallbacks.push(r) });
@@ -89,7 +68,7 @@ const O: GenerateOptions = { condition: { type: 'none' }, frames: 2, steps: 1, g
 
 describe('backends: one place for WebGPU → WASM', () => {
   it('loadModel: WASM when asked; WebGPU missing → WASM, said once', async () => {
-    const dir = tinyModels();
+    const dir = tinyModels(tmp).dir;
     const manifest = await loadManifest(dir);
     const said: string[] = [];
     const w = await loadModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 }, (r) => said.push(r));
