@@ -6,7 +6,7 @@
 import { AnimationMixer, LoopOnce, type AnimationClip, type Object3D, Quaternion, Vector3 } from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { describe, expect, it } from 'vitest';
-import { loadCharacter } from '../../src/character/retarget/load';
+import { type GltfJson, loadCharacter, readGlb, withoutTextures, writeGlb } from '../../src/character/retarget/load';
 import type { BoneMapping } from '../../src/character/retarget/mapping';
 import { type RetargetMotion, type RetargetResult, retargetMotion } from '../../src/character/retarget/retarget';
 import { characterToBVH, characterToGLB } from '../../src/export/characterGlb';
@@ -16,7 +16,7 @@ import { JOINT_NAMES, type JointName } from '../../src/skeleton';
 import fs from 'node:fs';
 import path from 'node:path';
 import { ROOT, fixtureExists, loadCase, manifestSkeleton } from './coreFixtures';
-import { RIGS, buildRigGlb } from './retargetRigs';
+import { RIGS, buildRigGlb, withSkin } from './retargetRigs';
 
 const sk = manifestSkeleton();
 const J = sk.joints.length;
@@ -142,8 +142,14 @@ function measure(root: Object3D, clip: AnimationClip, mapping: BoneMapping, moti
   return { maxDeg, medianDeg: errs[Math.floor(errs.length / 2)], worst, footMaxCm: footMax * 100, ourFootMaxCm: ourFootMax * 100, ourSlideMaxCm: ourSlideMax * 100, slideMaxCm: slideMax * 100, positions };
 }
 
-async function reload(glb: Uint8Array) {
-  return new GLTFLoader().parseAsync(glb.buffer.slice(glb.byteOffset, glb.byteOffset + glb.byteLength) as ArrayBuffer, '');
+/** Three's GLTFLoader reads the download back (Node decodes no images: textures are left out for it, after checking they are all there). */
+async function reload(glb: Uint8Array, ch: { json: GltfJson }) {
+  const { json, bin } = readGlb(glb, 'download.glb');
+  expect((json.images ?? []).length).toBe((ch.json.images ?? []).length);
+  expect((json.textures ?? []).length).toBe((ch.json.textures ?? []).length);
+  expect((json.materials ?? []).length).toBe((ch.json.materials ?? []).length);
+  const again = writeGlb(json.images?.length ? withoutTextures(json) : json, bin!);
+  return new GLTFLoader().parseAsync(again.buffer.slice(again.byteOffset, again.byteOffset + again.byteLength) as ArrayBuffer, '');
 }
 
 /** Load → map → retarget every motion → check, export GLB (reload, replay) and BVH. */
@@ -174,7 +180,7 @@ async function checkCharacter(label: string, file: string, glb: Uint8Array, unma
 
         // the GLB download: the character's own document + the clip; three reads it back with skin and animation
         const out = characterToGLB(ch, res);
-        const back = await reload(out);
+        const back = await reload(out, ch);
         const skinned = (r: Object3D) => {
           let n = 0;
           r.traverse((o) => {
@@ -226,5 +232,15 @@ describe('retargeting onto real characters (tests/fixtures/rigs)', () => {
   it("three.js's RobotExpressive (CC0): Blender names, feet as IK targets, rigid parts, its own 14 animations", async () => {
     const file = path.join(ROOT, 'tests', 'fixtures', 'rigs', 'RobotExpressive.glb');
     await checkCharacter('RobotExpressive', 'RobotExpressive.glb', new Uint8Array(fs.readFileSync(file)), ['l_foot', 'r_foot', 'l_wrist', 'r_wrist'], 'names');
+  });
+  it('cryptovoxels.vrm (VRM 0.x from UniVRM, skinned, faces −Z): through three-vrm, its humanoid map', async () => {
+    const file = path.join(ROOT, 'tests', 'fixtures', 'rigs', 'cryptovoxels.vrm');
+    await checkCharacter('cryptovoxels.vrm', 'cryptovoxels.vrm', new Uint8Array(fs.readFileSync(file)), ['spine2'], 'vrm', '0.x');
+  });
+  it("VRM 1.0 sample from the VRM specification (Blender VRM add-on armature, rolled bone axes), given a skin", async () => {
+    // the file's meshes are unskinned quads (a material sample): withSkin binds a small mesh to its armature
+    const name = 'VRMC_materials_mtoon_UV_Animation_Test.vrm';
+    const file = path.join(ROOT, 'tests', 'fixtures', 'rigs', name);
+    await checkCharacter('VRM 1.0 mtoon sample', name, withSkin(new Uint8Array(fs.readFileSync(file)), name), ['spine2'], 'vrm', '1.0');
   });
 });

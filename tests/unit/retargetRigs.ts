@@ -4,7 +4,7 @@
 // (Z-up → Y-up rotation, 0.01 scale as Blender's FBX exports have), extra spine, twist and finger
 // bones, and the VRM humanoid extension (0.x and 1.0). One tiny tetrahedron per bone is the mesh.
 import { Matrix4, Object3D, Quaternion, Vector3 } from 'three';
-import { writeGlb } from '../../src/character/retarget/load';
+import { readGlb, writeGlb } from '../../src/character/retarget/load';
 import { restPositions } from '../../src/character/rig';
 import type { JointName, SkeletonLike } from '../../src/skeleton';
 
@@ -311,3 +311,82 @@ export const RIGS: RigSpec[] = [
     twist: (s, limb) => (limb === 'thigh' ? `DEF-thigh.${s.toUpperCase()}.001` : `DEF-upper_arm.${s.toUpperCase()}.001`),
   },
 ];
+
+/**
+ * A real file's armature made into a skinned character: a tiny tetrahedron at each node under `root`
+ * (a node index; default: the first scene's roots), skinned rigidly to that node, is added as one
+ * skinned mesh; everything else in the document (nodes, extensions, meshes, materials) is unchanged.
+ * For real VRM files that ship a humanoid armature with unskinned meshes (VRM feature samples).
+ */
+export function withSkin(glb: Uint8Array, file: string, root?: number): Uint8Array {
+  const { json, bin } = readGlb(glb, file);
+  const nodes: Record<string, any>[] = json.nodes;
+  const parent = new Map<number, number>();
+  nodes.forEach((n, i) => (n.children ?? []).forEach((c: number) => parent.set(c, i)));
+  const local = (n: Record<string, any>) => new Matrix4().compose(
+    new Vector3(...((n.translation ?? [0, 0, 0]) as [number, number, number])),
+    new Quaternion(...((n.rotation ?? [0, 0, 0, 1]) as [number, number, number, number])),
+    new Vector3(...((n.scale ?? [1, 1, 1]) as [number, number, number])),
+  );
+  const world = (i: number): Matrix4 => (parent.has(i) ? world(parent.get(i)!).multiply(local(nodes[i])) : local(nodes[i]));
+  const joints: number[] = [];
+  const walk = (i: number) => {
+    if (nodes[i].mesh === undefined) joints.push(i);
+    (nodes[i].children ?? []).forEach(walk);
+  };
+  (root !== undefined ? [root] : json.scenes[json.scene ?? 0].nodes).forEach(walk);
+  const pos: number[] = [];
+  const jnt: number[] = [];
+  const wgt: number[] = [];
+  const ind: number[] = [];
+  const ibm: number[] = [];
+  joints.forEach((n, k) => {
+    const W = world(n);
+    const p = new Vector3().setFromMatrixPosition(W);
+    const o = pos.length / 3;
+    for (const d of [[0.01, 0, 0], [-0.01, 0, 0.01], [0, 0.01, -0.01], [0, -0.01, 0]]) {
+      pos.push(p.x + d[0], p.y + d[1], p.z + d[2]);
+      jnt.push(k, 0, 0, 0);
+      wgt.push(1, 0, 0, 0);
+    }
+    ind.push(o, o + 1, o + 2, o, o + 2, o + 3, o, o + 3, o + 1, o + 1, o + 3, o + 2);
+    ibm.push(...W.clone().invert().elements);
+  });
+  const chunks: Uint8Array[] = [bin ?? new Uint8Array(0)];
+  let len = chunks[0].byteLength;
+  const view = (a: Float32Array | Uint16Array, target?: number) => {
+    const pad = (4 - (len % 4)) % 4;
+    chunks.push(new Uint8Array(pad));
+    len += pad;
+    const v: Record<string, unknown> = { buffer: 0, byteOffset: len, byteLength: a.byteLength };
+    if (target) v.target = target;
+    chunks.push(new Uint8Array(a.buffer, a.byteOffset, a.byteLength));
+    len += a.byteLength;
+    return json.bufferViews.push(v) - 1;
+  };
+  const acc = (a: Record<string, unknown>) => json.accessors.push(a) - 1;
+  const n = pos.length / 3;
+  const mn = [0, 1, 2].map((c) => Math.min(...pos.filter((_, k) => k % 3 === c)));
+  const mx = [0, 1, 2].map((c) => Math.max(...pos.filter((_, k) => k % 3 === c)));
+  const P = acc({ bufferView: view(new Float32Array(pos), 34962), componentType: 5126, count: n, type: 'VEC3', min: mn, max: mx });
+  const Jt = acc({ bufferView: view(new Uint16Array(jnt), 34962), componentType: 5123, count: n, type: 'VEC4' });
+  const Wt = acc({ bufferView: view(new Float32Array(wgt), 34962), componentType: 5126, count: n, type: 'VEC4' });
+  const I = acc({ bufferView: view(new Uint16Array(ind), 34963), componentType: 5123, count: ind.length, type: 'SCALAR' });
+  const B = acc({ bufferView: view(new Float32Array(ibm)), componentType: 5126, count: joints.length, type: 'MAT4' });
+  json.materials = json.materials ?? [];
+  const material = json.materials.push({ name: 'Skin', pbrMetallicRoughness: { baseColorFactor: [0.9, 0.7, 0.6, 1], metallicFactor: 0 } }) - 1;
+  json.meshes = json.meshes ?? [];
+  const mesh = json.meshes.push({ name: 'Body', primitives: [{ attributes: { POSITION: P, JOINTS_0: Jt, WEIGHTS_0: Wt }, indices: I, material }] }) - 1;
+  json.skins = json.skins ?? [];
+  const skin = json.skins.push({ joints, inverseBindMatrices: B }) - 1;
+  const node = nodes.push({ name: 'Body', mesh, skin }) - 1;
+  json.scenes[json.scene ?? 0].nodes.push(node);
+  const out = new Uint8Array(chunks.reduce((s, c) => s + c.byteLength, 0));
+  let o = 0;
+  for (const c of chunks) {
+    out.set(c, o);
+    o += c.byteLength;
+  }
+  json.buffers = [{ byteLength: out.byteLength }];
+  return writeGlb(json, out);
+}

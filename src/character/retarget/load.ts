@@ -18,10 +18,18 @@
  *   (a required extension that needs a decoder: Draco, meshopt, KTX2), 'external-resource', 'no-skin'
  *   (no skinned mesh), 'not-humanoid' (the mapping lacks REQUIRED_JOINTS; `bones` and `mapping` are
  *   attached so a mapping editor can offer the rest).
- * - VRM 0.x / 1.0: the humanoid extension gives the bone mapping (node indices), read from the JSON.
+ * - VRM 0.x / 1.0 (a document with the `VRM` or `VRMC_vrm` extension): read through @pixiv/three-vrm's
+ *   VRMLoaderPlugin on the same GLTFLoader (loaded on demand, only for VRM files): its humanoid
+ *   (`vrm.humanoid.getRawBoneNode`) gives the bone mapping, its meta the version, and the page gets its
+ *   MToon materials. VRM 0.x characters face −Z at rest (what three-vrm's VRMUtils.rotateVRM0 turns
+ *   round); retargetMotion measures the rest facing of every character from its hips and turns the
+ *   motion onto it (RetargetResult.yaw, 180° for VRM 0.x), so the scene itself is not rotated here.
+ *   `vrm` holds three-vrm's VRM object (the raw bones are the ones animated; the normalized rig and
+ *   vrm.update() are not used, as they would overwrite the raw bones).
  */
 import type { Object3D } from 'three';
 import { GLTFLoader, type GLTF } from 'three/addons/loaders/GLTFLoader.js';
+import type { VRM } from '@pixiv/three-vrm';
 import { JOINT_NAMES, type JointName } from '../../skeleton';
 import { type BoneInfo, type BoneMapping, MappingError, autoMap, validateMapping } from './mapping';
 import { bonesOf } from './retarget';
@@ -70,6 +78,8 @@ export interface LoadedCharacter {
   unmapped: JointName[];
   mappingSource: 'vrm' | 'names' | 'user';
   vrm: '0.x' | '1.0' | null;
+  /** three-vrm's VRM object of a VRM file (meta, humanoid, materials), else null */
+  vrmModel: VRM | null;
   /** milliseconds spent in loadCharacter */
   loadMs: number;
   /** put every node back to its rest transform as loaded (retargetMotion reads the rest pose from the scene) */
@@ -249,8 +259,8 @@ export function writeGlb(json: GltfJson, bin: Uint8Array): Uint8Array {
   return out;
 }
 
-/** The JSON given to the loader when textures are not decoded: materials keep their factors. */
-function withoutTextures(json: GltfJson): GltfJson {
+/** The JSON given to the loader when textures are not decoded (no DOM, e.g. Node): materials keep their factors. */
+export function withoutTextures(json: GltfJson): GltfJson {
   const doc: GltfJson = JSON.parse(JSON.stringify(json));
   const strip = (o: unknown): void => {
     if (!o || typeof o !== 'object') return;
@@ -260,28 +270,15 @@ function withoutTextures(json: GltfJson): GltfJson {
     }
   };
   (doc.materials ?? []).forEach(strip);
+  // VRM 0.x keeps MToon textures by index in its own material list, and both versions name a thumbnail
+  for (const m of doc.extensions?.VRM?.materialProperties ?? []) if (m && typeof m === 'object') m.textureProperties = {};
+  if (doc.extensions?.VRM?.meta) delete doc.extensions.VRM.meta.texture;
+  if (doc.extensions?.VRMC_vrm?.meta) delete doc.extensions.VRMC_vrm.meta.thumbnailImage;
   delete doc.textures;
   delete doc.images;
   delete doc.samplers;
   if (Array.isArray(doc.extensionsRequired)) doc.extensionsRequired = doc.extensionsRequired.filter((e: string) => e !== 'KHR_texture_transform');
   return doc;
-}
-
-/** VRM humanoid (0.x or 1.0) → VRM bone name → node index. */
-function vrmHumanoid(json: GltfJson): { version: '0.x' | '1.0'; bones: Record<string, number> } | null {
-  const v1 = json.extensions?.VRMC_vrm?.humanoid?.humanBones;
-  if (v1 && typeof v1 === 'object') {
-    const bones: Record<string, number> = {};
-    for (const [k, b] of Object.entries(v1 as GltfJson)) if (Number.isInteger(b?.node)) bones[k] = b.node;
-    return { version: '1.0', bones };
-  }
-  const v0 = json.extensions?.VRM?.humanoid?.humanBones;
-  if (Array.isArray(v0)) {
-    const bones: Record<string, number> = {};
-    for (const b of v0) if (typeof b?.bone === 'string' && Number.isInteger(b?.node)) bones[b.bone] = b.node;
-    return { version: '0.x', bones };
-  }
-  return null;
 }
 
 export async function loadCharacter(files: CharacterFile[], opts: LoadCharacterOptions = {}): Promise<LoadedCharacter> {
@@ -323,19 +320,27 @@ export async function loadCharacter(files: CharacterFile[], opts: LoadCharacterO
 
   const textures = opts.textures ?? (typeof document !== 'undefined' || typeof createImageBitmap !== 'undefined');
   const forLoader = writeGlb(textures ? json : withoutTextures(json), bin);
+  const isVrm = !!(json.extensions?.VRM || json.extensions?.VRMC_vrm);
+  const loader = new GLTFLoader();
+  if (isVrm) {
+    const { VRMLoaderPlugin } = await import('@pixiv/three-vrm');
+    loader.register((parser) => new VRMLoaderPlugin(parser));
+  }
   let gltf: GLTF;
   try {
-    gltf = await new GLTFLoader().parseAsync(forLoader.buffer as ArrayBuffer, '');
+    gltf = await loader.parseAsync(forLoader.buffer as ArrayBuffer, '');
   } catch (e) {
-    throw new CharacterLoadError('corrupt', file, `three.js could not read it (${(e as Error)?.message ?? e})`);
+    throw new CharacterLoadError('corrupt', file, `${isVrm ? 'three.js with three-vrm' : 'three.js'} could not read it (${(e as Error)?.message ?? e})`);
+  }
+  const vrmModel = (gltf.userData?.vrm as VRM | undefined) ?? null;
+  if (isVrm && !vrmModel?.humanoid) {
+    throw new CharacterLoadError('unsupported', file, `it declares a VRM extension (${json.extensions?.VRMC_vrm ? `VRMC_vrm ${json.extensions.VRMC_vrm.specVersion ?? '?'}` : 'VRM 0.x'}) that three-vrm could not read as a humanoid; re-export it as VRM 0.x or 1.0, or as a plain .glb`);
   }
   const root = gltf.scene;
   const nodeIndex = new Map<Object3D, number>();
-  const byNode = new Map<number, Object3D>();
   for (const [obj, assoc] of gltf.parser.associations as Map<Object3D, { nodes?: number }>) {
     if (assoc && Number.isInteger(assoc.nodes) && (obj as { isObject3D?: boolean }).isObject3D) {
       nodeIndex.set(obj, assoc.nodes!);
-      if (!byNode.has(assoc.nodes!)) byNode.set(assoc.nodes!, obj);
     }
   }
   // unnamed nodes get 'node<index>' so a bone map can name them
@@ -344,16 +349,22 @@ export async function loadCharacter(files: CharacterFile[], opts: LoadCharacterO
   const { objects: bones, infos: boneInfos } = bonesOf(root);
   if (!bones.length) throw new CharacterLoadError('no-skin', file, 'its skins have no joints in the scene');
 
-  const vrm = vrmHumanoid(json);
+  // VRM: three-vrm's humanoid (VRM bone name → the raw bone it animates)
+  let vrmNames: Record<string, string> | undefined;
+  if (vrmModel) {
+    vrmNames = {};
+    for (const vb of Object.keys(vrmModel.humanoid.humanBones)) {
+      const o = vrmModel.humanoid.getRawBoneNode(vb as Parameters<VRM['humanoid']['getRawBoneNode']>[0]);
+      if (o?.name) vrmNames[vb] = o.name;
+    }
+  }
   let mapping: BoneMapping;
   let mappingSource: LoadedCharacter['mappingSource'];
   if (opts.mapping) {
     mapping = { ...opts.mapping };
     mappingSource = 'user';
   } else {
-    const vrmNames: Record<string, string> = {};
-    if (vrm) for (const [k, n] of Object.entries(vrm.bones)) if (byNode.get(n)) vrmNames[k] = byNode.get(n)!.name;
-    const auto = autoMap(boneInfos, vrm ? vrmNames : undefined);
+    const auto = autoMap(boneInfos, vrmNames);
     mapping = auto.mapping;
     mappingSource = auto.source;
   }
@@ -371,7 +382,7 @@ export async function loadCharacter(files: CharacterFile[], opts: LoadCharacterO
   root.traverse((o) => rest.push([o, o.position.clone(), o.quaternion.clone(), o.scale.clone()]));
   return {
     name: file, root, gltf, json, bin, bones, boneInfos, nodeIndex, mapping, unmapped, mappingSource,
-    vrm: vrm?.version ?? null, loadMs: performance.now() - t0,
+    vrm: vrmModel ? (vrmModel.meta?.metaVersion === '0' ? '0.x' : '1.0') : null, vrmModel, loadMs: performance.now() - t0,
     restPose() {
       for (const [o, p, q, s] of rest) {
         o.position.copy(p);
