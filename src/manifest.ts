@@ -161,9 +161,36 @@ export async function fetchBytes(
   } catch (e) {
     throw new ModelFileError(path, 'network', `cannot fetch ${url}: ${(e as Error).message}`);
   }
-  if (res.status === 404) throw new ModelFileError(path, 'missing', `not found at ${url} (HTTP 404)`);
+  if (res.status === 404 || res.status === 410) {
+    throw new ModelFileError(path, 'missing', `not found at ${url} (HTTP ${res.status}); put the file there (public/models/ in this repository) or fix the models URL`);
+  }
   if (!res.ok) throw new ModelFileError(path, 'network', `fetching ${url} failed: HTTP ${res.status} ${res.statusText}`);
+  if (!isHtmlPath(path) && /^\s*text\/html\b/i.test(res.headers.get('content-type') ?? '')) {
+    await res.body?.cancel().catch(() => undefined);
+    throw missingAsHtml(path, url, res.status);
+  }
   return readBody(res, onProgress);
+}
+
+const isHtmlPath = (path: string) => /\.html?$/i.test(path);
+
+/**
+ * Whether bytes start like an HTML page (`<!doctype html`, `<html`, `<head`, `<body`, `<script`, after
+ * whitespace or a BOM): what a server that answers every unknown path with its index.html sends
+ * instead of a model file, a JSON file or a weight blob, none of which starts with '<'.
+ */
+export function looksLikeHtml(data: ArrayBuffer | Uint8Array): boolean {
+  const view = data instanceof Uint8Array ? data : new Uint8Array(data);
+  const head = new TextDecoder('utf-8', { fatal: false }).decode(view.subarray(0, 256)).replace(/^\uFEFF/, '').trimStart().toLowerCase();
+  return /^<(!doctype html|html|head|body|script|meta|title)\b/.test(head);
+}
+
+function missingAsHtml(path: string, url: string, status?: number): ModelFileError {
+  return new ModelFileError(
+    path, 'missing',
+    `not found at ${url}: the server answered with an HTML page${status ? ` (HTTP ${status})` : ''} instead of the file, as a single-page-app ` +
+      `fallback answers a path it does not have; put the file there (public/models/ in this repository) or fix the models URL`,
+  );
 }
 
 /** Lower-case hex sha256 of the bytes (WebCrypto: browsers and Node ≥ 20). */
@@ -228,6 +255,7 @@ export async function loadManifest(baseUrl: string): Promise<Manifest> {
   try {
     data = JSON.parse(new TextDecoder().decode(buf));
   } catch (e) {
+    if (looksLikeHtml(buf)) throw missingAsHtml(MANIFEST_FILE, joinUrl(baseUrl, MANIFEST_FILE));
     throw new ModelFileError(MANIFEST_FILE, 'incompatible', `not valid JSON: ${(e as Error).message}`);
   }
   return validateManifest(data);
@@ -237,11 +265,16 @@ export async function loadManifest(baseUrl: string): Promise<Manifest> {
 export async function verifyBytes(manifest: Manifest, path: string, data: ArrayBuffer): Promise<void> {
   const meta = manifest.files[path];
   if (!meta) throw new ModelFileError(path, 'missing', `not listed in ${MANIFEST_FILE} 'files'; refusing an unverified file`);
+  // a file that is not what the manifest lists and is an HTML page: the server does not have the file
+  const html = () => !isHtmlPath(path) && looksLikeHtml(data);
+  const htmlInstead = () => new ModelFileError(path, 'missing', `is an HTML page (${data.byteLength} bytes), not the file: the server answered a path it does not have with a web page; put the file there or fix the models URL`);
   if (data.byteLength !== meta.bytes) {
+    if (html()) throw htmlInstead();
     throw new ModelFileError(path, 'sha256', `size ${data.byteLength} bytes differs from the manifest's ${meta.bytes}; the file is corrupt or from another build (re-download or re-export it)`);
   }
   const got = await sha256Hex(data);
   if (got !== meta.sha256) {
+    if (html()) throw htmlInstead();
     throw new ModelFileError(path, 'sha256', `sha256 ${got} differs from the manifest's ${meta.sha256}; the file is corrupt or from another build (re-download or re-export it)`);
   }
 }

@@ -4,7 +4,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { pathToFileURL } from 'node:url';
-import { fetchVerified, loadManifest, ModelFileError, sha256Hex, validateManifest, type Manifest } from '../../src/manifest';
+import { fetchVerified, loadManifest, looksLikeHtml, ModelFileError, sha256Hex, validateManifest, type Manifest } from '../../src/manifest';
 
 const MODELS = path.resolve(__dirname, '../../public/models') + '/';
 const ONNX = 'text/all-MiniLM-L6-v2/onnx/model_quantized.onnx';
@@ -85,6 +85,44 @@ describe('refusals', () => {
     const u = await rejection(fetchVerified(dir, m, 'text/evil.onnx'));
     expect(u.reason).toBe('missing');
     expect(u.message).toContain('refusing an unverified file');
+  });
+
+  test('a server without the file: HTTP 404, or its index.html with status 200, is reported missing with the path, never as corrupt', async () => {
+    const m = await loadManifest(MODELS);
+    const BASE = 'http://models.test/models/';
+    const page = '<!doctype html>\n<html><head><title>EMDM</title></head><body></body></html>\n';
+    const answers: Record<string, () => Response> = {
+      // a SPA fallback that says it is HTML
+      'emdm-t2m-web.onnx': () => new Response(page, { status: 200, headers: { 'content-type': 'text/html; charset=utf-8' } }),
+      // one that sends the page with a neutral type: caught by its first bytes when it fails verification
+      [ONNX]: () => new Response(`\uFEFF  ${page}`, { status: 200, headers: { 'content-type': 'application/octet-stream' } }),
+      'emdm-t2m-web.meanstd.f32': () => new Response('Not Found', { status: 404 }),
+      'manifest.json': () => new Response(page, { status: 200 }),
+    };
+    const realFetch = globalThis.fetch;
+    globalThis.fetch = (async (input: string | URL | Request) => {
+      const rel = String(input instanceof Request ? input.url : input).slice(BASE.length);
+      return answers[rel]?.() ?? new Response('', { status: 500 });
+    }) as typeof fetch;
+    try {
+      for (const [file, how] of [['emdm-t2m-web.onnx', /answered with an HTML page \(HTTP 200\)/], [ONNX, /is an HTML page/], ['emdm-t2m-web.meanstd.f32', /\(HTTP 404\)/]] as const) {
+        const e = await rejection(fetchVerified(BASE, m, file));
+        expect(e.reason, file).toBe('missing');
+        expect(e.path).toBe(file);
+        expect(e.message).toContain(file);
+        expect(e.message).toMatch(how);
+        expect(e.message).not.toMatch(/corrupt|sha256/);
+      }
+      const e = await rejection(loadManifest(BASE));
+      expect(e.reason).toBe('missing');
+      expect(e.message).toContain(`${BASE}manifest.json`);
+    } finally {
+      globalThis.fetch = realFetch;
+    }
+    // a real file that merely differs is still a checksum refusal, and bytes that are not HTML are not "missing"
+    expect(looksLikeHtml(new TextEncoder().encode('{"a": 1}'))).toBe(false);
+    expect(looksLikeHtml(new Uint8Array(fs.readFileSync(path.join(MODELS, 'emdm-t2m-web.meanstd.f32'))))).toBe(false);
+    expect(looksLikeHtml(new TextEncoder().encode('  <HTML lang="en">'))).toBe(true);
   });
 
   test('a malformed manifest names the field', async () => {
