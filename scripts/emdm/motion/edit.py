@@ -1,0 +1,352 @@
+"""Beyond one prompt (issue 14): a prompt timeline for long motions, in-betweening, body-part edits and loops, all
+made of masked sampling (``emdm.sample.sample_features(..., known, keep)``), masks (``emdm.motion.mask``) and root
+stitching (``emdm.motion.stitch``); docs/ARCHITECTURE.md "Sampling with constraints". The TypeScript twin is
+``src/edit.ts``; both follow the same frame bookkeeping, checked by the ``tiny-edit`` parity fixture
+(``python -m emdm.motion.edit_fixture``).
+
+    model = Editor.open(open_model("emdm-t2m-web"), steps=10)
+    tl = timeline(model, [Segment("a person walks forward", 4, seed=1), Segment("a person waves", 3, seed=2)])
+    tl2 = regenerate(model, tl, 1, Segment("a person sits down", 3, seed=7))   # segment 0 untouched
+    mid = inbetween(model, tl.features[:120], "a person jumps", seed=3)        # keeps the first and last second
+    wave = edit_body(model, walk, "a person waves both hands", seed=4, keep="lower")
+    cyc = loop(model, walk, "a person walks forward", seed=5, in_place=True)  # cyc.features: the looping clip
+
+Frame bookkeeping (the contract with ``src/edit.ts``; FPS 20, C = ``OVERLAP`` = 20 frames):
+
+* timeline: segment k has n_k = floor(seconds·20 + 0.5) ≥ 1 new frames, n_k ≤ maxFrames − C (8.8 s), Σ n_k ≤ 60 s.
+  Segment 0 is an ordinary generation of n_0 frames. Segment k > 0 samples a window of c + n_k frames, c =
+  min(C, frames so far), whose frames [0, c) are kept (all channels) from the sequence's last c normalised
+  frames; its joints are appended by ``append_segment(prev, window, c)``. The sequence's normalised features
+  are concat(window_0, window_1[c:], …). ``regenerate`` from segment i reuses frames before segment i.
+* in-betweening: known = the motion (N ≤ maxFrames frames), kept frames [0, a] ∪ [b, N−1] (default a = 19,
+  b = N − 20), then ``pin_kept_root`` so the kept end stays where it was.
+* body-part edit: kept groups root+legs on every frame (``keep="lower"``: new upper body) or upper
+  (``keep="upper"``: new legs and root).
+* loop (K = ``LOOP_ENDS`` = 10): known = the motion X with frames [N−K, N) replaced by X[0:K]; kept frames
+  [0, K) ∪ [N−K, N); ``pin_kept_root`` against that known; the clip is frames [0, N−K) (frame N−K, the copy
+  of frame 0, is where it wraps to). In place: the de-normalised root x/z velocity [1:3] is set to 0 on every
+  frame (the root turns but does not travel).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable, Sequence
+
+import numpy as np
+
+from emdm.motion.features import recover_joints
+from emdm.motion.mask import KeepRect, keep_mask
+from emdm.motion.stitch import append_segment, pin_kept_root
+
+FPS = 20
+OVERLAP = 20               # C: frames of the previous segment a new one starts from (1 s)
+MAX_SECONDS = 60.0         # a timeline's total length
+LOOP_ENDS = 10             # K: frames inpainted at each end of a loop
+MAX_SEED = 2**32 - 1
+
+
+class EditError(ValueError):
+    """A timeline or edit that cannot be made, said in one line naming the segment or argument and the limit."""
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One entry of a timeline: a prompt (a text model's prompt or an action model's label), its length in seconds
+    and the seed of its sampling."""
+    prompt: str
+    seconds: float
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class Editor:
+    """A model and its sampling settings: ``condition(prompt)`` → condition vector, ``sample`` → normalised x̂_0."""
+    step: Callable
+    mean: np.ndarray
+    std: np.ndarray
+    condition: Callable[[str], np.ndarray]
+    steps: int = 10
+    guidance: float = 2.5
+    z_dim: int = 64
+    objective: str = "ddgan"
+    max_frames: int = 196
+
+    @classmethod
+    def open(cls, opened, steps: int | None = None, guidance: float | None = None) -> "Editor":
+        """From ``emdm.model.open.open_model(...)``: its step, mean/std and manifest entry (text prompts are encoded
+        once each, an action model takes label names or indices)."""
+        return cls.from_entry(opened.step, opened.meta, opened.mean, opened.std, steps, guidance)
+
+    @classmethod
+    def from_entry(cls, step: Callable, meta: dict, mean: np.ndarray, std: np.ndarray, steps: int | None = None,
+                   guidance: float | None = None) -> "Editor":
+        """From a step function, its manifest-like entry and mean/std (what ``emdm.sample.load_model`` returns)."""
+        from emdm.sample import make_condition
+
+        spec = meta["condition"]
+        cache: dict[str, np.ndarray] = {}
+
+        def condition(prompt: str) -> np.ndarray:
+            if prompt not in cache:
+                text = prompt if spec["type"] == "text" else None
+                action = prompt if spec["type"] != "text" else None
+                cache[prompt] = make_condition(spec, text, action, False)
+            return cache[prompt]
+
+        return cls(step, np.asarray(mean, np.float32), np.asarray(std, np.float32), condition,
+                   int(meta.get("defaultSteps", 10)) if steps is None else steps,
+                   float(meta.get("guidance", 2.5)) if guidance is None else guidance,
+                   int(meta.get("zDim", 64)), meta.get("objective", "ddgan"), int(meta.get("maxFrames", 196)))
+
+    def sample(self, prompt: str, frames: int, seed: int, known: np.ndarray | None = None,
+               keep: np.ndarray | None = None) -> np.ndarray:
+        """(frames, 263) normalised x̂_0 of one motion (``emdm.sample.sample_features``)."""
+        from emdm.sample import sample_features
+
+        return sample_features(self.step, self.condition(prompt), frames, self.steps, self.guidance, seed, 1,
+                               self.z_dim, objective=self.objective, known=known, keep=keep)[0]
+
+    def normalise(self, features: np.ndarray) -> np.ndarray:
+        return ((np.asarray(features, np.float32) - self.mean) / self.std).astype(np.float32)
+
+    def denormalise(self, x: np.ndarray) -> np.ndarray:
+        return (np.asarray(x, np.float32) * self.std + self.mean).astype(np.float32)
+
+
+@dataclass(frozen=True)
+class Motion:
+    """De-normalised features (N, 263) and joints (N, 22, 3), metres."""
+    features: np.ndarray
+    joints: np.ndarray
+
+
+@dataclass(frozen=True)
+class Timeline(Motion):
+    """A generated timeline: ``x`` the normalised features (N, 263), ``frames`` the new frames of each segment."""
+    segments: tuple[Segment, ...] = ()
+    frames: tuple[int, ...] = ()
+    x: np.ndarray = field(default_factory=lambda: np.zeros((0, 263), np.float32))
+    overlap: int = OVERLAP
+
+    @property
+    def starts(self) -> list[int]:
+        """The sequence frame where each segment's new frames begin."""
+        return [int(s) for s in np.cumsum([0, *self.frames[:-1]])]
+
+
+@dataclass(frozen=True)
+class Loop(Motion):
+    """The looping clip (frames [0, N−K)) and ``full``, the sampled N frames (frame N−K repeats frame 0's pose)."""
+    full: Motion | None = None
+
+
+# ----------------------------------------------------------------------------------------------- checks
+
+def segment_frames(seconds: float, fps: int = FPS) -> int:
+    """New frames of a segment: seconds·fps rounded half up (as JavaScript's Math.round)."""
+    return int(math.floor(seconds * fps + 0.5))
+
+
+def _name(k: int, seg: Segment) -> str:
+    return f"segment {k + 1} ({seg.prompt.strip()[:40]!r})" if isinstance(seg.prompt, str) and seg.prompt.strip() \
+        else f"segment {k + 1}"
+
+
+def check_timeline(segments: Sequence[Segment], max_frames: int = 196, overlap: int = OVERLAP, fps: int = FPS,
+                   max_seconds: float = MAX_SECONDS) -> list[int]:
+    """Each segment's new frames; a bad segment is an EditError naming it (1-based) and the limit."""
+    if not segments:
+        raise EditError("the timeline is empty: add at least one segment (a prompt and its seconds)")
+    limit = max_frames - overlap
+    frames = []
+    for k, seg in enumerate(segments):
+        if not isinstance(seg.prompt, str) or not seg.prompt.strip():
+            raise EditError(f"segment {k + 1}: the prompt is empty; say what the character should do")
+        s = seg.seconds
+        if isinstance(s, bool) or not isinstance(s, (int, float)) or not math.isfinite(s):
+            raise EditError(f"{_name(k, seg)}: seconds must be a number, got {s!r}")
+        n = segment_frames(s, fps)
+        if n < 1:
+            raise EditError(f"{_name(k, seg)}: {s:g} s is too short; a segment lasts at least {1 / fps:g} s "
+                            f"(1 frame at {fps} fps)")
+        if n > limit:
+            raise EditError(f"{_name(k, seg)}: {s:g} s is longer than a segment can be ({limit / fps:g} s: the model's "
+                            f"{max_frames}-frame window less the {overlap / fps:g} s it continues from); split it in two")
+        if isinstance(seg.seed, bool) or not isinstance(seg.seed, (int, np.integer)) or not 0 <= seg.seed <= MAX_SEED:
+            raise EditError(f"{_name(k, seg)}: seed must be an integer in 0..{MAX_SEED}, got {seg.seed!r}")
+        frames.append(n)
+    total = sum(frames)
+    if total > max_seconds * fps:
+        raise EditError(f"the timeline lasts {total / fps:g} s in all; at most {max_seconds:g} s (shorten or remove a segment)")
+    return frames
+
+
+def parse_segment(spec: str, seed: int = 0) -> Segment:
+    """``"a person walks forward:4"`` → Segment(prompt, 4.0, seed): the text after the last ':' is the seconds."""
+    prompt, sep, sec = spec.rpartition(":")
+    try:
+        seconds = float(sec)
+    except ValueError:
+        seconds = None
+    if not sep or seconds is None:
+        raise EditError(f"segment {spec!r}: expected PROMPT:SECONDS, e.g. \"a person walks forward:4\"")
+    return Segment(prompt.strip(), seconds, seed)
+
+
+def read_segments(path, seed: int = 0) -> list[Segment]:
+    """Segments from a JSON file: [{"prompt": str, "seconds": number, "seed": int (default seed + k)}, ...]."""
+    import json
+    from pathlib import Path
+
+    try:
+        doc = json.loads(Path(path).read_text())
+    except OSError as e:
+        raise EditError(f"{path}: cannot read it ({e.strerror or e})") from None
+    except json.JSONDecodeError as e:
+        raise EditError(f"{path}:{e.lineno}: not valid JSON ({e.msg})") from None
+    if not isinstance(doc, list):
+        raise EditError(f"{path}: expected a JSON list of segments [{{\"prompt\": ..., \"seconds\": ...}}, ...]")
+    out = []
+    for k, e in enumerate(doc):
+        if not isinstance(e, dict) or set(e) - {"prompt", "seconds", "seed"} or "prompt" not in e or "seconds" not in e:
+            raise EditError(f"{path}: segment {k + 1} must be an object with \"prompt\", \"seconds\" and optionally "
+                            f"\"seed\", got {json.dumps(e)[:80]}")
+        out.append(Segment(e["prompt"], e["seconds"], e.get("seed", (seed + k) % (MAX_SEED + 1))))
+    return out
+
+
+def _check_motion(features, what: str, max_frames: int, min_frames: int) -> np.ndarray:
+    f = np.asarray(features, np.float32)
+    if f.ndim != 2 or f.shape[1] != 263:
+        raise EditError(f"{what}: the motion's features have shape {f.shape}, expected (frames, 263) de-normalised")
+    if not min_frames <= len(f) <= max_frames:
+        raise EditError(f"{what}: the motion has {len(f)} frames; this edit needs {min_frames}..{max_frames} "
+                        f"({min_frames / FPS:g}..{max_frames / FPS:g} s, one model window)")
+    if not np.isfinite(f).all():
+        raise EditError(f"{what}: the motion's features hold NaN/Infinity")
+    return f
+
+
+def _check_prompt_seed(what: str, prompt: str, seed: int) -> None:
+    if not isinstance(prompt, str) or not prompt.strip():
+        raise EditError(f"{what}: the prompt is empty; say what the character should do")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed <= MAX_SEED:
+        raise EditError(f"{what}: seed must be an integer in 0..{MAX_SEED}, got {seed!r}")
+
+
+# ----------------------------------------------------------------------------------------------- timeline
+
+def timeline(model: Editor, segments: Sequence[Segment], overlap: int = OVERLAP, previous: Timeline | None = None,
+             start: int = 0) -> Timeline:
+    """Generate ``segments`` one after the other, each continuing the last ``overlap`` frames of the sequence so far.
+    With ``previous`` (a timeline of the same first ``start`` segments) its frames before segment ``start`` are
+    kept as they are and only segments ``start``.. are generated."""
+    segments = tuple(segments)
+    frames = check_timeline(segments, model.max_frames, overlap)
+    if not 0 <= start < len(segments):
+        raise EditError(f"start segment {start + 1} outside 1..{len(segments)}")
+    if start > 0:
+        if previous is None:
+            raise EditError(f"regenerating from segment {start + 1} needs the previous timeline")
+        if previous.overlap != overlap or tuple(previous.segments[:start]) != segments[:start]:
+            raise EditError(f"regenerating from segment {start + 1}: segments 1..{start} must be those of the previous "
+                            f"timeline (and its overlap {previous.overlap})")
+        kept = sum(frames[:start])
+        x, joints = previous.x[:kept], previous.joints[:kept]
+    for k in range(start, len(segments)):          # every condition first: a bad prompt stops before any sampling
+        try:
+            model.condition(segments[k].prompt)
+        except ValueError as e:
+            raise EditError(f"{_name(k, segments[k])}: {e}") from None
+    for k in range(start, len(segments)):
+        seg, n = segments[k], frames[k]
+        if k == 0:
+            x = model.sample(seg.prompt, n, seg.seed)
+            joints = recover_joints(model.denormalise(x)).astype(np.float32)
+            continue
+        c = min(overlap, len(x))
+        known = np.zeros((c + n, x.shape[1]), np.float32)
+        known[:c] = x[-c:]
+        keep = keep_mask(c + n, [KeepRect(frames=((0, c - 1),))])
+        w = model.sample(seg.prompt, c + n, seg.seed, known, keep)
+        joints = append_segment(joints, recover_joints(model.denormalise(w)), c)
+        x = np.concatenate([x, w[c:]])
+    return Timeline(model.denormalise(x), np.asarray(joints, np.float32), segments, tuple(frames), x, overlap)
+
+
+def regenerate(model: Editor, tl: Timeline, i: int, segment: Segment | None = None) -> Timeline:
+    """``tl`` with segment ``i`` (0-based) replaced by ``segment`` (default: the same with seed + 1) and every later
+    segment generated again (they continue it); segments before ``i`` are untouched."""
+    if not 0 <= i < len(tl.segments):
+        raise EditError(f"segment {i + 1} outside 1..{len(tl.segments)}")
+    old = tl.segments[i]
+    segs = list(tl.segments)
+    segs[i] = segment if segment is not None else Segment(old.prompt, old.seconds, (old.seed + 1) % (MAX_SEED + 1))
+    return timeline(model, segs, tl.overlap, previous=tl, start=i)
+
+
+# ----------------------------------------------------------------------------------------------- edits
+
+def _edit(model: Editor, features: np.ndarray, prompt: str, seed: int, keep: np.ndarray,
+          known: np.ndarray | None = None) -> Motion:
+    """Sample with ``known`` (de-normalised, default ``features``) kept where ``keep``; pin the kept root."""
+    known = features if known is None else known
+    x = model.sample(prompt, len(features), seed, model.normalise(known), keep)
+    f = pin_kept_root(model.denormalise(x), keep, known)
+    return Motion(f, recover_joints(f).astype(np.float32))
+
+
+def inbetween(model: Editor, features: np.ndarray, prompt: str, seed: int, keep_until: int | None = None,
+              keep_from: int | None = None) -> Motion:
+    """Keep frames [0, keep_until] and [keep_from, N−1] of ``features`` (default: the first and last second) and
+    regenerate the frames between from ``prompt``."""
+    what = "in-betweening"
+    _check_prompt_seed(what, prompt, seed)
+    f = _check_motion(features, what, model.max_frames, 3)
+    n = len(f)
+    a = FPS - 1 if keep_until is None else keep_until
+    b = n - FPS if keep_from is None else keep_from
+    if not (isinstance(a, (int, np.integer)) and isinstance(b, (int, np.integer)) and 0 <= a and b <= n - 1
+            and b - a >= 2):
+        raise EditError(f"{what}: kept frames 0..{a} and {b}..{n - 1} leave no frame to regenerate in a {n}-frame "
+                        f"motion; keep less (0 ≤ first end, first end + 2 ≤ last start ≤ {n - 1})")
+    keep = keep_mask(n, [KeepRect(frames=((0, int(a)), (int(b), None)))])
+    return _edit(model, f, prompt, seed, keep)
+
+
+BODY_KEEP = {"lower": ("root", "legs"), "upper": ("upper",)}
+
+
+def edit_body(model: Editor, features: np.ndarray, prompt: str, seed: int, keep: str = "lower") -> Motion:
+    """Keep the lower body (legs and root; ``keep="lower"``) or the upper body (``keep="upper"``) of ``features`` on
+    every frame and regenerate the rest from ``prompt``."""
+    what = "body-part edit"
+    if keep not in BODY_KEEP:
+        raise EditError(f"{what}: keep must be 'lower' (legs and root) or 'upper', got {keep!r}")
+    _check_prompt_seed(what, prompt, seed)
+    f = _check_motion(features, what, model.max_frames, 1)
+    return _edit(model, f, prompt, seed, keep_mask(len(f), [KeepRect(groups=BODY_KEEP[keep])]))
+
+
+def loop(model: Editor, features: np.ndarray, prompt: str, seed: int, ends: int = LOOP_ENDS,
+         in_place: bool = False) -> Loop:
+    """A seamless loop of ``features`` (made from ``prompt``): its last ``ends`` frames are inpainted to be its first
+    ones, so the clip [0, N−ends) wraps onto its first frame; ``in_place`` removes the root's x/z travel."""
+    what = "loop"
+    _check_prompt_seed(what, prompt, seed)
+    if not isinstance(ends, (int, np.integer)) or ends < 1:
+        raise EditError(f"{what}: ends must be a positive number of frames, got {ends!r}")
+    f = _check_motion(features, what, model.max_frames, 2 * ends + 1)
+    n = len(f)
+    known = f.copy()
+    known[n - ends:] = f[:ends]
+    keep = keep_mask(n, [KeepRect(frames=((0, ends - 1), (n - ends, None)))])
+    m = _edit(model, f, prompt, seed, keep, known)
+    full = m.features
+    if in_place:
+        full = full.copy()
+        full[:, 1:3] = 0.0
+    joints = recover_joints(full).astype(np.float32)
+    return Loop(full[: n - ends], joints[: n - ends], Motion(full, joints))

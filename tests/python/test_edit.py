@@ -1,0 +1,262 @@
+"""Beyond one prompt (emdm.motion.edit): timeline, regenerate, in-betweening, body-part edits and loops on the tiny step
+model — their frame bookkeeping, every bad input, and the tiny-edit parity fixture (must be current)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from emdm.motion import edit as E
+from emdm.motion import edit_fixture
+from emdm.motion.features import heading_angles, recover_joints
+from emdm.motion.ik_fixture import read_case_array
+from emdm.motion.mask import group_channels
+
+PARITY = edit_fixture.PARITY_DIR
+
+
+class Spy:
+    """Records what every sampling call was given and returned."""
+
+    def __init__(self):
+        self.calls = []
+
+    def editor(self):
+        spy = self
+
+        class Spying(E.Editor):
+            def sample(self, prompt, frames, seed, known=None, keep=None):
+                x = super().sample(prompt, frames, seed, known, keep)
+                spy.calls.append({"prompt": prompt, "frames": frames, "seed": seed, "known": known, "keep": keep, "x": x})
+                return x
+
+        base = edit_fixture.tiny_editor()
+        return Spying(base.step, base.mean, base.std, base.condition, steps=2, guidance=2.5)
+
+
+@pytest.fixture(scope="module")
+def model():
+    return edit_fixture.tiny_editor()
+
+
+@pytest.fixture(scope="module")
+def tl(model):
+    return E.timeline(model, [E.Segment("b", 1.5, 1), E.Segment("e", 1.0, 2), E.Segment("g", 2.0, 3)])
+
+
+def _rel(joints):
+    """Root-relative joints turned to face +Z: the pose without where the body stands or faces."""
+    from emdm.motion.features import rot_y
+
+    rel = joints - joints[:, :1] * np.array([1, 0, 1])
+    return rot_y(-heading_angles(joints)[:, None], rel)
+
+
+# ----------------------------------------------------------------------------------------------- timeline
+
+def test_a_timeline_continues_each_segment_from_the_last_second_of_the_sequence():
+    spy = Spy()
+    segs = [E.Segment("b", 1.5, 1), E.Segment("e", 1.0, 2), E.Segment("g", 2.0, 3)]
+    ed = spy.editor()
+    tl = E.timeline(ed, segs)
+    assert tl.frames == (30, 20, 40) and tl.starts == [0, 30, 50]
+    assert tl.features.shape == (90, 263) and tl.joints.shape == (90, 22, 3) and tl.x.shape == (90, 263)
+    assert [c["frames"] for c in spy.calls] == [30, 40, 60] and [c["seed"] for c in spy.calls] == [1, 2, 3]
+    assert spy.calls[0]["known"] is None
+    for k, c in enumerate(spy.calls[1:], 1):
+        so_far = tl.x[:tl.starts[k]]
+        assert np.array_equal(c["known"][:20], so_far[-20:])                        # the last second, normalised
+        assert np.array_equal(c["keep"][:20], np.ones((20, 263))) and not c["keep"][20:].any()
+        assert np.array_equal(c["x"][:20], so_far[-20:])                           # kept exactly
+        assert np.array_equal(tl.x[tl.starts[k]:tl.starts[k] + tl.frames[k]], c["x"][20:])   # then its new frames
+    assert np.array_equal(tl.x[:30], spy.calls[0]["x"])
+    assert np.array_equal(tl.features, ed.denormalise(tl.x))
+
+
+def test_the_stitched_joints_are_the_whole_sequence_decoded_so_seams_do_not_jump(tl):
+    """append_segment of every window = recover_joints of the concatenated features: the root is integrated across
+    each seam from the previous segment's pose (no jump in position or heading)."""
+    whole = recover_joints(tl.features)
+    scale = max(1.0, float(np.abs(whole).max()))
+    assert np.abs(tl.joints - whole).max() < 1e-5 * scale
+    for s in tl.starts[1:]:                          # the seam step is the features' own root step, not a restart
+        step = np.linalg.norm(tl.joints[s, 0, [0, 2]] - tl.joints[s - 1, 0, [0, 2]])
+        want = np.linalg.norm(tl.features[s - 1, 1:3])
+        assert abs(step - want) < 1e-4 * scale
+
+
+def test_a_first_segment_shorter_than_the_overlap_is_continued_from_all_its_frames(model):
+    spy = Spy()
+    tl = E.timeline(spy.editor(), [E.Segment("b", 0.4, 1), E.Segment("e", 1.0, 2)])
+    assert tl.frames == (8, 20) and [c["frames"] for c in spy.calls] == [8, 28]
+    assert np.array_equal(spy.calls[1]["x"][:8], tl.x[:8]) and len(tl.features) == 28
+
+
+def test_regenerating_a_segment_keeps_the_ones_before_and_redoes_the_ones_after(model, tl):
+    new = E.regenerate(model, tl, 1, E.Segment("c", 1.0, 9))
+    assert new.segments[0] == tl.segments[0] and new.segments[1] == E.Segment("c", 1.0, 9)
+    assert np.array_equal(new.features[:30], tl.features[:30]) and np.array_equal(new.joints[:30], tl.joints[:30])
+    assert np.abs(new.features[30:50] - tl.features[30:50]).mean() > 1e-2
+    assert np.abs(new.features[50:] - tl.features[50:]).mean() > 1e-3        # same seed, but continues the new one
+    again = E.regenerate(model, tl, 2)                                         # default: same prompt, seed + 1
+    assert again.segments[2].seed == 4 and np.array_equal(again.features[:50], tl.features[:50])
+    assert len(E.regenerate(model, tl, 2, E.Segment("g", 0.5, 3)).features) == 60    # a new length
+    fresh = E.timeline(model, new.segments)                                    # the same as generating it whole
+    assert np.array_equal(fresh.features, new.features)
+
+
+def test_regenerating_needs_the_same_earlier_segments(model, tl):
+    with pytest.raises(E.EditError, match=r"segments 1..1 must be those of the previous timeline"):
+        E.timeline(model, [E.Segment("a", 1.5, 1), *tl.segments[1:]], previous=tl, start=1)
+    with pytest.raises(E.EditError, match=r"segment 4 outside 1..3"):
+        E.regenerate(model, tl, 3)
+
+
+@pytest.mark.parametrize("segments, says", [
+    ([], "the timeline is empty"),
+    ([("b", 2), ("e", 0)], r"segment 2 \('e'\): 0 s is too short; a segment lasts at least 0.05 s"),
+    ([("b", 0.02)], r"segment 1 \('b'\): 0.02 s is too short"),
+    ([("b", 2), ("  ", 2)], "segment 2: the prompt is empty"),
+    ([("b", 9)], r"segment 1 \('b'\): 9 s is longer than a segment can be \(8.8 s: the model's 196-frame window less "
+                 r"the 1 s it continues from\)"),
+    ([("b", 8.8)] * 6 + [("e", 8.2)], r"the timeline lasts 61 s in all; at most 60 s"),
+    ([("b", float("nan"))], r"segment 1 \('b'\): seconds must be a number, got nan"),
+    ([("b", "2")], r"seconds must be a number, got '2'"),
+    ([("zz", 1)], r"segment 1 \('zz'\): .*'zz'"),
+])
+def test_a_bad_timeline_is_refused_naming_the_segment_and_the_limit_before_sampling(segments, says):
+    spy = Spy()
+    with pytest.raises(E.EditError, match=says) as e:
+        E.timeline(spy.editor(), [E.Segment(p, s, 1) for p, s in segments])
+    assert "\n" not in str(e.value) and spy.calls == []
+
+
+def test_a_bad_seed_is_refused():
+    with pytest.raises(E.EditError, match=r"segment 1 \('b'\): seed must be an integer in 0..4294967295, got -1"):
+        E.check_timeline([E.Segment("b", 1, -1)])
+
+
+def test_segment_specs_and_json(tmp_path):
+    assert E.parse_segment("a person: then walks:4.5", 7) == E.Segment("a person: then walks", 4.5, 7)
+    with pytest.raises(E.EditError, match=r"expected PROMPT:SECONDS"):
+        E.parse_segment("a person walks")
+    f = tmp_path / "t.json"
+    f.write_text(json.dumps([{"prompt": "walk", "seconds": 2}, {"prompt": "wave", "seconds": 1, "seed": 9}]))
+    assert E.read_segments(f, 5) == [E.Segment("walk", 2, 5), E.Segment("wave", 1, 9)]
+    f.write_text('[{"prompt": "walk", "secs": 2}]')
+    with pytest.raises(E.EditError, match=r"segment 1 must be an object with \"prompt\", \"seconds\""):
+        E.read_segments(f)
+    f.write_text("[{")
+    with pytest.raises(E.EditError, match=r"t.json:1: not valid JSON"):
+        E.read_segments(f)
+
+
+# ----------------------------------------------------------------------------------------------- edits
+
+def test_inbetweening_keeps_the_first_and_last_second_where_they_were(model, tl):
+    spy = Spy()
+    src = tl.features[:70]
+    m = E.inbetween(spy.editor(), src, "d", 5)
+    keep = spy.calls[0]["keep"].astype(bool)
+    assert keep[:20].all() and keep[50:].all() and not keep[20:50].any()
+    want = recover_joints(src)
+    assert np.abs(m.joints[:20] - want[:20]).max() < 1e-5
+    assert np.abs(m.joints[50:] - want[50:]).max() < 1e-3                      # ≤ 1 mm after the free frames
+    assert np.abs(m.joints[20:50] - want[20:50]).max() > 1e-2
+    changed = np.argwhere(np.abs(m.features - src) > 1e-4 * (1 + np.abs(src)))
+    assert changed[:, 0].min() >= 20 and changed[:, 0].max() < 50
+    m2 = E.inbetween(model, src, "d", 5, keep_until=9, keep_from=60)             # any marked range
+    assert np.abs(m2.joints[60:] - want[60:]).max() < 1e-3 and np.abs(m2.joints[10:60] - want[10:60]).max() > 1e-2
+
+
+@pytest.mark.parametrize("keep, kept_groups", [("lower", ("root", "legs")), ("upper", ("upper",))])
+def test_a_body_part_edit_keeps_its_channels_on_every_frame(model, tl, keep, kept_groups):
+    src = tl.features[:60]
+    m = E.edit_body(model, src, "f", 4, keep=keep)
+    ch = sorted(c for g in kept_groups for c in group_channels(g))
+    free = sorted(set(range(263)) - set(ch))
+    np.testing.assert_allclose(m.features[:, ch], src[:, ch], rtol=1e-6, atol=1e-6)
+    assert np.abs(m.features[:, free] - src[:, free]).mean() > 1e-2
+    legs = [0, 1, 2, 4, 5, 7, 8, 10, 11]
+    upper = [3, 6, 9, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21]
+    want = recover_joints(src)
+    if keep == "lower":                                                        # legs where they were, in the world
+        assert np.abs(m.joints[:, legs] - want[:, legs]).max() < 1e-3
+    else:                                                                      # the upper body's pose, root-relative
+        rel = lambda f: f[:, 4:67].reshape(-1, 21, 3)[:, [j - 1 for j in upper]]  # noqa: E731
+        assert np.abs(rel(m.features) - rel(src)).max() < 1e-3
+
+
+def test_a_loop_ends_on_its_first_pose(model, tl):
+    spy = Spy()
+    src = tl.features[:50]
+    lp = E.loop(spy.editor(), src, "b", 6)
+    keep = spy.calls[0]["keep"].astype(bool)
+    assert keep[:10].all() and keep[40:].all() and not keep[10:40].any()
+    assert np.array_equal(spy.calls[0]["known"][40:], spy.calls[0]["known"][:10])
+    assert lp.features.shape == (40, 263) and lp.joints.shape == (40, 22, 3) and len(lp.full.features) == 50
+    assert np.array_equal(lp.features, lp.full.features[:40])
+    pose = lambda f: f[:, 3:67]                                                  # noqa: E731  height + root-relative joints
+    assert np.abs(pose(lp.full.features[40:41]) - pose(lp.full.features[:1])).max() < 1e-5
+    assert np.abs(_rel(lp.full.joints[40:41]) - _rel(lp.full.joints[:1])).max() < 1e-3   # ≤ 1 mm: the same pose
+    assert np.abs(lp.features[10:40] - src[10:40]).mean() > 1e-2
+
+
+def test_an_in_place_loop_does_not_travel(model, tl):
+    src = tl.features[:50]
+    moving = E.loop(model, src, "b", 6)
+    still = E.loop(model, src, "b", 6, in_place=True)
+    assert np.abs(moving.joints[:, 0, [0, 2]]).max() > 0.05
+    assert np.abs(still.joints[:, 0, [0, 2]]).max() == 0 and (still.features[:, 1:3] == 0).all()
+    np.testing.assert_allclose(still.features[:, [0, *range(3, 263)]], moving.features[:, [0, *range(3, 263)]])
+    np.testing.assert_allclose(heading_angles(still.joints), heading_angles(moving.joints), atol=1e-4)
+
+
+@pytest.mark.parametrize("call, says", [
+    (lambda m, f: E.inbetween(m, f[:30], "d", 1), r"in-betweening: kept frames 0..19 and 10..29 leave no frame"),
+    (lambda m, f: E.inbetween(m, f[:200], "d", 1), r"in-betweening: the motion has 200 frames; this edit needs 3..196"),
+    (lambda m, f: E.inbetween(m, f[:60], " ", 1), r"in-betweening: the prompt is empty"),
+    (lambda m, f: E.inbetween(m, f[:60], "d", 2**32), r"seed must be an integer in 0..4294967295"),
+    (lambda m, f: E.inbetween(m, f[:60, :200], "d", 1), r"shape \(60, 200\), expected \(frames, 263\)"),
+    (lambda m, f: E.inbetween(m, np.full((60, 263), np.nan, np.float32), "d", 1), r"NaN/Infinity"),
+    (lambda m, f: E.edit_body(m, f[:60], "f", 1, keep="arms"), r"keep must be 'lower' \(legs and root\) or 'upper'"),
+    (lambda m, f: E.loop(m, f[:20], "b", 1), r"loop: the motion has 20 frames; this edit needs 21..196"),
+    (lambda m, f: E.loop(m, f[:60], "b", 1, ends=0), r"ends must be a positive number of frames"),
+])
+def test_bad_edits_are_refused_with_one_line(model, tl, call, says):
+    f = np.concatenate([tl.features, tl.features, tl.features])
+    with pytest.raises(E.EditError, match=says) as e:
+        call(model, f)
+    assert "\n" not in str(e.value)
+
+
+# ----------------------------------------------------------------------------------------------- the fixture
+
+def test_the_tiny_edit_fixture_is_current(tmp_path):
+    edit_fixture.make(tmp_path)
+    want = json.loads((PARITY / "tiny-edit.json").read_text())
+    got = json.loads((tmp_path / "tiny-edit.json").read_text())
+    fix = "regenerate it with `.venv/bin/python -m emdm.motion.edit_fixture` and commit tests/fixtures/parity/tiny-edit.*"
+    assert {k: v for k, v in want.items() if k != "arrays"} == {k: v for k, v in got.items() if k != "arrays"}, fix
+    assert want["arrays"].keys() == got["arrays"].keys(), fix
+    for key in want["arrays"]:
+        w = read_case_array(PARITY, "tiny-edit", key)
+        g = read_case_array(tmp_path, "tiny-edit", key)
+        assert w.shape == g.shape, f"tiny-edit {key}: shape {w.shape} committed, {g.shape} regenerated; {fix}"
+        scale = max(1.0, float(np.abs(w).max()))
+        assert np.abs(w - g).max() <= 1e-5 * scale, f"tiny-edit {key}: differs by {np.abs(w - g).max():.3g}; {fix}"
+    size = (PARITY / "tiny-edit.bin").stat().st_size + (PARITY / "tiny-edit.json").stat().st_size
+    assert size < 1_000_000, f"tiny-edit is {size} bytes; keep the parity fixtures small"
+
+
+def test_the_fixture_holds_what_the_typescript_side_needs():
+    meta = json.loads((PARITY / "tiny-edit.json").read_text())
+    assert [r["op"] for r in meta["runs"]] == ["timeline"] * 3 + ["regenerate"] * 2 + ["inbetween", "body", "loop"]
+    assert meta["ops"]["timeline"]["frames"] == [24, 14, 10] and meta["overlap"] == 20 and meta["loopEnds"] == 10
+    assert [r["frames"] for r in meta["runs"]] == [24, 34, 30, 34, 30, 48, 48, 48]
+    tl = read_case_array(PARITY, "tiny-edit", "timeline_features")
+    regen = read_case_array(PARITY, "tiny-edit", "regen_features")
+    assert np.array_equal(regen[:24], tl[:24]) and np.abs(regen[38:] - tl[38:]).mean() > 1e-3
+    assert read_case_array(PARITY, "tiny-edit", "loop_features").shape == (38, 263)
