@@ -6,6 +6,11 @@
     python -m emdm.sample --ckpt runs/t2m/ckpt.pt --text "..." --out out/x      # PyTorch weights (EMA)
     python -m emdm.sample --model emdm-t2m-web --text "a person waves" --known out/walk.features.npy \
         --keep group:root,legs --out out/walk_wave       # keep the walk's legs and root, regenerate the rest
+    python -m emdm.sample --model emdm-t2m-web --timeline "a person walks forward:4" --timeline "a person waves:3" \
+        --timeline "a person sits down:3" --out out/long  # one motion, segment by segment (emdm.motion.edit)
+    python -m emdm.sample --model emdm-t2m-web --known out/long.features.npy --inbetween 20-99 --text "a person jumps" --out out/j
+    python -m emdm.sample --model emdm-t2m-web --known out/walk.features.npy --edit-upper --text "a person waves" --out out/ww
+    python -m emdm.sample --model emdm-t2m-web --text "a person walks forward" --frames 80 --loop --in-place --out out/cycle
 
 Writes <out>.npy (joints, (frames, 22, 3) metres; (n, frames, 22, 3) with --num > 1), <out>.features.npy
 (de-normalised 263-d) and <out>.metres.bvh (one per sample, <out>_<i>.metres.bvh with --num > 1;
@@ -15,6 +20,13 @@ x_T ~ N(0, I); per step: fresh z, x0 = G(x, z, c, time[k], mask) (with guidance 
 [c, 0] with the same x and z, x0 = x0_u + s·(x0_c − x0_u)), x = coef1·x0 + coef2·x + sigma·ε. Random
 draws come from numpy's default_rng(seed) in the order x_T, then per step z, then ε. Models trained with
 ``--objective diffusion`` are sampled with DDIM (η = 0, z = 0) on the same time grid.
+
+Beyond one prompt (``emdm.motion.edit``, docs/ARCHITECTURE.md "Sampling with constraints"): ``--timeline
+PROMPT:SECONDS`` (repeatable; segment k's seed is --seed + k) or ``--timeline-json F`` ([{"prompt", "seconds",
+"seed"?}, ...]) makes one motion of up to 60 s; with ``--known``, ``--inbetween [A-B]`` regenerates frames A..B
+(default: all but the first and last second), ``--edit-upper`` keeps the legs and root and regenerates the upper
+body, ``--edit-lower`` the reverse, each from --text/--action; ``--loop`` makes --known (or the motion the prompt
+gives) loop seamlessly, ``--in-place`` without root travel. They write one motion as above (--num 1).
 
 Arguments are checked as the page checks them (the model's supportedSteps, a finite guidance ≥ 0,
 --num ≥ 1, a known --variant, a uint32 seed, a writable --out) before any model runs; a bad one is
@@ -205,7 +217,9 @@ def check_args(a) -> None:
     if a.ckpt is not None and a.variant not in (None, "fp32"):
         raise SampleError(f"--variant {a.variant!r} needs --model (a checkpoint has only its fp32 weights)")
     check_out(a.out, a.num, None if a.no_bvh else a.bvh_units)
-    if a.keep or a.known is not None:
+    if edit_mode(a):
+        check_edit_args(a)
+    elif a.keep or a.known is not None:
         keep_rects(a)
         read_known(a.known)
 
@@ -258,6 +272,110 @@ def known_and_keep(a, frames: int, mean: np.ndarray, std: np.ndarray) -> tuple[n
     return known, keep
 
 
+EDIT_FLAGS = {"timeline": "--timeline", "timeline_json": "--timeline-json", "inbetween": "--inbetween",
+              "edit_upper": "--edit-upper", "edit_lower": "--edit-lower", "loop": "--loop"}
+
+
+def edit_mode(a) -> str | None:
+    """Which emdm.motion.edit mode the arguments ask for ("timeline", "inbetween", "edit_upper", "edit_lower",
+    "loop"), None for ordinary sampling; two modes at once are refused."""
+    given = [k for k in EDIT_FLAGS if getattr(a, k) not in (None, False, [])]
+    if "timeline" in given and "timeline_json" in given:
+        raise SampleError("give the segments with --timeline or with --timeline-json, not both")
+    given = [("timeline" if k == "timeline_json" else k) for k in given]
+    if len(given) > 1:
+        raise SampleError(f"{EDIT_FLAGS[given[0]]} and {EDIT_FLAGS[given[1]]} cannot be combined; make one, then "
+                          f"give its <out>.features.npy to the other as --known")
+    if a.in_place and given != ["loop"]:
+        raise SampleError("--in-place needs --loop")
+    return given[0] if given else None
+
+
+def check_edit_args(a) -> None:
+    """The arguments of an edit mode that can be checked before the model is opened."""
+    mode = edit_mode(a)
+    flag = EDIT_FLAGS[mode]
+    if a.num != 1:
+        raise SampleError(f"{flag} makes one motion; --num must be 1, got {a.num}")
+    if a.keep:
+        raise SampleError(f"{flag} builds its own keep mask; leave out --keep (or use --known/--keep without {flag})")
+    if mode == "timeline":
+        for name, v in (("--text", a.text), ("--action", a.action), ("--uncond", a.uncond or None),
+                        ("--known", a.known), ("--frames", a.frames)):
+            if v is not None:
+                raise SampleError(f"--timeline gives each segment its prompt and seconds; leave out {name}")
+        timeline_segments(a)
+        return
+    if a.uncond or (a.text is None) == (a.action is None):
+        raise SampleError(f"{flag} regenerates from a prompt: give exactly one of --text or --action")
+    if a.known is None and mode != "loop":
+        raise SampleError(f"{flag} needs --known PATH.features.npy (the motion to edit, an <out>.features.npy)")
+    if a.known is not None:
+        if a.frames is not None:
+            raise SampleError(f"{flag} keeps --known's length; leave out --frames")
+        read_known(a.known)
+    if mode == "inbetween":
+        inbetween_range(a.inbetween)
+
+
+def timeline_segments(a) -> list:
+    """The segments of --timeline PROMPT:SECONDS (seed --seed + k) or --timeline-json, checked (emdm.motion.edit)."""
+    from emdm.motion.edit import EditError, check_timeline, parse_segment, read_segments
+
+    try:
+        if a.timeline_json is not None:
+            segs = read_segments(a.timeline_json, a.seed)
+        else:
+            segs = [parse_segment(spec, (a.seed + k) % (MAX_SEED + 1)) for k, spec in enumerate(a.timeline)]
+        check_timeline(segs)
+    except EditError as e:
+        raise SampleError(f"{'--timeline-json' if a.timeline_json is not None else '--timeline'}: {e}") from None
+    return segs
+
+
+def inbetween_range(spec: str) -> tuple[int, int] | None:
+    """--inbetween A-B → (A, B), the frames to regenerate; "" → None (all but the first and last second)."""
+    import re
+
+    if spec == "":
+        return None
+    m = re.fullmatch(r"\s*(\d+)\s*-\s*(\d+)\s*", spec)
+    if not m or int(m.group(1)) > int(m.group(2)) or int(m.group(1)) < 1:
+        raise SampleError(f"--inbetween {spec!r}: give the frames to regenerate as A-B with 1 ≤ A ≤ B (frame 0 and "
+                          f"the last frame stay), e.g. --inbetween 20-99")
+    return int(m.group(1)), int(m.group(2))
+
+
+def run_edit(a, step, entry: dict, mean, std, steps: int, guidance: float, frames: int) -> tuple[np.ndarray, np.ndarray]:
+    """(features, joints) of one motion made by the edit mode (emdm.motion.edit), de-normalised."""
+    from emdm.motion import edit as E
+
+    model = E.Editor.from_entry(step, entry, mean, std, steps, guidance)
+    mode = edit_mode(a)
+    prompt = a.text if a.text is not None else a.action
+    try:
+        if mode == "timeline":
+            m = E.timeline(model, timeline_segments(a))
+        elif a.known is None:                   # --loop of a motion made from the prompt here (seed, then seed + 1)
+            x = model.sample(prompt, frames, a.seed)
+            m = E.loop(model, model.denormalise(x), prompt, (a.seed + 1) % (MAX_SEED + 1), in_place=a.in_place)
+        else:
+            known = read_known(a.known)
+            if mode == "loop":
+                m = E.loop(model, known, prompt, a.seed, in_place=a.in_place)
+            elif mode == "inbetween":
+                r = inbetween_range(a.inbetween)
+                if r is not None and r[1] >= len(known) - 1:
+                    raise SampleError(f"--inbetween {a.inbetween}: frame {r[1]} is not before --known's last frame "
+                                      f"{len(known) - 1}; the last frame stays")
+                m = E.inbetween(model, known, prompt, a.seed, *((r[0] - 1, r[1] + 1) if r else (None, None)))
+            else:
+                m = E.edit_body(model, known, prompt, a.seed, keep="lower" if mode == "edit_upper" else "upper")
+    except E.EditError as e:
+        raise SampleError(f"{EDIT_FLAGS[mode]}: {e}") from None
+    return m.features, m.joints
+
+
 def check_steps(steps: int | None, entry: dict, name: str) -> int:
     """The step count to run: ``steps`` (None: the model's default) if the model supports it, as the page."""
     supported = entry.get("supportedSteps")
@@ -285,7 +403,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--uncond", action="store_true")
     p.add_argument("--steps", type=int, default=None, help="denoising steps: one of the model's supportedSteps (default: its defaultSteps)")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--frames", type=int, default=120, help="length in frames at 20 fps (≤ 196)")
+    p.add_argument("--frames", type=int, default=None, help="length in frames at 20 fps (≤ 196; default 120)")
     p.add_argument("--guidance", type=float, default=None, help="classifier-free guidance scale (default: model's)")
     p.add_argument("--num", type=int, default=1, help="number of samples")
     p.add_argument("--threads", type=int, default=1)
@@ -299,6 +417,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--keep", action="append", default=[], metavar="SPEC",
                    help="what to keep of --known, repeatable (union): frames:0-19 | group:legs | frames:0-19/group:root,legs "
                         "(ranges A-B inclusive, A, A-; groups root, legs, upper)")
+    e = p.add_argument_group("beyond one prompt (emdm.motion.edit)")
+    e.add_argument("--timeline", action="append", default=[], metavar="PROMPT:SECONDS",
+                   help="a segment of a long motion, repeatable, in order (segment k's seed: --seed + k); ≤ 8.8 s each, "
+                        "≤ 60 s in all; each continues the last second of the one before")
+    e.add_argument("--timeline-json", type=Path, default=None, metavar="FILE",
+                   help='the segments as JSON: [{"prompt": "...", "seconds": 4, "seed": 1}, ...] (seed optional)')
+    e.add_argument("--inbetween", nargs="?", const="", default=None, metavar="A-B",
+                   help="with --known: regenerate its frames A..B from the prompt, keep the rest in place "
+                        "(default: all but the first and last second)")
+    e.add_argument("--edit-upper", action="store_true", help="with --known: keep its legs and root, new upper body from the prompt")
+    e.add_argument("--edit-lower", action="store_true", help="with --known: keep its upper body, new legs and root from the prompt")
+    e.add_argument("--loop", action="store_true", help="make --known (or the motion of --text/--action, --frames, --seed) "
+                   "loop: its last 0.5 s is inpainted into its first; writes the clip without the repeated end")
+    e.add_argument("--in-place", action="store_true", help="with --loop: no horizontal root travel (the root may still turn)")
     return p
 
 
@@ -317,13 +449,17 @@ def run(a: argparse.Namespace) -> int:
     check_args(a)
     step, entry, mean, std = load_model(a)
     max_frames = int(entry.get("maxFrames", 196))
-    if not 1 <= a.frames <= max_frames:
-        raise SampleError(f"--frames must be in 1..{max_frames}, got {a.frames}")
+    frames = 120 if a.frames is None else a.frames
+    if not 1 <= frames <= max_frames:
+        raise SampleError(f"--frames must be in 1..{max_frames}, got {frames}")
     steps = check_steps(a.steps, entry, a.model or str(a.ckpt))
-    cond = make_condition(entry["condition"], a.text, a.action, a.uncond)
     guidance = float(entry.get("guidance", 2.5)) if a.guidance is None else a.guidance
-    known, keep = known_and_keep(a, a.frames, mean, std) if a.keep else (None, None)
-    x = sample_features(step, cond, a.frames, steps, guidance, a.seed, a.num, int(entry.get("zDim", 64)),
+    if edit_mode(a):
+        feats, joints = run_edit(a, step, entry, mean, std, steps, guidance, frames)
+        return write_motion(a, feats[None], joints[None])
+    cond = make_condition(entry["condition"], a.text, a.action, a.uncond)
+    known, keep = known_and_keep(a, frames, mean, std) if a.keep else (None, None)
+    x = sample_features(step, cond, frames, steps, guidance, a.seed, a.num, int(entry.get("zDim", 64)),
                         objective=entry.get("objective", "ddgan"), known=known, keep=keep)
     feats = denormalise(x, mean, std)
     if not np.isfinite(feats).all():
@@ -335,6 +471,13 @@ def run(a: argparse.Namespace) -> int:
 
         feats = np.stack([pin_kept_root(f, keep, denormalise(known, mean, std)) for f in feats])
     joints = np.stack([recover_joints(f) for f in feats]).astype(np.float32)
+    return write_motion(a, feats, joints)
+
+
+def write_motion(a: argparse.Namespace, feats: np.ndarray, joints: np.ndarray) -> int:
+    """<out>.npy (joints), <out>.features.npy and the BVH files of (num, frames, ...) motions, after checking them."""
+    if not np.isfinite(feats).all():
+        raise SampleError(f"the motion has non-finite features ({int((~np.isfinite(feats)).sum())} values); nothing written")
     if not np.isfinite(joints).all():
         raise SampleError("recovering joints gave non-finite positions; nothing written")
     a.out.parent.mkdir(parents=True, exist_ok=True)

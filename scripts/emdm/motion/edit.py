@@ -204,6 +204,8 @@ def read_segments(path, seed: int = 0) -> list[Segment]:
         doc = json.loads(Path(path).read_text())
     except OSError as e:
         raise EditError(f"{path}: cannot read it ({e.strerror or e})") from None
+    except UnicodeDecodeError:
+        raise EditError(f"{path}: not a JSON text file (it is not UTF-8); give a list of segments as JSON") from None
     except json.JSONDecodeError as e:
         raise EditError(f"{path}:{e.lineno}: not valid JSON ({e.msg})") from None
     if not isinstance(doc, list):
