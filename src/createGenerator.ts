@@ -60,10 +60,18 @@ export interface MotionRequest {
   seed?: number;
   smooth?: boolean;
   footCleanup?: boolean;
+  /**
+   * Inpainting (docs/ARCHITECTURE.md "Sampling with constraints"; src/edit.ts builds these for timelines,
+   * in-betweening, body-part edits and loops): keep the entries of `features` (frames × 263, de-normalised: an
+   * earlier result's `features`) where `keep` (`keepMask(frames, …)`) is 1 and generate the rest. The arrays are
+   * copied, not taken. Kept frames after free ones decode where the known motion has them (`pinKeptRoot`).
+   */
+  known?: { features: Float32Array; keep: Float32Array };
   onStep?: (done: number, total: number) => void;
   signal?: AbortSignal;
 }
 
+/** A motion and, in `features`, its frames × 263 de-normalised features: what `known` takes to continue or edit it. */
 export interface GeneratedMotion extends Motion {
   model: string;
   backend: Backend;
@@ -135,6 +143,7 @@ export function resolveRequest(manifest: Manifest, req: MotionRequest): { model:
     options: {
       condition, frames, steps: req.steps ?? entry.defaultSteps, guidance: req.guidance ?? entry.guidance,
       seed: req.seed ?? randomSeed(), smooth: req.smooth, footCleanup: req.footCleanup,
+      ...(req.known ? { known: { features: Float32Array.from(req.known.features), keep: Float32Array.from(req.known.keep) } } : {}),
     },
   };
 }

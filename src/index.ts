@@ -8,7 +8,7 @@ export { loadModel, runWithFallback } from './backends';
 export type { LoadModelOptions } from './backends';
 // the generation worker's page side (createGenerator uses it; the demo page drives it directly)
 export { GenerationClient } from './worker/client';
-export type { ClientEvents, FileEvent, GenerationClientOptions, ModelInfo, RemoteGenerateOptions, RemoteResult, WireStepPreview, WorkerEnvironment } from './worker/client';
+export type { ClientEvents, FileEvent, GenerationClientOptions, ModelInfo, RemoteGenerateOptions, RemoteResult, WirePose, WireStepPreview, WorkerEnvironment } from './worker/client';
 export { clearModelCache, modelCacheUsage } from './cache/modelCache';
 export { loadManifest, fetchVerified, ModelFileError, sha256Hex } from './manifest';
 export { assertFinite, NonFiniteMotionError } from './errors';
@@ -36,6 +36,12 @@ export { computeSchedule, ddimScheduleFor, scheduleFor } from './sampler/schedul
 export type { DdimSchedule, Schedule } from './sampler/schedule';
 export { ddimUpdate } from './sampler/ddim';
 export { AbortError } from './sampler/sampler';
+// beyond one prompt: timelines, in-betweening, body-part edits and loops (inpainting with known/keep)
+export {
+  EditError, LOOP_END_FRAMES, MAX_TIMELINE_SECONDS, OVERLAP_FRAMES, bodyPartEdit, generateTimeline, inBetween, keptSegments, makeLoop,
+  planTimeline, stitchTimeline, withNewSeed,
+} from './edit';
+export type { EditCondition, EditGenerate, EditLimits, EditMotion, EditRequest, KeptPart, LoopResult, SegmentResult, Timeline, TimelineOptions, TimelinePlan, TimelineSegment } from './edit';
 export { FEATURE_GROUPS, GROUP_JOINTS, KeepSpecError, groupChannels, keepMask, parseKeep } from './sampler/mask';
 export type { FeatureGroup, KeepRect } from './sampler/mask';
 export type { NoiseSource, SamplerName } from './sampler/sampler';

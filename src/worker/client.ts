@@ -66,6 +66,15 @@ export interface RemoteResult extends GenerateResult {
   pose?: WirePose;
 }
 
+/** The buffers of arrays that own them whole (a view into a larger buffer, or a buffer listed twice, is not transferred but copied). */
+function ownBuffers(...arrays: Float32Array[]): ArrayBuffer[] {
+  const out = new Set<ArrayBuffer>();
+  for (const a of arrays) {
+    if (a.buffer instanceof ArrayBuffer && a.byteOffset === 0 && a.byteLength === a.buffer.byteLength) out.add(a.buffer);
+  }
+  return [...out];
+}
+
 /** Rebuild an error sent by the worker as the class the caller checks for. */
 function rebuild(w: WireError): Error {
   let e: Error;
@@ -154,15 +163,15 @@ export class GenerationClient {
     this.pending.clear();
   }
 
-  private send(msg: ToWorker): void {
-    this.worker.postMessage(msg);
+  private send(msg: ToWorker, transfer: Transferable[] = []): void {
+    this.worker.postMessage(msg, transfer);
   }
 
-  private request(msg: ToWorker & { id: number }, onStep?: Pending['onStep'], onPreview?: Pending['onPreview']): Promise<FromWorker> {
+  private request(msg: ToWorker & { id: number }, onStep?: Pending['onStep'], onPreview?: Pending['onPreview'], transfer: Transferable[] = []): Promise<FromWorker> {
     if (this.broken) return Promise.reject(this.broken);
     return new Promise((resolve, reject) => {
       this.pending.set(msg.id, { resolve, reject, onStep, onPreview });
-      this.send(msg);
+      this.send(msg, transfer);
     });
   }
 
@@ -173,7 +182,11 @@ export class GenerationClient {
     return m.info;
   }
 
-  /** One motion; the signal cancels it at the next denoising step (rejecting with an AbortError). */
+  /**
+   * One motion; the signal cancels it at the next denoising step (rejecting with an AbortError). With
+   * `known` (inpainting), its two arrays' buffers are transferred to the worker: they are detached here
+   * afterwards (pass copies to keep them).
+   */
   async generate(model: string, o: RemoteGenerateOptions, variant?: string): Promise<RemoteResult> {
     const { signal, onStep, onPreview, ...options } = o;
     if (signal?.aborted) throw new AbortError('generation cancelled before it started');
@@ -181,12 +194,21 @@ export class GenerationClient {
     const cancel = () => this.send({ type: 'cancel', id });
     signal?.addEventListener('abort', cancel, { once: true });
     try {
-      const m = await this.request({ type: 'generate', id, model, variant, options }, onStep, onPreview);
+      const transfer = options.known ? ownBuffers(options.known.features, options.known.keep) : [];
+      const m = await this.request({ type: 'generate', id, model, variant, options }, onStep, onPreview, transfer);
       if (m.type !== 'result') throw new Error(`generation worker answered '${m.type}' to generate`);
       return { ...m.result, info: m.info, pose: m.pose };
     } finally {
       signal?.removeEventListener('abort', cancel);
     }
+  }
+
+  /** Bone rotations (IK, the worker's solveIK) for frames × 22 × 3 joints made here, e.g. a stitched timeline; `joints` is copied. */
+  async solve(joints: Float32Array, frames: number): Promise<WirePose> {
+    const copy = Float32Array.from(joints);
+    const m = await this.request({ type: 'solve', id: this.nextId++, joints: copy, frames }, undefined, undefined, [copy.buffer]);
+    if (m.type !== 'solved') throw new Error(`generation worker answered '${m.type}' to solve`);
+    return m.pose;
   }
 
   /** Free the worker's sessions and stop it. */

@@ -116,6 +116,17 @@ async function handle(msg: ToWorker): Promise<void> {
       }
       return;
     }
+    case 'solve': {
+      try {
+        const t0 = performance.now();
+        const ik = solveIK(msg.joints, msg.frames, needHost().manifest.skeleton);
+        const pose: WirePose = { rootPos: ik.rootPos, quats: ik.quats, ikMs: performance.now() - t0 };
+        post({ type: 'solved', id: msg.id, pose }, buffersOf(pose.rootPos, pose.quats));
+      } catch (e) {
+        post({ type: 'error', id: msg.id, error: wireError(e) });
+      }
+      return;
+    }
     case 'cancel': {
       const ctrl = running.get(msg.id);
       if (ctrl) {

@@ -1,7 +1,7 @@
 /**
  * The messages between a page and its generation worker (src/worker/generation.worker.ts), typed on
  * both sides. The page sends requests with an `id`; the worker answers each with exactly one
- * `loaded` / `result` / `error` of the same id, and sends events (downloads, per-step progress,
+ * `loaded` / `result` / `solved` / `error` of the same id, and sends events (downloads, per-step progress,
  * backend fallbacks, cache notices) as they happen. Float32Array results travel as transferred
  * buffers (no copy).
  */
@@ -41,12 +41,20 @@ export interface WireGenerateOptions {
    * when `pose` is asked) as a `step-preview` message. Off by default; the result is the same either way.
    */
   previewSteps?: boolean;
+  /**
+   * Inpainting (GenerateOptions.known): a known motion's de-normalised features (frames × featureDim, like
+   * `Motion.features` of an earlier result) and the 0/1 `keep` mask (`keepMask`) of the entries to keep.
+   * Both buffers are transferred to the worker (the sender's arrays are detached: send copies to keep them).
+   */
+  known?: { features: Float32Array; keep: Float32Array };
 }
 
 export type ToWorker =
   | { type: 'init'; init: WorkerInit }
   | { type: 'load'; id: number; model: string; variant?: string }
   | { type: 'generate'; id: number; model: string; variant?: string; options: WireGenerateOptions }
+  /** Solve bone rotations (IK) for joints made on the page's side (a stitched timeline, a loop in place); answered by `solved` */
+  | { type: 'solve'; id: number; joints: Float32Array; frames: number }
   | { type: 'cancel'; id: number }
   | { type: 'dispose'; id: number };
 
@@ -96,6 +104,7 @@ export interface WireError {
 export type FromWorker =
   | { type: 'loaded'; id: number; info: ModelInfo }
   | { type: 'result'; id: number; info: ModelInfo; result: GenerateResult; pose?: WirePose }
+  | { type: 'solved'; id: number; pose: WirePose }
   | { type: 'error'; id: number; error: WireError }
   | { type: 'step'; id: number; done: number; total: number }
   | { type: 'step-preview'; id: number; preview: WireStepPreview }

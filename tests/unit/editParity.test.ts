@@ -1,0 +1,127 @@
+// src/edit.ts against Python's emdm.motion.edit (the tiny-edit parity fixture of `python -m emdm.motion.edit_fixture`):
+// the same timeline, regeneration, in-between, body-part edit and loop on the tiny step model, through the
+// library's own generate() (openModel) with the fixture's noise, within 1e-4.
+import crypto from 'node:crypto';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { afterAll, beforeAll, describe, expect, it } from 'vitest';
+import { type EditGenerate, type EditRequest, type TimelineSegment, bodyPartEdit, generateTimeline, inBetween, makeLoop } from '../../src/edit';
+import { type Generator, openModel } from '../../src/generate';
+import { type Manifest, loadManifest } from '../../src/manifest';
+import { recoverJoints } from '../../src/motion/recover';
+import { buildTinyManifest } from '../fixtures/parity/tinyManifest';
+import { MODELS_DIR, PARITY_DIR, fixtureNoise, loadCase, maxAbsDiff, maxJointDist } from './coreFixtures';
+
+const fx = loadCase('tiny-edit');
+type Seg = { label: string; cond: number; seconds: number; seed: number };
+const meta = fx.meta as unknown as {
+  labels: string[]; steps: number; guidance: number; fps: number; maxFrames: number; overlap: number; loopEnds: number;
+  ops: {
+    timeline: { segments: Seg[]; frames: number[]; starts: number[]; total: number };
+    regenerate: { segment: number; with: Seg; total: number };
+    inbetween: { seed: number; label: string; keepUntil: number; keepFrom: number };
+    body: { seed: number; label: string; keep: 'lower' | 'upper' };
+    loop: { seed: number; label: string; ends: number; clipFrames: number };
+  };
+  runs: { op: string; frames: number; label: string; seed: number; noise: string }[];
+};
+const D = 263;
+const limits = { fps: meta.fps, maxFrames: meta.maxFrames };
+const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-edit-parity-'));
+afterAll(() => fs.rmSync(tmp, { recursive: true, force: true }));
+
+/** The tiny action model with the fixture's mean/std (tiny.meanstd.f32), served from a temp folder. */
+function tinyFolder(): string {
+  const sha = (b: Buffer) => crypto.createHash('sha256').update(b).digest('hex');
+  const onnx = fs.readFileSync(path.join(PARITY_DIR, 'tiny-step.onnx'));
+  const ms = fs.readFileSync(path.join(PARITY_DIR, 'tiny.meanstd.f32'));
+  const real = JSON.parse(fs.readFileSync(path.join(MODELS_DIR, 'manifest.json'), 'utf8'));
+  const manifest: Manifest = buildTinyManifest(real.skeleton, { path: 'tiny.onnx', bytes: onnx.length, sha256: sha(onnx) },
+    { path: 'tiny.meanstd.f32', bytes: ms.length, sha256: sha(ms) });
+  fs.writeFileSync(path.join(tmp, 'tiny.onnx'), onnx);
+  fs.writeFileSync(path.join(tmp, 'tiny.meanstd.f32'), ms);
+  fs.writeFileSync(path.join(tmp, 'manifest.json'), JSON.stringify(manifest));
+  return tmp + '/';
+}
+
+let model: Generator;
+const calls: EditRequest[] = [];
+/** generate() with the noise of the fixture's run of the same frames and seed (the calls are checked in order below). */
+const gen: EditGenerate = async (r) => {
+  calls.push(r);
+  const run = meta.runs.find((x) => x.frames === r.frames && x.seed === r.seed);
+  if (!run) throw new Error(`no fixture run of ${r.frames} frames, seed ${r.seed}`);
+  const noise = fixtureNoise({ ...fx, get: (k) => fx.get(run.noise + k) });
+  const label = meta.labels.indexOf(String(r.action));
+  const res = await model.generate({ condition: { type: 'action', label }, frames: r.frames, steps: meta.steps, guidance: meta.guidance, seed: r.seed, noise, known: r.known });
+  return { frames: r.frames, fps: res.motion.fps, features: res.motion.features, joints: res.motion.joints };
+};
+
+const segsOf = (s: Seg[]): TimelineSegment[] => s.map((x) => ({ action: x.label, seconds: x.seconds, seed: x.seed }));
+const rows = (a: Float32Array, from: number, to: number, width: number) => a.subarray(from * width, to * width);
+
+beforeAll(async () => {
+  const dir = tinyFolder();
+  model = await openModel({ manifest: await loadManifest(dir), baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
+});
+afterAll(() => model?.dispose());
+
+describe('src/edit.ts = emdm.motion.edit (tiny-edit fixture)', () => {
+  const tlSegs = segsOf(meta.ops.timeline.segments);
+  const base = () => ({ frames: meta.ops.timeline.total, fps: meta.fps, features: fx.get('timeline_features'), joints: fx.get('timeline_joints') });
+
+  it('timeline and regenerating segment 2: same windows, features and stitched joints within 1e-4', async () => {
+    calls.length = 0;
+    const t = await generateTimeline(tlSegs, gen, limits);
+    expect(t.segments.map((s) => s.frames)).toEqual(meta.ops.timeline.frames);
+    expect(t.starts).toEqual(meta.ops.timeline.starts);
+    expect(t.frames).toBe(meta.ops.timeline.total);
+    const runs = meta.runs.filter((r) => r.op === 'timeline').map((r) => [r.frames, r.label, r.seed]);
+    expect(calls.map((c) => [c.frames, c.action, c.seed])).toEqual(runs);
+    expect(maxAbsDiff(t.features, fx.get('timeline_features'))).toBeLessThan(1e-4);
+    expect(maxJointDist(t.joints, fx.get('timeline_joints'))).toBeLessThan(1e-4);
+
+    calls.length = 0;
+    const segs = tlSegs.slice();
+    const w = meta.ops.regenerate.with;
+    segs[meta.ops.regenerate.segment - 1] = { action: w.label, seconds: w.seconds, seed: w.seed };
+    const r = await generateTimeline(segs, gen, limits, { previous: t });
+    expect(calls.map((c) => [c.frames, c.action, c.seed])).toEqual(meta.runs.filter((x) => x.op === 'regenerate').map((x) => [x.frames, x.label, x.seed]));
+    expect(r.frames).toBe(meta.ops.regenerate.total);
+    expect(maxAbsDiff(r.features, fx.get('regen_features'))).toBeLessThan(1e-4);
+    expect(maxJointDist(r.joints, fx.get('regen_joints'))).toBeLessThan(1e-4);
+    // segment 1 untouched, bit for bit
+    const n0 = meta.ops.timeline.frames[0];
+    expect(maxAbsDiff(rows(r.joints, 0, n0, 66), rows(t.joints, 0, n0, 66))).toBe(0);
+  });
+
+  it('in-between (first and last second kept): within 1e-4; kept frames decode within 1 mm of the known motion', async () => {
+    const o = meta.ops.inbetween;
+    const m = base();
+    const r = await inBetween(m, { action: o.label }, o.seed, gen, limits, { a: o.keepUntil, b: o.keepFrom });
+    expect(maxAbsDiff(r.features, fx.get('inbetween_features'))).toBeLessThan(1e-4);
+    expect(maxJointDist(r.joints, fx.get('inbetween_joints'))).toBeLessThan(1e-4);
+    const known = recoverJoints(m.features, m.frames);
+    for (const [a, b] of [[0, o.keepUntil + 1], [o.keepFrom, m.frames]]) {
+      expect(maxJointDist(rows(r.joints, a, b, 66), rows(known, a, b, 66))).toBeLessThan(1e-3);
+    }
+  });
+
+  it('body-part edit (keep the lower body): within 1e-4', async () => {
+    const o = meta.ops.body;
+    const r = await bodyPartEdit(base(), o.keep, { action: o.label }, o.seed, gen, limits);
+    expect(maxAbsDiff(r.features, fx.get('body_features'))).toBeLessThan(1e-4);
+    expect(maxJointDist(r.joints, fx.get('body_joints'))).toBeLessThan(1e-4);
+  });
+
+  it('loop and loop in place: the clip within 1e-4', async () => {
+    const o = meta.ops.loop;
+    const r = await makeLoop(base(), { action: o.label }, o.seed, gen, limits);
+    expect(r.clip.frames).toBe(o.clipFrames);
+    expect(maxAbsDiff(r.clip.features, fx.get('loop_features'))).toBeLessThan(1e-4);
+    expect(maxJointDist(r.clip.joints, fx.get('loop_joints'))).toBeLessThan(1e-4);
+    const p = await makeLoop(base(), { action: o.label }, o.seed, gen, limits, { inPlace: true });
+    expect(maxJointDist(p.clip.joints, fx.get('loop_in_place_joints'))).toBeLessThan(1e-4);
+  });
+});
