@@ -27,17 +27,20 @@
  *  5. Root: the midpoint of the character's hip joints follows ours scaled by s = character leg / our
  *     leg (hip→knee→ankle): horizontally s·P, vertically s·(our hip height above our standing ankle
  *     height) above its rest ankle height; the pelvis bone hangs off it with its rest offset, turned.
- *  6. Feet: on our contact frames (the four contact channels, threshold 0.5; a run is a stretch of
- *     frames where the ankle or the ball of the foot is in contact) the character's ankle, or its toe
- *     bone when the run is mostly on the ball of the foot, is held at the run's mean position, lowered
- *     or raised so that the lower of heel (ankle) and ball (toe) is at its rest height (on the floor) on
- *     average over the run; a two-bone IK on thigh and shin (keeping the knee's bend plane) moves the
- *     ankle there and the foot keeps its world rotation. The pelvis first takes the weighted mean of the
- *     feet's moves (a planted foot alone is then held by moving the root, with no limb turning). Where the leg is nearly straight, so that
- *     holding the foot would swing thigh or shin by more than `maxPinDeg` (8°), only the part of the
- *     move that stays within it is made: limbs keep following our motion, the foot may then slide a little. Over `blend` frames on both sides the run's correction at its first/last frame fades
- *     out (not a blend towards the target: the input motion, cleaned by src/motion/footContact.ts,
- *     has made that transition already).
+ *  6. Feet: on our contact frames (the four contact channels, threshold 0.5) each foot is put on the
+ *     floor: horizontally, the joint in contact (the ankle where the heel is down, else the toe bone)
+ *     is held at its mean position over that contact run (as our clean-up, src/motion/footContact.ts,
+ *     holds ours), and vertically the lower of heel (ankle) and ball (toe) is at its rest height, frame
+ *     by frame (the foot rolls heel → toe as ours does). A rig without a toe bone, on the ball of its
+ *     foot only, keeps its ankle as high above its rest height as ours is above our standing ankle
+ *     height (scaled). The root makes the feet's mean horizontal move (no limb turns for that) and, of
+ *     the heights between the feet's needs, the vertical move that leaves the feet nearest their
+ *     targets once the legs have done what they can; a two-bone IK on thigh and shin (keeping the knee's
+ *     bend plane) moves each ankle the rest of the way and the foot keeps its world rotation. Where the
+ *     leg is nearly straight, so that holding the foot would turn thigh or shin by more than
+ *     `maxPinDeg` (9°) from our motion's direction, only the part of the move within it is made. Over
+ *     `blend` frames on both sides of a stretch of contact the correction of its first/last frame fades
+ *     out (not a blend towards the target: our clean-up has made that transition already).
  */
 import { AnimationClip, Matrix4, type Object3D, PropertyBinding, Quaternion, QuaternionKeyframeTrack, Vector3, VectorKeyframeTrack } from 'three';
 import { solveIK } from '../../motion/ik';
@@ -60,7 +63,7 @@ export interface RetargetOptions {
   threshold?: number;
   /** frames over which a pinned foot fades in/out (default 3) */
   blend?: number;
-  /** the most a foot pin may turn thigh or shin away from our motion's direction, degrees (default 8) */
+  /** the most a foot pin may turn thigh or shin away from our motion's direction, degrees (default 9) */
   maxPinDeg?: number;
   /** clip name (default 'emdm') */
   name?: string;
@@ -121,7 +124,7 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
   const { joints, frames, fps } = motion;
   const threshold = opts.threshold ?? 0.5;
   const blend = opts.blend ?? 3;
-  const maxPin = ((opts.maxPinDeg ?? 8) * Math.PI) / 180;
+  const maxPin = ((opts.maxPinDeg ?? 9) * Math.PI) / 180;
   if (!(frames >= 1)) throw new RangeError('retargetMotion: the motion has no frames');
   if (!(fps > 0)) throw new RangeError(`retargetMotion: fps must be > 0, got ${fps}`);
   const I = standardJoints(skeleton, 'retargetMotion');
@@ -354,42 +357,60 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
         if (mapped(`${s}_foot`)) toes[li].push(posOf(M, `${s}_foot`));
       });
     }
-    // per frame: how far the ankle should move (in a run: onto the run's target; in the fades: the
-    // run's correction at its first/last frame, scaled down, so a fade our own clean-up already made
-    // is not made twice)
+    // per frame: how far the ankle should move. On a contact frame: horizontally, the joint in contact
+    // (the ankle where the heel is down, else the toe) onto its mean position over that contact run (as
+    // our clean-up pinned it); vertically, so that the lower of heel (ankle) and ball (toe) is at its rest
+    // height, i.e. on the floor (per frame: the foot rolls from heel to toe as ours does). In the fades
+    // (blend frames on both sides of a stretch of contact frames), the correction of the stretch's
+    // first/last frame, scaled down, so a fade our own clean-up already made is not made twice.
     const plans = legs.map(({ s, c }, li) => {
       const move: (Vector3 | null)[] = new Array(frames).fill(null);
       const wgt = new Float64Array(frames);
       const restA = restPos(`${s}_ankle`).y;
       const restT = mapped(`${s}_foot`) ? restPos(`${s}_foot`).y : null;
       const hasToe = restT !== null;
+      const heel = (f: number) => contact(f, c);
+      const ball = (f: number) => hasToe && contact(f, c + 1);
+      // a rig without a toe bone, on the ball of its foot only: its ankle as high above its rest height
+      // as ours is above our standing ankle height (scaled), where ours rolls forward (not held)
+      const tiptoe = (f: number) => !hasToe && !contact(f, c) && contact(f, c + 1);
+      // the held horizontal position of each frame's contact joint: its mean over its contact run
+      const held: (Vector3 | null)[] = new Array(frames).fill(null);
+      const holdRuns = (on: (f: number) => boolean, pts: Vector3[], skip: (f: number) => boolean) => {
+        let start = -1;
+        for (let f = 0; f <= frames; f++) {
+          const o = f < frames && on(f);
+          if (o && start < 0) start = f;
+          if (!o && start >= 0) {
+            const m = new Vector3();
+            for (let g = start; g < f; g++) m.add(pts[g]);
+            m.divideScalar(f - start);
+            for (let g = start; g < f; g++) if (!skip(g)) held[g] = m;
+            start = -1;
+          }
+        }
+      };
+      holdRuns(heel, ankles[li], () => false);
+      if (hasToe) holdRuns(ball, toes[li], heel);
+      const correction = (f: number): Vector3 => {
+        if (tiptoe(f)) return new Vector3(0, scale * Math.max(0, P(f, `${s}_ankle`).y - ho) - (ankles[li][f].y - restA), 0);
+        const pt = heel(f) ? ankles[li][f] : toes[li][f];
+        const dy = Math.min(ankles[li][f].y - restA, hasToe ? toes[li][f].y - restT! : Infinity);
+        return new Vector3(held[f]!.x - pt.x, -dy, held[f]!.z - pt.z);
+      };
       let start = -1;
       for (let f = 0; f <= frames; f++) {
-        const on = f < frames && (contact(f, c) || (hasToe && contact(f, c + 1)));
+        const on = f < frames && (held[f] !== null || tiptoe(f));
         if (on && start < 0) start = f;
         if (!on && start >= 0) {
           const e = f - 1;
-          // the point held still: the ankle (heel down) unless the run is mostly on the ball of the foot
-          let heel = 0;
-          for (let g = start; g <= e; g++) heel += contact(g, c) ? 1 : 0;
-          const pts = !hasToe || heel * 2 >= e - start + 1 ? ankles[li] : toes[li];
-          const T = new Vector3();
-          const low = { a: 0, t: 0 };
-          for (let g = start; g <= e; g++) {
-            T.add(pts[g]);
-            low.a += ankles[li][g].y - restA;
-            if (hasToe) low.t += toes[li][g].y - restT!;
-          }
-          const n = e - start + 1;
-          T.divideScalar(n);
-          // on the floor: the lower of heel (ankle) and ball (toe) at its rest height, on average
-          T.y -= Math.min(low.a / n, hasToe ? low.t / n : Infinity);
+          const first = correction(start);
+          const last = correction(e);
           for (let g = Math.max(0, start - blend); g <= Math.min(frames - 1, e + blend); g++) {
             const w = g < start ? 1 - (start - g) / (blend + 1) : g > e ? 1 - (g - e) / (blend + 1) : 1;
             if (w > wgt[g]) {
               wgt[g] = w;
-              const edge = g < start ? start : g > e ? e : g;
-              move[g] = T.clone().sub(pts[edge]).multiplyScalar(w);
+              move[g] = (g < start ? first.clone() : g > e ? last.clone() : correction(g)).multiplyScalar(w);
             }
           }
           start = -1;
@@ -397,20 +418,75 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
       }
       return { s, move, wgt };
     });
-    // the root takes the weighted mean of the feet's moves (no limb turns for that); the legs the rest
-    for (let f = 0; f < frames; f++) {
-      const corr = new Vector3();
-      let sw = 0;
-      for (const p of plans) {
-        if (p.wgt[f] > 0) {
-          corr.addScaledVector(p.move[f]!, p.wgt[f]);
-          sw += p.wgt[f];
+    /** Thigh and shin turns that move the ankle A by d (two-bone IK in the knee's plane). */
+    const legPin = (H: Vector3, K: Vector3, A: Vector3, d: Vector3) => {
+      const r = twoBoneIK(arr(H), arr(A.clone().add(d)), arr(K), H.distanceTo(K), K.distanceTo(A));
+      const q1 = swing(K.clone().sub(H), v(r.knee).sub(H));
+      const shin = A.clone().sub(K).applyQuaternion(q1);
+      const q2 = swing(shin, v(r.ankle).sub(v(r.knee)));
+      const turn = Math.max(K.clone().sub(H).angleTo(v(r.knee).sub(H)), A.clone().sub(K).angleTo(v(r.ankle).sub(v(r.knee))));
+      return { q1, q2, turn, reached: v(r.ankle) };
+    };
+    const legAt = (M: Matrix4[], s: 'l' | 'r') => ({ H: posOf(M, `${s}_hip`), K: posOf(M, `${s}_knee`), A: posOf(M, `${s}_ankle`) });
+    /** The largest part t of a move (all of it where possible) that turns thigh and shin by at most
+     * maxPinDeg: near a straight leg a small move of the ankle would swing the whole leg. */
+    const reach = (solve: (t: number) => ReturnType<typeof legPin>) => {
+      let best = solve(1);
+      if (best.turn <= maxPin) return { ...best, t: 1 };
+      let lo = 0;
+      let hi = 1;
+      best = solve(0);
+      for (let it = 0; it < 10; it++) {
+        const mid = (lo + hi) / 2;
+        const m = solve(mid);
+        if (m.turn > maxPin) hi = mid;
+        else {
+          lo = mid;
+          best = m;
         }
       }
-      if (!(sw > 0)) continue;
+      return { ...best, t: lo };
+    };
+    // the root takes the weighted mean of the feet's horizontal moves (no limb turns for that); its
+    // vertical move is, among heights between the feet's needs, the one that leaves the feet nearest
+    // their targets once the legs have done what they can (a nearly straight leg can hardly reach
+    // further, a bent one can); the legs make the rest
+    for (let f = 0; f < frames; f++) {
+      const active = plans.filter((p) => p.wgt[f] > 0);
+      if (!active.length) continue;
+      const corr = new Vector3();
+      let sw = 0;
+      for (const p of active) {
+        corr.addScaledVector(p.move[f]!, p.wgt[f]);
+        sw += p.wgt[f];
+      }
       corr.divideScalar(sw);
+      if (active.length > 1) {
+        const { M } = pose(allDeltas[f], rootPs[f], true);
+        const legs = active.map((p) => legAt(M, p.s));
+        const ys = active.map((p) => p.move[f]!.y);
+        const lo = Math.min(...ys);
+        const hi = Math.max(...ys);
+        const cost = (y: number) => Math.max(...active.map((p, k) => {
+          // how far (vertically) the ankle stays from its target: what the cap leaves, or out of reach
+          const d = p.move[f]!.clone().sub(new Vector3(corr.x, y, corr.z));
+          const { reached } = reach((t) => legPin(legs[k].H, legs[k].K, legs[k].A, d.clone().multiplyScalar(t)));
+          return p.wgt[f] * Math.abs(legs[k].A.y + d.y - reached.y); // a foot fading in/out counts less
+        }));
+        let best = lo;
+        let bestCost = cost(best);
+        for (let k = 1; k <= 16; k++) {
+          const y = lo + ((hi - lo) * k) / 16;
+          const c = cost(y);
+          if (c < bestCost - 1e-9) {
+            best = y;
+            bestCost = c;
+          }
+        }
+        corr.y = best;
+      }
       rootPs[f].add(corr);
-      for (const p of plans) if (p.wgt[f] > 0) p.move[f] = p.move[f]!.clone().sub(corr);
+      for (const p of active) p.move[f] = p.move[f]!.clone().sub(corr);
     }
     for (let f = 0; f < frames; f++) {
       if (!plans.some((p) => p.wgt[f] > 0)) continue;
@@ -418,34 +494,8 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
       for (const { s, move, wgt } of plans) {
         if (!(wgt[f] > 0)) continue;
         pinnedFrames++;
-        const H = posOf(M, `${s}_hip`);
-        const K = posOf(M, `${s}_knee`);
-        const A = posOf(M, `${s}_ankle`);
-        // the largest part of the move (all of it where possible) that turns thigh and shin by at
-        // most maxPinDeg: near a straight leg a small move of the ankle would swing the whole leg
-        const solve = (t: number) => {
-          const r = twoBoneIK(arr(H), arr(A.clone().addScaledVector(move[f]!, t)), arr(K), H.distanceTo(K), K.distanceTo(A));
-          const q1 = swing(K.clone().sub(H), v(r.knee).sub(H));
-          const shin = A.clone().sub(K).applyQuaternion(q1);
-          const q2 = swing(shin, v(r.ankle).sub(v(r.knee)));
-          const turn = Math.max(K.clone().sub(H).angleTo(v(r.knee).sub(H)), A.clone().sub(K).angleTo(v(r.ankle).sub(v(r.knee))));
-          return { q1, q2, turn };
-        };
-        let best = solve(1);
-        if (best.turn > maxPin) {
-          let lo = 0;
-          let hi = 1;
-          best = solve(0);
-          for (let it = 0; it < 10; it++) {
-            const mid = (lo + hi) / 2;
-            const m = solve(mid);
-            if (m.turn > maxPin) hi = mid;
-            else {
-              lo = mid;
-              best = m;
-            }
-          }
-        }
+        const { H, K, A } = legAt(M, s);
+        const best = reach((t) => legPin(H, K, A, move[f]!.clone().multiplyScalar(t)));
         const { q1, q2 } = best;
         // thigh and shin turn; every other driven bone (the ankle's too) keeps its world rotation
         const d = allDeltas[f];
