@@ -1,0 +1,29 @@
+// The timeline in the page URL (web/ui/timeline-url.ts): what a shared link restores, and what it refuses.
+import { describe, expect, it } from 'vitest';
+import { TimelineUrlError, decodeTimeline, encodeTimeline, withTimeline } from '../../web/ui/timeline-url';
+
+const actions = ['sit', 'walk'];
+
+describe('timeline URL', () => {
+  it('round-trips prompts, actions, seconds and seeds through the query string', () => {
+    const segs = [{ prompt: 'a person walks & waves?', seconds: 10, seed: 4294967295 }, { action: 'sit', seconds: 2.5, seed: 0 }];
+    const search = withTimeline('?mode=text&text=x', segs);
+    const q = new URLSearchParams(search);
+    expect(q.get('mode')).toBe('text');
+    expect(decodeTimeline(q.get('tl')!, actions)).toEqual(segs);
+    expect(encodeTimeline(segs)).toBe('[["a person walks & waves?",10,4294967295],[{"a":"sit"},2.5,0]]');
+    expect(withTimeline(search, null)).toBe('?mode=text&text=x');
+  });
+
+  it('keeps bad lengths and empty prompts for planTimeline to name, refuses a broken shape', () => {
+    expect(decodeTimeline('[["",0,1]]', actions)).toEqual([{ prompt: '', seconds: 0, seed: 1 }]);
+    for (const [v, msg] of [
+      ['[[', /not JSON/], ['{}', /a list of \[prompt, seconds, seed\]/], ['[["a",1]]', /segment 1 must be \[prompt, seconds, seed\]/],
+      ['[["a","x",1]]', /segment 1: seconds must be a number/], ['[["a",1,-1]]', /seed must be an integer/],
+      ['[["a",1,1],[{"a":"fly"},1,1]]', /segment 2: expected a prompt or \{"a": action\} with an action of sit, walk/],
+    ] as const) {
+      expect(() => decodeTimeline(v, actions)).toThrow(TimelineUrlError);
+      expect(() => decodeTimeline(v, actions)).toThrow(msg);
+    }
+  });
+});

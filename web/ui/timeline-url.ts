@@ -1,0 +1,54 @@
+// A timeline's segments in the page URL (`?…&tl=…`), so a timeline can be shared and a reload restores it.
+// The value is JSON: [[prompt, seconds, seed], [{"a": action}, seconds, seed], …] (URLSearchParams encodes it).
+// Pure: no DOM, so vitest checks the round trip and the refusals.
+import type { TimelineSegment } from '../../src/index';
+
+export const TIMELINE_PARAM = 'tl';
+
+/** The `tl` value of segments. */
+export function encodeTimeline(segments: readonly TimelineSegment[]): string {
+  return JSON.stringify(segments.map((s) => [s.action !== undefined && s.action !== '' ? { a: s.action } : (s.prompt ?? ''), s.seconds, s.seed >>> 0]));
+}
+
+export class TimelineUrlError extends Error {
+  constructor(message: string) {
+    super(`The timeline in the URL (parameter '${TIMELINE_PARAM}') could not be read: ${message}`);
+    this.name = 'TimelineUrlError';
+  }
+}
+
+/**
+ * Segments from a `tl` value. Lengths and prompts are NOT checked here (planTimeline does, with a message
+ * naming the segment, so a shared link with a bad segment still shows the list); the shape, the action names
+ * (`actions`) and the seeds are.
+ */
+export function decodeTimeline(value: string, actions: readonly string[]): TimelineSegment[] {
+  let doc: unknown;
+  try {
+    doc = JSON.parse(value);
+  } catch (e) {
+    throw new TimelineUrlError(`not JSON (${(e as Error).message})`);
+  }
+  if (!Array.isArray(doc)) throw new TimelineUrlError('expected a list of [prompt, seconds, seed] entries');
+  if (doc.length > 200) throw new TimelineUrlError(`${doc.length} segments; at most 200`);
+  return doc.map((e, i) => {
+    const where = `segment ${i + 1}`;
+    if (!Array.isArray(e) || e.length !== 3) throw new TimelineUrlError(`${where} must be [prompt, seconds, seed], got ${JSON.stringify(e)?.slice(0, 60)}`);
+    const [what, seconds, seed] = e as [unknown, unknown, unknown];
+    if (typeof seconds !== 'number' || !Number.isFinite(seconds)) throw new TimelineUrlError(`${where}: seconds must be a number, got ${JSON.stringify(seconds)}`);
+    if (typeof seed !== 'number' || !Number.isInteger(seed) || seed < 0 || seed > 0xffffffff) throw new TimelineUrlError(`${where}: seed must be an integer in 0…4294967295, got ${JSON.stringify(seed)}`);
+    if (typeof what === 'string') return { prompt: what.slice(0, 2000), seconds, seed };
+    const a = (what as { a?: unknown } | null)?.a;
+    if (typeof a === 'string' && actions.includes(a)) return { action: a, seconds, seed };
+    throw new TimelineUrlError(`${where}: expected a prompt or {"a": action} with an action of ${actions.join(', ') || '(no action model)'}, got ${JSON.stringify(what)?.slice(0, 60)}`);
+  });
+}
+
+/** `search` with the `tl` parameter set to `segments` (or removed when null). */
+export function withTimeline(search: string, segments: readonly TimelineSegment[] | null): string {
+  const q = new URLSearchParams(search);
+  if (segments) q.set(TIMELINE_PARAM, encodeTimeline(segments));
+  else q.delete(TIMELINE_PARAM);
+  const s = q.toString();
+  return s ? `?${s}` : '';
+}
