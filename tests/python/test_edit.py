@@ -66,13 +66,15 @@ def test_a_timeline_continues_each_segment_from_the_last_second_of_the_sequence(
     assert [c["frames"] for c in spy.calls] == [30, 40, 60] and [c["seed"] for c in spy.calls] == [1, 2, 3]
     assert spy.calls[0]["known"] is None
     for k, c in enumerate(spy.calls[1:], 1):
-        so_far = tl.x[:tl.starts[k]]
-        assert np.array_equal(c["known"][:20], so_far[-20:])                        # the last second, normalised
+        so_far = tl.features[:tl.starts[k]]
+        assert np.array_equal(c["known"][:20], ed.normalise(so_far[-20:]))         # the last second
         assert np.array_equal(c["keep"][:20], np.ones((20, 263))) and not c["keep"][20:].any()
-        assert np.array_equal(c["x"][:20], so_far[-20:])                           # kept exactly
-        assert np.array_equal(tl.x[tl.starts[k]:tl.starts[k] + tl.frames[k]], c["x"][20:])   # then its new frames
-    assert np.array_equal(tl.x[:30], spy.calls[0]["x"])
-    assert np.array_equal(tl.features, ed.denormalise(tl.x))
+        assert np.array_equal(c["x"][:20], c["known"][:20])                        # kept exactly
+        eased = E.ease_seams(ed.denormalise(c["x"]), c["keep"])
+        assert np.array_equal(tl.features[tl.starts[k]:tl.starts[k] + tl.frames[k]], eased[20:])   # then its new frames
+        assert np.abs(eased[30:] - ed.denormalise(c["x"])[30:]).max() == 0         # eased over the first 10 only
+    assert np.array_equal(tl.features[:30], ed.denormalise(spy.calls[0]["x"]))
+    assert np.array_equal(tl.x, ed.normalise(tl.features))
 
 
 def test_the_stitched_joints_are_the_whole_sequence_decoded_so_seams_do_not_jump(tl):
@@ -85,6 +87,25 @@ def test_the_stitched_joints_are_the_whole_sequence_decoded_so_seams_do_not_jump
         step = np.linalg.norm(tl.joints[s, 0, [0, 2]] - tl.joints[s - 1, 0, [0, 2]])
         want = np.linalg.norm(tl.features[s - 1, 1:3])
         assert abs(step - want) < 1e-4 * scale
+
+
+def test_easing_a_seam_removes_the_jump_and_leaves_kept_frames_and_contacts_alone():
+    t = np.arange(40, dtype=np.float64)[:, None]
+    f = np.repeat(np.sin(t / 6), 263, 1).astype(np.float32)
+    f[20:] += 0.8                                                       # generated frames 20.. start off the kept ones
+    keep = np.zeros((40, 263), np.float32)
+    keep[:20] = 1
+    g = E.ease_seams(f, keep)
+    assert np.array_equal(g[:20], f[:20]) and np.array_equal(g[30:], f[30:]) and np.array_equal(g[:, 259:], f[:, 259:])
+    acc = lambda x: np.abs(np.diff(x[:, 0], 2))                         # noqa: E731
+    assert acc(f)[18:20].max() > 0.5 and acc(g).max() < 0.1            # the jump is gone, spread over 10 frames
+    keep[35:] = 1                                                      # a kept end too: eased backwards into 34, 33, ...
+    f[35:] -= 1.6
+    h = E.ease_seams(f, keep)
+    assert acc(h).max() < 0.1 and np.array_equal(h[35:], f[35:])
+    part = np.zeros((40, 263), np.float32)
+    part[:, :7] = 1                                                    # a body-part mask: no row kept whole or free
+    assert np.array_equal(E.ease_seams(f, part), f)
 
 
 def test_a_first_segment_shorter_than_the_overlap_is_continued_from_all_its_frames(model):

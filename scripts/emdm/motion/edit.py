@@ -15,15 +15,18 @@ Frame bookkeeping (the contract with ``src/edit.ts``; FPS 20, C = ``OVERLAP`` = 
 
 * timeline: segment k has n_k = floor(seconds·20 + 0.5) ≥ 1 new frames, n_k ≤ maxFrames − C (8.8 s), Σ n_k ≤ 60 s.
   Segment 0 is an ordinary generation of n_0 frames. Segment k > 0 samples a window of c + n_k frames, c =
-  min(C, frames so far), whose frames [0, c) are kept (all channels) from the sequence's last c normalised
-  frames; its joints are appended by ``append_segment(prev, window, c)``. The sequence's normalised features
-  are concat(window_0, window_1[c:], …). ``regenerate`` from segment i reuses frames before segment i.
+  min(C, frames so far), whose frames [0, c) are kept (all channels) from the sequence's last c
+  de-normalised frames (normalised as the sampler takes them); the window's features are eased
+  (``ease_seams``) and its joints appended by ``append_segment(prev, window, c)``. The sequence's
+  de-normalised features are concat(window_0, window_1[c:], …). ``regenerate`` from segment i reuses frames
+  before segment i.
 * in-betweening: known = the motion (N ≤ maxFrames frames), kept frames [0, a] ∪ [b, N−1] (default a = 19,
-  b = N − 20), then ``pin_kept_root`` so the kept end stays where it was.
+  b = N − 20). Every edit's features are ``pin_kept_root(ease_seams(pin_kept_root(denormalise(x))))``: the
+  kept end stays where it was, and the seams are eased (``generate({known})`` gives the inner pin).
 * body-part edit: kept groups root+legs on every frame (``keep="lower"``: new upper body) or upper
   (``keep="upper"``: new legs and root).
 * loop (K = ``LOOP_ENDS`` = 10): known = the motion X with frames [N−K, N) replaced by X[0:K]; kept frames
-  [0, K) ∪ [N−K, N); ``pin_kept_root`` against that known; the clip is frames [0, N−K) (frame N−K, the copy
+  [0, K) ∪ [N−K, N); pinned and eased as an edit against that known; the clip is frames [0, N−K) (frame N−K, the copy
   of frame 0, is where it wraps to). In place: the de-normalised root x/z velocity [1:3] is set to 0 on every
   frame (the root turns but does not travel).
 """
@@ -44,6 +47,8 @@ FPS = 20
 OVERLAP = 20               # C: frames of the previous segment a new one starts from (1 s)
 MAX_SECONDS = 60.0         # a timeline's total length
 LOOP_ENDS = 10             # K: frames inpainted at each end of a loop
+SEAM_EASE = 10             # M: generated frames over which a seam's offset is eased out (0.5 s)
+CONTACTS = slice(259, 263)  # foot contact channels: not eased
 MAX_SEED = 2**32 - 1
 
 
@@ -124,7 +129,7 @@ class Motion:
 
 @dataclass(frozen=True)
 class Timeline(Motion):
-    """A generated timeline: ``x`` the normalised features (N, 263), ``frames`` the new frames of each segment."""
+    """A generated timeline: ``x`` its features normalised (N, 263), ``frames`` the new frames of each segment."""
     segments: tuple[Segment, ...] = ()
     frames: tuple[int, ...] = ()
     x: np.ndarray = field(default_factory=lambda: np.zeros((0, 263), np.float32))
@@ -238,6 +243,52 @@ def _check_prompt_seed(what: str, prompt: str, seed: int) -> None:
         raise EditError(f"{what}: seed must be an integer in 0..{MAX_SEED}, got {seed!r}")
 
 
+# ----------------------------------------------------------------------------------------------- seams
+
+def ease_seams(features: np.ndarray, keep: np.ndarray, ease: int = SEAM_EASE) -> np.ndarray:
+    """Ease out the jump between kept frames and generated ones (de-normalised ``features`` (F, D), ``keep`` (F, D)).
+
+    Masked sampling keeps the known frames exactly, but the model's first generated frame need not continue them:
+    measured on emdm-t2m-web at 10 steps, the joint acceleration at a timeline seam was up to 7× the motion's 95th
+    percentile. For every run [s, e) of frames with no kept channel next to a fully kept frame, the offset between
+    where the kept side leads (its last frame plus the mean of the velocities on both sides of the seam) and the
+    first generated frame is added to the generated frames, fading out over m = min(``ease``, e − s) frames with
+    w_i = (1 + cos(π·i/m))/2 (left: f[s+i] += w_i·o_L; right, mirrored: f[e−1−i] += w_i·o_R; i = 0..m−1); both
+    offsets are taken from the un-eased features. With these weights the 12 seams of 6 timelines went from
+    median 0.67× (max 6.9×) the 95th percentile to 0.09× (max 1.9×). Foot contacts [259:263] stay. Frames that keep only some channels (body-part edits) are
+    neither kept nor free: nothing is eased next to them."""
+    f = np.asarray(features, np.float64).copy()
+    k = np.asarray(keep).astype(bool)
+    kept, free = k.all(1), ~k.any(1)
+    n = len(f)
+    offsets = []
+    t = 0
+    while t < n:
+        if not free[t]:
+            t += 1
+            continue
+        s = t
+        while t < n and free[t]:
+            t += 1
+        e, m = t, min(ease, t - s)
+        w = 0.5 * (1 + np.cos(np.pi * np.arange(m) / m))
+        if s >= 1 and kept[s - 1]:
+            v = [f[s - 1] - f[s - 2]] if s >= 2 and kept[s - 2] else []
+            v += [f[s + 1] - f[s]] if s + 1 < e else []
+            o = f[s - 1] + (np.mean(v, 0) if v else 0) - f[s]
+            offsets += [(s + i, w[i] * o) for i in range(m)]
+        if e < n and kept[e]:
+            v = [f[e + 1] - f[e]] if e + 1 < n and kept[e + 1] else []
+            v += [f[e - 1] - f[e - 2]] if e - 2 >= s else []
+            o = f[e] - (np.mean(v, 0) if v else 0) - f[e - 1]
+            offsets += [(e - 1 - i, w[i] * o) for i in range(m)]
+    for row, o in offsets:
+        o = o.copy()
+        o[CONTACTS] = 0
+        f[row] += o
+    return f.astype(np.float32)
+
+
 # ----------------------------------------------------------------------------------------------- timeline
 
 def timeline(model: Editor, segments: Sequence[Segment], overlap: int = OVERLAP, previous: Timeline | None = None,
@@ -256,7 +307,7 @@ def timeline(model: Editor, segments: Sequence[Segment], overlap: int = OVERLAP,
             raise EditError(f"regenerating from segment {start + 1}: segments 1..{start} must be those of the previous "
                             f"timeline (and its overlap {previous.overlap})")
         kept = sum(frames[:start])
-        x, joints = previous.x[:kept], previous.joints[:kept]
+        feats, joints = previous.features[:kept], previous.joints[:kept]
     for k in range(start, len(segments)):          # every condition first: a bad prompt stops before any sampling
         try:
             model.condition(segments[k].prompt)
@@ -265,17 +316,17 @@ def timeline(model: Editor, segments: Sequence[Segment], overlap: int = OVERLAP,
     for k in range(start, len(segments)):
         seg, n = segments[k], frames[k]
         if k == 0:
-            x = model.sample(seg.prompt, n, seg.seed)
-            joints = recover_joints(model.denormalise(x)).astype(np.float32)
+            feats = model.denormalise(model.sample(seg.prompt, n, seg.seed))
+            joints = recover_joints(feats).astype(np.float32)
             continue
-        c = min(overlap, len(x))
-        known = np.zeros((c + n, x.shape[1]), np.float32)
-        known[:c] = x[-c:]
+        c = min(overlap, len(feats))
+        known = np.zeros((c + n, feats.shape[1]), np.float32)
+        known[:c] = model.normalise(feats[-c:])
         keep = keep_mask(c + n, [KeepRect(frames=((0, c - 1),))])
-        w = model.sample(seg.prompt, c + n, seg.seed, known, keep)
-        joints = append_segment(joints, recover_joints(model.denormalise(w)), c)
-        x = np.concatenate([x, w[c:]])
-    return Timeline(model.denormalise(x), np.asarray(joints, np.float32), segments, tuple(frames), x, overlap)
+        w = ease_seams(model.denormalise(model.sample(seg.prompt, c + n, seg.seed, known, keep)), keep)
+        joints = append_segment(joints, recover_joints(w), c)
+        feats = np.concatenate([feats, w[c:]])
+    return Timeline(feats, np.asarray(joints, np.float32), segments, tuple(frames), model.normalise(feats), overlap)
 
 
 def regenerate(model: Editor, tl: Timeline, i: int, segment: Segment | None = None) -> Timeline:
@@ -293,10 +344,11 @@ def regenerate(model: Editor, tl: Timeline, i: int, segment: Segment | None = No
 
 def _edit(model: Editor, features: np.ndarray, prompt: str, seed: int, keep: np.ndarray,
           known: np.ndarray | None = None) -> Motion:
-    """Sample with ``known`` (de-normalised, default ``features``) kept where ``keep``; pin the kept root."""
+    """Sample with ``known`` (de-normalised, default ``features``) kept where ``keep``; pin the kept root, ease the
+    seams, pin again (the easing moves the free frames' root)."""
     known = features if known is None else known
     x = model.sample(prompt, len(features), seed, model.normalise(known), keep)
-    f = pin_kept_root(model.denormalise(x), keep, known)
+    f = pin_kept_root(ease_seams(pin_kept_root(model.denormalise(x), keep, known), keep), keep, known)
     return Motion(f, recover_joints(f).astype(np.float32))
 
 
