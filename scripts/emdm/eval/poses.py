@@ -20,8 +20,12 @@ random clips): their bones have exactly the reference lengths, no leg is ever lo
 * **floor**: the lowest joint more than ``FLOOR_TOL`` (0.10 m) below the floor.
 
 A setting *fails* when any of its motions has an impossible frame. Prints one row per setting (share of
-impossible frames, worst bone error, worst leg stretch, deepest joint); ``--json`` writes the rows. Exit
-status 0 when no setting fails, 1 when some do (so it can gate a model before it is shipped), 2 on bad input.
+impossible frames, worst bone error, worst leg stretch, deepest joint); ``--json`` writes the rows (default
+``docs/results/json/poses-<model>.json``, which ``python -m emdm.eval.report`` turns into RESULTS.md's section).
+Exit status 0 when no setting fails, 1 when some do (so it can gate a model before it is shipped), 2 on bad input.
+
+JSON: {"schema": 1, "task": "poses", "name": model, "variant", "seeds", "conditions": [...], "bars": {...},
+"rows": [{"steps", "guidance", "seconds", "motions", "failed_motions", "impossible_share", ..., "ok"}]}
 """
 
 from __future__ import annotations
@@ -167,6 +171,30 @@ def run_grid(opened, steps: list[int], guidance: list[float], seconds: list[floa
     return rows
 
 
+def default_json(ref, variant: str | None) -> Path:
+    from emdm.eval.evaluate import slug
+    from emdm.eval.report import RESULTS_DIR
+
+    name = Path(ref).parent.name if isinstance(ref, Path) else str(ref)
+    return RESULTS_DIR / "json" / f"poses-{slug(name)}{'' if variant in (None, 'fp32') else '-' + variant}.json"
+
+
+def section(r: dict) -> list[str]:
+    """RESULTS.md lines for one poses JSON: the failing settings of the grid, or that none fails."""
+    rows = r["rows"]
+    bad = [x for x in rows if not x["ok"]]
+    head = (f"**{r['name']}** ({r.get('variant', 'fp32')}; {len(r.get('conditions', []))} conditions × {r.get('seeds')} "
+            f"seeds per setting): {len(bad)} of {len(rows)} settings give an impossible pose")
+    if not bad:
+        return [head + ".", ""]
+    table = ["| steps | guidance | seconds | motions failing | impossible frames (bone / leg / floor) | worst bone | "
+             "worst leg | lowest joint |", "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    table += [f"| {x['steps']} | {x['guidance']:g} | {x['seconds']:g} | {x['failed_motions']}/{x['motions']} | "
+              f"{x['impossible_share']:.1%} ({x['bone_share']:.1%} / {x['leg_share']:.1%} / {x['floor_share']:.1%}) | "
+              f"{x['worst_bone']:.0%} | {x['worst_leg']:.2f}× | {x['lowest']:+.2f} m |" for x in bad]
+    return [head + ":", "", *table, ""]
+
+
 def build_parser() -> argparse.ArgumentParser:
     ints = lambda s: [int(x) for x in s.split(",") if x.strip()]      # noqa: E731
     floats = lambda s: [float(x) for x in s.split(",") if x.strip()]  # noqa: E731
@@ -187,7 +215,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="action model: labels separated by ',' (default: all of the model's)")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--device", default="cpu", help="with --ckpt: cpu or cuda")
-    ap.add_argument("--json", type=Path, default=None, help="write the rows here")
+    ap.add_argument("--json", type=Path, default=None, help="write the rows here (default docs/results/json/poses-<model>.json)")
+    ap.add_argument("--no-json", action="store_true", help="print only")
     return ap
 
 
@@ -200,12 +229,13 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if a.seeds < 1:
             raise PosesError(f"--seeds {a.seeds}: need at least 1")
-        out = check_writable(a.json, option="--json") if a.json else None
         ref = a.ckpt if a.ckpt is not None else (a.model or "emdm-t2m-web")
+        out = None if a.no_json else check_writable(a.json or default_json(ref, a.variant), option="--json")
         opened = open_model(ref, models_dir=a.models_dir, variant=a.variant, device=a.device, threads=a.threads)
         supported = opened.meta.get("supportedSteps")
         steps = a.steps if a.steps is not None else [s for s in STEPS if not supported or s in supported]
-        rows = run_grid(opened, steps, a.guidance, a.seconds, a.seeds, conditions(opened, a.prompts, a.actions), a.seed)
+        conds = conditions(opened, a.prompts, a.actions)
+        rows = run_grid(opened, steps, a.guidance, a.seconds, a.seeds, conds, a.seed)
     except (PosesError, SampleError, ModelError, OutputRefused, FileNotFoundError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
@@ -214,7 +244,8 @@ def main(argv: list[str] | None = None) -> int:
           f"no impossible pose in {len(rows)} settings")
     if out:
         tmp = out.with_suffix(out.suffix + ".tmp")
-        tmp.write_text(json.dumps({"model": str(ref), "variant": a.variant or "fp32", "seeds": a.seeds,
+        tmp.write_text(json.dumps({"schema": 1, "task": "poses", "name": str(ref), "model": str(ref),
+                                   "variant": a.variant or "fp32", "seeds": a.seeds, "conditions": [c for c, _ in conds],
                                    "bars": {"bone": BONE_TOL, "leg": LEG_TOL, "floor_m": FLOOR_TOL},
                                    "rows": [{**asdict(r), "ok": r.ok} for r in rows]}, indent=1))
         tmp.replace(out)
