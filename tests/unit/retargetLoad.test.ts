@@ -111,6 +111,18 @@ describe('loading a character', () => {
     expect(await reason([{ name: 'rig.gltf', data: new TextEncoder().encode(JSON.stringify({ ...withImage, images: [{ uri: 'http://x/skin.png' }] })) }, { name: 'rig.bin', data: bin! }])).toEqual(['external-resource', expect.stringMatching(/image 0 points to 'http:\/\/x\/skin\.png'/)]);
   });
 
+  it('refuses a script or any other scheme as a URI, and a VRM extension three-vrm cannot read', async () => {
+    const { json, bin } = readGlb(mixamo, 'x');
+    const gltf = (uri: string) => new TextEncoder().encode(JSON.stringify({ ...json, buffers: [{ ...json.buffers[0], uri }] }));
+    for (const uri of ['javascript:alert(1)', 'file:///etc/passwd', 'blob:https://x/1', '\\\\server\\share\\rig.bin']) {
+      expect(await reason([{ name: 'rig.gltf', data: gltf(uri) }, { name: 'rig.bin', data: bin! }])).toEqual(['external-resource', expect.stringMatching(/nothing is fetched|not among the files given/)]);
+    }
+    // a VRM 1.0 humanoid of an unknown spec version: three-vrm reads no VRM from it; said, not guessed
+    const v1 = readGlb(buildRigGlb(sk, RIGS[2]), 'a.vrm');
+    v1.json.extensions.VRMC_vrm.specVersion = '9.9';
+    expect(await reason([{ name: 'future.vrm', data: writeGlb(v1.json, v1.bin!) }])).toEqual(['unsupported', expect.stringMatching(/future\.vrm: it declares a VRM extension \(VRMC_vrm 9\.9\) that three-vrm could not read as a humanoid/)]);
+  });
+
   it('reads the VRM humanoid of VRM 1.0 and 0.x files', async () => {
     const v1 = await loadCharacter([{ name: 'a.vrm', data: buildRigGlb(sk, RIGS[2]) }]);
     expect([v1.vrm, v1.mappingSource]).toEqual(['1.0', 'vrm']);
