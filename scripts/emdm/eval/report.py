@@ -18,6 +18,10 @@ Coverage JSON (``python -m emdm.eval.coverage``), one file per model:
     {"schema": 1, "task": "coverage", "name": ..., "condition": "text"|"action", "labels": [...],
      "real": {"per_action": {label: {"n", "recognised", "rate"}}, "reference": [...], "too_few": {label: n}},
      "runs": [{"steps": T, "per_action": {...}, "macro_accuracy", "covered": [...], ...}], "chips": {...}}
+Poses JSON (``python -m emdm.eval.poses``), one file per model: {"schema": 1, "task": "poses", "name": ...,
+     "rows": [{"steps", "guidance", "seconds", "failed_motions", "motions", "impossible_share", ..., "ok"}]}
+Editing JSON (``python -m emdm.eval.editing``), one file per model: {"schema": 1, "task": "editing", "name": ...,
+     "seams", "semantics", "kept", "loops", "time", "bars": {bar: {"met", "figure"}}, ...}
 """
 
 from __future__ import annotations
@@ -82,9 +86,11 @@ def load_results(json_dir: Path | str) -> list[dict]:
         if r.get("schema") != SCHEMA:
             raise ReportError(f"{path}: field 'schema' is {r.get('schema')!r}, expected {SCHEMA}")
         task = r.get("task")
-        if task not in ("text", "action", "timing", "coverage"):
-            raise ReportError(f"{path}: field 'task' is {task!r}, expected 'text', 'action', 'timing' or 'coverage'")
-        need = {"timing": ("rows", "runtime"), "coverage": ("name", "labels", "real", "runs")}.get(
+        if task not in ("text", "action", "timing", "coverage", "editing", "poses"):
+            raise ReportError(f"{path}: field 'task' is {task!r}, expected 'text', 'action', 'timing', 'coverage', "
+                              f"'editing' or 'poses'")
+        need = {"timing": ("rows", "runtime"), "coverage": ("name", "labels", "real", "runs"), "poses": ("name", "rows"),
+                "editing": ("name", "seams", "semantics", "kept", "loops", "time", "bars")}.get(
             task, ("name", "kind", "info", "metrics"))
         for k in need:
             if k not in r:
@@ -510,6 +516,27 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
                 "name each motion. An action is *covered* when at least half its motions are recognised.", ""]
         for r in cov:
             out += coverage_section(r, plots.get("coverage:" + r["_file"]))
+    edits = [r for r in results if r["task"] == "editing"]
+    if edits:
+        from emdm.eval.editing import section as editing_section
+
+        out += ["## Beyond one prompt: timelines, in-betweening, body-part edits, loops (issue 14)", "",
+                "`python -m emdm.eval.editing` makes 3-segment timelines, in-betweens, body-part edits and loops with "
+                "`emdm.motion.edit` (the algorithms the page runs, parity-tested against `src/edit.ts`) and measures "
+                "them against the issue's bars.", ""]
+        for r in sorted(edits, key=lambda r: r["name"]):
+            out += editing_section(r)
+    grids = sorted((r for r in results if r["task"] == "poses"), key=lambda r: r["name"])
+    if grids:
+        from emdm.eval.poses import BONE_TOL, FLOOR_TOL, LEG_TOL, section as poses_section
+
+        out += ["## Impossible poses over the page's settings (issue 12)", "",
+                "`python -m emdm.eval.poses` samples every step count × guidance (1, 2.5, 6: the page's slider range) × "
+                "length (2, 6, 9.8 s) and flags a frame as impossible when a bone is more than "
+                f"{BONE_TOL:.0%} off its reference length, a hip–ankle distance exceeds {LEG_TOL:g}× the straight leg, or "
+                f"a joint is more than {FLOOR_TOL * 100:.0f} cm under the floor (real clips: none of the three).", ""]
+        for r in grids:
+            out += poses_section(r)
     out += ["## Physical plausibility (the seed's Tab. D5)", "",
             "Penetration: depth of the lowest joint below the floor; Float: height of the lowest joint beyond "
             "5 cm above it; Skate: horizontal speed of a toe joint while below 5 cm in two consecutive frames; "
@@ -549,6 +576,7 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
             "    --diffusion runs/t2m-diffusion/ckpt.pt --naive runs/t2m-naive/ckpt.pt --nodcond runs/t2m-nodcond/ckpt.pt",
             "python -m emdm.eval.coverage --model emdm-t2m-web   # coverage per action, 1/2/4/10 steps (--seeds, default 8)",
             "python -m emdm.eval.coverage --model emdm-a2m-web",
+            "python -m emdm.eval.editing --model emdm-t2m-web   # timelines, in-betweens, body-part edits, loops (issue 14)",
             "node scripts/bench/core-bench.mjs --json bench.json && python -m emdm.eval.evaluate import-bench bench.json",
             "# browser-wasm, issue 7: EMDM at 1/2/4/5/8/10 and diffusion + DDIM at 10/50/100 steps in one run of the demo",
             "# page (window.emdm.generate, needs diffusion-t2m-web in public/models); replaces the browser-wasm rows above",

@@ -1,0 +1,87 @@
+"""emdm.eval.editing's measures (seam acceleration, foot skate, root jumps, loop pose) on a real clip with and without
+a planted seam, its bad arguments, and the committed result against the bars it claims."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from emdm.eval import editing as ev
+from emdm.eval.report import RESULTS_DIR, load_results
+from emdm.motion.features import recover_joints, rot_y
+from emdm.motion.ik_fixture import read_case_array
+from emdm.motion.mask_fixture import PARITY_DIR
+
+
+@pytest.fixture(scope="module")
+def clip():
+    return recover_joints(read_case_array(PARITY_DIR, "recover", "features")).astype(np.float64)   # (120, 22, 3), real
+
+
+def test_a_continuous_clip_has_no_seam_and_a_planted_jump_is_one(clip):
+    assert ev.seam_acceleration(clip, [60])[0] < 1.5
+    jumped = clip.copy()
+    jumped[60:, 20] += [0.3, 0.0, 0.0]                           # the left wrist 30 cm off from frame 60 on (the
+    # clip is lively: its 95th percentile is 68 m/s², i.e. a 17 cm kink in one frame)
+    assert ev.seam_acceleration(jumped, [60])[0] > 1.5
+    assert ev.seam_acceleration(jumped, [30])[0] < 1.5           # elsewhere it is ordinary
+    a = ev.acceleration(clip)
+    assert a.shape == (120,) and a[0] == a[-1] == 0 and (a[1:-1] > 0).all()
+
+
+def test_root_jumps_at_a_seam_are_found(clip):
+    r = ev.seam_root(clip, [60])[0]
+    assert r["step_ratio"] < 1.5 and r["turn_ratio"] < 1.5
+    moved = clip.copy()
+    moved[60:, :, 0] += 0.3
+    assert ev.seam_root(moved, [60])[0]["step_ratio"] > 1.5
+    turned = clip.copy()
+    pelvis = turned[60, 0] * [1, 0, 1]
+    turned[60:] = rot_y(np.full((60, 1), 1.2), turned[60:] - pelvis) + pelvis   # 69°; the clip turns ≤ 30° a frame (p95)
+    assert ev.seam_root(turned, [60])[0]["turn_ratio"] > 1.5
+
+
+def test_foot_skate_near_seams_against_the_rest():
+    f = 40
+    joints = np.zeros((f, 22, 3))
+    joints[:, :, 1] = 0.5
+    joints[:, 10:12, 1] = 0.02                                    # both toes on the floor throughout
+    joints[:, 10:12, 0] = np.arange(f)[:, None] * 0.001            # sliding 2 cm/s
+    joints[20:, 10:12, 0] += np.arange(f - 20)[:, None] * 0.004    # faster from the seam on: 10 cm/s
+    joints[26:, 10:12, 0] = joints[26, 10:12, 0]                   # then still
+    s = ev.seam_skate([(joints, [20])])
+    assert s["seam_pairs"] == 2 * 7 and s["within_pairs"] == 2 * (f - 1 - 7)
+    assert s["seam_cm_s"] > 4 and s["ratio"] > 1.2
+    assert ev.seam_skate([(joints, [5])])["ratio"] < 1.0
+
+
+def test_pose_ignores_where_the_body_stands_and_faces(clip):
+    moved = rot_y(np.full((120, 1), 1.1), clip) + [2.0, 0.0, -3.0]
+    assert np.abs(ev.pose(moved) - ev.pose(clip)).max() < 1e-9
+    assert np.abs(ev.pose(clip[:1]) - ev.pose(clip[60:61])).max() > 0.05
+
+
+@pytest.mark.parametrize("args, says", [
+    (["--actions", "walk,run"], "needs at least 3 actions"),
+    (["--actions", "walk,lie-down,lie-down"], "at least 2 of them must be able to come first"),
+])
+def test_bad_arguments_are_one_line(capsys, args, says):
+    assert ev.main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and says in err[0]
+
+
+def test_the_committed_result_claims_only_what_its_figures_say(tmp_path):
+    path = RESULTS_DIR / "json" / "editing-emdm-t2m-web.json"
+    if not path.is_file():
+        pytest.skip(f"{path} not measured yet (python -m emdm.eval.editing)")
+    r = json.loads(path.read_text())
+    assert r["bars"] == ev.bars(r)                                # every met/not met follows from the figures
+    (tmp_path / path.name).write_text(path.read_text())
+    assert [x["task"] for x in load_results(tmp_path)] == ["editing"]      # emdm.eval.report reads it
+    text = "\n".join(ev.section(r))
+    assert text.count("**met**") == sum(b["met"] for b in r["bars"].values())
+    assert text.count("**not met**") == sum(not b["met"] for b in r["bars"].values())
+    assert r["bars"]["seam_acceleration"]["figure"] in text
