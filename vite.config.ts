@@ -8,13 +8,16 @@
 //   (`vite build --mode e2e`, into dist-e2e/), which Playwright's test server builds and serves;
 //   the dev server serves every page.
 // - COOP/COEP headers on dev AND preview so ORT-web can use wasm threads (SharedArrayBuffer).
-// - the ORT wasm binaries are copied into public/ort* before anything runs (scripts/build/copy-ort.mjs).
+// - the ORT wasm binaries are copied into public/ort/ before anything runs (scripts/build/copy-ort.mjs);
+//   transformers.js is resolved onto the same onnxruntime-web (scripts/build/one-ort.mjs).
 import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { defineConfig, type Plugin } from 'vite';
 // @ts-expect-error -- plain ESM build script without type declarations
 import { copyOrt } from './scripts/build/copy-ort.mjs';
+// @ts-expect-error -- plain ESM build script without type declarations
+import { oneOnnxRuntime } from './scripts/build/one-ort.mjs';
 
 const ROOT = path.dirname(fileURLToPath(import.meta.url));
 const WEB = path.join(ROOT, 'web');
@@ -59,7 +62,7 @@ copyOrt(ROOT);
 /**
  * Dev server only: ORT loads its wasm glue with a runtime `import(wasmPaths + 'ort-wasm-*.mjs')`.
  * Vite's dev server rewrites such imports (`?import`) and refuses to serve public/ files as
- * modules, so answer /ort/* and /ort-tfjs/* straight from public/ before Vite's transforms.
+ * modules, so answer /ort/* straight from public/ before Vite's transforms.
  * (The production build serves public/ files as-is, so nothing is needed there.)
  */
 function serveOrtRaw(): Plugin {
@@ -69,7 +72,7 @@ function serveOrtRaw(): Plugin {
     configureServer(server) {
       server.middlewares.use((req, res, next) => {
         const url = (req.url ?? '').split('?')[0];
-        const m = /^\/(ort|ort-tfjs)\/(ort-wasm-[\w.-]+\.(mjs|wasm))$/.exec(url);
+        const m = /^\/(ort)\/(ort-wasm-[\w.-]+\.(mjs|wasm))$/.exec(url);
         if (!m) return next();
         const file = path.join(ROOT, 'public', m[1], m[2]);
         if (!fs.existsSync(file)) return next();
@@ -86,7 +89,7 @@ export default defineConfig(({ mode }) => {
   return {
     root: WEB,
     publicDir: path.join(ROOT, 'public'),
-    plugins: [serveOrtRaw()],
+    plugins: [serveOrtRaw(), oneOnnxRuntime()],
     resolve: {
       // the library as its users import it (package.json "exports"): the examples use these names
       alias: [
@@ -113,10 +116,10 @@ export default defineConfig(({ mode }) => {
       headers: CROSS_ORIGIN_ISOLATION_HEADERS,
     },
     optimizeDeps: {
-      // ORT locates its wasm via wasmPaths (public/ort*); pre-bundling it breaks that lookup.
+      // ORT locates its wasm via wasmPaths (public/ort/); pre-bundling it breaks that lookup.
       exclude: ['onnxruntime-web', '@huggingface/transformers'],
     },
-    worker: { format: 'es' },
+    worker: { format: 'es', plugins: () => [oneOnnxRuntime()] },
     test: {
       root: ROOT,
       include: ['tests/unit/**/*.test.ts'],

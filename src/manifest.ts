@@ -261,8 +261,11 @@ export async function loadManifest(baseUrl: string): Promise<Manifest> {
   return validateManifest(data);
 }
 
+/** What verification needs of a manifest: its file list (a manifest, or another list such as ORT's files.json). */
+export type FileTable = Pick<Manifest, 'files'>;
+
 /** Check bytes already in hand against the manifest's size and sha256 for `path`. */
-export async function verifyBytes(manifest: Manifest, path: string, data: ArrayBuffer): Promise<void> {
+export async function verifyBytes(manifest: FileTable, path: string, data: ArrayBuffer): Promise<void> {
   const meta = manifest.files[path];
   if (!meta) throw new ModelFileError(path, 'missing', `not listed in ${MANIFEST_FILE} 'files'; refusing an unverified file`);
   // a file that is not what the manifest lists and is an HTML page: the server does not have the file
@@ -287,7 +290,7 @@ type Progress = (loaded: number, total: number) => void;
  * `network(progress)`, which downloads and verifies them.
  */
 export type VerifiedFileSource = (
-  baseUrl: string, manifest: Manifest, path: string, onProgress: Progress | undefined, network: (onProgress?: Progress) => Promise<ArrayBuffer>,
+  baseUrl: string, manifest: FileTable, path: string, onProgress: Progress | undefined, network: (onProgress?: Progress) => Promise<ArrayBuffer>,
 ) => Promise<ArrayBuffer>;
 
 let fileSource: VerifiedFileSource | null = null;
@@ -300,7 +303,7 @@ export function setVerifiedFileSource(source: VerifiedFileSource | null): void {
 /** Fetch `path` (relative to the models folder) and verify it against the manifest. */
 export async function fetchVerified(
   baseUrl: string,
-  manifest: Manifest,
+  manifest: FileTable,
   path: string,
   onProgress?: Progress,
 ): Promise<ArrayBuffer> {

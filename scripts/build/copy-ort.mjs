@@ -1,10 +1,13 @@
 #!/usr/bin/env node
-// Self-host the ONNX Runtime Web wasm binaries (no CDN): copies
-//   onnxruntime-web (our direct dependency)              -> public/ort/
-//   @huggingface/transformers' own nested onnxruntime-web -> public/ort-tfjs/
-// Both folders are git-ignored and rebuilt from node_modules. Idempotent: a file whose size and
-// mtime already match is skipped, so this is instant when nothing changed.
-// Runtime code points ORT at them with `env.wasm.wasmPaths = <base>/ort/` (or `<base>/ort-tfjs/`).
+// Self-host the ONNX Runtime Web wasm binaries (no CDN): copies onnxruntime-web (our direct dependency;
+// transformers.js runs on the same instance, see vite.config.ts) into public/ort/ and writes
+// public/ort/files.json: {name: {bytes, sha256}} of each .wasm, which src/runtime/ort.ts uses to
+// fetch the runtime as a verified file (progress, Cache Storage for the next visit, checked on read).
+// The folder is git-ignored and rebuilt from node_modules. Idempotent: a file whose size and mtime
+// already match is skipped (and its hash kept), so this is instant when nothing changed. A
+// public/ort-tfjs/ left by older builds (transformers.js's own ORT) is removed.
+// Runtime code points ORT at it with `env.wasm.wasmPaths = <base>/ort/`.
+import { createHash } from 'node:crypto';
 import fs from 'node:fs';
 import path from 'node:path';
 import { createRequire } from 'node:module';
@@ -27,6 +30,8 @@ function readVersion(dir) {
   return JSON.parse(fs.readFileSync(path.join(dir, 'package.json'), 'utf8')).version;
 }
 
+export const FILES_JSON = 'files.json';
+
 export function copyOrtInto(srcPkgDir, destDir) {
   const dist = path.join(srcPkgDir, 'dist');
   const names = fs.readdirSync(dist).filter((n) => WASM_FILE.test(n));
@@ -34,37 +39,51 @@ export function copyOrtInto(srcPkgDir, destDir) {
     throw new Error(`copy-ort: no ort-wasm-simd-threaded*.wasm in ${dist}`);
   }
   fs.mkdirSync(destDir, { recursive: true });
+  const listPath = path.join(destDir, FILES_JSON);
+  let old = {};
+  try {
+    old = JSON.parse(fs.readFileSync(listPath, 'utf8'));
+  } catch {
+    old = {};
+  }
+  const list = {};
   let copied = 0;
-  for (const n of names) {
+  for (const n of names.sort()) {
     const src = path.join(dist, n);
     const dst = path.join(destDir, n);
     const s = fs.statSync(src);
+    let same = false;
     if (fs.existsSync(dst)) {
       const d = fs.statSync(dst);
-      if (d.size === s.size && Math.abs(d.mtimeMs - s.mtimeMs) < 1) continue;
+      same = d.size === s.size && Math.abs(d.mtimeMs - s.mtimeMs) < 1;
     }
-    fs.copyFileSync(src, dst);
-    fs.utimesSync(dst, s.atime, s.mtime);
-    copied++;
+    if (!same) {
+      fs.copyFileSync(src, dst);
+      fs.utimesSync(dst, s.atime, s.mtime);
+      copied++;
+    }
+    if (!n.endsWith('.wasm')) continue;
+    const prev = old[n];
+    list[n] = same && prev?.bytes === s.size && /^[0-9a-f]{64}$/.test(prev?.sha256 ?? '')
+      ? { bytes: prev.bytes, sha256: prev.sha256 }
+      : { bytes: s.size, sha256: createHash('sha256').update(fs.readFileSync(dst)).digest('hex') };
   }
+  const json = JSON.stringify(list, null, 1) + '\n';
+  if (!fs.existsSync(listPath) || fs.readFileSync(listPath, 'utf8') !== json) fs.writeFileSync(listPath, json);
   const version = readVersion(srcPkgDir);
-  fs.writeFileSync(path.join(destDir, 'VERSION'), version + '\n');
+  const versionPath = path.join(destDir, 'VERSION');
+  if (!fs.existsSync(versionPath) || fs.readFileSync(versionPath, 'utf8') !== version + '\n') fs.writeFileSync(versionPath, version + '\n');
   return { version, files: names.length, copied };
 }
 
 export function copyOrt(root = ROOT) {
   const ortDir = packageDir('onnxruntime-web', root);
-  const tfjsDir = packageDir('@huggingface/transformers', root);
-  const tfjsOrtDir = packageDir('onnxruntime-web', tfjsDir);
   const a = copyOrtInto(ortDir, path.join(root, 'public', 'ort'));
-  const b = copyOrtInto(tfjsOrtDir, path.join(root, 'public', 'ort-tfjs'));
-  return { ort: a, ortTfjs: b };
+  fs.rmSync(path.join(root, 'public', 'ort-tfjs'), { recursive: true, force: true });
+  return { ort: a };
 }
 
 if (process.argv[1] && path.resolve(process.argv[1]) === fileURLToPath(import.meta.url)) {
   const r = copyOrt();
-  console.log(
-    `copy-ort: public/ort <- onnxruntime-web ${r.ort.version} (${r.ort.copied}/${r.ort.files} copied), ` +
-      `public/ort-tfjs <- ${r.ortTfjs.version} (${r.ortTfjs.copied}/${r.ortTfjs.files} copied)`,
-  );
+  console.log(`copy-ort: public/ort <- onnxruntime-web ${r.ort.version} (${r.ort.copied}/${r.ort.files} copied, ${FILES_JSON} written)`);
 }

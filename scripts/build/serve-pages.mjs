@@ -7,6 +7,7 @@ import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { build, preview } from 'vite';
 import { copyOrt } from './copy-ort.mjs';
+import { oneOnnxRuntime } from './one-ort.mjs';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
 export const HEADERS = {
@@ -28,7 +29,7 @@ function pages(dir) {
 export async function buildAndServe({ pagesDir, port = 0 }) {
   copyOrt(ROOT);
   const outDir = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-pages-'));
-  const common = { configFile: false, root: pagesDir, publicDir: path.join(ROOT, 'public'), logLevel: 'warn' };
+  const common = { configFile: false, root: pagesDir, publicDir: path.join(ROOT, 'public'), logLevel: 'warn', plugins: [oneOnnxRuntime()], worker: { format: 'es', plugins: () => [oneOnnxRuntime()] } };
   await build({
     ...common,
     build: { outDir, emptyOutDir: true, target: 'es2022', chunkSizeWarningLimit: 8192, rollupOptions: { input: pages(pagesDir) } },

@@ -10,7 +10,7 @@
  * `useModelCache()` plugs this in front of the network for every `fetchVerified` of its JS context;
  * the page reads its size and clears it with `modelCacheUsage()` / `clearModelCache()`.
  */
-import { joinUrl, setVerifiedFileSource, verifyBytes, type Manifest } from '../manifest';
+import { joinUrl, setVerifiedFileSource, verifyBytes, type FileTable } from '../manifest';
 
 /** A download or cache read of one model file. */
 export interface FileEvent {
@@ -50,7 +50,7 @@ export function useModelCache(onFile: (e: FileEvent) => void = () => undefined, 
   const store = storage();
   if (!store) return false;
   let warnedWrite = false;
-  setVerifiedFileSource(async (baseUrl: string, manifest: Manifest, path: string, onProgress, network) => {
+  setVerifiedFileSource(async (baseUrl: string, manifest: FileTable, path: string, onProgress, network) => {
     const meta = manifest.files[path];
     const total = meta.bytes;
     const key = cacheKey(baseUrl, path, meta.sha256);

@@ -5,7 +5,13 @@
  *   `ort-wasm-simd-threaded.wasm` binary as the browser's `onnxruntime-web/wasm`, so CPU results
  *   are bit-identical between Node and Chromium.
  * - Browser: WASM via `onnxruntime-web/wasm` with self-hosted binaries (`wasmPaths`, default
- *   `<BASE_URL>ort/`), threads when the page is cross-origin isolated; WebGPU via
+ *   `<BASE_URL>ort/`), threads when the page is cross-origin isolated; the text encoder
+ *   (transformers.js) runs on this same ORT instance (vite.config.ts resolves its 'onnxruntime-web'
+ *   here), so one .wasm is downloaded and compiled for both. `preloadWasmRuntime` fetches that .wasm
+ *   at once (beside the model downloads, not after them) through the model files' verified path:
+ *   `<wasmPaths>files.json` (written by scripts/build/copy-ort.mjs) gives its size and sha256, so it
+ *   is counted in the download progress, checked, and kept in Cache Storage for the next visit
+ *   (src/cache/modelCache.ts); ORT gets the bytes as `env.wasm.wasmBinary`. WebGPU via
  *   `onnxruntime-web/webgpu` when `navigator.gpu` gives an adapter (which backend, and falling back
  *   from WebGPU to WASM, is decided in src/backends.ts only).
  * - ORT's wasm flags (thread count, paths) are global and fixed by the first session: a later
@@ -13,6 +19,7 @@
  * - Sessions are cached by (key, backend), so every generator for the same model file reuses one.
  */
 import type * as OrtTypes from 'onnxruntime-web';
+import { fetchBytes, fetchVerified, ModelFileError, type FileEntry } from '../manifest';
 
 export type Backend = 'webgpu' | 'wasm';
 export type BackendRequest = Backend | 'auto';
@@ -31,6 +38,13 @@ export interface RuntimeConfig {
 let wasmOrt: Promise<Ort> | null = null;
 let webgpuOrt: Promise<Ort> | null = null;
 let configuredThreads: number | null = null;
+/** the WASM backend's .wasm bytes (browser), fetched once by preloadWasmRuntime; null: ORT fetches it itself */
+let wasmBinary: Promise<ArrayBuffer | null> | null = null;
+
+/** The .wasm of the WASM backend (`onnxruntime-web/wasm`, threaded SIMD build). */
+export const WASM_RUNTIME_FILE = 'ort-wasm-simd-threaded.wasm';
+/** Sizes and sha256 of the runtime files in the wasm folder (scripts/build/copy-ort.mjs writes it). */
+export const RUNTIME_FILES = 'files.json';
 
 /** `<BASE_URL>ort/` as an absolute URL (an origin-less path makes Vite's dev server rewrite ORT's
  * dynamic import of the .mjs in public/ and refuse it). */
@@ -66,17 +80,65 @@ function configure(ort: Ort, cfg: RuntimeConfig): void {
   if (!isNode) ort.env.wasm.wasmPaths = cfg.wasmPaths ?? defaultWasmPaths();
 }
 
+/**
+ * Fetch the WASM backend's .wasm as a verified file: `<wasmPaths>files.json` lists its size and sha256,
+ * and the bytes come through fetchVerified (the model cache when one is in use: progress, per-file
+ * state, kept for the next visit, re-verified on read). A server without files.json (an older
+ * deployment): null, and ORT fetches the .wasm itself as before.
+ */
+async function fetchWasmRuntime(base: string, onProgress?: (loaded: number, total: number) => void): Promise<ArrayBuffer | null> {
+  let files: Record<string, FileEntry>;
+  try {
+    files = JSON.parse(new TextDecoder().decode(await fetchBytes(base, RUNTIME_FILES))) as Record<string, FileEntry>;
+  } catch (e) {
+    if (e instanceof ModelFileError && e.reason === 'missing') return null;
+    throw new Error(`runtime: cannot read ${base}${RUNTIME_FILES} (the ONNX Runtime file list): ${(e as Error).message}`, { cause: e });
+  }
+  if (!files[WASM_RUNTIME_FILE]) throw new Error(`runtime: ${base}${RUNTIME_FILES} does not list ${WASM_RUNTIME_FILE}; rebuild (scripts/build/copy-ort.mjs)`);
+  return fetchVerified(base, { files }, WASM_RUNTIME_FILE, onProgress);
+}
+
+/**
+ * Start loading the WASM backend now: ONNX Runtime's module and (browser) its .wasm binary, whose bytes
+ * are reported through `onProgress` like a model file's. Call it before the models are downloaded so
+ * the runtime arrives with them; sessions created later wait for it. Idempotent; a failed load is
+ * forgotten so a retry fetches again.
+ */
+export function preloadWasmRuntime(cfg: RuntimeConfig = {}, onProgress?: (loaded: number, total: number) => void): Promise<void> {
+  wasmOrt ??= (isNode ? import('onnxruntime-web') : import('onnxruntime-web/wasm')) as Promise<Ort>;
+  if (!isNode && !wasmBinary) {
+    const base = cfg.wasmPaths ?? defaultWasmPaths();
+    const p = fetchWasmRuntime(base.endsWith('/') ? base : base + '/', onProgress);
+    wasmBinary = p;
+    p.catch(() => {
+      if (wasmBinary === p) wasmBinary = null;
+    });
+  }
+  return Promise.all([wasmOrt, wasmBinary]).then(() => undefined);
+}
+
 async function loadOrt(backend: Backend, cfg: RuntimeConfig): Promise<Ort> {
   if (backend === 'wasm') {
-    wasmOrt ??= (isNode ? import('onnxruntime-web') : import('onnxruntime-web/wasm')) as Promise<Ort>;
-    const ort = await wasmOrt;
+    await preloadWasmRuntime(cfg);
+    const ort = await wasmOrt!;
     configure(ort, cfg);
+    const binary = await wasmBinary;
+    if (binary && !ort.env.wasm.wasmBinary) ort.env.wasm.wasmBinary = binary;
     return ort;
   }
   webgpuOrt ??= import('onnxruntime-web/webgpu') as Promise<Ort>;
   const ort = await webgpuOrt;
   configure(ort, cfg);
   return ort;
+}
+
+/**
+ * ONNX Runtime's WASM backend, configured (threads, wasm location, preloaded binary): what
+ * transformers.js runs the text encoder on (src/text/transformersEnv.ts), the same instance as the
+ * step models', so the thread count and the .wasm are shared.
+ */
+export function loadWasmOrt(cfg: RuntimeConfig = {}): Promise<Ort> {
+  return loadOrt('wasm', cfg);
 }
 
 /** Whether this environment offers a WebGPU adapter (never in Node). */

@@ -34,8 +34,10 @@ export interface TextEncoder {
 }
 
 export interface TextEncoderOptions {
-  /** where transformers.js's ORT wasm is served (browser); default `<BASE_URL>ort-tfjs/` */
+  /** where ONNX Runtime's wasm is served (browser; the step models' ORT, shared); default `<BASE_URL>ort/` */
   wasmPaths?: string;
+  /** WASM threads of the shared ORT (src/runtime/ort.ts; default there) */
+  threads?: number;
   /** download progress over all files of the encoder */
   onDownload?: (loaded: number, total: number) => void;
 }
@@ -136,7 +138,7 @@ export function createTextEncoder(manifest: Manifest, baseUrl: string, id: strin
 async function load(manifest: Manifest, baseUrl: string, id: string, opts: TextEncoderOptions): Promise<TextEncoder> {
   const entry = entryFor(manifest, id);
   const root = modelRoot(baseUrl, entry.dir);
-  const [tf] = await Promise.all([loadTransformers(opts.wasmPaths), prefetch(manifest, baseUrl, entry, root, opts.onDownload)]);
+  const [tf] = await Promise.all([loadTransformers({ wasmPaths: opts.wasmPaths, threads: opts.threads }), prefetch(manifest, baseUrl, entry, root, opts.onDownload)]);
   const device = isNodeRuntime ? 'cpu' : 'wasm';
   const common = { local_files_only: true, device } as const;
   if (entry.kind === 'minilm') {

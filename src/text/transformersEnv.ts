@@ -5,10 +5,12 @@
  * - Every model file is fetched by `fetchVerified` (size + sha256 against the manifest) BEFORE
  *   transformers.js asks for it, and handed over through `env.customCache`, so transformers.js
  *   never reads an unverified byte and nothing is downloaded twice.
- * - Browser: transformers.js's own ONNX Runtime Web build (≠ our onnxruntime-web version) runs
- *   from self-hosted wasm at `<BASE_URL>ort-tfjs/` (copied by scripts/build/copy-ort.mjs).
- *   Node: transformers.js uses onnxruntime-node (native CPU).
+ * - Browser: transformers.js runs on the project's onnxruntime-web (the bundler resolves its
+ *   'onnxruntime-web' import to ours: vite.config.ts `oneOnnxRuntime`), the same instance as the
+ *   step models (src/runtime/ort.ts), configured there before transformers.js is imported: one
+ *   .wasm to download and compile, one thread count. Node: transformers.js uses onnxruntime-node.
  */
+import { loadWasmOrt, type RuntimeConfig } from '../runtime/ort';
 
 type Transformers = typeof import('@huggingface/transformers');
 
@@ -41,16 +43,16 @@ export function provideVerifiedFile(key: string, bytes: ArrayBuffer): void {
   verified.set(normaliseKey(key), bytes);
 }
 
-export function defaultTfjsWasmPaths(): string {
-  const base = (import.meta as unknown as { env?: { BASE_URL?: string } }).env?.BASE_URL ?? '/';
-  return `${base.endsWith('/') ? base : base + '/'}ort-tfjs/`;
-}
-
 let loaded: Promise<Transformers> | null = null;
 
-/** transformers.js, configured once (local files only, verified cache, self-hosted wasm). */
-export function loadTransformers(wasmPaths?: string): Promise<Transformers> {
+/**
+ * transformers.js, configured once (local files only, verified cache; in the browser on the project's
+ * ONNX Runtime, configured with `runtime` first so transformers.js sees its wasm location and threads).
+ */
+export function loadTransformers(runtime: RuntimeConfig = {}): Promise<Transformers> {
   loaded ??= (async () => {
+    // ORT first: transformers.js points an unconfigured ORT at a CDN when it is imported
+    if (!IS_NODE) await loadWasmOrt(runtime);
     const tf = await import('@huggingface/transformers');
     const env = tf.env;
     env.allowRemoteModels = false;
@@ -61,13 +63,13 @@ export function loadTransformers(wasmPaths?: string): Promise<Transformers> {
     env.customCache = verifiedCache;
     if (!IS_NODE) {
       const wasm = env.backends.onnx.wasm;
-      if (wasm) {
-        wasm.wasmPaths = wasmPaths ?? defaultTfjsWasmPaths();
-        wasm.proxy = false;
-      }
+      if (wasm) wasm.proxy = false;
     }
     return tf;
   })();
+  loaded.catch(() => {
+    loaded = null;
+  });
   return loaded;
 }
 

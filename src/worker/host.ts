@@ -9,7 +9,7 @@
 import { loadModel, runWithFallback } from '../backends';
 import type { GenerateOptions, GenerateResult, Generator } from '../generate';
 import type { Manifest } from '../manifest';
-import type { BackendRequest } from '../runtime/ort';
+import { type BackendRequest, preloadWasmRuntime } from '../runtime/ort';
 import { createTextEncoder, type TextEncoder } from '../text';
 
 export interface HostEvents {
@@ -30,7 +30,22 @@ export class GenerationHost {
   /** progress of every download under way, summed */
   private readonly downloads = new Map<string, [number, number]>();
 
+  private runtime: Promise<void> | null = null;
+
   constructor(private readonly opts: HostOptions, private readonly events: HostEvents) {}
+
+  /**
+   * ONNX Runtime's WASM backend, fetched from the first moment (the text encoder runs on it whatever
+   * the step model's backend), its bytes counted in `model`'s download progress beside the model files.
+   */
+  private preloadRuntime(model: string): Promise<void> {
+    this.runtime ??= preloadWasmRuntime({ threads: this.opts.threads }, this.progress('runtime', model));
+    const p = this.runtime;
+    p.catch(() => {
+      if (this.runtime === p) this.runtime = null;
+    });
+    return p;
+  }
 
   get manifest(): Manifest {
     return this.opts.manifest;
@@ -82,7 +97,7 @@ export class GenerationHost {
     if (!c || c.type !== 'text') return { ready: Promise.resolve() };
     let enc = this.encoders.get(c.encoder);
     if (!enc) {
-      enc = createTextEncoder(this.opts.manifest, this.opts.baseUrl, c.encoder, { onDownload: this.progress(`enc:${c.encoder}`, model) });
+      enc = createTextEncoder(this.opts.manifest, this.opts.baseUrl, c.encoder, { onDownload: this.progress(`enc:${c.encoder}`, model), threads: this.opts.threads });
       this.encoders.set(c.encoder, enc);
       enc.catch(() => this.encoders.delete(c.encoder));
     }
@@ -98,10 +113,11 @@ export class GenerationHost {
   }
 
   private async create(model: string, variant?: string, force?: 'wasm'): Promise<Generator> {
+    const runtime = this.preloadRuntime(model);
     const enc = this.encoderFor(model);
     const gen = this.createStep(model, variant, enc.encoder, force);
-    // Both must load; if either fails, the model is unusable (the error names the file).
-    const [g] = await Promise.all([gen, enc.ready]).catch(async (e) => {
+    // All must load; if one fails, the model is unusable (the error names the file).
+    const [g] = await Promise.all([gen, enc.ready, runtime]).catch(async (e) => {
       gen.then((x) => x.dispose()).catch(() => undefined);
       throw e;
     });
