@@ -8,11 +8,11 @@ import { expect, test, type Page } from '@playwright/test';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { readGlb, writeGlb } from '../../src/character/retarget/load';
 import { RIGS, buildRigGlb } from '../unit/retargetRigs';
-import { watchPage } from './helpers';
+import { watchExternalRequests, watchPage } from './helpers';
 
 declare global {
   interface Window {
-    emdmCharacter: { active: boolean; builtInVisible: boolean; name: string; mapped: number; status: string; jointWorld(j: string): [number, number, number] | null };
+    emdmCharacter: { active: boolean; builtInVisible: boolean; name: string; mapped: number; status: string; comparing: boolean; jointWorld(j: string, copy?: 'main' | 'compare'): [number, number, number] | null };
   }
 }
 
@@ -29,8 +29,9 @@ async function drop(page: Page, files: { name: string; bytes: Uint8Array }[]): P
   await page.dispatchEvent('#viewport', 'drop', { dataTransfer: dt });
 }
 
-test('a dropped character performs the motion; bad files keep the built-in one; downloads reload', async ({ page }) => {
+test('a dropped character performs the motion; bad files keep the built-in one; downloads reload', async ({ page, baseURL }) => {
   const watch = watchPage(page);
+  const external = watchExternalRequests(page, baseURL!);
   await page.goto('/?noauto=1&backend=wasm');
   await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
   await page.locator('#prompt').fill('a person walks forward');
@@ -85,11 +86,47 @@ test('a dropped character performs the motion; bad files keep the built-in one; 
   expect(await page.evaluate(() => window.emdmCharacter.active)).toBe(true);
   expect(await page.evaluate(() => JSON.parse(localStorage.getItem('emdm.boneMap.odd.glb') ?? '{}').joints?.pelvis)).toBe(`segment${nodeOf.get(spec.names.pelvis!)}`);
 
-  // the real CC0 robot through the file picker, then back to the built-in character
+  // the real CC0 robot through the file picker
   await page.locator('#char-file').setInputFiles(path.join(process.cwd(), 'tests/fixtures/rigs/RobotExpressive.glb'));
   await expect(page.locator('#char-status')).toContainText('RobotExpressive.glb: 18/22 joints mapped');
+
+  // a real VRM 0.x avatar (UniVRM export, faces −Z) dropped on the page: read through three-vrm, its humanoid gives the map
+  const vrm = new Uint8Array(fs.readFileSync(path.join(process.cwd(), 'tests/fixtures/rigs/cryptovoxels.vrm')));
+  await drop(page, [{ name: 'cryptovoxels.vrm', bytes: vrm }]);
+  await expect(page.locator('#char-status')).toContainText('cryptovoxels.vrm: 21/22 joints mapped (VRM 0.x humanoid)');
+  expect(await page.evaluate(() => [window.emdmCharacter.active, window.emdmCharacter.name, window.emdmCharacter.builtInVisible])).toEqual([true, 'cryptovoxels.vrm', false]);
+  const moved = async (joint: string) => {
+    await page.evaluate(() => window.emdm.seek(0.2));
+    await page.waitForTimeout(200);
+    const p = await page.evaluate((j) => window.emdmCharacter.jointWorld(j), joint);
+    await page.evaluate(() => window.emdm.seek(1.5));
+    await page.waitForTimeout(200);
+    const q = await page.evaluate((j) => window.emdmCharacter.jointWorld(j), joint);
+    expect(p && q && p.concat(q).every(Number.isFinite)).toBe(true);
+    return Math.hypot(p![0] - q![0], p![1] - q![1], p![2] - q![2]);
+  };
+  expect(await moved('l_ankle')).toBeGreaterThan(0.05);
+  expect(await moved('r_wrist')).toBeGreaterThan(0.02);
+  // its GLB download keeps the VRM extension, the skin and gains the clip
+  const [vrmDownload] = await Promise.all([page.waitForEvent('download'), page.locator('#dl-char-glb').click()]);
+  const vrmBytes = fs.readFileSync(await vrmDownload.path());
+  const vrmBack = await new GLTFLoader().parseAsync(vrmBytes.buffer.slice(vrmBytes.byteOffset, vrmBytes.byteOffset + vrmBytes.byteLength) as ArrayBuffer, '');
+  expect(vrmBack.animations.map((c) => c.name)).toContain('emdm');
+  expect(Object.keys(vrmBack.parser.json.extensions ?? {})).toContain('VRM');
+
+  // bad files while it is shown: each says why, and the VRM stays on the stage
+  await drop(page, [{ name: 'broken.vrm', bytes: vrm.slice(0, 5000) }]);
+  await expect(page.locator('#char-status')).toContainText('broken.vrm: not a valid binary glTF: the header says');
+  const remote = new TextEncoder().encode(JSON.stringify({ asset: { version: '2.0' }, buffers: [{ uri: 'https://example.com/evil.bin', byteLength: 4 }] }));
+  await drop(page, [{ name: 'remote.gltf', bytes: remote }]);
+  await expect(page.locator('#char-status')).toContainText("remote.gltf: buffer 0 points to 'https://example.com/evil.bin': nothing is fetched");
+  expect(await page.evaluate(() => [window.emdmCharacter.active, window.emdmCharacter.name])).toEqual([true, 'cryptovoxels.vrm']);
+  expect(await moved('l_ankle')).toBeGreaterThan(0.05);
+
+  // back to the built-in character
   await page.locator('#char-builtin').click();
   expect(await page.evaluate(() => [window.emdmCharacter.active, window.emdmCharacter.builtInVisible])).toEqual([false, true]);
   expect(await page.evaluate(() => window.emdm.cspViolations)).toEqual([]);
+  expect(external, 'nothing fetched from outside the page (the remote .gltf buffer included)').toEqual([]);
   watch.assertClean();
 });

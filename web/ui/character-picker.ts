@@ -4,6 +4,7 @@
 // editor; the map is kept per file name in localStorage and can be exported as JSON. Downloads: the
 // character with the clip as GLB, and the clip as BVH on its bone names.
 import { AnimationMixer, Group, LoopOnce, type AnimationAction, type Object3D } from 'three';
+import { clone as cloneSkinned } from 'three/addons/utils/SkeletonUtils.js';
 import { type CharacterFile, CharacterLoadError, type LoadedCharacter, loadCharacter, type BoneInfo, type BoneMapping, MappingError, mappingFromJSON, mappingToJSON, validateMapping, type RetargetResult, retargetMotion, type BvhUnits, bvhFileName, characterToBVH, characterToGLB, contactsFromFeatures, type Motion, JOINT_NAMES, type JointName, type Skeleton } from '../../src/index';
 import { saveBlob } from './dom';
 
@@ -18,17 +19,26 @@ export interface PickerHost {
   notify(kind: 'info' | 'warn' | 'error', text: string): void;
   /** the panel section the picker's controls go before */
   before: HTMLElement;
+  /** the character on the stage changed (the visitor's shown or gone): the compare view re-asks compare() */
+  changed?(): void;
+}
+
+/** One copy of the visitor's character performing one motion. */
+interface Performer {
+  root: Object3D;
+  holder: Group;
+  mixer: AnimationMixer | null;
+  action: AnimationAction | null;
+  result: RetargetResult | null;
 }
 
 const STORE = 'emdm.boneMap.';
 const ACCEPT = '.glb,.gltf,.vrm,.bin,.png,.jpg,.jpeg,.webp,.ktx2';
 
-interface Shown {
+interface Shown extends Performer {
   ch: LoadedCharacter;
-  holder: Group;
-  mixer: AnimationMixer | null;
-  action: AnimationAction | null;
-  result: RetargetResult | null;
+  /** the compare view's second copy (the DDIM motion), made when a comparison is shown */
+  twin: Performer | null;
 }
 
 /** What the page's tests read (window.emdmCharacter). */
@@ -38,13 +48,17 @@ export interface CharacterProbe {
   name: string;
   mapped: number;
   status: string;
-  /** world position of the bone playing `joint`, or null */
-  jointWorld(joint: JointName): [number, number, number] | null;
+  /** the compare view's second copy is performing the DDIM motion */
+  comparing: boolean;
+  /** world position of the bone playing `joint` (of the compare view's second copy: `copy` 'compare'), or null */
+  jointWorld(joint: JointName, copy?: 'main' | 'compare'): [number, number, number] | null;
 }
 
 export class CharacterPicker {
   private shown: Shown | null = null;
   private motion: Motion | null = null;
+  /** the compare view's second motion (DDIM), null when not comparing */
+  private compareMotion: Motion | null = null;
   private stem = 'emdm';
   private files: CharacterFile[] = [];
   /** the bones the editor offers (of the last file read, shown or refused) */
@@ -126,6 +140,40 @@ export class CharacterPicker {
     if (this.shown) this.retarget();
   }
 
+  /**
+   * The compare view: `motion` (the DDIM one, same clock as the main motion) on a second copy of the
+   * visitor's character, or null to leave the comparison. Returns the two objects for the split view
+   * (left: the main motion, right: this one), or null when the built-in characters are on the stage.
+   */
+  compare(motion: Motion | null): { left: Object3D; right: Object3D } | null {
+    this.compareMotion = motion;
+    const s = this.shown;
+    if (!s) return null;
+    if (!motion) {
+      if (s.twin) this.drop(s.twin);
+      s.twin = null;
+      return null;
+    }
+    // the original at rest (its clip poses it again on the next frame) for the copy's rest pose
+    s.ch.restPose();
+    if (!s.twin) {
+      // a copy of the character (skins re-bound to the copy's bones), its nodes named as the original's
+      const root = cloneSkinned(s.ch.root);
+      const holder = new Group();
+      holder.name = 'user-character-compare';
+      holder.add(root);
+      this.host.add(holder);
+      s.twin = { root, holder, mixer: null, action: null, result: null };
+    }
+    this.perform(s.twin, motion, s.ch);
+    return { left: s.holder, right: s.twin.holder };
+  }
+
+  /** The visitor's character is on the stage (the built-in one hidden). */
+  get active(): boolean {
+    return !!this.shown;
+  }
+
   private say(text: string): void {
     this.status.textContent = text;
   }
@@ -169,48 +217,62 @@ export class CharacterPicker {
     holder.name = 'user-character';
     holder.add(ch.root);
     this.host.add(holder);
-    this.shown = { ch, holder, mixer: null, action: null, result: null };
+    this.shown = { ch, root: ch.root, holder, mixer: null, action: null, result: null, twin: null };
     this.host.builtIn.visible = false;
     this.back.hidden = false;
     this.showEditor(ch.boneInfos, ch.mapping);
     this.say(`${ch.name}: ${22 - ch.unmapped.length}/22 joints mapped (${ch.mappingSource === 'vrm' ? `VRM ${ch.vrm} humanoid` : ch.mappingSource === 'user' ? 'your map' : 'by bone names'}), read in ${Math.round(ch.loadMs)} ms`);
     this.retarget();
+    if (this.compareMotion) this.compare(this.compareMotion);
+    this.host.changed?.();
   }
 
   private retarget(): void {
     const s = this.shown;
     if (!s || !this.motion) return;
-    s.mixer?.stopAllAction();
-    s.mixer?.uncacheRoot(s.ch.root);
     s.ch.restPose();
-    const m = this.motion;
-    const contacts = m.features.length === m.frames * 263 ? contactsFromFeatures(m.features, m.frames) : null;
-    const res = retargetMotion(s.ch.root, s.ch.mapping, { joints: m.joints, frames: m.frames, fps: m.fps, contacts }, this.host.skeleton);
-    // shown at our size and facing, so the camera that follows our pelvis follows it too
-    s.holder.scale.setScalar(1 / res.scale);
-    s.holder.rotation.y = -res.yaw;
-    s.mixer = new AnimationMixer(s.ch.root);
-    s.action = s.mixer.clipAction(res.clip);
-    s.action.setLoop(LoopOnce, 1);
-    s.action.clampWhenFinished = true;
-    s.action.play();
-    s.result = res;
+    this.perform(s, this.motion, s.ch);
     this.dlGlb.disabled = false;
     this.dlBvh.disabled = false;
   }
 
+  /** Retarget `m` onto one copy of the character (at rest as loaded) and play it on the page's clock. */
+  private perform(p: Performer, m: Motion, ch: LoadedCharacter): void {
+    p.mixer?.stopAllAction();
+    p.mixer?.uncacheRoot(p.root);
+    if (p.root !== ch.root) restLike(p.root, ch.root);
+    const contacts = m.features.length === m.frames * 263 ? contactsFromFeatures(m.features, m.frames) : null;
+    const res = retargetMotion(p.root, ch.mapping, { joints: m.joints, frames: m.frames, fps: m.fps, contacts }, this.host.skeleton);
+    // shown at our size and facing, so the camera that follows our pelvis follows it too
+    p.holder.scale.setScalar(1 / res.scale);
+    p.holder.rotation.y = -res.yaw;
+    p.mixer = new AnimationMixer(p.root);
+    p.action = p.mixer.clipAction(res.clip);
+    p.action.setLoop(LoopOnce, 1);
+    p.action.clampWhenFinished = true;
+    p.action.play();
+    p.result = res;
+  }
+
+  private drop(p: Performer): void {
+    p.mixer?.stopAllAction();
+    p.holder.removeFromParent();
+  }
+
   private update(): void {
     const s = this.shown;
-    if (!s?.mixer || !s.action || !s.result) return;
-    s.action.time = Math.min(Math.max(this.host.time(), 0), s.result.clip.duration);
-    s.mixer.update(0);
+    for (const p of [s, s?.twin]) {
+      if (!p?.mixer || !p.action || !p.result) continue;
+      p.action.time = Math.min(Math.max(this.host.time(), 0), p.result.clip.duration);
+      p.mixer.update(0);
+    }
   }
 
   useBuiltIn(say = true): void {
     const s = this.shown;
     if (s) {
-      s.mixer?.stopAllAction();
-      s.holder.removeFromParent();
+      this.drop(s);
+      if (s.twin) this.drop(s.twin);
       this.shown = null;
     }
     this.host.builtIn.visible = true;
@@ -220,6 +282,7 @@ export class CharacterPicker {
     if (say) {
       this.editor.hidden = true;
       this.say('');
+      if (s) this.host.changed?.();
     }
   }
 
@@ -303,10 +366,14 @@ export class CharacterPicker {
       get status() {
         return self.status.textContent ?? '';
       },
-      jointWorld(j) {
+      get comparing() {
+        return !!self.shown?.twin?.result;
+      },
+      jointWorld(j, copy = 'main') {
         const s = self.shown;
         const name = s?.ch.mapping[j];
-        const o = name ? s!.ch.root.getObjectByName(name) : undefined;
+        const root = copy === 'compare' ? s?.twin?.root : s?.ch.root;
+        const o = name && root ? root.getObjectByName(name) : undefined;
         if (!o) return null;
         o.updateWorldMatrix(true, false);
         const e = o.matrixWorld.elements;
@@ -318,4 +385,18 @@ export class CharacterPicker {
   get element(): HTMLElement {
     return this.el;
   }
+}
+
+/** Put every node under `copy` (a SkeletonUtils clone) at the transform of the same node under `original` (at rest). */
+function restLike(copy: Object3D, original: Object3D): void {
+  const a: Object3D[] = [];
+  const b: Object3D[] = [];
+  original.traverse((o) => a.push(o));
+  copy.traverse((o) => b.push(o));
+  a.forEach((o, i) => {
+    b[i]?.position.copy(o.position);
+    b[i]?.quaternion.copy(o.quaternion);
+    b[i]?.scale.copy(o.scale);
+  });
+  copy.updateMatrixWorld(true);
 }
