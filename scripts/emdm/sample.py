@@ -419,8 +419,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "(ranges A-B inclusive, A, A-; groups root, legs, upper)")
     e = p.add_argument_group("beyond one prompt (emdm.motion.edit)")
     e.add_argument("--timeline", action="append", default=[], metavar="PROMPT:SECONDS",
-                   help="a segment of a long motion, repeatable, in order (segment k's seed: --seed + k); ≤ 8.8 s each, "
-                        "≤ 60 s in all; each continues the last second of the one before")
+                   help="a segment of a long motion, repeatable, in order (segment k's seed: --seed + k); ≤ 60 s in all; "
+                        "each continues the last second of the one before (one longer than the model's window is made "
+                        "in several windows)")
     e.add_argument("--timeline-json", type=Path, default=None, metavar="FILE",
                    help='the segments as JSON: [{"prompt": "...", "seconds": 4, "seed": 1}, ...] (seed optional)')
     e.add_argument("--inbetween", nargs="?", const="", default=None, metavar="A-B",

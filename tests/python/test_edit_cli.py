@@ -41,6 +41,14 @@ def test_a_timeline_is_one_motion_with_every_segments_frames(long):
     assert np.abs(joints - recover_joints(feats)).max() < 1e-4                  # stitched = decoded whole: no seam jump
 
 
+def test_a_30_s_timeline_of_10_s_segments_is_one_bvh_of_600_frames(shipped, tmp_path):
+    out = tmp_path / "thirty"
+    assert sample_main(["--model", "emdm-a2m-web", "--steps", "1", "--timeline", "walk:10", "--timeline", "run:10",
+                        "--timeline", "wave-both-hands:10", "--out", str(out)]) == 0
+    assert np.load(out.with_suffix(".npy")).shape == (600, 22, 3)
+    assert read_bvh(out.with_suffix(".metres.bvh")).num_frames == 600
+
+
 def test_the_same_timeline_from_json_with_explicit_seeds(long, tmp_path):
     spec = tmp_path / "t.json"
     spec.write_text(json.dumps([{"prompt": "walk", "seconds": 2, "seed": 4}, {"prompt": "wave-both-hands", "seconds": 1.5, "seed": 5},
@@ -87,7 +95,6 @@ def test_loops_from_a_prompt_and_from_a_known_motion(shipped, tmp_path):
     (["--timeline", "walk:2", "--timeline", "run:0"], r"--timeline: segment 2 \('run'\): 0 s is too short"),
     (["--timeline", "walk:8.8"] * 6 + ["--timeline", "run:8.2"], r"--timeline: the timeline lasts 61 s in all; at most 60 s"),
     (["--timeline", "walk:2", "--timeline", " :2"], r"--timeline: segment 2: the prompt is empty"),
-    (["--timeline", "walk:9"], r"--timeline: segment 1 \('walk'\): 9 s is longer than a segment can be \(8.8 s"),
     (["--timeline", "walk"], r"--timeline: segment 'walk': expected PROMPT:SECONDS"),
     (["--timeline", "fly:2"], r"--timeline: segment 1 \('fly'\): unknown action 'fly'"),
     (["--timeline", "walk:2", "--action", "run"], r"--timeline gives each segment its prompt and seconds; leave out --action"),

@@ -13,20 +13,23 @@ stitching (``emdm.motion.stitch``); docs/ARCHITECTURE.md "Sampling with constrai
 
 Frame bookkeeping (the contract with ``src/edit.ts``; FPS 20, C = ``OVERLAP`` = 20 frames):
 
-* timeline: segment k has n_k = floor(seconds·20 + 0.5) ≥ 1 new frames, n_k ≤ maxFrames − C (8.8 s), Σ n_k ≤ 60 s.
-  Segment 0 is an ordinary generation of n_0 frames. Segment k > 0 samples a window of c + n_k frames, c =
-  min(C, frames so far), whose frames [0, c) are kept (all channels) from the sequence's last c
+* timeline: segment k has n_k = floor(seconds·20 + 0.5) ≥ 1 new frames, Σ n_k ≤ 60 s, made in windows
+  (``window_sizes``: one window when n_k ≤ maxFrames − C, or ≤ maxFrames for segment 0; else ⌈n_k/(maxFrames − C)⌉
+  near-equal ones, window j seeded seed + j). The first window is an ordinary generation. Every later window
+  samples c + n frames, c = min(C, frames so far), whose frames [0, c) are kept (all channels) from the
+  sequence's last c
   de-normalised frames (normalised as the sampler takes them); the window's features are eased
   (``ease_seams``) and its joints appended by ``append_segment(prev, window, c)``. The sequence's
   de-normalised features are concat(window_0, window_1[c:], …). ``regenerate`` from segment i reuses frames
   before segment i.
 * in-betweening: known = the motion (N ≤ maxFrames frames), kept frames [0, a] ∪ [b, N−1] (default a = 19,
-  b = N − 20). Every edit's features are ``pin_kept_root(ease_seams(pin_kept_root(denormalise(x))))``: the
-  kept end stays where it was, and the seams are eased (``generate({known})`` gives the inner pin).
+  b = N − 20). In-betweening's and body-part edits' features are
+  ``pin_kept_root(ease_seams(pin_kept_root(denormalise(x))))``: the kept end stays where it was, and the seams
+  are eased (``generate({known})`` gives the inner pin).
 * body-part edit: kept groups root+legs on every frame (``keep="lower"``: new upper body) or upper
   (``keep="upper"``: new legs and root).
 * loop (K = ``LOOP_ENDS`` = 10): known = the motion X with frames [N−K, N) replaced by X[0:K]; kept frames
-  [0, K) ∪ [N−K, N); pinned and eased as an edit against that known; the clip is frames [0, N−K) (frame N−K, the copy
+  [0, K) ∪ [N−K, N); eased, not pinned (the root goes where the model takes it); the clip is frames [0, N−K) (frame N−K, the copy
   of frame 0, is where it wraps to). In place: the de-normalised root x/z velocity [1:3] is set to 0 on every
   frame (the root turns but does not travel).
 """
@@ -164,7 +167,6 @@ def check_timeline(segments: Sequence[Segment], max_frames: int = 196, overlap: 
     """Each segment's new frames; a bad segment is an EditError naming it (1-based) and the limit."""
     if not segments:
         raise EditError("the timeline is empty: add at least one segment (a prompt and its seconds)")
-    limit = max_frames - overlap
     frames = []
     for k, seg in enumerate(segments):
         if not isinstance(seg.prompt, str) or not seg.prompt.strip():
@@ -176,9 +178,6 @@ def check_timeline(segments: Sequence[Segment], max_frames: int = 196, overlap: 
         if n < 1:
             raise EditError(f"{_name(k, seg)}: {s:g} s is too short; a segment lasts at least {1 / fps:g} s "
                             f"(1 frame at {fps} fps)")
-        if n > limit:
-            raise EditError(f"{_name(k, seg)}: {s:g} s is longer than a segment can be ({limit / fps:g} s: the model's "
-                            f"{max_frames}-frame window less the {overlap / fps:g} s it continues from); split it in two")
         if isinstance(seg.seed, bool) or not isinstance(seg.seed, (int, np.integer)) or not 0 <= seg.seed <= MAX_SEED:
             raise EditError(f"{_name(k, seg)}: seed must be an integer in 0..{MAX_SEED}, got {seg.seed!r}")
         frames.append(n)
@@ -186,6 +185,17 @@ def check_timeline(segments: Sequence[Segment], max_frames: int = 196, overlap: 
     if total > max_seconds * fps:
         raise EditError(f"the timeline lasts {total / fps:g} s in all; at most {max_seconds:g} s (shorten or remove a segment)")
     return frames
+
+
+def window_sizes(n: int, first: bool, max_frames: int = 196, overlap: int = OVERLAP) -> list[int]:
+    """New frames of each window of an n-frame segment: one window when it fits (the timeline's ``first`` segment
+    up to ``max_frames``, later ones up to cap = max_frames − overlap), else ⌈n/cap⌉ near-equal windows, the first
+    n mod m of them one frame longer (``src/edit.ts`` windowSizes)."""
+    cap = max_frames - overlap
+    if n <= (max_frames if first else cap):
+        return [n]
+    m = -(-n // cap)
+    return [n // m + (1 if j < n % m else 0) for j in range(m)]
 
 
 def parse_segment(spec: str, seed: int = 0) -> Segment:
@@ -314,18 +324,20 @@ def timeline(model: Editor, segments: Sequence[Segment], overlap: int = OVERLAP,
         except ValueError as e:
             raise EditError(f"{_name(k, segments[k])}: {e}") from None
     for k in range(start, len(segments)):
-        seg, n = segments[k], frames[k]
-        if k == 0:
-            feats = model.denormalise(model.sample(seg.prompt, n, seg.seed))
-            joints = recover_joints(feats).astype(np.float32)
-            continue
-        c = min(overlap, len(feats))
-        known = np.zeros((c + n, feats.shape[1]), np.float32)
-        known[:c] = model.normalise(feats[-c:])
-        keep = keep_mask(c + n, [KeepRect(frames=((0, c - 1),))])
-        w = ease_seams(model.denormalise(model.sample(seg.prompt, c + n, seg.seed, known, keep)), keep)
-        joints = append_segment(joints, recover_joints(w), c)
-        feats = np.concatenate([feats, w[c:]])
+        seg = segments[k]
+        for j, n in enumerate(window_sizes(frames[k], k == 0, model.max_frames, overlap)):
+            seed = (seg.seed + j) % (MAX_SEED + 1)
+            if k == 0 and j == 0:
+                feats = model.denormalise(model.sample(seg.prompt, n, seed))
+                joints = recover_joints(feats).astype(np.float32)
+                continue
+            c = min(overlap, len(feats))
+            known = np.zeros((c + n, feats.shape[1]), np.float32)
+            known[:c] = model.normalise(feats[-c:])
+            keep = keep_mask(c + n, [KeepRect(frames=((0, c - 1),))])
+            w = ease_seams(model.denormalise(model.sample(seg.prompt, c + n, seed, known, keep)), keep)
+            joints = append_segment(joints, recover_joints(w), c)
+            feats = np.concatenate([feats, w[c:]])
     return Timeline(feats, np.asarray(joints, np.float32), segments, tuple(frames), model.normalise(feats), overlap)
 
 
@@ -342,11 +354,10 @@ def regenerate(model: Editor, tl: Timeline, i: int, segment: Segment | None = No
 
 # ----------------------------------------------------------------------------------------------- edits
 
-def _edit(model: Editor, features: np.ndarray, prompt: str, seed: int, keep: np.ndarray,
-          known: np.ndarray | None = None) -> Motion:
-    """Sample with ``known`` (de-normalised, default ``features``) kept where ``keep``; pin the kept root, ease the
-    seams, pin again (the easing moves the free frames' root)."""
-    known = features if known is None else known
+def _edit(model: Editor, features: np.ndarray, prompt: str, seed: int, keep: np.ndarray) -> Motion:
+    """Sample with ``features`` (de-normalised) kept where ``keep``; pin the kept root, ease the seams, pin again
+    (the easing moves the free frames' root)."""
+    known = features
     x = model.sample(prompt, len(features), seed, model.normalise(known), keep)
     f = pin_kept_root(ease_seams(pin_kept_root(model.denormalise(x), keep, known), keep), keep, known)
     return Motion(f, recover_joints(f).astype(np.float32))
@@ -397,8 +408,7 @@ def loop(model: Editor, features: np.ndarray, prompt: str, seed: int, ends: int 
     known = f.copy()
     known[n - ends:] = f[:ends]
     keep = keep_mask(n, [KeepRect(frames=((0, ends - 1), (n - ends, None)))])
-    m = _edit(model, f, prompt, seed, keep, known)
-    full = m.features
+    full = ease_seams(model.denormalise(model.sample(prompt, n, seed, model.normalise(known), keep)), keep)
     if in_place:
         full = full.copy()
         full[:, 1:3] = 0.0

@@ -13,13 +13,13 @@ constants (C = 20, K = 10, seam easing M = 10, 20 fps, maxFrames 196). Operation
    0..23 equal the timeline's, segment 3 (same seed, so the same noise) continues the new segment 2.
 3. ``inbetween`` of ``timeline_features`` (defaults: keep 0..19 and 28..47) → ``inbetween_*``.
 4. ``edit_body`` of ``timeline_features``, keep ``lower`` (root + legs) → ``body_*``.
-5. ``loop`` of ``timeline_features`` (K = 10; the clip is 38 frames) → ``loop_*``; with ``in_place`` the same
+5. ``loop`` of ``timeline_features`` (K = 10; the clip is 38 frames; eased, not pinned) → ``loop_*``; with ``in_place`` the same
    sampling with root x/z velocity zeroed → ``loop_in_place_joints`` (its features are ``loop_features`` with
    [:, 1:3] = 0).
 
 Every sampling call is a ``run`` (JSON ``runs``, in call order) with its frames, label, seed and the key prefix of
 its noise arrays: ``<prefix>x_T``, then for k = steps−1..0 ``<prefix>z_<k>`` and ``<prefix>eps_<k>`` when drawn
-(the order emdm.sample draws them; ``emdm.fixtures.draw_noise``). Operations 3–5 start from the stored
+(the order emdm.sample draws them; ``emdm.fixtures.draw_noise``). Features are de-normalised throughout. Operations 3–5 start from the stored
 ``timeline_features`` (not a re-computed timeline), so their errors do not compound.
 tests/python/test_edit.py regenerates the fixture and compares (the fixture must be current).
 """
