@@ -21,9 +21,11 @@ export class PlaybackBar {
       e.preventDefault();
       this.toggle();
     });
+    this.sync();
   }
 
   toggle(): void {
+    if (!this.player.track) return; // nothing to play yet
     this.player.playing = !this.player.playing;
     if (this.player.playing && this.player.time >= this.player.duration) this.player.seek(0);
     this.sync();
@@ -32,8 +34,17 @@ export class PlaybackBar {
   /** Reflect the player's clock (call once per displayed frame). */
   sync(): void {
     const p = this.player;
-    this.play.classList.toggle('paused', !p.playing);
-    this.play.setAttribute('aria-label', p.playing ? 'Pause' : 'Play');
+    // no motion yet: a disabled play button and no clock (not a pause icon over "0.0 / 0.0 s")
+    const empty = !p.track;
+    this.play.disabled = empty;
+    this.scrub.disabled = empty;
+    this.play.classList.toggle('paused', empty || !p.playing);
+    this.play.setAttribute('aria-label', empty ? 'Play (no motion yet)' : p.playing ? 'Pause' : 'Play');
+    if (empty) {
+      this.scrub.value = '0';
+      this.time.textContent = '– / – s';
+      return;
+    }
     const d = p.duration;
     if (!this.dragging) this.scrub.value = String(d > 0 ? p.time / d : 0);
     this.time.textContent = `${p.time.toFixed(1)} / ${d.toFixed(1)} s`;

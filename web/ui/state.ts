@@ -143,6 +143,21 @@ export function parseState(search: string, l: StateLimits, fallbackSeed: number)
   return { state: s, notices };
 }
 
+/** The URL parameters of a state (parseState reads them; stateToSearch writes them). */
+export const STATE_PARAMS = ['mode', 'text', 'action', 'steps', 'seconds', 'guidance', 'seed', 'backend', 'compare'] as const;
+/** Page flags read elsewhere: `noauto` (no first motion on load), `quality=high` (no adaptive resolution). */
+export const PAGE_FLAGS = ['noauto', 'quality'] as const;
+
+/** The notice for URL parameters the page does not know ('' when there are none): it names them and the known ones. */
+export function unknownParamsNotice(search: string): string {
+  const known: readonly string[] = [...STATE_PARAMS, ...PAGE_FLAGS];
+  const unknown = [...new Set([...new URLSearchParams(search).keys()])].filter((k) => !known.includes(k));
+  if (!unknown.length) return '';
+  const names = unknown.map((k) => `'${k}'`).join(', ');
+  return `URL parameter${unknown.length > 1 ? 's' : ''} ${names} ${unknown.length > 1 ? 'are' : 'is'} not known and ignored `
+    + `(known: ${known.join(', ')}${unknown.some((k) => /len|dur|time|frame/i.test(k)) ? "; the motion's length is 'seconds'" : ''}).`;
+}
+
 /** The query string for a state (only what determines the motion, plus a non-default backend). */
 export function stateToSearch(s: PageState): string {
   const q = new URLSearchParams();
