@@ -154,7 +154,7 @@ async function reload(glb: Uint8Array, ch: { json: GltfJson }) {
 }
 
 /** Load → map → retarget every motion → check, export GLB (reload, replay) and BVH. */
-async function checkCharacter(label: string, file: string, glb: Uint8Array, unmapped: string[], source: string, vrm?: string) {
+async function checkCharacter(label: string, file: string, glb: Uint8Array, unmapped: string[], source: string, vrm?: string, facingDeg?: number) {
       const t0 = performance.now();
       const ch = await loadCharacter([{ name: file, data: glb }]);
       const loadMs = performance.now() - t0;
@@ -174,6 +174,8 @@ async function checkCharacter(label: string, file: string, glb: Uint8Array, unma
         const slide = m.slideMaxCm / res.scale;
         console.log(`[retarget] ${spec.label.split(',')[0]} × ${motion.label}: mapped ${22 - ch.unmapped.length}/22, limb direction max ${m.maxDeg.toFixed(2)}° (${m.worst}) mean ${m.meanDeg.toFixed(3)}° median ${m.medianDeg.toFixed(3)}°, foot height on contact frames ≤ ${m.footMaxCm.toFixed(2)} cm in its units, ${foot.toFixed(2)} cm at our size (ours ${m.ourFootMaxCm.toFixed(2)} cm), slide ≤ ${slide.toFixed(2)} cm at our size (ours ${m.ourSlideMaxCm.toFixed(2)} cm), scale ${res.scale.toFixed(3)}, yaw ${((res.yaw * 180) / Math.PI).toFixed(0)}°, load ${loadMs.toFixed(0)} ms, retarget ${retargetMs.toFixed(0)} ms`);
         expect(m.maxDeg, m.worst).toBeLessThan(10);
+        // the rest facing found from the hips (VRM 0.x faces −Z: 180°, what three-vrm's rotateVRM0 turns)
+        if (facingDeg !== undefined) expect(Math.abs(Math.abs((res.yaw * 180) / Math.PI) - facingDeg)).toBeLessThan(1);
         // feet on the floor on every contact frame, the real kick clip included (long one-leg stances on
         // a nearly straight leg: the root goes down to the lower foot, the other leg bends)
         expect(foot).toBeLessThan(3);
@@ -238,12 +240,12 @@ describe('retargeting onto real characters (tests/fixtures/rigs)', () => {
   });
   it('cryptovoxels.vrm (VRM 0.x from UniVRM, skinned, faces −Z): through three-vrm, its humanoid map', async () => {
     const file = path.join(ROOT, 'tests', 'fixtures', 'rigs', 'cryptovoxels.vrm');
-    await checkCharacter('cryptovoxels.vrm', 'cryptovoxels.vrm', new Uint8Array(fs.readFileSync(file)), ['spine2'], 'vrm', '0.x');
+    await checkCharacter('cryptovoxels.vrm', 'cryptovoxels.vrm', new Uint8Array(fs.readFileSync(file)), ['spine2'], 'vrm', '0.x', 180);
   });
   it("VRM 1.0 sample from the VRM specification (Blender VRM add-on armature, rolled bone axes), given a skin", async () => {
     // the file's meshes are unskinned quads (a material sample): withSkin binds a small mesh to its armature
     const name = 'VRMC_materials_mtoon_UV_Animation_Test.vrm';
     const file = path.join(ROOT, 'tests', 'fixtures', 'rigs', name);
-    await checkCharacter('VRM 1.0 mtoon sample', name, withSkin(new Uint8Array(fs.readFileSync(file)), name), ['spine2'], 'vrm', '1.0');
+    await checkCharacter('VRM 1.0 mtoon sample', name, withSkin(new Uint8Array(fs.readFileSync(file)), name), ['spine2'], 'vrm', '1.0', 0);
   });
 });
