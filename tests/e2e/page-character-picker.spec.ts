@@ -7,7 +7,7 @@ import path from 'node:path';
 import { expect, test, type Page } from '@playwright/test';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { readGlb, writeGlb } from '../../src/character/retarget/load';
-import { RIGS, buildRigGlb } from '../unit/retargetRigs';
+import { RIGS, buildRigGlb, withSkin } from '../unit/retargetRigs';
 import { watchExternalRequests, watchPage } from './helpers';
 
 declare global {
@@ -85,6 +85,13 @@ test('a dropped character performs the motion; bad files keep the built-in one; 
   await expect(page.locator('#char-status')).toContainText('odd.glb: 22/22 joints mapped (your map)');
   expect(await page.evaluate(() => window.emdmCharacter.active)).toBe(true);
   expect(await page.evaluate(() => JSON.parse(localStorage.getItem('emdm.boneMap.odd.glb') ?? '{}').joints?.pelvis)).toBe(`segment${nodeOf.get(spec.names.pelvis!)}`);
+  // the map as a JSON file
+  const [mapDownload] = await Promise.all([page.waitForEvent('download'), page.locator('#char-map-export').click()]);
+  expect(mapDownload.suggestedFilename()).toBe('odd.bonemap.json');
+  const exported = JSON.parse(fs.readFileSync(await mapDownload.path(), 'utf8'));
+  expect(exported.format).toBe('emdm-bone-map/1');
+  expect(Object.keys(exported.joints).length).toBe(22);
+  expect(exported.joints.l_knee).toBe(`segment${nodeOf.get(spec.names.l_knee!)}`);
 
   // the real CC0 robot through the file picker
   await page.locator('#char-file').setInputFiles(path.join(process.cwd(), 'tests/fixtures/rigs/RobotExpressive.glb'));
@@ -114,6 +121,14 @@ test('a dropped character performs the motion; bad files keep the built-in one; 
   expect(vrmBack.animations.map((c) => c.name)).toContain('emdm');
   expect(Object.keys(vrmBack.parser.json.extensions ?? {})).toContain('VRM');
 
+  // a VRM 1.0 (the VRM specification's Blender-made sample, given a skin as in the unit tests)
+  const v1 = withSkin(new Uint8Array(fs.readFileSync(path.join(process.cwd(), 'tests/fixtures/rigs/VRMC_materials_mtoon_UV_Animation_Test.vrm'))), 'v1.vrm');
+  await drop(page, [{ name: 'sample-1.0.vrm', bytes: v1 }]);
+  await expect(page.locator('#char-status')).toContainText('sample-1.0.vrm: 21/22 joints mapped (VRM 1.0 humanoid)');
+  expect(await moved('l_ankle')).toBeGreaterThan(0.05);
+  await drop(page, [{ name: 'cryptovoxels.vrm', bytes: vrm }]);
+  await expect(page.locator('#char-status')).toContainText('cryptovoxels.vrm: 21/22 joints mapped');
+
   // bad files while it is shown: each says why, and the VRM stays on the stage
   await drop(page, [{ name: 'broken.vrm', bytes: vrm.slice(0, 5000) }]);
   await expect(page.locator('#char-status')).toContainText('broken.vrm: not a valid binary glTF: the header says');
@@ -128,5 +143,46 @@ test('a dropped character performs the motion; bad files keep the built-in one; 
   expect(await page.evaluate(() => [window.emdmCharacter.active, window.emdmCharacter.builtInVisible])).toEqual([false, true]);
   expect(await page.evaluate(() => window.emdm.cspViolations)).toEqual([]);
   expect(external, 'nothing fetched from outside the page (the remote .gltf buffer included)').toEqual([]);
+  watch.assertClean();
+});
+
+test("the visitor's character in the compare view: a second copy performs the DDIM motion, back to one on leaving", async ({ page }) => {
+  test.setTimeout(300_000);
+  const m = (await (await page.request.get('/models/manifest.json')).json()) as { models: Record<string, { task: string; objective?: string }> };
+  test.skip(!Object.values(m.models).some((e) => e.objective === 'diffusion' && e.task === 'text'), 'no diffusion-objective text model in the manifest');
+  const watch = watchPage(page);
+  await page.goto('/?noauto=1&backend=wasm');
+  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+  const vrm = new Uint8Array(fs.readFileSync(path.join(process.cwd(), 'tests/fixtures/rigs/cryptovoxels.vrm')));
+  await drop(page, [{ name: 'cryptovoxels.vrm', bytes: vrm }]);
+  await page.waitForFunction(() => window.emdmCharacter.name === 'cryptovoxels.vrm', null, { timeout: 30_000 });
+  await page.locator('#mode-text').click();
+  await page.locator('#compare').check();
+  await page.evaluate(() => window.emdm.generate({ text: 'a person walks forward and waves', steps: 20, seconds: 2, seed: 7 }));
+  await page.waitForFunction(() => window.emdmCharacter.comparing, null, { timeout: 30_000 });
+  // the built-in characters stay hidden; both copies of the visitor's character move, differently
+  expect(await page.evaluate(() => [window.emdmCharacter.active, window.emdmCharacter.builtInVisible, window.emdm.compareInfo().ddimCharacterVisible])).toEqual([true, false, false]);
+  const at = (t: number) => page.evaluate(async (time) => {
+    window.emdm.seek(time);
+    await new Promise((r) => setTimeout(r, 200));
+    return [window.emdmCharacter.jointWorld('l_ankle', 'main'), window.emdmCharacter.jointWorld('l_ankle', 'compare')];
+  }, t);
+  const [a0, b0] = await at(0.2);
+  const [a1, b1] = await at(1.5);
+  const dist = (p: number[] | null, q: number[] | null) => Math.hypot(p![0] - q![0], p![1] - q![1], p![2] - q![2]);
+  expect(dist(a0, a1)).toBeGreaterThan(0.05);
+  expect(dist(b0, b1)).toBeGreaterThan(0.05);
+  expect(Math.abs(dist(a0, a1) - dist(b0, b1)) + dist(a1, b1)).toBeGreaterThan(0.01);
+  // leaving the comparison: one copy again
+  await page.locator('#compare').uncheck();
+  await page.waitForFunction(() => !window.emdmCharacter.comparing, null, { timeout: 30_000 });
+  expect(await page.evaluate(() => window.emdmCharacter.active)).toBe(true);
+  // back to the built-in character while comparing: the built-in pair is shown again
+  await page.locator('#compare').check();
+  await page.evaluate(() => window.emdm.generate({ text: 'a person walks forward and waves', steps: 20, seconds: 2, seed: 7 }));
+  await page.waitForFunction(() => window.emdmCharacter.comparing, null, { timeout: 30_000 });
+  await page.locator('#char-builtin').click();
+  await page.waitForFunction(() => window.emdm.compareInfo().ddimCharacterVisible === true, null, { timeout: 30_000 });
+  expect(await page.evaluate(() => [window.emdmCharacter.active, window.emdmCharacter.builtInVisible])).toEqual([false, true]);
   watch.assertClean();
 });

@@ -179,6 +179,7 @@ export class View {
     this.picker = new CharacterPicker({
       add: (o) => this.stage.add(o), builtIn: this.character.object, skeleton, time: () => this.player.time,
       notify: (kind, text) => this.notices.show(kind, text), before: document.querySelector<HTMLElement>('section.downloads')!,
+      changed: () => this.showCompare(this.compareShown),
     });
     this.stepStrip = new StepStrip(byId('step-strip'), skeleton.parents);
     this.showSteps.addEventListener('change', () => {
@@ -278,9 +279,11 @@ export class View {
       this.player2.setTrack(ddim.track);
       this.player2.playing = false;
     }
-    this.ddimCharacter.object.visible = !!ddim;
+    // the visitor's character, when one is shown, performs both motions (a second copy for DDIM)
+    const theirs = this.picker.compare(ddim ? ddim.result.motion : null);
+    this.ddimCharacter.object.visible = !!ddim && !theirs;
     // split view: EMDM in the left half, DDIM in the right, each followed by its own camera
-    this.stage.setSplit(ddim ? { left: this.character.object, right: this.ddimCharacter.object } : null);
+    this.stage.setSplit(ddim ? theirs ?? { left: this.character.object, right: this.ddimCharacter.object } : null);
     this.comparePanels.hidden = !ddim;
     this.compareDivider.hidden = !ddim;
     if (ddim) this.timingsHud.hidden = true;
