@@ -262,11 +262,20 @@ test.describe('demo page: faults', () => {
     await expect(page.locator('#error-title')).toContainText(name);
     await expect(page.locator('#error-reason')).toContainText(/missing|could not be downloaded/);
     await expect(page.locator('#mode-text')).toBeDisabled();
+    // one status: the error, never "Downloading …" with the loading dot beside the error panel
+    await expect(page.locator('#status-dot')).toHaveClass(/\berror\b/);
+    await expect(page.locator('#status-text')).toContainText(`${name} unavailable`);
+    await page.waitForTimeout(1500); // late download events of the failed load must not bring "loading" back
+    await expect(page.locator('#status-dot')).toHaveClass(/\berror\b/);
+    await expect(page.locator('#status-text')).not.toContainText('Downloading');
+    await expect(page.locator('#download-bar')).toBeHidden();
     const action = Object.values(m.models).find((x) => x.task === 'action');
     test.skip(!action, 'no action model is shipped, so no other mode can be shown working');
     await expect(page.locator('#mode-action')).toHaveAttribute('aria-selected', 'true');
+    expect(new URL(page.url()).searchParams.get('mode'), 'the URL names the mode the page fell back to').toBe('action');
     const r = await page.evaluate(() => window.emdm.generate({ mode: 'action', seconds: 1, steps: 1 }));
     expect(r.frames).toBe(20);
+    await expect(page.locator('#status-dot')).toHaveClass(/\bready\b/); // the action model works: ready
   });
 
   test('a model whose sha256 differs from the manifest is refused with the reason', async ({ page }) => {

@@ -1,6 +1,8 @@
-// The models the page needs, loaded lazily in the generation worker (which also falls back from
-// WebGPU to WASM), and generations run so that the NEWEST request wins: starting one aborts the one
-// before it (the worker stops it at the next denoising step) and waits for it to stop before running.
+// The models the page needs, loaded lazily in the generation worker, and generations run so that the
+// NEWEST request wins: starting one aborts the one before it (the worker stops it at the next denoising
+// step) and waits for it to stop before running. Backend choice and the WebGPU → WASM fallback (at load
+// and at run time) are not made here or in web/main.ts: the page's `backend` (URL) goes to the worker,
+// where src/backends.ts decides, in one place for the page and the library (createGenerator).
 import { type Manifest, type ModelEntry, GenerationClient, type ClientEvents, type ModelInfo, type RemoteGenerateOptions, type RemoteResult } from '../../src/index';
 import type { BackendChoice, Mode } from './state';
 
