@@ -475,7 +475,8 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
         }));
         let best = lo;
         let bestCost = cost(best);
-        for (let k = 1; k <= 16; k++) {
+        // (stops once the feet are within 0.1 mm: most frames need no search)
+        for (let k = 1; k <= 16 && bestCost > 1e-4 * (legs[0].H.distanceTo(legs[0].K) / 0.4); k++) {
           const y = lo + ((hi - lo) * k) / 16;
           const c = cost(y);
           if (c < bestCost - 1e-9) {
