@@ -1,7 +1,7 @@
 // Loading users' characters (src/character/retarget/load.ts): bad files get a typed error that says what
 // is wrong; nothing outside the given files is fetched; .gltf + .bin + images are packed into one GLB.
 import { describe, expect, it } from 'vitest';
-import { CharacterLoadError, type CharacterFile, loadCharacter, readGlb, writeGlb } from '../../src/character/retarget/load';
+import { CharacterLoadError, type CharacterFile, MAX_CHARACTER_BYTES, loadCharacter, readGlb, writeGlb } from '../../src/character/retarget/load';
 import { mappingToJSON, mappingFromJSON } from '../../src/character/retarget/mapping';
 import { manifestSkeleton } from './coreFixtures';
 import { RIGS, buildRigGlb } from './retargetRigs';
@@ -53,6 +53,8 @@ describe('loading a character', () => {
   it('refuses what is too large, corrupt, compressed, unskinned or not a humanoid, saying so', async () => {
     expect(await reason([{ name: 'a.txt', data: new Uint8Array(4) }])).toEqual(['no-file', expect.stringMatching(/no \.glb, \.gltf or \.vrm/)]);
     expect(await reason([{ name: 'big.glb', data: mixamo }], { maxBytes: 1000 })).toEqual(['too-large', expect.stringMatching(/big\.glb: 0\.0 MB given; characters up to 0 MB/)]);
+    // the page's limit: over 100 MB in all (the files of a .gltf counted together) is refused before any parsing
+    expect(await reason([{ name: 'huge.gltf', data: new Uint8Array(8) }, { name: 'huge.bin', data: new Uint8Array(MAX_CHARACTER_BYTES) }])).toEqual(['too-large', expect.stringMatching(/huge\.gltf: 100\.0 MB given; characters up to 100 MB are read/)]);
     expect((await reason([{ name: 'cut.glb', data: mixamo.slice(0, 200) }]))[1]).toMatch(/cut\.glb: not a valid binary glTF: the header says \d+ bytes, the file has 200/);
     expect(await reason([{ name: 'junk.vrm', data: new TextEncoder().encode('hello, I am not a model') }])).toEqual(['corrupt', expect.stringMatching(/junk\.vrm: not a valid binary glTF: it does not start with 'glTF'/)]);
     expect(await reason([{ name: 'junk.gltf', data: new TextEncoder().encode('hello, I am not a model') }])).toEqual(['corrupt', expect.stringMatching(/its glTF JSON does not parse/)]);
