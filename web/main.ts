@@ -17,6 +17,7 @@ import { ErrorPanel, Notices } from './ui/notices';
 import { failedModel, limitsFor, Session, type Generation, type PageContext, type SessionGenerateOptions } from './ui/session';
 import { parseState, randomSeed, stateToSearch, unknownParamsNotice, type PageState } from './ui/state';
 import { connectTestApi, installTestApi } from './ui/testapi';
+import { TimelinePanel } from './ui/timeline';
 import { describe, promptNote, View } from './ui/view';
 
 const MODELS_URL = `${import.meta.env.BASE_URL}models/`;
@@ -169,6 +170,8 @@ async function main(): Promise<void> {
   // ------------------------------------------------------------ panels and the test API get the page
   const page: PageContext = { session, view, controls, generate };
   connectTestApi(api, page);
+  const timeline = new TimelinePanel(page, byId('edit-panel'));
+  api.edit = timeline.testApi();
 
   // ------------------------------------------------------------ cold start: load the first model
   const first = modelForMode(models, controls.read().mode) ?? (models.text ?? models.action)!;
@@ -198,7 +201,7 @@ async function main(): Promise<void> {
     return;
   }
   // Show something right away: the motion the URL (or the defaults) describe.
-  if (AUTO_GENERATE) void generate(controls.read()).catch(() => undefined);
+  if (AUTO_GENERATE) void (timeline.restoredFromUrl ? timeline.generateAll() : generate(controls.read())).catch(() => undefined);
 }
 
 main().catch((e) => {

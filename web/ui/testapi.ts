@@ -1,4 +1,5 @@
 // `window.emdm`: the page's test API (used by the Playwright suites and by anyone scripting the demo).
+import type { EditTestApi } from './timeline';
 import type { PageContext, Produced } from './session';
 import { MAX_GUIDANCE, MAX_SECONDS, MAX_SEED, MIN_GUIDANCE, MIN_SECONDS, stepChoices, type Mode, type PageState, type StateLimits } from './state';
 
@@ -115,6 +116,8 @@ export interface EmdmTestApi {
   cache: { usage(): Promise<{ files: number; bytes: number }>; clear(): Promise<void> };
   /** "Show steps": the step previews of the last generation as they arrived (x̂0 joints, worker decode + IK ms, arrival time, put on the character) */
   previews(): Array<{ step: number; steps: number; frames: number; joints: number[]; ms: number; at: number; played: boolean }>;
+  /** the timeline & editing panel (web/ui/timeline.ts), once the page is ready */
+  edit?: EditTestApi;
 }
 
 declare global {

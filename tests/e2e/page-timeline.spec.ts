@@ -1,0 +1,260 @@
+// The "Timeline & editing" panel (web/ui/timeline.ts, issue 14) on the built page: a 3-segment 30 s
+// timeline (frames, its BVH in three's BVHLoader, the URL restoring it), an in-between (kept frames
+// unchanged), an upper-body edit (legs and root unchanged), a loop (first and last pose meet; in place
+// stays put), bad input (a message naming the segment, the other segments kept), and the keyboard.
+// Prints the time of a 3 × 5 s timeline against one 5 s motion (figures, not asserted).
+import fs from 'node:fs';
+import { expect, test, type Page } from '@playwright/test';
+import { BVHLoader } from 'three/addons/loaders/BVHLoader.js';
+import { watchPage } from './helpers';
+
+const STEPS = 1; // the fewest the shipped text model supports: the test checks bookkeeping, not quality
+const D = 263;
+const J = 22;
+
+test.describe.configure({ mode: 'serial' });
+
+let page: Page;
+let watch: ReturnType<typeof watchPage>;
+
+test.beforeAll(async ({ browser }) => {
+  page = await browser.newPage();
+  watch = watchPage(page);
+  await page.goto(`/?noauto=1&backend=wasm&steps=${STEPS}&mode=text&text=a+person+walks+forward`);
+  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+  expect(await page.evaluate(() => window.emdm.error)).toBe('');
+  expect(await page.evaluate(() => typeof window.emdm.edit)).toBe('object');
+  // the panel starts folded (the character keeps the room); open it
+  await page.locator('#edit-panel summary').click();
+  await expect(page.locator('#edit-panel details')).toHaveAttribute('open', '');
+});
+
+test.afterAll(async () => {
+  await page?.close();
+});
+
+/** Frames × 22 joints, position of joint j at frame f. */
+const at = (joints: number[], f: number, j: number) => joints.slice((f * J + j) * 3, (f * J + j) * 3 + 3);
+
+/** Heading of frame f (about +Y) from the hips and shoulders, as src/motion/stitch.ts headingAt measures it. */
+function heading(joints: number[], f: number): number {
+  const [lh, rh, ls, rs] = [1, 2, 16, 17].map((j) => at(joints, f, j));
+  const ax = rh[0] - lh[0] + rs[0] - ls[0];
+  const az = rh[2] - lh[2] + rs[2] - ls[2];
+  return Math.atan2(az, -ax);
+}
+
+/** Largest per-joint distance between two frames' poses: each relative to its pelvis x/z and turned to face +Z. */
+function poseDistance(a: number[], fa: number, b: number[], fb: number): number {
+  const local = (js: number[], f: number, j: number) => {
+    const r = at(js, f, 0);
+    const p = at(js, f, j);
+    const t = -heading(js, f);
+    const x = p[0] - r[0];
+    const z = p[2] - r[2];
+    return [Math.cos(t) * x + Math.sin(t) * z, p[1], -Math.sin(t) * x + Math.cos(t) * z];
+  };
+  let m = 0;
+  for (let j = 0; j < J; j++) {
+    const p = local(a, fa, j);
+    const q = local(b, fb, j);
+    m = Math.max(m, Math.hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]));
+  }
+  return m;
+}
+
+test('a 3-segment 30 s timeline: 600 frames, one BVH of 600 frames, kept in the URL', async ({ browser }) => {
+  const segs = [
+    { prompt: 'a person walks forward', seconds: 10, seed: 11 },
+    { prompt: 'a person waves with the right hand', seconds: 10, seed: 12 },
+    { prompt: 'a person walks backward', seconds: 10, seed: 13 },
+  ];
+  await page.evaluate((s) => window.emdm.edit!.setSegments(s), segs);
+  const r = await page.evaluate(() => window.emdm.edit!.generateAll());
+  expect(r.kind).toBe('timeline');
+  expect(r.frames).toBe(600);
+  expect(r.starts).toEqual([0, 200, 400]);
+  expect(r.windows).toBe(6); // 10 s = 200 frames: two windows each (a window holds at most 196 frames)
+  expect(await page.evaluate(() => window.emdm.edit!.message())).toBe('');
+  // the player plays the whole sequence and scrubs it
+  const pb = await page.evaluate(() => window.emdm.playback());
+  expect(pb.duration).toBeCloseTo(599 / 20, 2); // frames 0…599 at 20 fps
+  await page.evaluate(() => window.emdm.seek(25, false));
+  expect(await page.evaluate(() => window.emdm.frame())).toBeCloseTo(500, 0);
+  // the stitched motion has no jump at the seams: the pelvis moves no more across one than within the segments
+  const cur = (await page.evaluate(() => window.emdm.edit!.current()))!;
+  const step = (f: number) => Math.hypot(cur.joints[f * 66] - cur.joints[(f - 1) * 66], cur.joints[f * 66 + 2] - cur.joints[(f - 1) * 66 + 2]);
+  const steps = Array.from({ length: 599 }, (_, k) => step(k + 1)).sort((a, b) => a - b);
+  const p99 = steps[Math.floor(0.99 * steps.length)];
+  for (const seam of [100, 200, 300, 400, 500]) expect(step(seam), `pelvis step at frame ${seam}`).toBeLessThanOrEqual(Math.max(p99 * 1.5, 0.05));
+
+  const [dl] = await Promise.all([page.waitForEvent('download'), page.locator('#dl-bvh').click()]);
+  const parsed = new BVHLoader().parse(fs.readFileSync((await dl.path())!, 'utf8'));
+  expect(parsed.clip.tracks[0].times.length).toBe(600);
+  expect(parsed.skeleton.bones.length).toBeGreaterThanOrEqual(22);
+
+  // the URL holds the timeline: a reload (or a shared link) restores the segments
+  const url = page.url();
+  expect(new URL(url).searchParams.get('tl')).toBe(JSON.stringify(segs.map((s) => [s.prompt, s.seconds, s.seed])));
+  const other = await browser.newPage();
+  await other.goto(`${url}&noauto=1`);
+  await other.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+  expect(await other.evaluate(() => window.emdm.edit!.segments())).toEqual(segs);
+  expect(await other.locator('#edit-panel details').getAttribute('open')).not.toBeNull();
+  await other.close();
+});
+
+test('regenerating segment 2 keeps segment 1 as it was', async () => {
+  const before = (await page.evaluate(() => window.emdm.edit!.current()))!;
+  const r = await page.evaluate(() => window.emdm.edit!.regenerate(1));
+  expect(r.windows).toBe(4); // segments 2 and 3, two windows each; segment 1 reused
+  const after = (await page.evaluate(() => window.emdm.edit!.current()))!;
+  expect(after.frames).toBe(600);
+  expect(after.features.slice(0, 200 * D)).toEqual(before.features.slice(0, 200 * D));
+  expect(after.features.slice(200 * D, 400 * D)).not.toEqual(before.features.slice(200 * D, 400 * D));
+});
+
+test('edits refuse a motion longer than one model window, saying so', async () => {
+  await expect(page.evaluate(() => window.emdm.edit!.inBetween('a person jumps'))).rejects.toThrow(/at most 196 frames/);
+  expect(await page.evaluate(() => window.emdm.edit!.message())).toMatch(/in-betweening works on a motion of at most 196 frames \(9\.8 s\).*this one is 600 frames/);
+});
+
+test('in-between: the first and last second stay as they were, the middle is new', async () => {
+  await page.evaluate((s) => window.emdm.generate({ mode: 'text', text: 'a person walks forward', seconds: 5, steps: s, seed: 21 }), STEPS);
+  const before = (await page.evaluate(() => window.emdm.edit!.current()))!;
+  expect(before.frames).toBe(100);
+  const r = await page.evaluate(() => window.emdm.edit!.inBetween('a person jumps'));
+  expect(r.frames).toBe(100);
+  const after = (await page.evaluate(() => window.emdm.edit!.current()))!;
+  let kept = 0;
+  let middle = 0;
+  for (let f = 0; f < 100; f++) {
+    for (let c = 0; c < D; c++) {
+      const d = Math.abs(after.features[f * D + c] - before.features[f * D + c]);
+      if (f < 20 || f >= 80) kept = Math.max(kept, d);
+      else middle = Math.max(middle, d);
+    }
+  }
+  expect(kept, 'kept features (first and last second)').toBeLessThan(1e-4);
+  expect(middle, 'the middle is regenerated').toBeGreaterThan(1e-2);
+  // kept frames decode where they were, ≤ 1 mm (the later second is pinned in the world)
+  for (const f of [0, 19, 80, 99]) {
+    for (let j = 0; j < J; j++) {
+      const p = at(after.joints, f, j);
+      const q = at(before.joints, f, j);
+      expect(Math.hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]), `frame ${f} joint ${j}`).toBeLessThan(1e-3);
+    }
+  }
+});
+
+test('upper-body edit: legs and root unchanged on every frame, a new upper body', async () => {
+  const before = (await page.evaluate(() => window.emdm.edit!.current()))!;
+  await page.locator('#tl-body-keep').selectOption('lower');
+  await page.locator('#tl-body-prompt').fill('a person waves both hands');
+  const r = await page.evaluate(() => window.emdm.edit!.bodyEdit('lower', 'a person waves both hands'));
+  expect(r.kind).toBe('body');
+  const after = (await page.evaluate(() => window.emdm.edit!.current()))!;
+  // lower body: root [0:4] and the pelvis/legs' positions, rotations and velocities (src/sampler/mask.ts groups)
+  const legs = [1, 2, 4, 5, 7, 8, 10, 11];
+  const lower = new Set<number>([0, 1, 2, 3, 193, 194, 195, 259, 260, 261, 262]);
+  for (const j of legs) {
+    for (let k = 0; k < 3; k++) lower.add(4 + 3 * (j - 1) + k);
+    for (let k = 0; k < 6; k++) lower.add(67 + 6 * (j - 1) + k);
+    for (let k = 0; k < 3; k++) lower.add(193 + 3 * j + k);
+  }
+  let keptDiff = 0;
+  let upperDiff = 0;
+  for (let f = 0; f < after.frames; f++) {
+    for (let c = 0; c < D; c++) {
+      const d = Math.abs(after.features[f * D + c] - before.features[f * D + c]);
+      if (lower.has(c)) keptDiff = Math.max(keptDiff, d);
+      else upperDiff = Math.max(upperDiff, d);
+    }
+  }
+  expect(keptDiff).toBeLessThan(1e-4);
+  expect(upperDiff).toBeGreaterThan(1e-2);
+});
+
+test('loop: the pose at the wrap is the first pose; in place the pelvis does not travel', async () => {
+  const base = (await page.evaluate(() => window.emdm.edit!.current()))!;
+  const r = await page.evaluate(() => window.emdm.edit!.loop(false));
+  expect(r.frames).toBe(base.frames - 10);
+  const full = (await page.evaluate(() => window.emdm.edit!.lastLoopFull()))!;
+  expect(full.frames).toBe(base.frames);
+  // frame N−K (where the clip wraps to) repeats frame 0's pose, ≤ 2 cm per joint
+  expect(poseDistance(full.joints, base.frames - 10, full.joints, 0)).toBeLessThan(0.02);
+  expect(await page.evaluate(() => window.emdm.playback().duration)).toBeCloseTo((base.frames - 11) / 20, 2);
+
+  await page.evaluate((s) => window.emdm.generate({ mode: 'text', text: 'a person walks forward', seconds: 5, steps: s, seed: 31 }), STEPS);
+  await page.locator('#tl-loop-in-place').check();
+  await page.evaluate(() => window.emdm.edit!.loop(true));
+  const clip = (await page.evaluate(() => window.emdm.edit!.current()))!;
+  let travel = 0;
+  for (let f = 0; f < clip.frames; f++) travel = Math.max(travel, Math.hypot(clip.joints[f * 66] - clip.joints[0], clip.joints[f * 66 + 2] - clip.joints[2]));
+  expect(travel, 'in-place root travel, metres').toBeLessThan(0.05);
+});
+
+test('bad input: a clear message naming the segment, the other segments kept, nothing generated', async () => {
+  const good = [{ prompt: 'a person walks forward', seconds: 3, seed: 1 }, { prompt: 'a person waves', seconds: 3, seed: 2 }];
+  const shown = await page.evaluate(() => window.emdm.edit!.current()!.frames);
+  const calls0 = await page.evaluate(() => window.emdm.counters.stepsRun);
+  const cases: [object[], RegExp, number | null][] = [
+    [[good[0], { prompt: 'a person sits down', seconds: 0, seed: 3 }, good[1]], /segment 2 is 0 s long; a segment needs at least one frame/, 1],
+    [[good[0], good[1], { prompt: 'a person runs', seconds: 55, seed: 3 }], /the timeline is 61 s in all; at most 60 s/, null],
+    [[good[0], good[1], { prompt: '  ', seconds: 2, seed: 3 }], /segment 3: the prompt is empty/, 2],
+  ];
+  for (const [segs, msg, invalid] of cases) {
+    await page.evaluate((s) => window.emdm.edit!.setSegments(s as never), segs);
+    await expect(page.evaluate(() => window.emdm.edit!.generateAll())).rejects.toThrow(msg);
+    expect(await page.evaluate(() => window.emdm.edit!.message())).toMatch(msg);
+    await expect(page.locator('.tl-message')).toBeVisible();
+    expect(await page.evaluate(() => window.emdm.edit!.segments())).toEqual(segs);
+    const rows = page.locator('.tl-seg');
+    await expect(rows).toHaveCount(3);
+    for (let i = 0; i < 3; i++) {
+      if (i === invalid) await expect(rows.nth(i)).toHaveAttribute('aria-invalid', 'true');
+      else await expect(rows.nth(i)).not.toHaveAttribute('aria-invalid', 'true');
+    }
+  }
+  expect(await page.evaluate(() => window.emdm.counters.stepsRun)).toBe(calls0);
+  expect(await page.evaluate(() => window.emdm.edit!.current()!.frames)).toBe(shown);
+});
+
+test('keyboard: open the panel, add a segment, type it and generate with Enter', async () => {
+  await page.evaluate(() => window.emdm.edit!.setSegments([{ prompt: 'a person walks forward', seconds: 1.5, seed: 5 }]));
+  const summary = page.locator('#edit-panel summary');
+  const details = page.locator('#edit-panel details');
+  if ((await details.getAttribute('open')) !== null) {
+    await summary.focus();
+    await page.keyboard.press('Enter'); // closes
+  }
+  await summary.focus();
+  await page.keyboard.press('Enter');
+  await expect(details).toHaveAttribute('open', '');
+  await page.getByRole('button', { name: 'Add segment' }).focus();
+  await page.keyboard.press('Enter');
+  await expect(page.locator('.tl-seg')).toHaveCount(2);
+  await expect(page.getByLabel('Segment 2 prompt')).toBeFocused();
+  await page.keyboard.type('a person waves');
+  await page.getByLabel('Segment 2 seconds').fill('1');
+  await page.getByLabel('Segment 2 prompt').focus();
+  const before = await page.evaluate(() => window.emdm.counters.generations);
+  await page.keyboard.press('Enter');
+  await page.waitForFunction((n) => window.emdm.counters.generations > n, before, { timeout: 120_000 });
+  expect(await page.evaluate(() => window.emdm.edit!.current()!.frames)).toBe(50);
+  watch.assertClean();
+});
+
+test('timing: a 3 × 5 s timeline against one 5 s motion (printed)', async () => {
+  const one = await page.evaluate(async (s) => {
+    const t0 = performance.now();
+    await window.emdm.generate({ mode: 'text', text: 'a person walks forward', seconds: 5, steps: s, seed: 41 });
+    return performance.now() - t0;
+  }, STEPS);
+  await page.evaluate(() => window.emdm.edit!.setSegments([
+    { prompt: 'a person walks forward', seconds: 5, seed: 1 }, { prompt: 'a person waves', seconds: 5, seed: 2 }, { prompt: 'a person walks backward', seconds: 5, seed: 3 },
+  ]));
+  const tl = await page.evaluate(() => window.emdm.edit!.generateAll());
+  expect(tl.frames).toBe(300);
+  console.log(`[timeline timing] steps ${STEPS}: one 5 s motion ${one.toFixed(0)} ms; 3 × 5 s timeline ${tl.ms.toFixed(0)} ms (${tl.windows} windows), ratio ${(tl.ms / one).toFixed(2)} (this machine, under the load of the moment)`);
+});

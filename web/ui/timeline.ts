@@ -1,0 +1,537 @@
+// "Beyond one prompt" on the page (issue 14): a prompt timeline (segments of prompt or action + seconds,
+// generated window by window far past the model's 196 frames, one segment regenerated without touching the
+// ones before it, kept in the URL), and edits of the motion on screen: in-betweening (keep the first and
+// last second, a new middle), body-part edits (keep the lower or upper body) and seamless loops (+ in place).
+// The bookkeeping is src/edit.ts's; every generation runs in the generation worker through the page's
+// session (progress, and the newest request wins: a new one cancels the running one at its next step).
+// The panel builds its DOM inside one container (#edit-panel in index.html) and styles it in timeline.css.
+import {
+  EditError, MAX_TIMELINE_SECONDS, bodyPartEdit, cleanupFootContacts, contactsFromFeatures, generateTimeline, inBetween, makeLoop,
+  planTimeline, recoverJoints, smoothJoints,
+  type EditCondition, type EditGenerate, type EditMotion, type GenerateResult, type KeptPart, type RemoteResult, type Timeline, type TimelineSegment,
+} from '../../src/index';
+import type { PoseTrack } from '../../src/three';
+import { el } from './dom';
+import { isAbort } from './engine';
+import type { Generation, PageContext } from './session';
+import { randomSeed, type PageState } from './state';
+import { TIMELINE_PARAM, decodeTimeline, withTimeline } from './timeline-url';
+import './timeline.css';
+
+/** Read before the page rewrites its URL (web/main.ts replaces it with the controls' state on start). */
+const INITIAL = new URLSearchParams(location.search);
+
+/** What the test API reports about the panel's last result. */
+export interface EditSummary {
+  kind: 'timeline' | 'inbetween' | 'body' | 'loop';
+  frames: number;
+  fps: number;
+  /** timeline: the first frame of each segment */
+  starts?: number[];
+  /** wall time of the whole request on the page, ms */
+  ms: number;
+  /** model calls (one per denoising step and window) */
+  windows: number;
+}
+
+/** The panel's hooks for Playwright (window.emdm.edit). */
+export interface EditTestApi {
+  segments(): TimelineSegment[];
+  setSegments(s: TimelineSegment[]): void;
+  generateAll(): Promise<EditSummary>;
+  regenerate(i: number): Promise<EditSummary>;
+  inBetween(prompt: string): Promise<EditSummary>;
+  bodyEdit(part: KeptPart, prompt: string): Promise<EditSummary>;
+  loop(inPlace: boolean): Promise<EditSummary>;
+  /** the message under the panel ('' when none) */
+  message(): string;
+  /** the motion on screen as the panel edits it: raw decoded joints (no smoothing) and features */
+  current(): { frames: number; fps: number; joints: number[]; features: number[] } | null;
+  /** the full N-frame loop of the last loop (frame N−K repeats frame 0), null before one */
+  lastLoopFull(): { frames: number; joints: number[] } | null;
+}
+
+interface Row {
+  li: HTMLLIElement;
+  kind: HTMLSelectElement;
+  prompt: HTMLInputElement;
+  seconds: HTMLInputElement;
+  seed: number;
+}
+
+const PROMPT = '';
+
+export class TimelinePanel {
+  private readonly list = el('ol', 'tl-list');
+  private readonly total = el('span', 'tl-total');
+  private readonly msg = el('p', 'tl-message');
+  private readonly rows: Row[] = [];
+  /** the last generated timeline (its segments are reused when regenerating a later one) */
+  private timeline: Timeline | null = null;
+  /** the full N frames of the last loop */
+  private lastLoop: EditMotion | null = null;
+  /** the last motion this panel showed, with raw decoded joints, and its condition (null: several) */
+  private current: EditMotion | null = null;
+  private currentCondition: EditCondition | null = null;
+  private readonly actions: readonly string[];
+
+  constructor(private readonly page: PageContext, container: HTMLElement) {
+    this.actions = page.session.limits.actions;
+    const details = el('details', 'tl-panel');
+    const summary = el('summary', undefined, 'Timeline & editing');
+    const body = el('div', 'tl-body');
+    details.append(summary, body);
+    container.replaceChildren(details);
+
+    // ---- timeline
+    const intro = el('p', 'tl-hint', `Chain prompts up to ${MAX_TIMELINE_SECONDS} s: each segment continues from the last second of the one before.`);
+    const add = this.button('Add segment', 'ghost', () => this.addRow({ prompt: PROMPT, seconds: 4, seed: randomSeed() }, true));
+    const genAll = this.button('Generate timeline', 'primary tl-generate', () => void this.generateAll().catch(() => undefined));
+    const bar = el('div', 'tl-row-actions');
+    bar.append(add, this.total);
+    this.msg.setAttribute('role', 'alert');
+    this.msg.hidden = true;
+    body.append(el('h4', undefined, 'Timeline'), intro, this.list, bar, genAll, this.msg);
+
+    // ---- edits of the motion on screen
+    const ibPrompt = this.input('tl-ib-prompt', 'New middle (prompt)', 'a person jumps');
+    const ibGo = this.button('Regenerate the middle', 'ghost', () => void this.inBetween(ibPrompt.value).catch(() => undefined));
+    const bodyKeep = el('select');
+    bodyKeep.id = 'tl-body-keep';
+    bodyKeep.setAttribute('aria-label', 'Which part to keep');
+    for (const [v, t] of [['lower', 'Keep legs, new upper body'], ['upper', 'Keep upper body, new legs']] as const) {
+      const o = el('option', undefined, t);
+      o.value = v;
+      bodyKeep.append(o);
+    }
+    const bodyPrompt = this.input('tl-body-prompt', 'New part (prompt)', 'a person waves both hands');
+    const bodyGo = this.button('Edit body part', 'ghost', () => void this.bodyEdit(bodyKeep.value as KeptPart, bodyPrompt.value).catch(() => undefined));
+    const inPlace = el('input');
+    inPlace.type = 'checkbox';
+    inPlace.id = 'tl-loop-in-place';
+    const inPlaceLabel = el('label', 'tl-check');
+    inPlaceLabel.append(inPlace, document.createTextNode(' in place (no travel)'));
+    const loopGo = this.button('Make it loop', 'ghost', () => void this.loop(inPlace.checked).catch(() => undefined));
+    body.append(
+      el('h4', undefined, 'Edit the motion on screen'),
+      el('p', 'tl-hint', 'Works on a motion of one model window (up to 9.8 s).'),
+      this.group('In-between: keep the first and last second', ibPrompt, ibGo),
+      this.group('Body part', bodyKeep, bodyPrompt, bodyGo),
+      this.group('Loop: last pose = first pose', inPlaceLabel, loopGo),
+    );
+
+    // ---- restore from the URL (a shared link), else one example row
+    const tl = INITIAL.get(TIMELINE_PARAM);
+    let restored: TimelineSegment[] | null = null;
+    if (tl !== null) {
+      try {
+        restored = decodeTimeline(tl, this.actions);
+      } catch (e) {
+        this.say((e as Error).message);
+      }
+    }
+    for (const s of restored ?? [{ prompt: 'a person walks forward', seconds: 4, seed: randomSeed() }, { prompt: 'a person waves with the right hand', seconds: 3, seed: randomSeed() }]) this.addRow(s);
+    if (restored) details.open = true;
+    this.refreshTotal();
+  }
+
+  /** The URL held a timeline (the page may generate it first instead of the single motion). */
+  get restoredFromUrl(): boolean {
+    return INITIAL.has(TIMELINE_PARAM);
+  }
+
+  // ------------------------------------------------------------ rows
+  private addRow(s: TimelineSegment, focus = false): void {
+    const li = el('li', 'tl-seg');
+    const kind = el('select', 'tl-kind');
+    const p = el('option', undefined, 'Prompt');
+    p.value = '';
+    kind.append(p);
+    for (const a of this.actions) {
+      const o = el('option', undefined, a.replace(/[_-]+/g, ' '));
+      o.value = a;
+      kind.append(o);
+    }
+    kind.value = s.action !== undefined ? String(s.action) : '';
+    const prompt = el('input', 'tl-prompt');
+    prompt.type = 'text';
+    prompt.value = s.prompt ?? '';
+    prompt.placeholder = 'what the character does';
+    const seconds = el('input', 'tl-seconds');
+    seconds.type = 'number';
+    seconds.min = '0';
+    seconds.max = String(MAX_TIMELINE_SECONDS);
+    seconds.step = '0.1';
+    seconds.value = String(s.seconds);
+    const row: Row = { li, kind, prompt, seconds, seed: s.seed >>> 0 };
+    const up = this.button('↑', 'icon', () => this.move(row, -1));
+    const down = this.button('↓', 'icon', () => this.move(row, 1));
+    const again = this.button('↻', 'icon', () => void this.regenerate(this.rows.indexOf(row)).catch(() => undefined));
+    const remove = this.button('✕', 'icon', () => this.remove(row));
+    const unit = el('span', 'tl-unit', 's');
+    li.append(el('span', 'tl-num'), kind, prompt, seconds, unit, up, down, again, remove);
+    const sync = () => {
+      prompt.disabled = kind.value !== '';
+      this.refreshTotal();
+    };
+    kind.addEventListener('change', sync);
+    seconds.addEventListener('input', () => this.refreshTotal());
+    prompt.addEventListener('keydown', (e) => {
+      if (e.key === 'Enter') void this.generateAll().catch(() => undefined);
+    });
+    this.rows.push(row);
+    this.list.append(li);
+    sync();
+    this.relabel();
+    if (focus) prompt.focus();
+  }
+
+  private move(row: Row, d: number): void {
+    const i = this.rows.indexOf(row);
+    const j = i + d;
+    if (j < 0 || j >= this.rows.length) return;
+    this.rows.splice(i, 1);
+    this.rows.splice(j, 0, row);
+    this.list.replaceChildren(...this.rows.map((r) => r.li));
+    this.relabel();
+    (d < 0 ? row.li.querySelector<HTMLButtonElement>('button[data-k="↑"]') : row.li.querySelector<HTMLButtonElement>('button[data-k="↓"]'))?.focus();
+  }
+
+  private remove(row: Row): void {
+    if (this.rows.length === 1) {
+      this.say('A timeline needs at least one segment.');
+      return;
+    }
+    const i = this.rows.indexOf(row);
+    this.rows.splice(i, 1);
+    row.li.remove();
+    this.relabel();
+    this.refreshTotal();
+    this.rows[Math.min(i, this.rows.length - 1)].prompt.focus();
+  }
+
+  /** Numbers and accessible names follow the order. */
+  private relabel(): void {
+    this.rows.forEach((r, i) => {
+      const n = i + 1;
+      r.li.querySelector('.tl-num')!.textContent = `${n}`;
+      r.kind.setAttribute('aria-label', `Segment ${n}: prompt or action`);
+      r.prompt.setAttribute('aria-label', `Segment ${n} prompt`);
+      r.seconds.setAttribute('aria-label', `Segment ${n} seconds`);
+      for (const b of r.li.querySelectorAll<HTMLButtonElement>('button')) {
+        const k = b.dataset.k;
+        const what = k === '↑' ? 'Move up' : k === '↓' ? 'Move down' : k === '↻' ? 'Regenerate (new take; keeps the segments before it)' : 'Remove';
+        b.setAttribute('aria-label', `Segment ${n}: ${what}`);
+        b.title = what;
+      }
+      r.li.classList.remove('invalid');
+      r.li.removeAttribute('aria-invalid');
+    });
+  }
+
+  private refreshTotal(): void {
+    const s = this.segments().reduce((a, x) => a + (Number.isFinite(x.seconds) ? x.seconds : 0), 0);
+    this.total.textContent = `${Number(s.toFixed(2))} s of ${MAX_TIMELINE_SECONDS} s`;
+    this.total.classList.toggle('over', s > MAX_TIMELINE_SECONDS);
+  }
+
+  /** The list as segments (what planTimeline checks). */
+  segments(): TimelineSegment[] {
+    return this.rows.map((r) => {
+      const seconds = r.seconds.value.trim() === '' ? NaN : Number(r.seconds.value);
+      return r.kind.value ? { action: r.kind.value, seconds, seed: r.seed } : { prompt: r.prompt.value, seconds, seed: r.seed };
+    });
+  }
+
+  setSegments(segs: TimelineSegment[]): void {
+    this.rows.length = 0;
+    this.list.replaceChildren();
+    for (const s of segs) this.addRow(s);
+    this.refreshTotal();
+  }
+
+  // ------------------------------------------------------------ messages
+  private say(text: string, segment: number | null = null): void {
+    this.msg.textContent = text;
+    this.msg.hidden = !text;
+    this.rows.forEach((r, i) => {
+      r.li.classList.toggle('invalid', i === segment);
+      if (i === segment) r.li.setAttribute('aria-invalid', 'true');
+      else r.li.removeAttribute('aria-invalid');
+    });
+  }
+
+  message(): string {
+    return this.msg.hidden ? '' : this.msg.textContent ?? '';
+  }
+
+  // ------------------------------------------------------------ generating
+  private limits() {
+    return { fps: this.page.session.limits.fps, maxFrames: this.page.session.limits.maxFrames };
+  }
+
+  /** The page's model for a condition (text → the text model, action → the action model). */
+  private modelFor(c: EditCondition): string {
+    const m = c.action !== undefined ? this.page.session.models.action : this.page.session.models.text;
+    if (!m) throw new EditError(c.action !== undefined ? 'no action model is shipped with this demo' : 'no text model is shipped with this demo: pick an action');
+    return m.name;
+  }
+
+  /**
+   * Run `job` as the page's newest request (cancelling a running one), with progress, the busy button and
+   * errors said in the panel; the result is shown on the character.
+   */
+  private async request(kind: EditSummary['kind'], job: (gen: EditGenerate, signal: AbortSignal, calls: Calls) => Promise<Shown>): Promise<EditSummary> {
+    const { session, view, controls } = this.page;
+    const state = controls.read();
+    const t0 = performance.now();
+    this.say('');
+    controls.setBusy(true);
+    view.showProgress(0, 'Starting…');
+    session.counters.requests++;
+    try {
+      const shown = await session.engine.run(async (signal) => {
+        const calls: Calls = { n: 0, results: [], progress: (f) => f, text: (d, t) => `Denoising step ${d} / ${t}` };
+        const gen: EditGenerate = async (r) => {
+          const model = this.modelFor(r);
+          await session.load(model);
+          const label = r.action !== undefined ? this.actions.indexOf(String(r.action)) : -1;
+          const res: RemoteResult = await session.engine.client.generate(model, {
+            condition: r.action !== undefined ? { type: 'action', label } : { type: 'text', text: r.prompt ?? '' },
+            frames: r.frames, steps: state.steps, guidance: state.guidance, seed: r.seed, signal,
+            ...(r.known ? { known: r.known } : {}),
+            onStep: (d, t) => {
+              session.counters.stepsRun++;
+              view.showProgress(calls.progress(d / t), calls.text(d, t));
+            },
+          });
+          calls.n++;
+          calls.results.push(res);
+          return { frames: res.motion.frames, fps: res.motion.fps, features: res.motion.features, joints: res.motion.joints };
+        };
+        return job(gen, signal, calls);
+      });
+      const track = await this.solve(shown.display, shown.motion);
+      this.show(state, shown, track, performance.now() - t0);
+      session.counters.generations++;
+      return { kind, frames: shown.motion.frames, fps: shown.motion.fps, starts: shown.starts, ms: performance.now() - t0, windows: shown.windows };
+    } catch (e) {
+      if (isAbort(e)) session.counters.cancelled++;
+      else {
+        session.counters.errors++;
+        this.say(e instanceof EditError || e instanceof Error ? e.message : String(e), e instanceof EditError ? e.segment : null);
+      }
+      throw e;
+    } finally {
+      if (!session.busy) {
+        controls.setBusy(false);
+        view.hideProgress();
+      }
+    }
+  }
+
+  /** Bone rotations (the worker's IK) for the joints shown. */
+  private async solve(joints: Float32Array, m: EditMotion): Promise<PoseTrack> {
+    const p = await this.page.session.engine.client.solve(joints, m.frames);
+    return { frames: m.frames, fps: m.fps, joints: this.page.session.manifest.skeleton.joints.length, rootPos: p.rootPos, quats: p.quats };
+  }
+
+  /** The page's decoding of joints made here (as generate() does for one motion: σ = 1 frame smoothing, feet on the floor). */
+  private decode(features: Float32Array, frames: number): Float32Array {
+    const sk = this.page.session.manifest.skeleton;
+    const joints = smoothJoints(recoverJoints(features, frames), frames, 1);
+    return cleanupFootContacts(joints, frames, contactsFromFeatures(features, frames), { parents: sk.parents, footJoints: sk.footJoints });
+  }
+
+  private show(state: PageState, s: Shown, track: PoseTrack, ms: number): void {
+    // the timings of everything this request generated (nothing, when an unchanged timeline is shown again)
+    const results = s.results;
+    const first = results[0];
+    const sum = (f: (r: GenerateResult) => number) => results.reduce((a, r) => a + f(r), 0);
+    const result: GenerateResult = {
+      motion: { frames: s.motion.frames, fps: s.motion.fps, joints: s.display, features: s.motion.features },
+      timings: {
+        encodeMs: sum((r) => r.timings.encodeMs), stepMs: results.flatMap((r) => r.timings.stepMs), decodeMs: sum((r) => r.timings.decodeMs),
+        totalMs: ms, backend: first?.timings.backend ?? (this.page.session.backend === 'webgpu' ? 'webgpu' : 'wasm'), threads: first?.timings.threads ?? 0,
+      },
+      modelCalls: sum((r) => r.modelCalls), sampler: first?.sampler ?? 'ddgan', steps: first?.steps ?? state.steps,
+    };
+    const g: Generation = {
+      state: { ...state, seconds: s.motion.frames / s.motion.fps, compare: false, seed: s.seed },
+      label: s.label, plan: null,
+      main: { model: s.model, result, track, ikMs: 0 },
+      ddim: null,
+    };
+    this.page.view.show(g);
+    this.current = s.motion;
+    this.currentCondition = s.condition;
+  }
+
+  /** The motion the edit tools start from: the one on screen (the page's or this panel's). */
+  private base(): { motion: EditMotion; condition: EditCondition | null } {
+    const shown = this.page.view.shown;
+    if (!shown) throw new EditError('there is no motion on screen yet: generate one first');
+    const m = shown.result.motion;
+    if (this.current && this.current.features === m.features) return { motion: this.current, condition: this.currentCondition };
+    const s = shown.state;
+    const condition = s.mode === 'text' ? { prompt: s.text } : s.mode === 'action' ? { action: s.action } : null;
+    return { motion: { frames: m.frames, fps: m.fps, features: m.features, joints: recoverJoints(m.features, m.frames) }, condition };
+  }
+
+  // ------------------------------------------------------------ the four modes
+  async generateAll(regenerated: number | null = null): Promise<EditSummary> {
+    const segs = this.segments();
+    try {
+      planTimeline(segs, this.limits());
+    } catch (e) {
+      if (e instanceof EditError) this.say(e.message, e.segment);
+      throw e;
+    }
+    history.replaceState(null, '', withTimeline(location.search, segs));
+    const previous = this.timeline;
+    return this.request('timeline', async (gen, signal, calls) => {
+      let seg = 0;
+      let doneWindows = 0;
+      let todo = 1;
+      calls.progress = (f) => (doneWindows + f) / todo;
+      calls.text = (d, t) => `Segment ${seg + 1} of ${segs.length}${regenerated !== null ? ` (again from ${regenerated + 1})` : ''}: step ${d} / ${t}`;
+      const t = await generateTimeline(segs, gen, this.limits(), {
+        previous, signal,
+        onWindow: (s, done, total) => {
+          seg = s;
+          doneWindows = done;
+          todo = Math.max(1, total);
+        },
+      });
+      this.timeline = t;
+      const label = segs.map((s) => s.action ?? (s.prompt ?? '').trim()).join(' → ');
+      const one = segs.every((s) => s.action === segs[0].action && (s.prompt ?? '').trim() === (segs[0].prompt ?? '').trim());
+      return {
+        motion: t, display: this.decode(t.features, t.frames), starts: t.starts, windows: calls.n, results: calls.results,
+        label: label.length > 120 ? `${label.slice(0, 117)}…` : label, model: this.modelFor(segs[0]), seed: segs[0].seed,
+        condition: one ? (segs[0].action !== undefined ? { action: segs[0].action } : { prompt: segs[0].prompt }) : null,
+      };
+    }).then((r) => {
+      // the URL says what is on screen: the page's state and the timeline (a reload restores the segments)
+      history.replaceState(null, '', withTimeline(location.search, segs));
+      return r;
+    });
+  }
+
+  async regenerate(i: number): Promise<EditSummary> {
+    if (!(i >= 0 && i < this.rows.length)) throw new RangeError(`regenerate: segment ${i + 1} outside 1…${this.rows.length}`);
+    this.rows[i].seed = randomSeed();
+    return this.generateAll(i);
+  }
+
+  async inBetween(prompt: string): Promise<EditSummary> {
+    return this.request('inbetween', async (gen, _signal, calls) => {
+      const { motion } = this.base();
+      const c = { prompt };
+      const seed = randomSeed();
+      const r = await inBetween(motion, c, seed, gen, this.limits());
+      return {
+        motion: r, display: this.decode(r.features, r.frames), windows: 1, results: calls.results,
+        label: `${prompt.trim()} (in-between)`, model: this.modelFor(c), seed, condition: c,
+      };
+    });
+  }
+
+  async bodyEdit(part: KeptPart, prompt: string): Promise<EditSummary> {
+    return this.request('body', async (gen, _signal, calls) => {
+      const { motion } = this.base();
+      const c = { prompt };
+      const seed = randomSeed();
+      const r = await bodyPartEdit(motion, part, c, seed, gen, this.limits());
+      return {
+        motion: r, display: this.decode(r.features, r.frames), windows: 1, results: calls.results,
+        label: `${prompt.trim()} (${part === 'lower' ? 'upper body' : 'legs'} edited)`, model: this.modelFor(c), seed, condition: c,
+      };
+    });
+  }
+
+  async loop(inPlace: boolean): Promise<EditSummary> {
+    return this.request('loop', async (gen, _signal, calls) => {
+      const { motion, condition } = this.base();
+      if (!condition) throw new EditError('looping keeps the motion\'s own prompt; this motion has none (a random motion or a timeline of several prompts): generate one from a prompt or an action first');
+      const seed = randomSeed();
+      const r = await makeLoop(motion, condition, seed, gen, this.limits(), { inPlace, decode: (f, n) => recoverJoints(f, n) });
+      this.lastLoop = r.full;
+      const what = condition.action !== undefined ? String(condition.action) : (condition.prompt ?? '').trim();
+      return {
+        motion: r.clip, display: this.decode(r.clip.features, r.clip.frames), windows: 1, results: calls.results,
+        label: `${what} (loop${inPlace ? ', in place' : ''})`, model: this.modelFor(condition), seed, condition,
+      };
+    });
+  }
+
+  // ------------------------------------------------------------ small DOM helpers
+  private button(text: string, cls: string, on: () => void): HTMLButtonElement {
+    const b = el('button', cls, text);
+    b.type = 'button';
+    b.dataset.k = text;
+    b.addEventListener('click', on);
+    return b;
+  }
+
+  private input(id: string, label: string, placeholder: string): HTMLInputElement {
+    const i = el('input');
+    i.type = 'text';
+    i.id = id;
+    i.placeholder = placeholder;
+    i.setAttribute('aria-label', label);
+    return i;
+  }
+
+  private group(title: string, ...children: HTMLElement[]): HTMLElement {
+    const f = el('fieldset', 'tl-tool');
+    f.append(el('legend', undefined, title), ...children);
+    return f;
+  }
+
+  /** window.emdm.edit */
+  testApi(): EditTestApi {
+    return {
+      segments: () => this.segments(),
+      setSegments: (s) => this.setSegments(s),
+      generateAll: () => this.generateAll(),
+      regenerate: (i) => this.regenerate(i),
+      inBetween: (p) => this.inBetween(p),
+      bodyEdit: (part, p) => this.bodyEdit(part, p),
+      loop: (inPlace) => this.loop(inPlace),
+      message: () => this.message(),
+      current: () => {
+        try {
+          const { motion } = this.base();
+          return { frames: motion.frames, fps: motion.fps, joints: Array.from(motion.joints), features: Array.from(motion.features) };
+        } catch {
+          return null;
+        }
+      },
+      lastLoopFull: () => (this.lastLoop ? { frames: this.lastLoop.frames, joints: Array.from(this.lastLoop.joints) } : null),
+    };
+  }
+}
+
+/** What a mode hands back to be shown. */
+interface Shown {
+  /** the motion as src/edit.ts made it (raw decoded joints: what later edits start from) */
+  motion: EditMotion;
+  /** the joints shown and exported (smoothed, feet cleaned up as the page does) */
+  display: Float32Array;
+  starts?: number[];
+  windows: number;
+  results: GenerateResult[];
+  label: string;
+  model: string;
+  seed: number;
+  condition: EditCondition | null;
+}
+
+/** The generations of one request, and how its progress and label read (a timeline sets them per window). */
+interface Calls {
+  n: number;
+  results: GenerateResult[];
+  progress(f: number): number;
+  text(done: number, total: number): string;
+}
