@@ -200,7 +200,12 @@ async function checkCharacter(label: string, file: string, glb: Uint8Array, unma
         expect(anim).toBeTruthy();
         expect(anim.tracks.length).toBe(res.bones.length + 1 + res.positions.length);
         expect(anim.duration).toBeCloseTo((motion.frames - 1) / motion.fps, 5);
-        if (spec.vrm) expect(JSON.stringify(back.parser.json.extensions)).toContain(spec.vrm === '1.0' ? 'VRMC_vrm' : '"VRM"');
+        if (spec.vrm) {
+          expect(JSON.stringify(back.parser.json.extensions)).toContain(spec.vrm === '1.0' ? 'VRMC_vrm' : '"VRM"');
+          // still a VRM three-vrm reads, with the same humanoid map
+          const again = await loadCharacter([{ name: file, data: out }]);
+          expect([again.vrm, again.mapping]).toEqual([ch.vrm, ch.mapping]);
+        }
         const again = measure(back.scene, anim, ch.mapping, motion, res.yaw);
         let moved = 0;
         again.positions.forEach((row, f) => row.forEach((p, k) => (moved = Math.max(moved, p.distanceTo(m.positions[f][k])))));
