@@ -144,22 +144,32 @@ def root_frame(features: np.ndarray, joints: np.ndarray) -> np.ndarray:
     return rot_y(-theta[:, None], j - root[:, None] * np.array([1.0, 0.0, 1.0]))
 
 
-def summary(values) -> dict:
+def summary(values, bar: float | None = None) -> dict:
     v = np.asarray(values, np.float64)
-    return {"n": int(v.size), "median": float(np.median(v)), "mean": float(v.mean()), "p90": float(np.percentile(v, 90)),
-            "max": float(v.max())}
+    out = {"n": int(v.size), "median": float(np.median(v)), "mean": float(v.mean()), "p90": float(np.percentile(v, 90)),
+           "max": float(v.max())}
+    if bar is not None:
+        out["share_within_bar"] = float(np.mean(v <= bar))
+    return out
 
 
 # ----------------------------------------------------------------------------------------------- the run
 
 def orders(actions, n: int, seed: int) -> list[tuple[str, ...]]:
-    """``n`` orders of 3 distinct actions (LAST_ONLY ones only last), each action about equally often."""
+    """``n`` orders of 3 distinct actions (LAST_ONLY ones only last), each action as equally often as can be: the
+    valid orders in a seeded random order, each time the one whose actions have been used least."""
+    from itertools import permutations
+
     rng = np.random.default_rng(seed)
+    valid = [o for o in permutations(actions, 3) if not any(a in LAST_ONLY for a in o[:2])]
+    valid = [valid[i] for i in rng.permutation(len(valid))]
+    count = dict.fromkeys(actions, 0)
     out = []
-    while len(out) < n:
-        o = tuple(rng.permutation(actions)[:3])
-        if not any(a in LAST_ONLY for a in o[:2]):
-            out.append(o)
+    for _ in range(n):
+        o = min(valid, key=lambda o: (sorted((count[a] for a in o), reverse=True), o in out))
+        out.append(o)
+        for a in o:
+            count[a] += 1
     return out
 
 
@@ -180,6 +190,18 @@ class Recorder:
 
         self.editor = Recording(editor.step, editor.mean, editor.std, editor.condition, editor.steps, editor.guidance,
                                 editor.z_dim, editor.objective, editor.max_frames)
+
+
+def uneased_joints(model, tl, windows) -> np.ndarray:
+    """The timeline's joints stitched from its windows as sampled, before ``ease_seams`` (an ablation: the same
+    windows, each continuing the eased sequence before it)."""
+    from emdm.motion.features import recover_joints
+    from emdm.motion.stitch import append_segment
+
+    joints = recover_joints(model.denormalise(windows[0]))
+    for k in range(1, len(tl.frames)):
+        joints = append_segment(joints, recover_joints(model.denormalise(windows[k])), min(tl.overlap, tl.starts[k]))
+    return joints
 
 
 def overlap_error_mm(model, tl, windows) -> float:
@@ -215,7 +237,7 @@ def measure(model, bench, a, log=print) -> dict:
     # timelines and single motions, interleaved (their timings compare under the same load)
     t_single, t_tl = [], []
     timelines, tl_orders, singles, single_action = [], orders(list(a.actions), a.timelines, a.seed), [], []
-    overlap_mm = 0.0
+    overlap_mm, uneased = 0.0, []
     per_single = max(1, round(3 * a.timelines / len(a.actions)))   # as many single motions per action as segments
     todo_single = [(x, s) for x in a.actions for s in range(per_single)]
     for i, o in enumerate(tl_orders):
@@ -224,6 +246,7 @@ def measure(model, bench, a, log=print) -> dict:
         tl = E.timeline(rec.editor, [E.Segment(prompt[x], a.seconds, a.seed + 10 * i + k) for k, x in enumerate(o)])
         t_tl.append(time.perf_counter() - t0)
         overlap_mm = max(overlap_mm, overlap_error_mm(model, tl, rec.windows))
+        uneased.append(uneased_joints(model, tl, rec.windows))
         timelines.append(tl)
         for x, s in todo_single[i * len(todo_single) // len(tl_orders):(i + 1) * len(todo_single) // len(tl_orders)]:
             t0 = time.perf_counter()
@@ -242,25 +265,33 @@ def measure(model, bench, a, log=print) -> dict:
             seg_action.append(x)
     pred_seg = bench.predict(seg_feats)
     pred_single = bench.predict([f for f, _ in singles])
+    pred_late = bench.predict([f[FPS:] for f in seg_feats])        # diagnostic: without each segment's first second
     per_action = {}
     for x in a.actions:
         li = labels.index(x)
         s_hit = [int(p == li) for p, y in zip(pred_seg, seg_action) if y == x]
         o_hit = [int(p == li) for p, y in zip(pred_single, single_action) if y == x]
+        named = lambda preds, acts: {n: int(c) for n, c in zip(*np.unique([labels[p] for p, y in zip(preds, acts) if y == x],  # noqa: E731
+                                                                       return_counts=True))}
         per_action[x] = {"prompt": prompt[x], "segments": len(s_hit), "segment_rate": float(np.mean(s_hit)) if s_hit else None,
-                         "singles": len(o_hit), "single_rate": float(np.mean(o_hit)) if o_hit else None}
-    seg_rate = float(np.mean([p == labels.index(y) for p, y in zip(pred_seg, seg_action)]))
-    single_rate = float(np.mean([p == labels.index(y) for p, y in zip(pred_single, single_action)]))
+                         "singles": len(o_hit), "single_rate": float(np.mean(o_hit)) if o_hit else None,
+                         "segment_named": named(pred_seg, seg_action), "single_named": named(pred_single, single_action)}
+    seg_hits = int(sum(p == labels.index(y) for p, y in zip(pred_seg, seg_action)))
+    single_hits = int(sum(p == labels.index(y) for p, y in zip(pred_single, single_action)))
+    seg_rate, single_rate = seg_hits / len(seg_action), single_hits / len(single_action)
     by_pos = [float(np.mean([pred_seg[3 * i + k] == labels.index(o[k]) for i, o in enumerate(tl_orders)]))
               for k in range(3)]
+    late_rate = float(np.mean([p == labels.index(y) for p, y in zip(pred_late, seg_action)]))
 
     # seams (real clips and single motions at their middle frame are the reference)
     seams = [tl.starts[1:] for tl in timelines]
     acc = [r for tl, s in zip(timelines, seams) for r in seam_acceleration(tl.joints, s)]
+    acc_uneased = [r for j, s in zip(uneased, seams) for r in seam_acceleration(j, s)]
     root = [r for tl, s in zip(timelines, seams) for r in seam_root(tl.joints, s)]
     real = [recover_joints(m) for m in bench.test.motions if len(m) >= 3 * FPS]
-    ref_acc = {"real": summary([r for j in real for r in seam_acceleration(j, [len(j) // 2])]),
-               "single": summary([r for _, j in singles for r in seam_acceleration(j, [len(j) // 2])])}
+    bar = BARS["seam_acceleration"]
+    ref_acc = {"real": summary([r for j in real for r in seam_acceleration(j, [len(j) // 2])], bar),
+               "single": summary([r for _, j in singles for r in seam_acceleration(j, [len(j) // 2])], bar)}
     ref_root = {"real": [r for j in real for r in seam_root(j, [len(j) // 2])],
                 "single": [r for _, j in singles for r in seam_root(j, [len(j) // 2])]}
     skate = seam_skate([(tl.joints, s) for tl, s in zip(timelines, seams)])
@@ -300,6 +331,7 @@ def measure(model, bench, a, log=print) -> dict:
         "orders": [list(o) for o in tl_orders],
         "seams": {"count": len(acc), "acceleration_ratio": summary(acc),
                   "acceleration_within_bar": int(np.sum(np.asarray(acc) <= BARS["seam_acceleration"])),
+                  "uneased_acceleration_ratio": summary(acc_uneased, BARS["seam_acceleration"]),
                   "reference_acceleration_ratio": ref_acc,
                   "skate": skate, "reference_skate": ref_skate,
                   "root_step_ratio": summary([r["step_ratio"] for r in root]),
@@ -311,8 +343,10 @@ def measure(model, bench, a, log=print) -> dict:
                   "reference_root_step_ratio": {k: summary([r["step_ratio"] for r in v]) for k, v in ref_root.items()},
                   "reference_root_turn_ratio": {k: summary([r["turn_ratio"] for r in v]) for k, v in ref_root.items()},
                   "real_clips": len(real)},
-        "semantics": {"segment_rate": seg_rate, "single_rate": single_rate,
-                      "ratio": seg_rate / single_rate if single_rate else None, "segment_rate_by_position": by_pos,
+        "semantics": {"segment_rate": seg_rate, "single_rate": single_rate, "segment_hits": seg_hits, "single_hits": single_hits,
+                      # from the counts, so a ratio exactly at the bar is not lost to rounding (40/54 ÷ 50/54 = 0.8)
+                      "ratio": (seg_hits * len(single_action)) / (len(seg_action) * single_hits) if single_hits else None, "segment_rate_by_position": by_pos,
+                      "segment_rate_without_first_second": late_rate,
                       "segments": len(seg_action), "singles": len(single_action), "per_action": per_action},
         "kept": kept,
         "loops": {"count": len(firsts), "ends": E.LOOP_ENDS, "pose_cm": summary(loops["pose_cm"]),
@@ -383,14 +417,15 @@ def section(r: dict) -> list[str]:
     out = [f"### {r['name']}, {r['steps']} steps (guidance {r['guidance']:g})", "",
            f"{r['timelines']} timelines of 3 × {r['segment_seconds']:g} s ({s['count']} seams) from the plain prompts of "
            f"{', '.join(r['actions'])} in random orders; {sem['singles']} single {r['segment_seconds']:g} s motions of the same "
-           f"prompts. Measured on {r['hardware']}, {r['threads']} thread(s), in {r['seconds']:.0f} s; load average "
+           f"prompts. Measured on {r['hardware']}, ONNX Runtime on {r['threads']} thread(s), in {r['seconds']:.0f} s; load average "
            f"{r['load_avg_1min_start']:.1f} at the start, {r['load_avg_1min_end']:.1f} at the end (a shared machine: timings are under that load). File "
            f"`docs/results/json/editing-{r['name']}.json`.", "",
            "| bar (issue 14) | measured | |", "|---|---|---|",
            f"| seam joint acceleration ≤ 1.5× the within-timeline 95th percentile | median {_f(s['acceleration_ratio']['median'])}×, "
            f"max {_f(s['acceleration_ratio']['max'])}×; {b['seam_acceleration']['figure']} (reference at a middle frame: real clips "
-           f"median {_f(ra['real']['median'])}×, max {_f(ra['real']['max'])}× of {ra['real']['n']}; single generated motions "
-           f"median {_f(ra['single']['median'])}×, max {_f(ra['single']['max'])}×) | {yes('seam_acceleration')} |",
+           f"median {_f(ra['real']['median'])}×, max {_f(ra['real']['max'])}×, {_pct(ra['real'].get('share_within_bar'))} ≤ 1.5× of "
+           f"{ra['real']['n']}; single generated motions median {_f(ra['single']['median'])}×, max {_f(ra['single']['max'])}×)"
+           f"{_uneased(s)} | {yes('seam_acceleration')} |",
            f"| foot skate at seams ≤ 1.2× within segments | {_f(sk['seam_cm_s'], 1)} vs {_f(sk['within_cm_s'], 1)} cm/s "
            f"(ratio {_f(sk['ratio'])}; {sk['seam_pairs']} contact pairs within {SEAM_SKATE_FRAMES} frames of a seam); reference "
            f"ratio at a middle frame: real {_f(rsk['real']['ratio'])}, single {_f(rsk['single']['ratio'])} | {yes('seam_skate')} |",
@@ -400,8 +435,10 @@ def section(r: dict) -> list[str]:
            f"{_f(s['root_turn_deg']['max'], 1)}°); {b['seam_root']['figure']}; real middle frames: step max "
            f"{_f(rr['real']['max'])}× | {yes('seam_root')} |",
            f"| each segment recognised as its prompt at ≥ 80 % of the single-prompt rate | segments {sem['segment_rate']:.0%} "
-           f"(by position {', '.join(f'{v:.0%}' for v in sem['segment_rate_by_position'])}), single motions "
-           f"{sem['single_rate']:.0%}: {_f(sem['ratio'])} | {yes('semantics')} |",
+           f"(by position {', '.join(f'{v:.0%}' for v in sem['segment_rate_by_position'])}; without each segment's first "
+           f"second {_pct(sem.get('segment_rate_without_first_second'))}), single motions {sem['single_rate']:.0%} "
+           f"({sem.get('segment_hits', '?')}/{sem['segments']} vs {sem.get('single_hits', '?')}/{sem['singles']}): "
+           f"{_f(sem['ratio'])} | {yes('semantics')} |",
            f"| kept frames/channels equal the known motion ≤ 1 mm after decoding | in-between {k['inbetween_mm']:.3g} mm, "
            f"lower body kept {k['lower_mm']:.3g} mm, upper body kept (root frame) {k['upper_mm']:.3g} mm, timeline overlap "
            f"{k['timeline_overlap_mm']:.3g} mm (worst of {lp['count']} each) | {yes('kept')} |",
@@ -414,8 +451,22 @@ def section(r: dict) -> list[str]:
            f"(medians of {t['timeline_s']['n']} and {t['single_s']['n']} interleaved runs, {t['timeline_frames']} vs "
            f"{t['single_frames']} frames): {_f(t['ratio_of_medians'])}× | {yes('time')} |", "",
            "Per action (segment rate / single rate): " + "; ".join(
-               f"{x} {_pct(v['segment_rate'])} / {_pct(v['single_rate'])}" for x, v in sem["per_action"].items()) + ".", ""]
+               f"{x} {_pct(v['segment_rate'])} / {_pct(v['single_rate'])}" for x, v in sem["per_action"].items()) + ".", "",
+           "Reading: kept parts, the loop's closing pose and in-place travel hold by construction (kept entries are "
+           "replaced exactly at every step; the in-place root velocity is zero), so their rows check the bookkeeping, "
+           "not the model. A 3 × n-frame timeline samples n + 2·(C + n) frames (C = 20: 340 vs 100 for 5 s segments, "
+           "3.4× the frames), so its time is about 3.4× one motion unless a frame gets cheaper in longer windows. "
+           f"Semantics counts {sem['segments']} segments and {sem['singles']} single motions: a few motions move the "
+           "ratio by several points, so a figure near 0.8 is within noise of the bar.", ""]
     return out
+
+
+def _uneased(s: dict) -> str:
+    u = s.get("uneased_acceleration_ratio")
+    if not u:
+        return ""
+    return (f"; the same windows without `ease_seams`: median {_f(u['median'])}×, max {_f(u['max'])}×, "
+            f"{round(u['share_within_bar'] * u['n'])}/{u['n']} ≤ 1.5×")
 
 
 # ----------------------------------------------------------------------------------------------- CLI
