@@ -157,3 +157,115 @@ test('benchmark: EMDM vs DDIM, ms per motion and per frame through the page (iss
   fs.writeFileSync(test.info().outputPath('timing-compare.json'), json);
   if (process.env.EMDM_BENCH_JSON) fs.writeFileSync(process.env.EMDM_BENCH_JSON, json);
 });
+
+// Issue 13 item 4: what each speed lever buys for 10 steps × 196 frames on this machine. The core harness
+// (web/harness/, ?via=worker: the page's generation worker, ORT-web WASM) is opened once per thread count
+// (ORT's thread count is fixed per worker); every configuration is warmed up twice, then the configurations
+// take turns, rep by rep, so a load change on a shared machine hits them alike. Levers: WASM threads 1 / 2,
+// the model file (fp32 and each manifest variant: int8, fp16), and classifier-free guidance (guided = batch 2,
+// guidance 1 = one batch row). With each thread count, the page thread's longest requestAnimationFrame gap
+// and 50 ms-timer lateness during one generation (and idle) tell what the threads cost the page.
+//
+//   EMDM_BENCH=1 npx playwright test tests/e2e/page-bench.spec.ts -g "speed levers"
+//
+// EMDM_BENCH_REPS (default 5), EMDM_BENCH_THREADS (default 1,2), EMDM_BENCH_JSON_LEVERS (a path: also write
+// the figures there).
+test('benchmark: speed levers for 10 steps × 196 frames (threads, int8/fp16 file, guidance), median of 5', async ({ browser }) => {
+  test.skip(process.env.EMDM_BENCH !== '1', 'benchmark: set EMDM_BENCH=1 to run it');
+  test.setTimeout(3_600_000);
+  const model = 'emdm-t2m-web';
+  const manifest = JSON.parse(fs.readFileSync('public/models/manifest.json', 'utf8'));
+  const entry = manifest.models[model];
+  if (!entry) throw new Error(`public/models/manifest.json has no model '${model}'`);
+  const reps = Number(process.env.EMDM_BENCH_REPS ?? 5);
+  const threadCounts = (process.env.EMDM_BENCH_THREADS ?? '1,2').split(',').filter(Boolean).map(Number);
+  const files = ['fp32', ...Object.keys(entry.variants ?? {})];
+  const frames = 196;
+  const steps = 10;
+  const ctx = await browser.newContext();
+  const pages = new Map<number, Page>();
+  for (const t of threadCounts) {
+    const page = await ctx.newPage();
+    await page.goto(`/harness/?via=worker&backend=wasm&threads=${t}`);
+    await page.waitForFunction(() => window.coreHarness?.ready === true, null, { timeout: 120_000 });
+    const info = await page.evaluate(() => window.coreHarness.info());
+    if (!info.crossOriginIsolated && t > 1) throw new Error(`the harness is not cross-origin isolated: ${t} threads cannot run (serve with COOP/COEP, see vite.config.ts)`);
+    pages.set(t, page);
+  }
+  type Config = { threads: number; file: string; guidance: number };
+  const configs: Config[] = [];
+  for (const t of threadCounts) {
+    for (const file of files) configs.push({ threads: t, file, guidance: entry.guidance });
+    configs.push({ threads: t, file: 'fp32', guidance: 1 });
+  }
+  const request = (c: Config, seed: number) => ({
+    model, ...(c.file === 'fp32' ? {} : { variant: c.file }), condition: { type: 'text' as const, text: PROMPT }, frames, steps, guidance: c.guidance, seed,
+  });
+  const gen = (c: Config, seed: number) => pages.get(c.threads)!.evaluate((r) => window.coreHarness.generate(r), request(c, seed));
+  for (const c of configs) for (let i = 0; i < 2; i++) await gen(c, 1);
+  const load0 = os.loadavg()[0];
+  const totals = configs.map(() => [] as number[]);
+  const stepSums = configs.map(() => [] as number[]);
+  const threadsRan = configs.map(() => 0);
+  for (let r = 0; r < reps; r++) {
+    for (const [k, c] of configs.entries()) {
+      const res = await gen(c, 100 + r);
+      expect(res.modelCalls).toBe(steps);
+      totals[k].push(res.timings.totalMs);
+      stepSums[k].push(res.timings.stepMs.reduce((a, b) => a + b, 0));
+      threadsRan[k] = res.timings.threads;
+    }
+  }
+  const load1 = os.loadavg()[0];
+
+  // the page's thread while the worker generates (fp32 and int8 where shipped), per thread count
+  const responsiveness: Array<{ threads: number; file: string; idleMaxFrameGap: number; maxFrameGap: number; frames: number; maxTimerLate: number; ms: number }> = [];
+  for (const [t, page] of pages) {
+    for (const file of files.filter((f) => f === 'fp32' || f === 'int8')) {
+      const probe = await page.evaluate(async (req) => {
+        const watch = async (work: () => Promise<unknown>) => {
+          const frameTimes: number[] = [];
+          const ticks: number[] = [];
+          let on = true;
+          const raf = (t: number) => {
+            frameTimes.push(t);
+            if (on) requestAnimationFrame(raf);
+          };
+          requestAnimationFrame(raf);
+          const timer = setInterval(() => ticks.push(performance.now()), 50);
+          const t0 = performance.now();
+          await work();
+          const ms = performance.now() - t0;
+          on = false;
+          clearInterval(timer);
+          const gaps = frameTimes.slice(1).map((x, i) => x - frameTimes[i]);
+          const late = ticks.slice(1).map((x, i) => x - ticks[i] - 50);
+          return { frames: frameTimes.length, maxFrameGap: Math.max(0, ...gaps), maxTimerLate: Math.max(0, ...late), ms };
+        };
+        const idle = await watch(() => new Promise((r) => setTimeout(r, 1000)));
+        const busy = await watch(() => window.coreHarness.generate(req));
+        return { idleMaxFrameGap: idle.maxFrameGap, ...busy };
+      }, request({ threads: t, file, guidance: entry.guidance }, 7));
+      responsiveness.push({ threads: t, file, ...probe });
+    }
+  }
+  await ctx.close();
+
+  const rows = configs.map((c, k) => ({
+    ...c, threadsRan: threadsRan[k], batch: c.guidance === 1 ? 1 : 2,
+    medianMs: median(totals[k]), medianStepsMs: median(stepSums[k]), msPerStep: median(stepSums[k]) / steps, runsMs: totals[k].map((x) => Math.round(x)),
+  }));
+  const base = rows.find((r) => r.threads === Math.min(...threadCounts) && r.file === 'fp32' && r.guidance !== 1)!;
+  const lines = [
+    `10 steps × ${frames} frames, ${model}, harness in the generation worker (Chromium, ORT-web WASM), median of ${reps} (turns taken), ${os.cpus().length} cores, load average ${load0.toFixed(1)} → ${load1.toFixed(1)}`,
+    'threads  file  guidance  batch  ms/motion  ms/step  × base  runs (ms)',
+    ...rows.map((r) => `${String(r.threadsRan).padStart(7)}  ${r.file.padEnd(4)}  ${String(r.guidance).padStart(8)}  ${String(r.batch).padStart(5)}  ${r.medianMs.toFixed(0).padStart(9)}  ${r.msPerStep.toFixed(1).padStart(7)}  ${(r.medianMs / base.medianMs).toFixed(2).padStart(6)}  ${r.runsMs.join(' ')}`),
+    'page thread during one generation: threads  file  idle max frame gap  max frame gap  frames  max 50 ms-timer lateness  ms',
+    ...responsiveness.map((p) => `  ${String(p.threads).padStart(7)}  ${p.file.padEnd(4)}  ${p.idleMaxFrameGap.toFixed(0).padStart(18)}  ${p.maxFrameGap.toFixed(0).padStart(13)}  ${String(p.frames).padStart(6)}  ${p.maxTimerLate.toFixed(0).padStart(25)}  ${p.ms.toFixed(0)}`),
+  ];
+  console.log(lines.join('\n'));
+  const figures = { model, frames, steps, reps, cpuCores: os.cpus().length, loadAverage: [load0, load1], source: 'tests/e2e/page-bench.spec.ts (speed levers)', rows, responsiveness };
+  const json = JSON.stringify(figures, null, 1);
+  fs.writeFileSync(test.info().outputPath('speed-levers.json'), json);
+  if (process.env.EMDM_BENCH_JSON_LEVERS) fs.writeFileSync(process.env.EMDM_BENCH_JSON_LEVERS, json);
+});

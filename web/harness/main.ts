@@ -17,6 +17,8 @@ const VIA_WORKER = params.get('via') === 'worker';
 export interface HarnessRequest {
   /** 'tiny' / 'tiny-ddim' (the parity fixture's tiny step model, DDGAN / DDIM) or a shipped model name */
   model: string;
+  /** a manifest variant of the model (e.g. 'int8'); default its fp32 file */
+  variant?: string;
   condition: GenerateOptions['condition'];
   frames: number;
   steps: number;
@@ -88,7 +90,7 @@ const harness = {
     return { sha256: await hex(v), values: Array.from(v) };
   },
   async generate(req: HarnessRequest) {
-    const gen = await generatorFor(req.model);
+    const gen = await generatorFor(req.model, req.variant);
     const r = await gen.generate({ condition: req.condition, frames: req.frames, steps: req.steps, guidance: req.guidance, seed: req.seed });
     return {
       featuresSha256: await hex(r.motion.features),
