@@ -8,6 +8,8 @@
 //   (`vite build --mode e2e`, into dist-e2e/), which Playwright's test server builds and serves;
 //   the dev server serves every page.
 // - COOP/COEP headers on dev AND preview so ORT-web can use wasm threads (SharedArrayBuffer).
+// - the build writes .br/.gz beside every compressible file and preview serves them with
+//   Content-Encoding (scripts/build/precompress.mjs; README "Hosting" for static hosts).
 // - the ORT wasm binaries are copied into public/ort/ before anything runs (scripts/build/copy-ort.mjs);
 //   transformers.js is resolved onto the same onnxruntime-web (scripts/build/one-ort.mjs).
 import fs from 'node:fs';
@@ -18,6 +20,8 @@ import { defineConfig, type Plugin } from 'vite';
 import { copyOrt } from './scripts/build/copy-ort.mjs';
 // @ts-expect-error -- plain ESM build script without type declarations
 import { oneOnnxRuntime } from './scripts/build/one-ort.mjs';
+// @ts-expect-error -- plain ESM build script without type declarations
+import { precompress } from './scripts/build/precompress.mjs';
 
 const ROOT = path.dirname(fileURLToPath(import.meta.url));
 const WEB = path.join(ROOT, 'web');
@@ -89,7 +93,7 @@ export default defineConfig(({ mode }) => {
   return {
     root: WEB,
     publicDir: path.join(ROOT, 'public'),
-    plugins: [serveOrtRaw(), oneOnnxRuntime()],
+    plugins: [serveOrtRaw(), oneOnnxRuntime(), precompress()],
     resolve: {
       // the library as its users import it (package.json "exports"): the examples use these names
       alias: [

@@ -2,13 +2,17 @@
 // (web/examples/*.html, served at /examples/minimal.html by `make demo`): the test harness
 // (web/harness/: no CSP, loads models from ?models=<any URL>) is built only in the test mode that
 // Playwright's server uses.
-import { createHash } from 'node:crypto';
+import { createHash, randomBytes } from 'node:crypto';
 import fs from 'node:fs';
+import { Writable } from 'node:stream';
+import zlib from 'node:zlib';
 import os from 'node:os';
 import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
 import { build } from 'vite';
 import { E2E_MODE, pageInputs } from '../../vite.config';
+// @ts-expect-error -- plain ESM build script without type declarations
+import { compressedStatic, pickEncoding, precompressDir } from '../../scripts/build/precompress.mjs';
 
 const ROOT = path.resolve(__dirname, '../..');
 const out = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-build-'));
@@ -51,5 +55,52 @@ describe('vite build', () => {
     expect(Object.keys(pageInputs())).toEqual(['main', 'examples/minimal']);
     expect(Object.keys(pageInputs(undefined, { testPages: true }))).toEqual(expect.arrayContaining(['main', 'harness', 'examples/minimal']));
     expect(E2E_MODE).toBe('e2e');
+  });
+});
+
+describe('compressed delivery (scripts/build/precompress.mjs)', () => {
+  it('writes .br/.gz beside files that shrink by 10 %, not beside incompressible ones; preview serves them with Content-Encoding', async () => {
+    const dir = fs.mkdtempSync(path.join(out, 'site-'));
+    const cacheDir = fs.mkdtempSync(path.join(out, 'cache-'));
+    fs.mkdirSync(path.join(dir, 'models'));
+    const json = JSON.stringify({ joints: Array.from({ length: 400 }, (_, i) => ({ name: `joint_${i % 22}`, offset: [0, 0.1, 0] })) });
+    fs.writeFileSync(path.join(dir, 'models/manifest.json'), json);
+    const noise = randomBytes(8192); // nothing to compress
+    fs.writeFileSync(path.join(dir, 'models/noise.onnx'), noise);
+    const t = precompressDir(dir, { cacheDir });
+    expect(t.files).toBe(2);
+    const br = fs.readFileSync(path.join(dir, 'models/manifest.json.br'));
+    expect(zlib.brotliDecompressSync(br).toString()).toBe(json);
+    expect(zlib.gunzipSync(fs.readFileSync(path.join(dir, 'models/manifest.json.gz'))).toString()).toBe(json);
+    expect(fs.existsSync(path.join(dir, 'models/noise.onnx.br'))).toBe(false);
+    // a rebuild takes the compressed bytes from the cache, by sha256
+    fs.rmSync(path.join(dir, 'models/manifest.json.br'));
+    expect(precompressDir(dir, { cacheDir }).br).toBe(t.br);
+    expect(fs.readFileSync(path.join(dir, 'models/manifest.json.br'))).toEqual(br);
+
+    expect(pickEncoding('gzip, deflate, br')).toEqual({ ext: 'br', name: 'br' });
+    expect(pickEncoding('gzip, br;q=0')).toEqual({ ext: 'gz', name: 'gzip' });
+    expect(pickEncoding('identity')).toBeNull();
+
+    const serve = compressedStatic(dir, { 'Cross-Origin-Embedder-Policy': 'require-corp' });
+    const call = (url: string, headers: Record<string, string>) => new Promise<{ status: number; headers: Record<string, string>; body: Buffer; next: boolean }>((resolve) => {
+      const h: Record<string, string> = {};
+      const chunks: Buffer[] = [];
+      const res = Object.assign(new Writable({ write(c: Buffer, _e: string, cb: () => void) { chunks.push(c); cb(); } }), {
+        statusCode: 0, setHeader: (k: string, v: string) => { h[k.toLowerCase()] = v; },
+      });
+      res.on('finish', () => resolve({ status: res.statusCode, headers: h, body: Buffer.concat(chunks), next: false }));
+      serve({ method: 'GET', url, headers }, res, () => resolve({ status: 0, headers: h, body: Buffer.alloc(0), next: true }));
+    });
+    const r = await call('/models/manifest.json?x=1', { 'accept-encoding': 'gzip, br' });
+    expect(r.status).toBe(200);
+    expect(r.headers['content-encoding']).toBe('br');
+    expect(r.headers['content-type']).toBe('application/json');
+    expect(r.headers['cross-origin-embedder-policy']).toBe('require-corp');
+    expect(zlib.brotliDecompressSync(r.body).toString()).toBe(json);
+    expect((await call('/models/manifest.json', { 'accept-encoding': 'br', 'if-none-match': r.headers.etag })).status).toBe(304);
+    expect((await call('/models/manifest.json', {})).next, 'no Accept-Encoding: the plain file').toBe(true);
+    expect((await call('/models/noise.onnx', { 'accept-encoding': 'br' })).next).toBe(true);
+    expect((await call('/../build.test.ts', { 'accept-encoding': 'br' })).next).toBe(true);
   });
 });
