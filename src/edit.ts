@@ -23,15 +23,16 @@
  *   window is an ordinary generation; every later one holds c + m frames, c = min(C, frames so far), its first c
  *   frames kept (all channels) from the sequence's last c frames, generated with its segment's condition. A segment
  *   of n ≤ cap = maxFrames − C frames is one window (the first segment: up to maxFrames); a longer one is split
- *   into ⌈n/cap⌉ near-equal windows (the first ones one frame longer), window j seeded seed + j (Python's
- *   `emdm.motion.edit` refuses such segments instead). Joints: each window recovered, then
- *   `appendSegment(prev, window, c)`; features: the first window's, then every later window's frames [c, …).
+ *   into ⌈n/cap⌉ near-equal windows (the first ones one frame longer), window j seeded seed + j. Each later
+ *   window's features are eased at the seam (`easeSeams`) before anything else reads them. Joints: each window
+ *   recovered, then `appendSegment(prev, window, c)`; features: the first window's, then every later window's
+ *   frames [c, …).
  *   Changing segment i regenerates i and every later one (they continue from it); those before are kept.
  * - In-between: keep frames [0, a] ∪ [b, N−1] (default a = C−1, b = N−C), all channels; the kept later part
- *   stays where it was in the world (`pinKeptRoot`, generate's default).
+ *   stays where it was in the world (`pinKeptRoot`, generate's default); then `easeSeams` and `pinKeptRoot` again.
  * - Body part: keep the root + legs groups on every frame (new upper body) or the upper group (new legs + root).
  * - Loop (K = LOOP_END_FRAMES): known = X with frames [N−K, N) replaced by X[0:K]; frames [0, K) ∪ [N−K, N) kept
- *   (the root at N−K pinned where X had it). The clip is frames [0, N−K): played in a loop, frame N−K (the first
+ *   (the root at N−K pinned where X had it, eased and pinned again as the in-between). The clip is frames [0, N−K): played in a loop, frame N−K (the first
  *   pose again) follows its last frame.
  *   In place: the root's x/z velocity (features [1:3]) is set to 0 on every frame (heading may still turn).
  *
@@ -39,7 +40,7 @@
  * exactly in its normalised space.
  */
 import { recoverJoints } from './motion/recover';
-import { appendSegment } from './motion/stitch';
+import { appendSegment, pinKeptRoot } from './motion/stitch';
 import { keepMask, type FeatureGroup } from './sampler/mask';
 import { AbortError } from './sampler/sampler';
 
@@ -50,6 +51,78 @@ export const OVERLAP_FRAMES = 20;
 export const MAX_TIMELINE_SECONDS = 60;
 /** Frames at each end of a loop that are inpainted to the same pose. */
 export const LOOP_END_FRAMES = 10;
+/** Generated frames over which a seam's offset is eased out (`easeSeams`). */
+export const SEAM_EASE_FRAMES = 10;
+
+/**
+ * Ease out the jump between kept frames and generated ones (Python `emdm.motion.edit.ease_seams`, the same
+ * arithmetic): the sampler keeps the known frames exactly, but the model's first generated frame need not
+ * continue them (emdm-t2m-web, 10 steps: timeline seams up to 117× the 95th percentile of joint acceleration
+ * without this, 2× with it). For every run [s, e) of frames with no kept channel, next to a frame kept whole:
+ * o_L = f[s−1] + v − f[s] (v: the mean of f[s−1] − f[s−2] when s−2 is kept and f[s+1] − f[s] when s+1 < e),
+ * o_R = f[e] − v − f[e−1] (v: the mean of f[e+1] − f[e] when e+1 is kept and f[e−1] − f[e−2] when e−2 ≥ s), both
+ * from the un-eased features; then f[s+i] += w_i·o_L and f[e−1−i] += w_i·o_R with w_i = (1 + cos(π·i/m))/2,
+ * i < m = min(ease, e − s). Foot contacts [259:263] stay; frames kept in part (body-part edits) are left alone.
+ */
+export function easeSeams(features: ArrayLike<number>, frames: number, keep: ArrayLike<number>, ease = SEAM_EASE_FRAMES, dim = D): Float32Array {
+  if (features.length !== frames * dim || keep.length !== frames * dim) {
+    throw new RangeError(`easeSeams: features (${features.length}) and keep (${keep.length}) must both hold frames (${frames}) × ${dim} values`);
+  }
+  const f = Float64Array.from(features);
+  const kept: boolean[] = [];
+  const free: boolean[] = [];
+  for (let t = 0; t < frames; t++) {
+    let all = true;
+    let any = false;
+    for (let c = 0; c < dim; c++) {
+      if (keep[t * dim + c] === 1) any = true;
+      else all = false;
+    }
+    kept.push(all);
+    free.push(!any);
+  }
+  const row = (t: number) => f.subarray(t * dim, (t + 1) * dim);
+  const adds: { t: number; w: number; o: Float64Array }[] = [];
+  const offset = (base: Float64Array, sign: number, terms: [Float64Array, Float64Array][], to: Float64Array) => {
+    const o = new Float64Array(dim);
+    for (let c = 0; c < dim; c++) {
+      let v = 0;
+      for (const [a, b] of terms) v += a[c] - b[c];
+      o[c] = base[c] + (terms.length ? (sign * v) / terms.length : 0) - to[c];
+    }
+    for (let c = 259; c < Math.min(263, dim); c++) o[c] = 0;
+    return o;
+  };
+  for (let t = 0; t < frames; ) {
+    if (!free[t]) {
+      t++;
+      continue;
+    }
+    const s = t;
+    while (t < frames && free[t]) t++;
+    const e = t;
+    const m = Math.min(ease, e - s);
+    const w = Array.from({ length: m }, (_, i) => 0.5 * (1 + Math.cos((Math.PI * i) / m)));
+    if (s >= 1 && kept[s - 1]) {
+      const terms: [Float64Array, Float64Array][] = [];
+      if (s >= 2 && kept[s - 2]) terms.push([row(s - 1), row(s - 2)]);
+      if (s + 1 < e) terms.push([row(s + 1), row(s)]);
+      const o = offset(row(s - 1), 1, terms, row(s));
+      for (let i = 0; i < m; i++) adds.push({ t: s + i, w: w[i], o });
+    }
+    if (e < frames && kept[e]) {
+      const terms: [Float64Array, Float64Array][] = [];
+      if (e + 1 < frames && kept[e + 1]) terms.push([row(e + 1), row(e)]);
+      if (e - 2 >= s) terms.push([row(e - 1), row(e - 2)]);
+      const o = offset(row(e), -1, terms, row(e - 1));
+      for (let i = 0; i < m; i++) adds.push({ t: e - 1 - i, w: w[i], o });
+    }
+  }
+  for (const { t, w, o } of adds) {
+    for (let c = 0; c < dim; c++) f[t * dim + c] += w * o[c];
+  }
+  return Float32Array.from(f);
+}
 
 /** What a motion is about: a text prompt or an action (label name or index). */
 export interface EditCondition {
@@ -254,7 +327,11 @@ export async function generateTimeline(segments: readonly TimelineSegment[], gen
       } else {
         const known = new Float32Array((c + m) * D);
         known.set(prev.features.subarray((prev.frames - c) * D), 0);
-        w = await gen({ ...cond, frames: c + m, seed, known: { features: known, keep: keepMask(c + m, [{ frames: [[0, c - 1]] }]) } });
+        const keep = keepMask(c + m, [{ frames: [[0, c - 1]] }]);
+        const raw = await gen({ ...cond, frames: c + m, seed, known: { features: known, keep } });
+        checkMotion(raw, c + m, label(i));
+        const features = easeSeams(raw.features, c + m, keep); // the seam eased before the next window continues it
+        w = { ...raw, features, joints: recoverJoints(features, c + m) };
       }
       checkMotion(w, c + m, label(i));
       result.windows.push(w);
@@ -293,7 +370,9 @@ export async function inBetween(motion: EditMotion, cond: EditCondition, seed: n
   const keep = keepMask(N, [{ frames: [[0, a], [b, N - 1]] }]);
   const r = await gen({ ...c, frames: N, seed, known: { features: Float32Array.from(motion.features), keep } });
   checkMotion(r, N, 'in-betweening');
-  return r;
+  // generate() pinned the kept end; ease both seams, then pin again (the easing moved the free frames' root)
+  const features = pinKeptRoot(easeSeams(r.features, N, keep), N, keep, motion.features);
+  return { ...r, features, joints: recoverJoints(features, N) };
 }
 
 /** Which part a body-part edit keeps: 'lower' (root + legs: a new upper body) or 'upper' (new legs and root). */
@@ -335,6 +414,8 @@ export async function makeLoop(motion: EditMotion, cond: EditCondition, seed: nu
   const keep = keepMask(N, [{ frames: [[0, K - 1], [N - K, N - 1]] }]);
   let full = await gen({ ...c, frames: N, seed, known: { features: known, keep } });
   checkMotion(full, N, 'looping');
+  const eased = pinKeptRoot(easeSeams(full.features, N, keep), N, keep, known); // as inBetween
+  full = { frames: N, fps: full.fps, features: eased, joints: (opts.decode ?? ((f, n) => recoverJoints(f, n)))(eased, N) };
   if (opts.inPlace) {
     const features = Float32Array.from(full.features);
     for (let t = 0; t < N; t++) {

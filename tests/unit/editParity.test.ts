@@ -80,7 +80,10 @@ describe('src/edit.ts = emdm.motion.edit (tiny-edit fixture)', () => {
     const runs = meta.runs.filter((r) => r.op === 'timeline').map((r) => [r.frames, r.label, r.seed]);
     expect(calls.map((c) => [c.frames, c.action, c.seed])).toEqual(runs);
     expect(maxAbsDiff(t.features, fx.get('timeline_features'))).toBeLessThan(1e-4);
-    expect(maxJointDist(t.joints, fx.get('timeline_joints'))).toBeLessThan(1e-4);
+    // joints reach 11.7 m in this random model: feature differences of 3.5e-6 integrate along the root path to
+    // 1.4e-4 (1.2e-5 of the scale), so joints are compared relative to their scale
+    const jointTol = (a: Float32Array) => 1e-4 * Math.max(1, ...Array.from(a, Math.abs));
+    expect(maxJointDist(t.joints, fx.get('timeline_joints'))).toBeLessThan(jointTol(fx.get('timeline_joints')));
 
     calls.length = 0;
     const segs = tlSegs.slice();
@@ -90,7 +93,7 @@ describe('src/edit.ts = emdm.motion.edit (tiny-edit fixture)', () => {
     expect(calls.map((c) => [c.frames, c.action, c.seed])).toEqual(meta.runs.filter((x) => x.op === 'regenerate').map((x) => [x.frames, x.label, x.seed]));
     expect(r.frames).toBe(meta.ops.regenerate.total);
     expect(maxAbsDiff(r.features, fx.get('regen_features'))).toBeLessThan(1e-4);
-    expect(maxJointDist(r.joints, fx.get('regen_joints'))).toBeLessThan(1e-4);
+    expect(maxJointDist(r.joints, fx.get('regen_joints'))).toBeLessThan(jointTol(fx.get('regen_joints')));
     // segment 1 untouched, bit for bit
     const n0 = meta.ops.timeline.frames[0];
     expect(maxAbsDiff(rows(r.joints, 0, n0, 66), rows(t.joints, 0, n0, 66))).toBe(0);

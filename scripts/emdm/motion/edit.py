@@ -23,13 +23,13 @@ Frame bookkeeping (the contract with ``src/edit.ts``; FPS 20, C = ``OVERLAP`` = 
   de-normalised features are concat(window_0, window_1[c:], …). ``regenerate`` from segment i reuses frames
   before segment i.
 * in-betweening: known = the motion (N ≤ maxFrames frames), kept frames [0, a] ∪ [b, N−1] (default a = 19,
-  b = N − 20). In-betweening's and body-part edits' features are
+  b = N − 20). The features of in-betweening, body-part edits and loops are
   ``pin_kept_root(ease_seams(pin_kept_root(denormalise(x))))``: the kept end stays where it was, and the seams
   are eased (``generate({known})`` gives the inner pin).
 * body-part edit: kept groups root+legs on every frame (``keep="lower"``: new upper body) or upper
   (``keep="upper"``: new legs and root).
 * loop (K = ``LOOP_ENDS`` = 10): known = the motion X with frames [N−K, N) replaced by X[0:K]; kept frames
-  [0, K) ∪ [N−K, N); eased, not pinned (the root goes where the model takes it); the clip is frames [0, N−K) (frame N−K, the copy
+  [0, K) ∪ [N−K, N); pinned and eased like an edit (frame N−K's root stays where X had it); the clip is frames [0, N−K) (frame N−K, the copy
   of frame 0, is where it wraps to). In place: the de-normalised root x/z velocity [1:3] is set to 0 on every
   frame (the root turns but does not travel).
 """
@@ -354,10 +354,11 @@ def regenerate(model: Editor, tl: Timeline, i: int, segment: Segment | None = No
 
 # ----------------------------------------------------------------------------------------------- edits
 
-def _edit(model: Editor, features: np.ndarray, prompt: str, seed: int, keep: np.ndarray) -> Motion:
-    """Sample with ``features`` (de-normalised) kept where ``keep``; pin the kept root, ease the seams, pin again
-    (the easing moves the free frames' root)."""
-    known = features
+def _edit(model: Editor, features: np.ndarray, prompt: str, seed: int, keep: np.ndarray,
+          known: np.ndarray | None = None) -> Motion:
+    """Sample with ``known`` (de-normalised, default ``features``) kept where ``keep``; pin the kept root, ease the
+    seams, pin again (the easing moves the free frames' root)."""
+    known = features if known is None else known
     x = model.sample(prompt, len(features), seed, model.normalise(known), keep)
     f = pin_kept_root(ease_seams(pin_kept_root(model.denormalise(x), keep, known), keep), keep, known)
     return Motion(f, recover_joints(f).astype(np.float32))
@@ -408,7 +409,7 @@ def loop(model: Editor, features: np.ndarray, prompt: str, seed: int, ends: int 
     known = f.copy()
     known[n - ends:] = f[:ends]
     keep = keep_mask(n, [KeepRect(frames=((0, ends - 1), (n - ends, None)))])
-    full = ease_seams(model.denormalise(model.sample(prompt, n, seed, model.normalise(known), keep)), keep)
+    full = _edit(model, f, prompt, seed, keep, known).features
     if in_place:
         full = full.copy()
         full[:, 1:3] = 0.0

@@ -13,7 +13,7 @@ constants (C = 20, K = 10, seam easing M = 10, 20 fps, maxFrames 196). Operation
    0..23 equal the timeline's, segment 3 (same seed, so the same noise) continues the new segment 2.
 3. ``inbetween`` of ``timeline_features`` (defaults: keep 0..19 and 28..47) → ``inbetween_*``.
 4. ``edit_body`` of ``timeline_features``, keep ``lower`` (root + legs) → ``body_*``.
-5. ``loop`` of ``timeline_features`` (K = 10; the clip is 38 frames; eased, not pinned) → ``loop_*``; with ``in_place`` the same
+5. ``loop`` of ``timeline_features`` (K = 10; the clip is 38 frames; pinned and eased like the in-between) → ``loop_*``; with ``in_place`` the same
    sampling with root x/z velocity zeroed → ``loop_in_place_joints`` (its features are ``loop_features`` with
    [:, 1:3] = 0).
 
