@@ -29,8 +29,8 @@ export { CharacterLoadError, MAX_CHARACTER_BYTES, loadCharacter } from './charac
 export type { CharacterFile, CharacterLoadReason, LoadCharacterOptions, LoadedCharacter } from './character/retarget/load';
 export { MappingError, REQUIRED_JOINTS, autoMap, mappingFromJSON, mappingToJSON, validateMapping } from './character/retarget/mapping';
 export type { AutoMapResult, BoneInfo, BoneMapping } from './character/retarget/mapping';
-export { retargetMotion } from './character/retarget/retarget';
-export type { RetargetMotion, RetargetOptions, RetargetResult } from './character/retarget/retarget';
+export { retargetMotion, retargetMotionAsync } from './character/retarget/retarget';
+export type { RetargetMotion, RetargetOptions, RetargetResult, RetargetSliceOptions } from './character/retarget/retarget';
 export { SeededRandom } from './sampler/rng';
 export { computeSchedule, ddimScheduleFor, scheduleFor } from './sampler/schedule';
 export type { DdimSchedule, Schedule } from './sampler/schedule';

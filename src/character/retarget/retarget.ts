@@ -120,7 +120,71 @@ const PRIMARY: Partial<Record<JointName, JointName>> = {
   l_collar: 'l_shoulder', l_shoulder: 'l_elbow', l_elbow: 'l_wrist', r_collar: 'r_shoulder', r_shoulder: 'r_elbow', r_elbow: 'r_wrist',
 };
 
+/** Retarget `motion` onto the character under `root` in one go (see the file's comment). */
 export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: RetargetMotion, skeleton: SkeletonLike, opts: RetargetOptions = {}): RetargetResult {
+  const steps = retargetSteps(root, mapping, motion, skeleton, opts);
+  for (;;) {
+    const r = steps.next();
+    if (r.done) return r.value;
+  }
+}
+
+export interface RetargetSliceOptions extends RetargetOptions {
+  /** the most time one slice of work may take before the page gets its thread back, ms (default 8) */
+  sliceMs?: number;
+  /** aborting stops the work at the next slice boundary; the promise rejects with an AbortError */
+  signal?: AbortSignal;
+  /** called between slices with the share of the work done (0–1) */
+  onProgress?: (fraction: number) => void;
+}
+
+/**
+ * The same retargeting as retargetMotion (the same steps, so the same numbers to the last bit), cut into
+ * slices of at most about `sliceMs` with the event loop run between them, so that a long motion (60 s:
+ * 1,200 frames) does not stop the page from drawing or answering input. The character's rest pose is
+ * read synchronously, before this returns: the caller may pose `root` again (e.g. keep playing its
+ * previous clip) while the rest is computed. Aborting `signal` stops it at the next slice boundary.
+ */
+export async function retargetMotionAsync(root: Object3D, mapping: BoneMapping, motion: RetargetMotion, skeleton: SkeletonLike, opts: RetargetSliceOptions = {}): Promise<RetargetResult> {
+  const { signal, onProgress } = opts;
+  const sliceMs = opts.sliceMs ?? 8;
+  if (!(sliceMs > 0)) throw new RangeError(`retargetMotionAsync: sliceMs must be > 0, got ${sliceMs}`);
+  const aborted = () => signal?.reason instanceof Error ? signal.reason : new DOMException('retargetMotionAsync: cancelled (a newer motion arrived)', 'AbortError');
+  if (signal?.aborted) throw aborted();
+  const steps = retargetSteps(root, mapping, motion, skeleton, opts);
+  // the first slice runs now, synchronously: it reads the rest pose from the scene
+  let t0 = performance.now();
+  for (;;) {
+    const r = steps.next();
+    if (r.done) return r.value;
+    if (performance.now() - t0 < sliceMs) continue;
+    onProgress?.(r.value);
+    await nextTask();
+    if (signal?.aborted) throw aborted();
+    t0 = performance.now();
+  }
+}
+
+/** Give the event loop a turn (rendering and input included): scheduler.yield where there is one, else a message to ourselves (no 4 ms timer clamp). */
+function nextTask(): Promise<void> {
+  const sched = (globalThis as { scheduler?: { yield?: () => Promise<void> } }).scheduler;
+  if (typeof sched?.yield === 'function') return sched.yield();
+  return new Promise((resolve) => {
+    const ch = new MessageChannel();
+    ch.port1.onmessage = () => {
+      ch.port1.close();
+      resolve();
+    };
+    ch.port2.postMessage(null);
+  });
+}
+
+/**
+ * The retargeting, as a generator that yields (the share of the work done, 0–1) after each frame of each
+ * per-frame pass: retargetMotion runs it through, retargetMotionAsync a slice at a time. Everything it reads
+ * from the scene it reads before its first yield.
+ */
+function* retargetSteps(root: Object3D, mapping: BoneMapping, motion: RetargetMotion, skeleton: SkeletonLike, opts: RetargetOptions): Generator<number, RetargetResult, void> {
   const { joints, frames, fps } = motion;
   const threshold = opts.threshold ?? 0.5;
   const blend = opts.blend ?? 3;
@@ -339,9 +403,12 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
 
   const allDeltas: Map<number, Quaternion>[] = [];
   const rootPs: Vector3[] = [];
+  const PASSES = 5;
+  const done = (pass: number, f: number) => (pass + (f + 1) / frames) / PASSES;
   for (let f = 0; f < frames; f++) {
     allDeltas.push(deltas(f));
     rootPs.push(rootWorld(f, allDeltas[f].get(0) ?? new Quaternion()));
+    yield done(0, f);
   }
 
   // ---- feet: pin the ankle on contact frames (two-bone IK on thigh and shin)
@@ -356,6 +423,7 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
         ankles[li].push(posOf(M, `${s}_ankle`));
         if (mapped(`${s}_foot`)) toes[li].push(posOf(M, `${s}_foot`));
       });
+      yield done(1, f);
     }
     // per frame: how far the ankle should move. On a contact frame: horizontally, the joint in contact
     // (the ankle where the heel is down, else the toe) onto its mean position over that contact run (as
@@ -452,6 +520,7 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
     // their targets once the legs have done what they can (a nearly straight leg can hardly reach
     // further, a bent one can); the legs make the rest
     for (let f = 0; f < frames; f++) {
+      yield done(2, f);
       const active = plans.filter((p) => p.wgt[f] > 0);
       if (!active.length) continue;
       const corr = new Vector3();
@@ -490,6 +559,7 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
       for (const p of active) p.move[f] = p.move[f]!.clone().sub(corr);
     }
     for (let f = 0; f < frames; f++) {
+      yield done(3, f);
       if (!plans.some((p) => p.wgt[f] > 0)) continue;
       const { M } = pose(allDeltas[f], rootPs[f], true);
       for (const { s, move, wgt } of plans) {
@@ -526,6 +596,7 @@ export function retargetMotion(root: Object3D, mapping: BoneMapping, motion: Ret
     });
     const lp = rootPs[f].clone().applyMatrix4(pelvisParentInv);
     rootPositions.set([lp.x, lp.y, lp.z], f * 3);
+    yield done(4, f);
   }
   for (const r of rotations) for (let i = 0; i < r.length; i++) if (!Number.isFinite(r[i])) throw new Error('retargetMotion: a bone rotation came out non-finite (degenerate rest pose?)');
 
