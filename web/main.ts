@@ -15,7 +15,7 @@ import { examplePrompts } from './ui/examples';
 import { CacheControl, FileList } from './ui/files';
 import { ErrorPanel, Notices } from './ui/notices';
 import { failedModel, limitsFor, Session, type Generation, type PageContext, type SessionGenerateOptions } from './ui/session';
-import { parseState, randomSeed, stateToSearch, unknownParamsNotice, type PageState } from './ui/state';
+import { pageFlagNotices, parseState, randomSeed, stateToSearch, unknownParamsNotice, type PageState } from './ui/state';
 import { connectTestApi, installTestApi } from './ui/testapi';
 import { TimelinePanel } from './ui/timeline';
 import { describe, promptNote, View } from './ui/view';
@@ -75,6 +75,7 @@ async function main(): Promise<void> {
   for (const n of parsed.notices) notices.show('warn', n, 14000);
   const unknownParams = unknownParamsNotice(location.search);
   if (unknownParams) notices.show('warn', unknownParams, 14000);
+  for (const n of pageFlagNotices(location.search)) notices.show('warn', n, 14000);
 
   // ------------------------------------------------------------ session: the models in the worker
   const session = new Session(manifest, limits, MODELS_URL, parsed.state.backend, {

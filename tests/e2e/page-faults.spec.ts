@@ -278,6 +278,21 @@ test.describe('demo page: faults', () => {
     await expect(page.locator('#status-dot')).toHaveClass(/\bready\b/); // the action model works: ready
   });
 
+  test('a diffusion model that fails to load turns compare off in the URL too, and the status says what failed', async ({ page }) => {
+    const m = await readManifest(page);
+    const ddim = Object.entries(m.models).find(([, x]) => x.task === 'text' && x.objective === 'diffusion');
+    test.skip(!ddim, 'no diffusion model is shipped, so there is no compare view');
+    const [name, entry] = ddim!;
+    for (const f of onnxFiles(entry)) await page.route(`**/models/${f}`, (r: Route) => r.fulfill({ status: 404, body: 'not found' }));
+    await open(page);
+    await page.locator('#compare').click();
+    await expect(page.locator('#compare')).toBeDisabled({ timeout: 60_000 });
+    await expect(page.locator('#compare')).not.toBeChecked();
+    expect(new URL(page.url()).searchParams.get('compare'), 'the URL no longer asks for the compare view').toBeNull();
+    await expect(page.locator('#status-dot')).toHaveClass(/\berror\b/);
+    await expect(page.locator('#status-text')).toContainText(`${name} unavailable`);
+  });
+
   test('a model whose sha256 differs from the manifest is refused with the reason', async ({ page }) => {
     const m = await readManifest(page);
     const [name, text] = Object.entries(m.models).find(([, x]) => isEmdmText(x))!;

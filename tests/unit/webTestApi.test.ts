@@ -2,7 +2,7 @@
 // before any control is touched, unknownParamsNotice (web/ui/state.ts) names URL parameters the page ignores.
 import { describe, expect, it } from 'vitest';
 import { checkRequest, type RequestContext } from '../../web/ui/testapi';
-import { defaultState, unknownParamsNotice, type Mode, type StateLimits } from '../../web/ui/state';
+import { defaultState, pageFlagNotices, unknownParamsNotice, type Mode, type StateLimits } from '../../web/ui/state';
 
 const LIMITS: StateLimits = {
   supportedSteps: [1, 2, 4, 10], defaultSteps: 4, defaultGuidance: 2.5, actions: ['walk', 'jump'], fps: 20,
@@ -98,5 +98,12 @@ describe('unknownParamsNotice', () => {
   it('says nothing when every parameter is known', () => {
     expect(unknownParamsNotice('?mode=text&text=a&steps=4&seconds=2&guidance=2&seed=1&backend=wasm&compare=0&noauto=1&quality=high')).toBe('');
     expect(unknownParamsNotice('')).toBe('');
+  });
+});
+
+describe('pageFlagNotices', () => {
+  it("names a quality other than 'high'", () => {
+    expect(pageFlagNotices('?quality=low')).toEqual(["URL quality='low' is not 'high' (the only value); the page lowers its resolution when frames are slow."]);
+    expect(pageFlagNotices('?quality=high&noauto=1')).toEqual([]);
   });
 });

@@ -116,7 +116,8 @@ export class Controls {
   /** Disable the compare view with the reason shown under it (null: available again). */
   setCompareAvailable(reason: string | null): void {
     this.compareBlocked = reason;
-    if (reason) this.setCompare(false);
+    // turning a checked toggle off is a change (the URL and the view follow it, as for a click)
+    if (reason) this.setCompare(false, this.compare.checked);
     else this.refresh();
   }
 

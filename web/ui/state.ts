@@ -158,6 +158,15 @@ export function unknownParamsNotice(search: string): string {
     + `(known: ${known.join(', ')}${unknown.some((k) => /len|dur|time|frame/i.test(k)) ? "; the motion's length is 'seconds'" : ''}).`;
 }
 
+/** Notices for page flags with a value the page does not use (`quality` other than 'high'). */
+export function pageFlagNotices(search: string): string[] {
+  const q = new URLSearchParams(search);
+  const quality = q.get('quality');
+  return quality !== null && quality !== 'high'
+    ? [`URL quality='${quality}' is not 'high' (the only value); the page lowers its resolution when frames are slow.`]
+    : [];
+}
+
 /** The query string for a state (only what determines the motion, plus a non-default backend). */
 export function stateToSearch(s: PageState): string {
   const q = new URLSearchParams();
