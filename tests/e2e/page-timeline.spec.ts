@@ -114,9 +114,13 @@ test('regenerating segment 2 keeps segment 1 as it was', async () => {
   expect(after.features.slice(200 * D, 400 * D)).not.toEqual(before.features.slice(200 * D, 400 * D));
 });
 
-test('edits refuse a motion longer than one model window, saying so', async () => {
+test('edits refuse a motion longer than one model window; another step count regenerates every segment', async () => {
   await expect(page.evaluate(() => window.emdm.edit!.inBetween('a person jumps'))).rejects.toThrow(/at most 196 frames/);
   expect(await page.evaluate(() => window.emdm.edit!.message())).toMatch(/in-betweening works on a motion of at most 196 frames \(9\.8 s\).*this one is 600 frames/);
+  // the same segments with another step count: nothing is reused
+  await page.evaluate(() => window.emdm.generate({ mode: 'text', text: 'a person walks', seconds: 1, steps: 2, seed: 3 }));
+  expect((await page.evaluate(() => window.emdm.edit!.generateAll())).windows).toBe(6);
+  await page.evaluate((s) => window.emdm.generate({ mode: 'text', text: 'a person walks', seconds: 1, steps: s, seed: 3 }), STEPS);
 });
 
 test('in-between: the first and last second stay as they were, the middle is new', async () => {
@@ -220,6 +224,34 @@ test('bad input: a clear message naming the segment, the other segments kept, no
   expect(await page.evaluate(() => window.emdm.edit!.current()!.frames)).toBe(shown);
 });
 
+test('a timeline shows its progress per segment and gives way to a newer request (cancelled at a step)', async () => {
+  await page.evaluate(() => window.emdm.edit!.setSegments([
+    { prompt: 'a person walks forward', seconds: 9, seed: 61 }, { prompt: 'a person waves', seconds: 9, seed: 62 }, { prompt: 'a person walks backward', seconds: 9, seed: 63 },
+  ]));
+  const cancelled0 = await page.evaluate(() => window.emdm.counters.cancelled);
+  const running = page.evaluate(() => window.emdm.edit!.generateAll().then(() => 'finished', (e: Error) => e.name));
+  await expect(page.locator('#progress-text')).toContainText(/Segment [12] of 3: step/);
+  const single = await page.evaluate((s) => window.emdm.generate({ mode: 'text', text: 'a person walks forward', seconds: 2, steps: s, seed: 71 }), STEPS);
+  expect(await running).toBe('AbortError');
+  expect(single.frames).toBe(40);
+  expect(await page.evaluate(() => window.emdm.counters.cancelled)).toBeGreaterThan(cancelled0);
+  expect(await page.evaluate(() => window.emdm.edit!.current()!.frames)).toBe(40); // the newer motion is on screen
+});
+
+test('segments reorder and go with their buttons; the last one stays', async () => {
+  const a = { prompt: 'a person walks forward', seconds: 2, seed: 1 };
+  const b = { prompt: 'a person waves', seconds: 3, seed: 2 };
+  await page.evaluate((s) => window.emdm.edit!.setSegments(s), [a, b]);
+  await page.getByRole('button', { name: 'Segment 2: Move up' }).click();
+  expect(await page.evaluate(() => window.emdm.edit!.segments())).toEqual([b, a]);
+  await expect(page.getByLabel('Segment 1 prompt')).toHaveValue(b.prompt);
+  await page.getByRole('button', { name: 'Segment 1: Remove' }).click();
+  expect(await page.evaluate(() => window.emdm.edit!.segments())).toEqual([a]);
+  await page.getByRole('button', { name: 'Segment 1: Remove' }).click();
+  expect(await page.evaluate(() => window.emdm.edit!.segments())).toEqual([a]);
+  expect(await page.evaluate(() => window.emdm.edit!.message())).toMatch(/at least one segment/);
+});
+
 test('keyboard: open the panel, add a segment, type it and generate with Enter', async () => {
   await page.evaluate(() => window.emdm.edit!.setSegments([{ prompt: 'a person walks forward', seconds: 1.5, seed: 5 }]));
   const summary = page.locator('#edit-panel summary');
@@ -246,15 +278,21 @@ test('keyboard: open the panel, add a segment, type it and generate with Enter',
 });
 
 test('timing: a 3 × 5 s timeline against one 5 s motion (printed)', async () => {
-  const one = await page.evaluate(async (s) => {
-    const t0 = performance.now();
-    await window.emdm.generate({ mode: 'text', text: 'a person walks forward', seconds: 5, steps: s, seed: 41 });
-    return performance.now() - t0;
-  }, STEPS);
-  await page.evaluate(() => window.emdm.edit!.setSegments([
-    { prompt: 'a person walks forward', seconds: 5, seed: 1 }, { prompt: 'a person waves', seconds: 5, seed: 2 }, { prompt: 'a person walks backward', seconds: 5, seed: 3 },
-  ]));
-  const tl = await page.evaluate(() => window.emdm.edit!.generateAll());
-  expect(tl.frames).toBe(300);
-  console.log(`[timeline timing] steps ${STEPS}: one 5 s motion ${one.toFixed(0)} ms; 3 × 5 s timeline ${tl.ms.toFixed(0)} ms (${tl.windows} windows), ratio ${(tl.ms / one).toFixed(2)} (this machine, under the load of the moment)`);
+  for (const steps of [STEPS, 10]) {
+    // the single motion sets the page's step count, which the timeline then uses too
+    const one = await page.evaluate(async (s) => {
+      const t0 = performance.now();
+      await window.emdm.generate({ mode: 'text', text: 'a person walks forward', seconds: 5, steps: s, seed: 41 });
+      return performance.now() - t0;
+    }, steps);
+    await page.evaluate((k) => window.emdm.edit!.setSegments([
+      { prompt: 'a person walks forward', seconds: 5, seed: k + 1 }, { prompt: 'a person waves', seconds: 5, seed: k + 2 }, { prompt: 'a person walks backward', seconds: 5, seed: k + 3 },
+    ]), steps * 10);
+    const tl = await page.evaluate(() => window.emdm.edit!.generateAll());
+    expect(tl.frames).toBe(300);
+    expect(tl.windows).toBe(3);
+    const threads = await page.evaluate(() => window.emdm.environment?.threads ?? 0);
+    console.log(`[timeline timing] ${steps} step(s), WASM ${threads} thread(s): one 5 s motion ${one.toFixed(0)} ms; 3 × 5 s timeline ${tl.ms.toFixed(0)} ms `
+      + `(${tl.windows} windows of 100/120/120 frames), ratio ${(tl.ms / one).toFixed(2)} (this machine, under the load of the moment)`);
+  }
 });

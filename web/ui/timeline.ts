@@ -66,8 +66,9 @@ export class TimelinePanel {
   private readonly total = el('span', 'tl-total');
   private readonly msg = el('p', 'tl-message');
   private readonly rows: Row[] = [];
-  /** the last generated timeline (its segments are reused when regenerating a later one) */
+  /** the last generated timeline (its segments are reused when regenerating a later one) and the steps/guidance it ran with */
   private timeline: Timeline | null = null;
+  private timelineSettings = '';
   /** the full N frames of the last loop */
   private lastLoop: EditMotion | null = null;
   /** the last motion this panel showed, with raw decoded joints, and its condition (null: several) */
@@ -388,7 +389,10 @@ export class TimelinePanel {
       throw e;
     }
     history.replaceState(null, '', withTimeline(location.search, segs));
-    const previous = this.timeline;
+    // segments are reused only when made with the same steps and guidance as now
+    const st = this.page.controls.read();
+    const settings = `${st.steps}|${st.guidance}`;
+    const previous = this.timelineSettings === settings ? this.timeline : null;
     return this.request('timeline', async (gen, signal, calls) => {
       let seg = 0;
       let doneWindows = 0;
@@ -404,6 +408,7 @@ export class TimelinePanel {
         },
       });
       this.timeline = t;
+      this.timelineSettings = settings;
       const label = segs.map((s) => s.action ?? (s.prompt ?? '').trim()).join(' → ');
       const one = segs.every((s) => s.action === segs[0].action && (s.prompt ?? '').trim() === (segs[0].prompt ?? '').trim());
       return {
