@@ -32,6 +32,12 @@ export interface CreateGeneratorOptions {
   backend?: BackendRequest;
   /** WASM threads (default: up to 4 when cross-origin isolated, else 1) */
   threads?: number;
+  /**
+   * Which file of each model to run: 'fp32' (default) or a variant of its manifest entry, e.g. 'int8'
+   * (4.3 instead of 15.6 MB, about half the WASM compute per step, the same coverage per step count:
+   * docs/MODELS.md "Speed in the browser"). fp32 results are bit-identical between Node and the page.
+   */
+  variant?: string;
   /** run in a Web Worker (default: true where `Worker` exists, i.e. in browsers; false in Node) */
   worker?: boolean;
   /** keep verified model files in Cache Storage (worker only; default true) */
@@ -159,17 +165,26 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
     fallback: (m, r) => opts.onFallback?.(m, r),
   };
 
+  const variantOf = (model: string): string | undefined => {
+    const v = opts.variant;
+    if (v === undefined || v === 'fp32') return undefined;
+    const have = Object.keys(manifest.models[model]?.variants ?? {});
+    if (!have.includes(v)) throw new Error(`createGenerator: model '${model}' has no '${v}' file (its variants: ${have.join(', ') || 'none'}); use variant 'fp32' or one of those`);
+    return v;
+  };
+
   if (inWorker) {
     const client = new GenerationClient({ manifest, baseUrl, backend, threads: opts.threads, cache: opts.cache, events });
     return {
       manifest, skeleton: manifest.skeleton, inWorker,
       async load(model) {
-        const info = await client.load(model ?? modelFor(manifest, {}));
+        const name = model ?? modelFor(manifest, {});
+        const info = await client.load(name, variantOf(name));
         return { model: info.model, backend: info.backend, threads: info.threads };
       },
       async generate(req) {
         const { model, options } = resolveRequest(manifest, req);
-        const r = await client.generate(model, { ...options, pose: true, signal: req.signal, onStep: req.onStep });
+        const r = await client.generate(model, { ...options, pose: true, signal: req.signal, onStep: req.onStep }, variantOf(model));
         if (!r.pose) throw new Error('generation worker: the result has no pose (IK) although it was asked for');
         return motionOf(model, options, r, r.info.backend, r.pose);
       },
@@ -187,12 +202,12 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
     manifest, skeleton: manifest.skeleton, inWorker,
     async load(model) {
       const name = model ?? modelFor(manifest, {});
-      const g = await host.load(name);
+      const g = await host.load(name, variantOf(name));
       return { model: name, backend: g.backend, threads: g.threads };
     },
     async generate(req) {
       const { model, options } = resolveRequest(manifest, req);
-      const { gen, result } = await host.generate(model, { ...options, signal: req.signal, onStep: req.onStep });
+      const { gen, result } = await host.generate(model, { ...options, signal: req.signal, onStep: req.onStep }, variantOf(model));
       const ik = solveIK(result.motion.joints, result.motion.frames, manifest.skeleton);
       return motionOf(model, options, result, gen.backend, { rootPos: ik.rootPos, quats: ik.quats });
     },
