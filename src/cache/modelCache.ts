@@ -10,7 +10,8 @@
  * `useModelCache()` plugs this in front of the network for every `fetchVerified` of its JS context;
  * the page reads its size and clears it with `modelCacheUsage()` / `clearModelCache()`.
  */
-import { joinUrl, setVerifiedFileSource, verifyBytes, type FileTable } from '../manifest';
+import { loadMark } from '../runtime/ort';
+import { joinUrl, ModelFileError, setVerifiedFileSource, verifyBytes, type FileTable, type ModelFileErrorReason } from '../manifest';
 
 /** A download or cache read of one model file. */
 export interface FileEvent {
@@ -19,6 +20,8 @@ export interface FileEvent {
   state: 'network' | 'cache' | 'done' | 'failed';
   loaded: number;
   total: number;
+  /** with 'failed': why (ModelFileError's reason: 'missing' when the server does not have the file) */
+  reason?: ModelFileErrorReason;
 }
 
 export const MODEL_CACHE = 'emdm-models-v1';
@@ -67,6 +70,7 @@ export function useModelCache(onFile: (e: FileEvent) => void = () => undefined, 
         try {
           await verifyBytes(manifest, path, bytes);
           onFile({ path, state: 'cache', loaded: total, total });
+          loadMark(`file-verified:${path}`);
           onProgress?.(total, total);
           onFile({ path, state: 'done', loaded: total, total });
           return bytes;
@@ -83,10 +87,11 @@ export function useModelCache(onFile: (e: FileEvent) => void = () => undefined, 
         onProgress?.(loaded, total);
       });
     } catch (e) {
-      onFile({ path, state: 'failed', loaded: 0, total });
+      onFile({ path, state: 'failed', loaded: 0, total, reason: e instanceof ModelFileError ? e.reason : 'network' });
       throw e;
     }
     onFile({ path, state: 'done', loaded: total, total });
+    loadMark(`file-verified:${path}`);
     if (cache) {
       try {
         await cache.delete(joinUrl(baseUrl, path), { ignoreSearch: true }); // the entry of an older sha256

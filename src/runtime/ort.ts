@@ -41,6 +41,19 @@ let configuredThreads: number | null = null;
 /** the WASM backend's .wasm bytes (browser), fetched once by preloadWasmRuntime; null: ORT fetches it itself */
 let wasmBinary: Promise<ArrayBuffer | null> | null = null;
 
+/**
+ * A performance mark `emdm:<name>` (where the load time goes: the load benchmark,
+ * tests/e2e/page-bench-load.spec.ts, reads them from the generation worker). No-op without
+ * the User Timing API.
+ */
+export function loadMark(name: string): void {
+  try {
+    (globalThis as { performance?: { mark?: (n: string) => unknown } }).performance?.mark?.(`emdm:${name}`);
+  } catch {
+    // a mark is never worth an error
+  }
+}
+
 /** The .wasm of the WASM backend (`onnxruntime-web/wasm`, threaded SIMD build). */
 export const WASM_RUNTIME_FILE = 'ort-wasm-simd-threaded.wasm';
 /** Sizes and sha256 of the runtime files in the wasm folder (scripts/build/copy-ort.mjs writes it). */
@@ -95,7 +108,9 @@ async function fetchWasmRuntime(base: string, onProgress?: (loaded: number, tota
     throw new Error(`runtime: cannot read ${base}${RUNTIME_FILES} (the ONNX Runtime file list): ${(e as Error).message}`, { cause: e });
   }
   if (!files[WASM_RUNTIME_FILE]) throw new Error(`runtime: ${base}${RUNTIME_FILES} does not list ${WASM_RUNTIME_FILE}; rebuild (scripts/build/copy-ort.mjs)`);
-  return fetchVerified(base, { files }, WASM_RUNTIME_FILE, onProgress);
+  const bytes = await fetchVerified(base, { files }, WASM_RUNTIME_FILE, onProgress);
+  loadMark('runtime-wasm-verified');
+  return bytes;
 }
 
 /**
@@ -121,6 +136,7 @@ async function loadOrt(backend: Backend, cfg: RuntimeConfig): Promise<Ort> {
   if (backend === 'wasm') {
     await preloadWasmRuntime(cfg);
     const ort = await wasmOrt!;
+    loadMark('runtime-module');
     configure(ort, cfg);
     const binary = await wasmBinary;
     if (binary && !ort.env.wasm.wasmBinary) ort.env.wasm.wasmBinary = binary;
@@ -219,6 +235,7 @@ async function createSession(key: string, bytes: ArrayBuffer | Uint8Array, backe
   const ort = await loadOrt(backend, cfg);
   const data = bytes instanceof Uint8Array ? bytes : new Uint8Array(bytes);
   let session: OrtTypes.InferenceSession;
+  loadMark(`session-start:${key}`);
   try {
     session = await ort.InferenceSession.create(data, {
       executionProviders: [backend],
@@ -227,6 +244,7 @@ async function createSession(key: string, bytes: ArrayBuffer | Uint8Array, backe
   } catch (e) {
     throw new Error(`runtime: cannot load ONNX model ${key} on ${backend}: ${(e as Error).message}`, { cause: e });
   }
+  loadMark(`session-ready:${key}`);
   const threads = backend === 'wasm' ? (ort.env.wasm.numThreads ?? 1) : 0;
   let released = false;
   return {

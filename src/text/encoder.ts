@@ -10,6 +10,7 @@
 import { fetchVerified, joinUrl, ModelFileError, type Manifest, type TextEncoderEntry } from '../manifest';
 import { CLIP_CONTEXT, emdmClipIds, truncateKeepingEnd } from './clipTokens';
 import { l2Normalize, meanPool } from './pooling';
+import { loadMark } from '../runtime/ort';
 import { isNodeRuntime, loadTransformers, provideVerifiedFile } from './transformersEnv';
 
 /** The tokens an encoder reads from a prompt. */
@@ -139,6 +140,7 @@ async function load(manifest: Manifest, baseUrl: string, id: string, opts: TextE
   const entry = entryFor(manifest, id);
   const root = modelRoot(baseUrl, entry.dir);
   const [tf] = await Promise.all([loadTransformers({ wasmPaths: opts.wasmPaths, threads: opts.threads }), prefetch(manifest, baseUrl, entry, root, opts.onDownload)]);
+  loadMark(`encoder-files:${id}`);
   const device = isNodeRuntime ? 'cpu' : 'wasm';
   const common = { local_files_only: true, device } as const;
   if (entry.kind === 'minilm') {
@@ -147,6 +149,7 @@ async function load(manifest: Manifest, baseUrl: string, id: string, opts: TextE
       tf.AutoTokenizer.from_pretrained(root, { local_files_only: true }),
       tf.AutoModel.from_pretrained(root, { ...common, dtype }),
     ]);
+    loadMark(`encoder-ready:${id}`);
     const maxTokens = entry.maxTokens ?? 128;
     const tokenize = (text: string): PromptTokens => {
       // transformers.js's own truncation drops [SEP]; HF tokenizers, which Python uses, keep it.

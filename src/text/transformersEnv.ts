@@ -10,7 +10,7 @@
  *   step models (src/runtime/ort.ts), configured there before transformers.js is imported: one
  *   .wasm to download and compile, one thread count. Node: transformers.js uses onnxruntime-node.
  */
-import { loadWasmOrt, type RuntimeConfig } from '../runtime/ort';
+import { loadMark, loadWasmOrt, type RuntimeConfig } from '../runtime/ort';
 
 type Transformers = typeof import('@huggingface/transformers');
 
@@ -54,6 +54,7 @@ export function loadTransformers(runtime: RuntimeConfig = {}): Promise<Transform
     // ORT first: transformers.js points an unconfigured ORT at a CDN when it is imported
     if (!IS_NODE) await loadWasmOrt(runtime);
     const tf = await import('@huggingface/transformers');
+    loadMark('transformers-module');
     const env = tf.env;
     env.allowRemoteModels = false;
     env.allowLocalModels = true;

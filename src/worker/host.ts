@@ -9,7 +9,7 @@
 import { loadModel, runWithFallback } from '../backends';
 import type { GenerateOptions, GenerateResult, Generator } from '../generate';
 import type { Manifest } from '../manifest';
-import { type BackendRequest, preloadWasmRuntime } from '../runtime/ort';
+import { type BackendRequest, loadMark, preloadWasmRuntime } from '../runtime/ort';
 import { createTextEncoder, type TextEncoder } from '../text';
 
 export interface HostEvents {
@@ -121,6 +121,7 @@ export class GenerationHost {
       gen.then((x) => x.dispose()).catch(() => undefined);
       throw e;
     });
+    loadMark(`model-ready:${model}`);
     return g;
   }
 

@@ -10,7 +10,7 @@
 // EMDM_BENCH_LOAD_REPS (default 3) is the number of fresh profiles (cold + second visit each).
 import fs from 'node:fs';
 import os from 'node:os';
-import { expect, test, type BrowserContext, type Request } from '@playwright/test';
+import { expect, test, type BrowserContext, type Page, type Request } from '@playwright/test';
 
 interface FileRow {
   path: string;
@@ -29,6 +29,20 @@ interface Visit {
   files: FileRow[];
   /** the page's own per-file record: cache or network, and when each was verified */
   modelFiles: Array<{ path: string; cached: boolean; at: number }>;
+  /** the generation worker's `emdm:*` performance marks (src/runtime/ort.ts loadMark), ms after navigation */
+  marks: Array<[string, number]>;
+}
+
+/** The generation worker's emdm:* marks on the page's clock (ms since the page's time origin). */
+async function workerMarks(page: Page): Promise<Array<[string, number]>> {
+  const worker = page.workers().find((w) => w.url().includes('generation.worker'));
+  if (!worker) return [];
+  const pageOrigin = await page.evaluate(() => performance.timeOrigin);
+  const w = await worker.evaluate(() => ({
+    origin: performance.timeOrigin,
+    marks: performance.getEntriesByType('mark').filter((m) => m.name.startsWith('emdm:')).map((m) => [m.name.slice(5), m.startTime] as [string, number]),
+  }));
+  return w.marks.map(([n, t]) => [n, t + w.origin - pageOrigin] as [string, number]).sort((a, b) => a[1] - b[1]);
 }
 
 async function visit(context: BrowserContext): Promise<Visit> {
@@ -45,20 +59,22 @@ async function visit(context: BrowserContext): Promise<Visit> {
     const headers = await res.allHeaders();
     return {
       path: u.pathname, status: res.status(), wireBytes: sizes.responseBodySize + sizes.responseHeadersSize,
-      encoding: headers['content-encoding'] ?? '', startMs: t.startTime - navStart, endMs: t.startTime + t.responseEnd - navStart,
+      encoding: headers['content-encoding'] ?? '', startMs: t.startTime, endMs: t.startTime + t.responseEnd, // made relative below
     };
   };
   page.on('requestfinished', (r) => pending.push(row(r)));
-  page.once('request', (r) => { navStart = r.timing().startTime; });
-  await page.goto('/?noauto=1&backend=wasm');
+  const nav = await page.goto('/?noauto=1&backend=wasm');
+  navStart = nav!.request().timing().startTime;
   await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 300_000 });
   expect(await page.evaluate(() => window.emdm.error)).toBe('');
   const startup = await page.evaluate(() => window.emdm.startup);
   const modelFiles = await page.evaluate(() => window.emdm.files().map((f) => ({ path: f.path, cached: f.cached, at: f.at })));
+  const marks = await workerMarks(page);
   await page.waitForTimeout(300); // let the last requestfinished events arrive
-  const files = (await Promise.all(pending)).filter((x): x is FileRow => x !== null).sort((a, b) => a.startMs - b.startMs);
+  const files = (await Promise.all(pending)).filter((x): x is FileRow => x !== null)
+    .map((f) => ({ ...f, startMs: f.startMs - navStart, endMs: f.endMs - navStart })).sort((a, b) => a.startMs - b.startMs);
   await page.close();
-  return { readyMs: startup.readyMs, manifestMs: startup.manifestMs, wireBytes: files.reduce((s, f) => s + f.wireBytes, 0), files, modelFiles };
+  return { readyMs: startup.readyMs, manifestMs: startup.manifestMs, wireBytes: files.reduce((s, f) => s + f.wireBytes, 0), files, modelFiles, marks };
 }
 
 const MB = (b: number) => (b / 2 ** 20).toFixed(2);
@@ -73,6 +89,7 @@ function table(label: string, v: Visit): string {
   }
   const small = v.files.filter((f) => f.wireBytes < 50_000 && f.status === 200 && !f.path.includes('/models/') && !f.path.includes('/ort'));
   if (small.length) lines.push(`  (+ ${small.length} small page files, ${MB(small.reduce((s, f) => s + f.wireBytes, 0))} MB)`);
+  if (v.marks.length) lines.push(`  worker: ${v.marks.map(([n, t]) => `${n.replace(/^(session-\w+):([^#]*).*$/, '$1:$2')} ${t.toFixed(0)}`).join(' · ')}`);
   const cached = v.modelFiles.filter((f) => f.cached).length;
   if (v.modelFiles.length) {
     lines.push(`  model files: ${v.modelFiles.length} (${cached} from Cache Storage), all verified at ${Math.max(...v.modelFiles.map((f) => f.at)).toFixed(0)} ms`);

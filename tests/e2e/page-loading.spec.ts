@@ -52,6 +52,7 @@ test('HTTP 404 for an encoder file: missing, with the path and URL', async ({ pa
   const f = await failure(page, 'tokenizer.json');
   expectMissing(f, 'text/all-MiniLM-L6-v2/tokenizer.json');
   expect(f.hint).toMatch(/models\/text\/all-MiniLM-L6-v2\/tokenizer\.json \(HTTP 404\)/);
+  await expect(page.locator('#file-list li[title="text/all-MiniLM-L6-v2/tokenizer.json"]')).toContainText('missing on the server');
 });
 
 test('HTTP 404 for the ONNX Runtime .wasm: missing, with the path and URL', async ({ page }) => {

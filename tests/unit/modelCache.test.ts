@@ -92,6 +92,15 @@ describe('model cache', () => {
     expect(await modelCacheUsage()).toEqual({ files: 0, bytes: 0 });
   });
 
+  test('a file the server does not have is a failed file with reason missing, and nothing is stored', async () => {
+    const events: FileEvent[] = [];
+    useModelCache((e) => events.push(e));
+    const gone = { ...manifest, files: { ...manifest.files, 'gone.bin': { bytes: 10, sha256: '0'.repeat(64) } } };
+    await expect(fetchVerified(BASE, gone, 'gone.bin')).rejects.toMatchObject({ name: 'ModelFileError', path: 'gone.bin', reason: 'missing' });
+    expect(events).toEqual([{ path: 'gone.bin', state: 'failed', loaded: 0, total: 10, reason: 'missing' }]);
+    expect(await modelCacheUsage()).toEqual({ files: 0, bytes: 0 });
+  });
+
   test('a corrupt entry is dropped, fetched again and stored good, with a notice', async () => {
     const notices: string[] = [];
     useModelCache(undefined, (t) => notices.push(t));

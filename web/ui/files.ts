@@ -25,7 +25,9 @@ export class FileList {
     }
     row.dataset.state = cached ? 'cache' : e.state;
     const bytes = e.state === 'network' ? `${formatBytes(e.loaded)} / ${formatBytes(e.total)}` : formatBytes(e.total);
-    row.lastElementChild!.textContent = `${bytes} · ${cached && e.state === 'done' ? 'from cache, verified' : LABEL[e.state]}`;
+    const label = e.state === 'failed' && e.reason === 'missing' ? 'missing on the server' : e.state === 'failed' && e.reason === 'sha256' ? 'failed: checksum' : LABEL[e.state];
+    row.dataset.reason = e.state === 'failed' ? (e.reason ?? '') : '';
+    row.lastElementChild!.textContent = `${bytes} · ${cached && e.state === 'done' ? 'from cache, verified' : label}`;
     this.box.hidden = false;
   }
 
