@@ -66,15 +66,6 @@ export interface RemoteResult extends GenerateResult {
   pose?: WirePose;
 }
 
-/** The buffers of arrays that own them whole (a view into a larger buffer, or a buffer listed twice, is not transferred but copied). */
-function ownBuffers(...arrays: Float32Array[]): ArrayBuffer[] {
-  const out = new Set<ArrayBuffer>();
-  for (const a of arrays) {
-    if (a.buffer instanceof ArrayBuffer && a.byteOffset === 0 && a.byteLength === a.buffer.byteLength) out.add(a.buffer);
-  }
-  return [...out];
-}
-
 /** Rebuild an error sent by the worker as the class the caller checks for. */
 function rebuild(w: WireError): Error {
   let e: Error;
@@ -184,8 +175,8 @@ export class GenerationClient {
 
   /**
    * One motion; the signal cancels it at the next denoising step (rejecting with an AbortError). With
-   * `known` (inpainting), its two arrays' buffers are transferred to the worker: they are detached here
-   * afterwards (pass copies to keep them).
+   * `known` (inpainting), its two arrays are copied to the worker (structured clone, ~200 kB for 196 frames),
+   * not transferred: the caller keeps using them (src/edit.ts reads `keep` again after the generation).
    */
   async generate(model: string, o: RemoteGenerateOptions, variant?: string): Promise<RemoteResult> {
     const { signal, onStep, onPreview, ...options } = o;
@@ -194,8 +185,7 @@ export class GenerationClient {
     const cancel = () => this.send({ type: 'cancel', id });
     signal?.addEventListener('abort', cancel, { once: true });
     try {
-      const transfer = options.known ? ownBuffers(options.known.features, options.known.keep) : [];
-      const m = await this.request({ type: 'generate', id, model, variant, options }, onStep, onPreview, transfer);
+      const m = await this.request({ type: 'generate', id, model, variant, options }, onStep, onPreview);
       if (m.type !== 'result') throw new Error(`generation worker answered '${m.type}' to generate`);
       return { ...m.result, info: m.info, pose: m.pose };
     } finally {

@@ -44,7 +44,7 @@ export interface WireGenerateOptions {
   /**
    * Inpainting (GenerateOptions.known): a known motion's de-normalised features (frames × featureDim, like
    * `Motion.features` of an earlier result) and the 0/1 `keep` mask (`keepMask`) of the entries to keep.
-   * Both buffers are transferred to the worker (the sender's arrays are detached: send copies to keep them).
+   * Both are copied to the worker (not transferred: the sender keeps its arrays).
    */
   known?: { features: Float32Array; keep: Float32Array };
 }

@@ -6,6 +6,7 @@
 import fs from 'node:fs';
 import { expect, test, type Page } from '@playwright/test';
 import { BVHLoader } from 'three/addons/loaders/BVHLoader.js';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { watchPage } from './helpers';
 
 const STEPS = 1; // the fewest the shipped text model supports: the test checks bookkeeping, not quality
@@ -63,7 +64,7 @@ function poseDistance(a: number[], fa: number, b: number[], fb: number): number 
   return m;
 }
 
-test('a 3-segment 30 s timeline: 600 frames, one BVH of 600 frames, kept in the URL', async ({ browser }) => {
+test('a 3-segment 30 s timeline: 600 frames, one BVH and one GLB of 600 frames, kept in the URL', async ({ browser }) => {
   const segs = [
     { prompt: 'a person walks forward', seconds: 10, seed: 11 },
     { prompt: 'a person waves with the right hand', seconds: 10, seed: 12 },
@@ -92,6 +93,11 @@ test('a 3-segment 30 s timeline: 600 frames, one BVH of 600 frames, kept in the 
   const parsed = new BVHLoader().parse(fs.readFileSync((await dl.path())!, 'utf8'));
   expect(parsed.clip.tracks[0].times.length).toBe(600);
   expect(parsed.skeleton.bones.length).toBeGreaterThanOrEqual(22);
+  const [glbDl] = await Promise.all([page.waitForEvent('download'), page.locator('#dl-glb').click()]);
+  const glb = fs.readFileSync((await glbDl.path())!);
+  const gltf = await new GLTFLoader().parseAsync(glb.buffer.slice(glb.byteOffset, glb.byteOffset + glb.byteLength) as ArrayBuffer, '');
+  expect(gltf.animations.length).toBe(1);
+  for (const track of gltf.animations[0].tracks) expect(track.times.length).toBe(600);
 
   // the URL holds the timeline: a reload (or a shared link) restores the segments
   const url = page.url();
