@@ -108,6 +108,16 @@ function entryFor(manifest: Manifest, id: string): TextEncoderEntry {
   return entry;
 }
 
+/**
+ * ORT session options of the encoders: no graph optimisation. On a cold WASM runtime (a page load),
+ * optimising the int8 MiniLM graph is what its session creation spends its time on: measured with
+ * onnxruntime-web 1.30 in fresh Node processes on this 2-core machine (load average 13–16), creating it
+ * took 1.1–3.6 s with 'all'/'extended'/'basic' and 0.3–0.9 s with 'disabled'; its first encode is
+ * ~0.3 s slower and later ones ~20 ms instead of ~12 ms (one per prompt). Vectors stay within the
+ * Python parity tests' cosine ≥ 0.999.
+ */
+export const ENCODER_SESSION_OPTIONS = { graphOptimizationLevel: 'disabled' } as const;
+
 const loaded = new Map<string, Promise<TextEncoder>>();
 
 /**
@@ -142,7 +152,7 @@ async function load(manifest: Manifest, baseUrl: string, id: string, opts: TextE
   const [tf] = await Promise.all([loadTransformers({ wasmPaths: opts.wasmPaths, threads: opts.threads }), prefetch(manifest, baseUrl, entry, root, opts.onDownload)]);
   loadMark(`encoder-files:${id}`);
   const device = isNodeRuntime ? 'cpu' : 'wasm';
-  const common = { local_files_only: true, device } as const;
+  const common = { local_files_only: true, device, session_options: ENCODER_SESSION_OPTIONS } as const;
   if (entry.kind === 'minilm') {
     const dtype = entry.dtype ?? 'q8';
     const [tokenizer, model] = await Promise.all([
