@@ -155,6 +155,12 @@ test('in-between: the first and last second stay as they were, the middle is new
       expect(Math.hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]), `frame ${f} joint ${j}`).toBeLessThan(1e-3);
     }
   }
+  // any marked range: keep the first 0.5 s and the last 2 s
+  await page.evaluate(() => window.emdm.edit!.inBetween('a person sits down', 0.5, 2));
+  const again = (await page.evaluate(() => window.emdm.edit!.current()))!;
+  const diff = (f: number) => Math.max(...Array.from({ length: D }, (_, c) => Math.abs(again.features[f * D + c] - after.features[f * D + c])));
+  for (const f of [0, 9, 60, 99]) expect(diff(f), `kept frame ${f}`).toBeLessThan(1e-4);
+  expect(Math.max(diff(20), diff(40))).toBeGreaterThan(1e-2);
 });
 
 test('upper-body edit: legs and root unchanged on every frame, a new upper body', async () => {

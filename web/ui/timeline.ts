@@ -40,7 +40,8 @@ export interface EditTestApi {
   setSegments(s: TimelineSegment[]): void;
   generateAll(): Promise<EditSummary>;
   regenerate(i: number): Promise<EditSummary>;
-  inBetween(prompt: string): Promise<EditSummary>;
+  /** keep the first `first` and the last `last` seconds (default 1 each) */
+  inBetween(prompt: string, first?: number, last?: number): Promise<EditSummary>;
   bodyEdit(part: KeptPart, prompt: string): Promise<EditSummary>;
   loop(inPlace: boolean): Promise<EditSummary>;
   /** the message under the panel ('' when none) */
@@ -96,7 +97,11 @@ export class TimelinePanel {
 
     // ---- edits of the motion on screen
     const ibPrompt = this.input('tl-ib-prompt', 'New middle (prompt)', 'a person jumps');
-    const ibGo = this.button('Regenerate the middle', 'ghost', () => void this.inBetween(ibPrompt.value).catch(() => undefined));
+    const ibFirst = this.seconds('tl-ib-first', 'Keep the first seconds', 1);
+    const ibLast = this.seconds('tl-ib-last', 'Keep the last seconds', 1);
+    const ibKeep = el('span', 'tl-check');
+    ibKeep.append(document.createTextNode('keep first '), ibFirst, document.createTextNode(' s, last '), ibLast, document.createTextNode(' s'));
+    const ibGo = this.button('Regenerate the middle', 'ghost', () => void this.inBetween(ibPrompt.value, Number(ibFirst.value), Number(ibLast.value)).catch(() => undefined));
     const bodyKeep = el('select');
     bodyKeep.id = 'tl-body-keep';
     bodyKeep.setAttribute('aria-label', 'Which part to keep');
@@ -116,7 +121,7 @@ export class TimelinePanel {
     body.append(
       el('h4', undefined, 'Edit the motion on screen'),
       el('p', 'tl-hint', 'Works on a motion of one model window (up to 9.8 s).'),
-      this.group('In-between: keep the first and last second', ibPrompt, ibGo),
+      this.group('In-between: keep the start and the end', ibKeep, ibPrompt, ibGo),
       this.group('Body part', bodyKeep, bodyPrompt, bodyGo),
       this.group('Loop: last pose = first pose', inPlaceLabel, loopGo),
     );
@@ -300,7 +305,8 @@ export class TimelinePanel {
           const res: RemoteResult = await session.engine.client.generate(model, {
             condition: r.action !== undefined ? { type: 'action', label } : { type: 'text', text: r.prompt ?? '' },
             frames: r.frames, steps: state.steps, guidance: state.guidance, seed: r.seed, signal,
-            ...(r.known ? { known: r.known } : {}),
+            // copies: the client transfers these buffers to the worker, and src/edit.ts reads `keep` again after
+            ...(r.known ? { known: { features: r.known.features.slice(), keep: r.known.keep.slice() } } : {}),
             onStep: (d, t) => {
               session.counters.stepsRun++;
               view.showProgress(calls.progress(d / t), calls.text(d, t));
@@ -429,12 +435,16 @@ export class TimelinePanel {
     return this.generateAll(i);
   }
 
-  async inBetween(prompt: string): Promise<EditSummary> {
+  async inBetween(prompt: string, first = 1, last = 1): Promise<EditSummary> {
     return this.request('inbetween', async (gen, _signal, calls) => {
       const { motion } = this.base();
       const c = { prompt };
       const seed = randomSeed();
-      const r = await inBetween(motion, c, seed, gen, this.limits());
+      const fps = motion.fps;
+      if (!(first > 0) || !(last > 0)) throw new EditError(`in-betweening: keep more than 0 s at each end (got first ${first} s, last ${last} s)`);
+      // keep frames 0…a and b…N−1
+      const range = { a: Math.round(first * fps) - 1, b: motion.frames - Math.round(last * fps) };
+      const r = await inBetween(motion, c, seed, gen, this.limits(), range);
       return {
         motion: r, display: this.decode(r.features, r.frames), windows: 1, results: calls.results,
         label: `${prompt.trim()} (in-between)`, model: this.modelFor(c), seed, condition: c,
@@ -488,6 +498,17 @@ export class TimelinePanel {
     return i;
   }
 
+  private seconds(id: string, label: string, value: number): HTMLInputElement {
+    const i = el('input', 'tl-seconds');
+    i.type = 'number';
+    i.id = id;
+    i.min = '0.05';
+    i.step = '0.05';
+    i.value = String(value);
+    i.setAttribute('aria-label', label);
+    return i;
+  }
+
   private group(title: string, ...children: HTMLElement[]): HTMLElement {
     const f = el('fieldset', 'tl-tool');
     f.append(el('legend', undefined, title), ...children);
@@ -501,7 +522,7 @@ export class TimelinePanel {
       setSegments: (s) => this.setSegments(s),
       generateAll: () => this.generateAll(),
       regenerate: (i) => this.regenerate(i),
-      inBetween: (p) => this.inBetween(p),
+      inBetween: (p, first, last) => this.inBetween(p, first, last),
       bodyEdit: (part, p) => this.bodyEdit(part, p),
       loop: (inPlace) => this.loop(inPlace),
       message: () => this.message(),
