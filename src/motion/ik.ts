@@ -98,6 +98,15 @@ function adaptedOffsets(joints: Float32Array, frames: number, skeleton: Skeleton
 }
 
 export function solveIK(joints: Float32Array, frames: number, skeleton: SkeletonLike, opts: { adaptOffsets?: boolean } = {}): IKResult {
+  const steps = solveIKSteps(joints, frames, skeleton, opts);
+  for (;;) {
+    const r = steps.next();
+    if (r.done) return r.value;
+  }
+}
+
+/** solveIK as a generator that yields (the share of frames solved) after each frame, so a caller can run it in slices (src/character/retarget). */
+export function* solveIKSteps(joints: Float32Array, frames: number, skeleton: SkeletonLike, opts: { adaptOffsets?: boolean } = {}): Generator<number, IKResult, void> {
   const J = skeleton.joints.length;
   if (joints.length !== frames * J * 3) throw new RangeError(`solveIK: joints has ${joints.length} values, expected frames (${frames}) × ${J} × 3`);
   const I = standardJoints(skeleton, 'solveIK');
@@ -217,6 +226,7 @@ export function solveIK(joints: Float32Array, frames: number, skeleton: Skeleton
       quats.set(q, (f * J + j) * 4);
     }
     rootPos.set(P(0), f * 3);
+    yield (f + 1) / frames;
   }
   return { rootPos, quats, offsets: off.map((o) => [...o]) };
 }

@@ -43,7 +43,7 @@
  *     out (not a blend towards the target: our clean-up has made that transition already).
  */
 import { AnimationClip, Matrix4, type Object3D, PropertyBinding, Quaternion, QuaternionKeyframeTrack, Vector3, VectorKeyframeTrack } from 'three';
-import { solveIK } from '../../motion/ik';
+import { type IKResult, solveIKSteps } from '../../motion/ik';
 import { type V3, alignFrames, quatFromMat, twoBoneIK } from '../../motion/math3';
 import { JOINT_NAMES, PARENTS, type JointName, type SkeletonLike, standardJoints } from '../../skeleton';
 import { restPositions } from '../rig';
@@ -113,6 +113,18 @@ const quatOfM3 = (m: number[]) => {
   return new Quaternion(q[0], q[1], q[2], q[3]);
 };
 
+/** Per-frame passes of the retargeting (our IK, deltas, contact poses, root search, pins, tracks), for progress. */
+const PASSES = 6;
+
+/** Our IK's frames as the retargeting's first pass (its progress scaled to that pass). */
+function* ikSteps(steps: Generator<number, IKResult, void>): Generator<number, IKResult, void> {
+  for (;;) {
+    const r = steps.next();
+    if (r.done) return r.value;
+    yield r.value / PASSES;
+  }
+}
+
 /** Our joint → the next joint down its chain whose direction drives it (PRIMARY child). */
 const PRIMARY: Partial<Record<JointName, JointName>> = {
   pelvis: 'spine1', spine1: 'spine2', spine2: 'spine3', spine3: 'neck', neck: 'head',
@@ -134,8 +146,8 @@ export interface RetargetSliceOptions extends RetargetOptions {
   sliceMs?: number;
   /** aborting stops the work at the next slice boundary; the promise rejects with an AbortError */
   signal?: AbortSignal;
-  /** called between slices with the share of the work done (0–1) */
-  onProgress?: (fraction: number) => void;
+  /** called at the end of each slice (but the last) with the share of the work done (0–1) and the slice's duration, ms */
+  onProgress?: (fraction: number, sliceMs: number) => void;
 }
 
 /**
@@ -158,17 +170,21 @@ export async function retargetMotionAsync(root: Object3D, mapping: BoneMapping, 
     const r = steps.next();
     if (r.done) return r.value;
     if (performance.now() - t0 < sliceMs) continue;
-    onProgress?.(r.value);
+    onProgress?.(r.value, performance.now() - t0);
     await nextTask();
     if (signal?.aborted) throw aborted();
     t0 = performance.now();
   }
 }
 
-/** Give the event loop a turn (rendering and input included): scheduler.yield where there is one, else a message to ourselves (no 4 ms timer clamp). */
+/**
+ * Give the event loop a turn: a background-priority task (scheduler.postTask) where there is one, so a
+ * frame that is due is drawn and input is handled before the next slice; else a message to ourselves
+ * (no 4 ms timer clamp; Node, older browsers).
+ */
 function nextTask(): Promise<void> {
-  const sched = (globalThis as { scheduler?: { yield?: () => Promise<void> } }).scheduler;
-  if (typeof sched?.yield === 'function') return sched.yield();
+  const sched = (globalThis as { scheduler?: { postTask?: (cb: () => void, o: { priority: string }) => Promise<void> } }).scheduler;
+  if (typeof sched?.postTask === 'function') return sched.postTask(() => undefined, { priority: 'user-visible' });
   return new Promise((resolve) => {
     const ch = new MessageChannel();
     ch.port1.onmessage = () => {
@@ -240,7 +256,7 @@ function* retargetSteps(root: Object3D, mapping: BoneMapping, motion: RetargetMo
 
   // ---- our side: rest (reference T-pose) and the IK's global rotations
   const ours = restPositions(skeleton).map((p) => p.clone());
-  const ik = solveIK(joints, frames, skeleton);
+  const ik = yield* ikSteps(solveIKSteps(joints, frames, skeleton)); // in slices too: the first of six passes
   const P = (f: number, j: JointName) => new Vector3(joints[(f * J + I(j)) * 3], joints[(f * J + I(j)) * 3 + 1], joints[(f * J + I(j)) * 3 + 2]);
 
   // ---- facing: C turns our rest left (+X) onto the character's
@@ -403,8 +419,7 @@ function* retargetSteps(root: Object3D, mapping: BoneMapping, motion: RetargetMo
 
   const allDeltas: Map<number, Quaternion>[] = [];
   const rootPs: Vector3[] = [];
-  const PASSES = 5;
-  const done = (pass: number, f: number) => (pass + (f + 1) / frames) / PASSES;
+  const done = (pass: number, f: number) => (1 + pass + (f + 1) / frames) / PASSES;
   for (let f = 0; f < frames; f++) {
     allDeltas.push(deltas(f));
     rootPs.push(rootWorld(f, allDeltas[f].get(0) ?? new Quaternion()));
