@@ -3,9 +3,12 @@
 // click brings the built-in character back. Joints the automatic map missed can be picked in a small
 // editor; the map is kept per file name in localStorage and can be exported as JSON. Downloads: the
 // character with the clip as GLB, and the clip as BVH on its bone names.
+// Retargeting runs in slices (retargetMotionAsync: ~8 ms of work, then the page draws), so a 60 s motion
+// does not freeze the page; a newer motion cancels the one being put on the character (newest wins), and
+// the character plays its previous clip until the new one is ready.
 import { AnimationMixer, Group, LoopOnce, type AnimationAction, type Object3D } from 'three';
 import { clone as cloneSkinned } from 'three/addons/utils/SkeletonUtils.js';
-import { type CharacterFile, CharacterLoadError, type LoadedCharacter, loadCharacter, type BoneInfo, type BoneMapping, MappingError, mappingFromJSON, mappingToJSON, validateMapping, type RetargetResult, retargetMotion, type BvhUnits, bvhFileName, characterToBVH, characterToGLB, contactsFromFeatures, type Motion, JOINT_NAMES, type JointName, type Skeleton } from '../../src/index';
+import { type CharacterFile, CharacterLoadError, type LoadedCharacter, loadCharacter, type BoneInfo, type BoneMapping, MappingError, mappingFromJSON, mappingToJSON, validateMapping, type RetargetResult, retargetMotionAsync, type BvhUnits, bvhFileName, characterToBVH, characterToGLB, contactsFromFeatures, type Motion, JOINT_NAMES, type JointName, type Skeleton } from '../../src/index';
 import { saveBlob } from './dom';
 
 export interface PickerHost {
@@ -30,6 +33,8 @@ interface Performer {
   mixer: AnimationMixer | null;
   action: AnimationAction | null;
   result: RetargetResult | null;
+  /** the retargeting under way (aborted when a newer motion arrives), null when none */
+  job: AbortController | null;
 }
 
 const STORE = 'emdm.boneMap.';
@@ -39,6 +44,18 @@ interface Shown extends Performer {
   ch: LoadedCharacter;
   /** the compare view's second copy (the DDIM motion), made when a comparison is shown */
   twin: Performer | null;
+  /** what the status line says about it once its motion is on it */
+  summary: string;
+}
+
+/** Retargeting runs of this page visit (window.emdmCharacter.retargets). */
+export interface RetargetStats {
+  started: number;
+  finished: number;
+  /** stopped because a newer motion (or another character) came first */
+  cancelled: number;
+  /** the last one that finished: frames, wall time on the page and the slices it was cut into, performance.now() at start/end */
+  last: { frames: number; ms: number; slices: number; start: number; end: number; firstSliceMs: number; longestSliceMs: number } | null;
 }
 
 /** What the page's tests read (window.emdmCharacter). */
@@ -50,6 +67,11 @@ export interface CharacterProbe {
   status: string;
   /** the compare view's second copy is performing the DDIM motion */
   comparing: boolean;
+  /** a motion is being put on the visitor's character (active/comparing are false meanwhile) */
+  retargeting: boolean;
+  /** frames of the clip the (main) copy plays, 0 without one */
+  frames: number;
+  retargets: RetargetStats;
   /** world position of the bone playing `joint` (of the compare view's second copy: `copy` 'compare'), or null */
   jointWorld(joint: JointName, copy?: 'main' | 'compare'): [number, number, number] | null;
 }
@@ -70,6 +92,7 @@ export class CharacterPicker {
   private readonly rows: HTMLElement;
   private readonly dlGlb: HTMLButtonElement;
   private readonly dlBvh: HTMLButtonElement;
+  private readonly stats: RetargetStats = { started: 0, finished: 0, cancelled: 0, last: null };
 
   constructor(private readonly host: PickerHost) {
     const el = document.createElement('section');
@@ -137,7 +160,7 @@ export class CharacterPicker {
   setMotion(motion: Motion, stem: string): void {
     this.motion = motion;
     this.stem = stem;
-    if (this.shown) this.retarget();
+    if (this.shown) this.retarget().catch((e) => this.fail(e));
   }
 
   /**
@@ -163,9 +186,12 @@ export class CharacterPicker {
       holder.name = 'user-character-compare';
       holder.add(root);
       this.host.add(holder);
-      s.twin = { root, holder, mixer: null, action: null, result: null };
+      s.twin = { root, holder, mixer: null, action: null, result: null, job: null };
     }
-    this.perform(s.twin, motion, s.ch);
+    const twin = s.twin;
+    this.perform(twin, motion, s.ch).catch((e) => {
+      if (this.shown?.twin === twin) this.fail(e);
+    });
     return { left: s.holder, right: s.twin.holder };
   }
 
@@ -217,32 +243,78 @@ export class CharacterPicker {
     holder.name = 'user-character';
     holder.add(ch.root);
     this.host.add(holder);
-    this.shown = { ch, root: ch.root, holder, mixer: null, action: null, result: null, twin: null };
+    const summary = `${ch.name}: ${22 - ch.unmapped.length}/22 joints mapped (${ch.mappingSource === 'vrm' ? `VRM ${ch.vrm} humanoid` : ch.mappingSource === 'user' ? 'your map' : 'by bone names'}), read in ${Math.round(ch.loadMs)} ms`;
+    const shown: Shown = { ch, root: ch.root, holder, mixer: null, action: null, result: null, job: null, twin: null, summary };
+    this.shown = shown;
     this.host.builtIn.visible = false;
     this.back.hidden = false;
     this.showEditor(ch.boneInfos, ch.mapping);
-    this.say(`${ch.name}: ${22 - ch.unmapped.length}/22 joints mapped (${ch.mappingSource === 'vrm' ? `VRM ${ch.vrm} humanoid` : ch.mappingSource === 'user' ? 'your map' : 'by bone names'}), read in ${Math.round(ch.loadMs)} ms`);
-    this.retarget();
+    // with a motion on screen, the status says what was read once that motion is on the character
+    this.say(this.motion ? `Putting the motion on ${ch.name}…` : summary);
+    const first = this.retarget();
     if (this.compareMotion) this.compare(this.compareMotion);
     this.host.changed?.();
+    await first;
   }
 
-  private retarget(): void {
+  /** Put the motion on screen on the visitor's character (the previous clip plays until it is ready). */
+  private async retarget(): Promise<void> {
     const s = this.shown;
     if (!s || !this.motion) return;
     s.ch.restPose();
-    this.perform(s, this.motion, s.ch);
+    this.dlGlb.disabled = true;
+    this.dlBvh.disabled = true;
+    const name = s.ch.name;
+    const done = await this.perform(s, this.motion, s.ch, (f) => this.say(`Putting the motion on ${name}… ${Math.round(f * 100)}%`));
+    if (!done || this.shown !== s) return;
     this.dlGlb.disabled = false;
     this.dlBvh.disabled = false;
+    this.say(s.summary);
   }
 
-  /** Retarget `m` onto one copy of the character (at rest as loaded) and play it on the page's clock. */
-  private perform(p: Performer, m: Motion, ch: LoadedCharacter): void {
-    p.mixer?.stopAllAction();
-    p.mixer?.uncacheRoot(p.root);
+  /**
+   * Retarget `m` onto one copy of the character (at rest as loaded; read before the first slice ends) in
+   * slices, then play it on the page's clock. A newer call for the same copy cancels this one: false then.
+   */
+  private async perform(p: Performer, m: Motion, ch: LoadedCharacter, progress?: (fraction: number) => void): Promise<boolean> {
+    p.job?.abort();
+    const job = new AbortController();
+    p.job = job;
     if (p.root !== ch.root) restLike(p.root, ch.root);
     const contacts = m.features.length === m.frames * 263 ? contactsFromFeatures(m.features, m.frames) : null;
-    const res = retargetMotion(p.root, ch.mapping, { joints: m.joints, frames: m.frames, fps: m.fps, contacts }, this.host.skeleton);
+    const stats = this.stats;
+    stats.started++;
+    const start = performance.now();
+    let slices = 1;
+    let res: RetargetResult;
+    let firstSliceMs = NaN;
+    let longestSliceMs = 0;
+    try {
+      const running = retargetMotionAsync(p.root, ch.mapping, { joints: m.joints, frames: m.frames, fps: m.fps, contacts }, this.host.skeleton, {
+        signal: job.signal,
+        onProgress: (f, ms) => {
+          slices++;
+          longestSliceMs = Math.max(longestSliceMs, ms);
+          progress?.(f);
+        },
+      });
+      // the first slice (the rest pose read, our IK solved for every frame) ran before retargetMotionAsync returned
+      firstSliceMs = performance.now() - start;
+      res = await running;
+    } catch (e) {
+      if (job.signal.aborted) {
+        stats.cancelled++;
+        return false;
+      }
+      if (p.job === job) p.job = null;
+      throw e;
+    }
+    p.job = null;
+    stats.finished++;
+    const end = performance.now();
+    stats.last = { frames: m.frames, ms: end - start, slices, start, end, firstSliceMs, longestSliceMs };
+    p.mixer?.stopAllAction();
+    p.mixer?.uncacheRoot(p.root);
     // shown at our size and facing, so the camera that follows our pelvis follows it too
     p.holder.scale.setScalar(1 / res.scale);
     p.holder.rotation.y = -res.yaw;
@@ -252,9 +324,11 @@ export class CharacterPicker {
     p.action.clampWhenFinished = true;
     p.action.play();
     p.result = res;
+    return true;
   }
 
   private drop(p: Performer): void {
+    p.job?.abort();
     p.mixer?.stopAllAction();
     p.holder.removeFromParent();
   }
@@ -330,7 +404,7 @@ export class CharacterPicker {
 
   private download(kind: 'glb' | 'bvh'): void {
     const s = this.shown;
-    if (!s?.result) return;
+    if (!s?.result || s.job) return;
     const base = `${this.stem}-${s.ch.name.replace(/\.[^.]+$/, '')}`;
     if (kind === 'glb') {
       saveBlob(new Blob([characterToGLB(s.ch, s.result) as BlobPart], { type: 'model/gltf-binary' }), `${base}.glb`);
@@ -352,7 +426,7 @@ export class CharacterPicker {
     const self = this;
     return {
       get active() {
-        return !!self.shown?.result;
+        return !!self.shown?.result && !self.shown.job;
       },
       get builtInVisible() {
         return self.host.builtIn.visible;
@@ -367,7 +441,17 @@ export class CharacterPicker {
         return self.status.textContent ?? '';
       },
       get comparing() {
-        return !!self.shown?.twin?.result;
+        const s = self.shown;
+        return !!s?.twin?.result && !s.twin.job && !s.job;
+      },
+      get retargeting() {
+        return !!self.shown && (!!self.shown.job || !!self.shown.twin?.job);
+      },
+      get frames() {
+        return self.shown?.result?.frames ?? 0;
+      },
+      get retargets() {
+        return { ...self.stats, last: self.stats.last && { ...self.stats.last } };
       },
       jointWorld(j, copy = 'main') {
         const s = self.shown;
