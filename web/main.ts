@@ -61,10 +61,10 @@ async function main(): Promise<void> {
     finish('error', describe(e));
     return;
   }
-  view.attach(manifest.skeleton);
   const models = pickModels(manifest);
   const limits = limitsFor(manifest, models);
   if (!limits) {
+    view.attach(manifest.skeleton);
     view.status.show('error', 'No motion model');
     errorPanel.show('No motion model is shipped', 'public/models/manifest.json lists no text or action model.',
       'Export one with `python -m emdm.export` (see README).');
@@ -101,6 +101,13 @@ async function main(): Promise<void> {
       notices.show('warn', NOT_ISOLATED, 20000);
     }
   });
+
+  // The first model (and ONNX Runtime) start loading in the worker now, while this thread builds the
+  // view: the page is ready sooner on a cold and on a second visit (awaited and reported below).
+  const early = modelForMode(models, parsed.state.mode) ?? models.text ?? models.action;
+  const earlyLoad = early ? session.load(early.name) : null;
+  earlyLoad?.catch(() => undefined);
+  view.attach(manifest.skeleton);
 
   // ------------------------------------------------------------ controls + URL
   const controls = new Controls(limits, examplePrompts(manifest, models.text?.name ?? null, limits.actions), {
@@ -177,7 +184,7 @@ async function main(): Promise<void> {
   // ------------------------------------------------------------ cold start: load the first model
   const first = modelForMode(models, controls.read().mode) ?? (models.text ?? models.action)!;
   try {
-    await session.load(first.name);
+    await (earlyLoad && early?.name === first.name ? earlyLoad : session.load(first.name));
     controls.setReady(true);
     finish('ready');
     fileList.settle();

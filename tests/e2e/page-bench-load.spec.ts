@@ -88,7 +88,7 @@ function table(label: string, v: Visit): string {
     lines.push(`  ${f.path.slice(0, 52).padEnd(52)}  ${String(f.status).padStart(6)}  ${MB(f.wireBytes).padStart(10)}  ${(f.encoding || '-').padEnd(4)}  ${f.startMs.toFixed(0).padStart(8)}  ${f.endMs.toFixed(0).padStart(6)}`);
   }
   const small = v.files.filter((f) => f.wireBytes < 50_000 && f.status === 200 && !f.path.includes('/models/') && !f.path.includes('/ort'));
-  if (small.length) lines.push(`  (+ ${small.length} small page files, ${MB(small.reduce((s, f) => s + f.wireBytes, 0))} MB)`);
+  if (small.length) lines.push(`  (+ ${small.length} small page files, ${MB(small.reduce((s, f) => s + f.wireBytes, 0))} MB: ${small.map((f) => `${f.path.split('/').pop()} ${f.startMs.toFixed(0)}`).join(', ')})`);
   if (v.marks.length) lines.push(`  worker: ${v.marks.map(([n, t]) => `${n.replace(/^(session-\w+):([^#]*).*$/, '$1:$2')} ${t.toFixed(0)}`).join(' · ')}`);
   const cached = v.modelFiles.filter((f) => f.cached).length;
   if (v.modelFiles.length) {
