@@ -1,13 +1,41 @@
-// Transient notices over the 3-D view, and the persistent error panel in the side bar.
+// Notices beside the 3-D view (never over it), and the persistent error panel in the side bar.
+// The newest FRESH notices show in full, newest first; older ones, and any whose time ran out, fold
+// behind a "N more" button that opens them all: nothing is dropped unseen, and each can be dismissed.
 import { byId, el } from './dom';
 
 export type NoticeKind = 'info' | 'warn' | 'error';
 
+/** How many notices show unfolded at once. */
+export const FRESH = 3;
+
 export class Notices {
   private readonly box = byId('notices');
+  private readonly stack = el('div', 'notices-stack');
+  private readonly row = el('div', 'notices-more-row');
+  private readonly more = el('button', 'notices-more');
+  private readonly clear = el('button', 'notices-clear', 'Dismiss all');
+  private open = false;
   /** Every notice shown so far (the test API exposes them). */
   readonly log: Array<{ kind: NoticeKind; text: string }> = [];
 
+  constructor() {
+    this.more.type = 'button';
+    this.clear.type = 'button';
+    this.more.setAttribute('aria-expanded', 'false');
+    this.more.addEventListener('click', () => {
+      this.open = !this.open;
+      this.render();
+    });
+    this.clear.addEventListener('click', () => {
+      this.stack.replaceChildren();
+      this.render();
+    });
+    this.row.append(this.more, this.clear);
+    this.box.replaceChildren(this.stack, this.row);
+    this.render();
+  }
+
+  /** Show a notice; after ttlMs (0 = never) it folds behind "N more" instead of vanishing. */
   show(kind: NoticeKind, text: string, ttlMs = kind === 'error' ? 0 : 9000): HTMLElement {
     this.log.push({ kind, text });
     const n = el('div', `notice ${kind}`);
@@ -17,12 +45,38 @@ export class Notices {
     const close = el('button', undefined, '×');
     close.type = 'button';
     close.setAttribute('aria-label', 'Dismiss');
-    close.addEventListener('click', () => n.remove());
+    close.addEventListener('click', () => {
+      n.remove();
+      this.render();
+    });
     n.append(msg, close);
-    this.box.append(n);
-    while (this.box.children.length > 4) this.box.firstElementChild?.remove();
-    if (ttlMs > 0) setTimeout(() => n.remove(), ttlMs);
+    this.stack.prepend(n);
+    if (ttlMs > 0) {
+      setTimeout(() => {
+        n.classList.add('expired');
+        this.render();
+      }, ttlMs);
+    }
+    this.render();
     return n;
+  }
+
+  /** Fold all but the FRESH newest unexpired notices; label the button with how many are folded. */
+  private render(): void {
+    let shown = 0;
+    let folded = 0;
+    for (const n of this.stack.children) {
+      const fold = n.classList.contains('expired') || shown >= FRESH;
+      n.classList.toggle('folded', fold);
+      if (fold) folded++;
+      else shown++;
+    }
+    if (folded === 0) this.open = false;
+    this.box.classList.toggle('open', this.open);
+    this.box.hidden = this.stack.children.length === 0;
+    this.row.hidden = folded === 0;
+    this.more.textContent = this.open ? `Fold away ${folded}` : `${folded} more notice${folded === 1 ? '' : 's'}`;
+    this.more.setAttribute('aria-expanded', String(this.open));
   }
 }
 

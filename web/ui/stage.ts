@@ -2,14 +2,25 @@
 // camera that follows the character's root and can be orbited, and the root's path on the floor.
 // Split view (the compare mode): the canvas's left half shows one character and the right half the
 // other, each followed by its own camera with the same (orbited) view direction.
+// Framing: the page draws a caption over the top of the canvas and the playback bar over its bottom;
+// the cameras frame the band between them (CSS --stage-top / --stage-bottom on the canvas's parent),
+// so the character is centred and sized in the part of the stage nothing covers.
 import {
   ACESFilmicToneMapping, BufferAttribute, BufferGeometry, CircleGeometry, Color, DirectionalLight, Fog,
   GridHelper, HemisphereLight, Line, LineBasicMaterial, Mesh, MeshStandardMaterial, PCFShadowMap,
-  PerspectiveCamera, Scene, SRGBColorSpace, Vector2, Vector3, WebGLRenderer, type Object3D,
+  PerspectiveCamera, Scene, SkinnedMesh, SRGBColorSpace, Vector2, Vector3, WebGLRenderer, type Object3D,
 } from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
 const BG = 0x161b26;
+
+/** A rectangle in page CSS pixels (like getBoundingClientRect). */
+export interface ScreenRect {
+  x: number;
+  y: number;
+  width: number;
+  height: number;
+}
 const MAX_PATH_FRAMES = 1024;
 
 export class Stage {
@@ -31,6 +42,8 @@ export class Stage {
   private slowFor = 0;
   adaptive = true;
   private readonly tmp = new Vector3();
+  /** CSS pixels at the top and bottom of the canvas that overlays cover (read from the page's CSS). */
+  private insets = { top: 0, bottom: 0 };
 
   constructor(readonly canvas: HTMLCanvasElement) {
     this.renderer = new WebGLRenderer({ canvas, antialias: true, powerPreference: 'high-performance', preserveDrawingBuffer: false });
@@ -157,8 +170,7 @@ export class Stage {
     r.getSize(this.size);
     const half = Math.floor(this.size.x / 2);
     const h = this.size.y;
-    this.camera.aspect = half / h;
-    this.camera.updateProjectionMatrix();
+    this.frameView(this.camera, half, h);
     this.camera2.copy(this.camera);
     this.camera2.position.add(this.tmp.copy(this.follow2).sub(this.follow));
     r.setScissorTest(true);
@@ -175,8 +187,20 @@ export class Stage {
     right.visible = true;
     r.setScissorTest(false);
     r.setViewport(0, 0, this.size.x, h);
-    this.camera.aspect = this.size.x / h;
-    this.camera.updateProjectionMatrix();
+    this.frameView(this.camera, this.size.x, h);
+  }
+
+  /**
+   * Point a camera at a view of width × height CSS pixels whose top and bottom insets are covered by
+   * overlays: its field of view spans the band between them (a view offset), so what the camera
+   * frames is centred in the uncovered band and the covered strips show only the scene around it.
+   */
+  private frameView(cam: PerspectiveCamera, width: number, height: number): void {
+    const band = Math.max(1, height - this.insets.top - this.insets.bottom);
+    cam.aspect = width / band;
+    if (band < height) cam.setViewOffset(width, band, 0, -this.insets.top, width, height);
+    else cam.clearViewOffset();
+    cam.updateProjectionMatrix();
   }
 
   /** Snap the right half's follow point to a root (split view). */
@@ -214,6 +238,40 @@ export class Stage {
     }
   }
 
+  /**
+   * Where the characters are on the page now (CSS pixels, like getBoundingClientRect): for each visible
+   * object holding a SkinnedMesh (in split view: the left and the right one, each in its half), the
+   * screen box of its posed mesh (every vertex skinned by the current bones, projected through the
+   * camera that draws it). For layout checks: nothing drawn over the page should cover these.
+   */
+  characterRects(): ScreenRect[] {
+    this.scene.updateMatrixWorld();
+    const page = this.canvas.getBoundingClientRect();
+    const w = page.width;
+    const h = page.height;
+    const half = Math.floor(w / 2);
+    const views: Array<{ objects: Object3D[]; camera: PerspectiveCamera; x: number; width: number }> = this.split
+      ? [{ objects: [this.split.left], camera: this.camera, x: 0, width: half }, { objects: [this.split.right], camera: this.camera2, x: half, width: w - half }]
+      : [{ objects: this.scene.children.filter((o) => o.visible && hasSkinnedMesh(o)), camera: this.camera, x: 0, width: w }];
+    const rects: ScreenRect[] = [];
+    for (const view of views) {
+      const cam = view.camera.clone();
+      this.frameView(cam, view.width, h);
+      cam.updateMatrixWorld();
+      for (const o of view.objects) {
+        const b = { x0: Infinity, y0: Infinity, x1: -Infinity, y1: -Infinity };
+        forEachPosedVertex(o, (v) => {
+          v.project(cam);
+          const px = page.left + view.x + ((v.x + 1) / 2) * view.width;
+          const py = page.top + ((1 - v.y) / 2) * h;
+          b.x0 = Math.min(b.x0, px); b.x1 = Math.max(b.x1, px); b.y0 = Math.min(b.y0, py); b.y1 = Math.max(b.y1, py);
+        });
+        if (b.x0 <= b.x1) rects.push({ x: b.x0, y: b.y0, width: b.x1 - b.x0, height: b.y1 - b.y0 });
+      }
+    }
+    return rects;
+  }
+
   /** Current quality (for the test API / diagnostics). */
   get quality(): { pixelRatio: number; shadows: boolean } {
     return { pixelRatio: this.renderer.getPixelRatio(), shadows: this.renderer.shadowMap.enabled };
@@ -227,8 +285,26 @@ export class Stage {
     const pr = this.renderer.getPixelRatio();
     if (force || c.width !== Math.floor(w * pr) || c.height !== Math.floor(h * pr)) {
       this.renderer.setSize(w, h, false);
-      this.camera.aspect = w / h;
-      this.camera.updateProjectionMatrix();
+      const css = c.parentElement ? getComputedStyle(c.parentElement) : null;
+      const px = (name: string) => Math.max(0, parseFloat(css?.getPropertyValue(name) ?? '') || 0);
+      this.insets = { top: px('--stage-top'), bottom: px('--stage-bottom') };
+      this.frameView(this.camera, w, h);
     }
   }
+}
+
+function hasSkinnedMesh(o: Object3D): boolean {
+  let found = false;
+  o.traverseVisible((c) => (found ||= c instanceof SkinnedMesh));
+  return found;
+}
+
+/** Every vertex of an object's visible meshes in world space, as posed now (skinned meshes skinned). */
+function forEachPosedVertex(o: Object3D, fn: (v: Vector3) => void): void {
+  const v = new Vector3();
+  o.traverseVisible((c) => {
+    if (!(c instanceof Mesh)) return;
+    const n = c.geometry.getAttribute('position').count;
+    for (let i = 0; i < n; i++) fn(c.getVertexPosition(i, v).applyMatrix4(c.matrixWorld));
+  });
 }

@@ -116,6 +116,8 @@ export interface EmdmTestApi {
   cache: { usage(): Promise<{ files: number; bytes: number }>; clear(): Promise<void> };
   /** "Show steps": the step previews of the last generation as they arrived (x̂0 joints, worker decode + IK ms, arrival time, put on the character) */
   previews(): Array<{ step: number; steps: number; frames: number; joints: number[]; ms: number; at: number; played: boolean }>;
+  /** where each character is drawn now (its posed mesh through its camera; page CSS pixels, like getBoundingClientRect): for layout checks */
+  characterRects(): Array<{ x: number; y: number; width: number; height: number }>;
   /** the timeline & editing panel (web/ui/timeline.ts), once the page is ready */
   edit?: EditTestApi;
 }
@@ -294,6 +296,7 @@ export function installTestApi(src: TestApiSources): { api: EmdmTestApi; finish(
     environment: null,
     files: src.files,
     previews: () => [],
+    characterRects: () => [],
     cache: src.cache,
   };
   window.emdm = api;
@@ -379,4 +382,5 @@ export function connectTestApi(api: EmdmTestApi, page: PageContext): void {
   };
   api.frame = () => (view.player.track ? view.player.frame : -1);
   api.previews = () => view.previews.map((p) => ({ ...p, joints: [...p.joints] }));
+  api.characterRects = () => view.stage.characterRects();
 }

@@ -178,7 +178,7 @@ export class View {
     // a character the visitor drops replaces the built-in one (web/ui/character-picker.ts)
     this.picker = new CharacterPicker({
       add: (o) => this.stage.add(o), builtIn: this.character.object, skeleton, time: () => this.player.time,
-      notify: (kind, text) => this.notices.show(kind, text), before: document.querySelector<HTMLElement>('section.downloads')!,
+      notify: (kind, text) => this.notices.show(kind, text), before: byId('panel-actions'),
       changed: () => this.showCompare(this.compareShown),
     });
     this.stepStrip = new StepStrip(byId('step-strip'), skeleton.parents);
