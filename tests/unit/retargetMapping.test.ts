@@ -2,7 +2,7 @@
 // onto our 22 joints; wrong maps are refused with a message naming the joint and bone.
 import { describe, expect, it } from 'vitest';
 import { type BoneInfo, MappingError, autoMap, mappingFromJSON, mappingToJSON, parseBoneName, validateMapping } from '../../src/character/retarget/mapping';
-import { JOINT_NAMES } from '../../src/skeleton';
+import { JOINT_NAMES, PARENTS } from '../../src/skeleton';
 
 /** A hierarchy from "child<parent" lines (parent by name; first line is the root). */
 function tree(spec: string): BoneInfo[] {
@@ -93,6 +93,21 @@ describe('automatic bone mapping', () => {
       expect(r.unmapped).toEqual([]);
       expect(r.mapping).toMatchObject(c.expect);
       expect(() => validateMapping(r.mapping, c.bones)).not.toThrow();
+    });
+  }
+
+  // The page's own GLB/BVH (bones named after our joints, SMPL's order) dropped back on the page as "your
+  // character", and SMPL rigs (L_Shoulder is the upper arm, L_Collar the clavicle; L_Foot below L_Ankle).
+  for (const [label, name] of [
+    ['our own joint names (the page\'s GLB export)', (j: string) => j],
+    ['SMPL names (Pelvis, L_Hip, L_Collar, L_Shoulder, …)', (j: string) => j.replace(/^([lr])_/, (_, s: string) => `${s.toUpperCase()}_`).replace(/(^|_)([a-z])/g, (_, a: string, c: string) => a + c.toUpperCase())],
+  ] as const) {
+    it(`maps every joint onto itself: ${label}`, () => {
+      const bones: BoneInfo[] = JOINT_NAMES.map((j, i) => ({ name: name(j), parent: PARENTS[i] }));
+      const r = autoMap(bones);
+      expect(r.unmapped).toEqual([]);
+      expect(r.mapping).toEqual(Object.fromEntries(JOINT_NAMES.map((j) => [j, name(j)])));
+      expect(() => validateMapping(r.mapping, bones)).not.toThrow();
     });
   }
 

@@ -15,7 +15,8 @@
  *    `clavicle_l`, `upperarm_l`, `lowerarm_l`, `hand_l`, `neck_01`, `head`), Blender Rigify / metarig
  *    (`DEF-thigh.L`, `shin.L`, `upper_arm.L`, `spine.003`, …), VRoid (`J_Bip_L_UpperLeg`), Reallusion
  *    CC (`CC_Base_L_Thigh`, the CMU BVH rig of our data) and plain names (`Hips`, `LeftUpLeg`,
- *    `LeftLeg`, `LeftFoot`, `LeftToeBase`, `Spine1`, `LeftArm`, `LeftForeArm`, `LeftHand`, …).
+ *    `LeftLeg`, `LeftFoot`, `LeftToeBase`, `Spine1`, `LeftArm`, `LeftForeArm`, `LeftHand`, …), and rigs named
+ *    after the joints (SMPL `L_Hip`, `L_Collar`, `L_Shoulder` = upper arm; our own `l_hip` … of the page's exports).
  * Limbs are found by name and must hang one below the other (a knee under its hip, …; an ankle may also
  * be a foot IK target outside the pelvis's tree, as in three.js's RobotExpressive); the pelvis is
  * the lowest common ancestor of both thighs and the neck; spine1..spine3 are taken from the bones
@@ -64,6 +65,21 @@ const LIMB_KEYS: Record<Limb, string[]> = {
   shoulder: ['arm', 'upperarm', 'uparm', 'humerus', 'armupper'],
   elbow: ['forearm', 'lowerarm', 'elbow', 'radius', 'armlower'],
   wrist: ['hand', 'wrist'],
+};
+/**
+ * Rigs named after the joints (SMPL's L_Hip … L_Collar, L_Shoulder, L_Elbow, L_Wrist; our own l_hip …, as the
+ * page's GLB/BVH exports; Kinect's HipLeft … ShoulderLeft): 'shoulder' is the upper arm (the collar is
+ * 'collar'/'clavicle') and 'foot' hangs below 'ankle'. Recognised when both sides have hip, knee, ankle and elbow.
+ */
+const JOINT_NAMED_KEYS: Record<Limb, string[]> = {
+  hip: ['hip', 'upleg', 'upperleg', 'thigh'],
+  knee: ['knee'],
+  ankle: ['ankle'],
+  foot: ['foot', 'toebase', 'toes', 'toe', 'ball'],
+  collar: ['collar', 'clavicle'],
+  shoulder: ['shoulder', 'upperarm', 'arm'],
+  elbow: ['elbow'],
+  wrist: ['wrist', 'hand'],
 };
 const LIMB_ORDER: Limb[][] = [['hip', 'knee', 'ankle', 'foot'], ['shoulder', 'elbow', 'wrist']];
 const PELVIS_KEYS = ['hips', 'hip', 'pelvis'];
@@ -155,16 +171,18 @@ export function autoMap(bones: BoneInfo[], vrm?: Record<string, string>): AutoMa
       .sort(([pa, a], [pb, b]) => keys.indexOf(pa!.key) - keys.indexOf(pb!.key) || (pa!.num ?? -1) - (pb!.num ?? -1) || depth(a) - depth(b))
       .map(([, i]) => i);
 
+  const jointNamed = (['l', 'r'] as const).every((side) => ['hip', 'knee', 'ankle', 'elbow'].every((k) => parsed.some((p) => p?.side === side && p.key === k)));
+  const limbKeys = jointNamed ? JOINT_NAMED_KEYS : LIMB_KEYS;
   // limbs: each joint the best-named bone below the previous one of its chain
   for (const side of ['l', 'r'] as const) {
     for (const chain of LIMB_ORDER) {
       let above = -1;
       for (const limb of chain) {
-        let c = candidates(LIMB_KEYS[limb], side).filter((i) => above < 0 || isAncestor(above, i));
+        let c = candidates(limbKeys[limb], side).filter((i) => above < 0 || isAncestor(above, i));
         // a foot rigged as an IK target elsewhere in the hierarchy (not in the leg's chain)
-        if (!c.length && limb === 'ankle' && above >= 0) c = candidates(LIMB_KEYS.ankle, side).filter((i) => !isAncestor(i, above) && !isAncestor(above, i));
+        if (!c.length && limb === 'ankle' && above >= 0) c = candidates(limbKeys.ankle, side).filter((i) => !isAncestor(i, above) && !isAncestor(above, i));
         // among same-key bones prefer the one nearest the chain (highest), e.g. thigh.L before thigh.L.001
-        const pick = c.length ? c.reduce((best, i) => (LIMB_KEYS[limb].indexOf(parsed[i]!.key) < LIMB_KEYS[limb].indexOf(parsed[best]!.key) ? i : best), c[0]) : -1;
+        const pick = c.length ? c.reduce((best, i) => (limbKeys[limb].indexOf(parsed[i]!.key) < limbKeys[limb].indexOf(parsed[best]!.key) ? i : best), c[0]) : -1;
         if (pick < 0) continue;
         out[`${side}_${limb}` as JointName] = pick;
         above = pick;
@@ -174,7 +192,7 @@ export function autoMap(bones: BoneInfo[], vrm?: Record<string, string>): AutoMa
   // collars: a collar-named bone above the upper arm
   for (const s of ['l', 'r'] as const) {
     const sh = out[`${s}_shoulder`];
-    const c = candidates(LIMB_KEYS.collar, s).filter((i) => sh === undefined || isAncestor(i, sh));
+    const c = candidates(limbKeys.collar, s).filter((i) => sh === undefined || isAncestor(i, sh));
     if (c.length) out[`${s}_collar`] = c[0];
   }
   const neckC = candidates(NECK_KEYS, null);
