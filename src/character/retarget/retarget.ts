@@ -7,6 +7,10 @@
  * new AnimationMixer(character.root).clipAction(clip).play();
  * ```
  *
+ * On a page, `await retargetMotionAsync(...)` (the same arguments, plus `{ signal, sliceMs }`) gives the
+ * same result to the bit in ~8 ms slices with the event loop between them, so a 60 s motion (1,200 frames)
+ * does not stop the page drawing; aborting `signal` stops it (the demo: a newer motion wins).
+ *
  * Everything is computed in the frame of `root` (the loaded scene; the character must be in its rest
  * pose, as loaded: stop its mixer and call LoadedCharacter.restPose() first). Per frame:
  *  1. Our IK (src/motion/ik.ts: solveIK) gives every joint's global rotation G_j relative to our rest
