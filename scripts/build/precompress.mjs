@@ -59,6 +59,8 @@ export function precompressDir(dir, { cacheDir = CACHE_DIR, log = () => undefine
     const file = path.join(dir, rel);
     const ext = path.extname(rel).toLowerCase();
     if (!(ext in TYPES)) continue;
+    // ORT's .wasm copies that Vite emits into assets/ are never fetched (src/runtime/ort.ts points ORT at ort/)
+    if (ext === '.wasm' && rel.split(path.sep)[0] === 'assets') continue;
     const st = fs.statSync(file);
     if (!st.isFile() || st.size < MIN_BYTES) continue;
     const buf = fs.readFileSync(file);
