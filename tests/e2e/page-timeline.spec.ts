@@ -110,6 +110,19 @@ test('a 3-segment 30 s timeline: 600 frames, one BVH and one GLB of 600 frames, 
   await other.close();
 });
 
+test('a shared link with a timeline generates that timeline on load', async ({ browser }) => {
+  const segs = [{ prompt: 'a person walks forward', seconds: 2, seed: 1 }, { prompt: 'a person waves', seconds: 1.5, seed: 2 }];
+  const other = await browser.newPage();
+  const tl = encodeURIComponent(JSON.stringify(segs.map((s) => [s.prompt, s.seconds, s.seed])));
+  await other.goto(`/?backend=wasm&steps=${STEPS}&tl=${tl}`);
+  await other.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+  await other.waitForFunction(() => window.emdm.edit?.current()?.frames === 70, null, { timeout: 120_000 });
+  expect(await other.evaluate(() => window.emdm.edit!.segments())).toEqual(segs);
+  expect(new URL(other.url()).searchParams.get('tl')).toBe(JSON.stringify(segs.map((s) => [s.prompt, s.seconds, s.seed])));
+  expect(await other.evaluate(() => window.emdm.notices().filter((n) => /not known/.test(n.text)))).toEqual([]);
+  await other.close();
+});
+
 test('regenerating segment 2 keeps segment 1 as it was', async () => {
   const before = (await page.evaluate(() => window.emdm.edit!.current()))!;
   const r = await page.evaluate(() => window.emdm.edit!.regenerate(1));
