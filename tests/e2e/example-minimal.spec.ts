@@ -9,6 +9,7 @@ declare global {
     example?: {
       character: { player: { time: number }; bones: Array<{ name: string; matrixWorld: { elements: number[] } }>; object: { parent: unknown; updateMatrixWorld(force?: boolean): void } };
       motion: { frames: number; fps: number; joints: Float32Array; backend: string; pose: { rootPos: Float32Array } };
+      camera: { position: { clone(): { set(x: number, y: number, z: number): { project(c: unknown): { x: number; y: number; z: number } } } } };
     };
   }
 }
@@ -46,6 +47,25 @@ test('minimal example: prompt → motion in the worker → the character moves',
   expect(m.travel).toBeGreaterThan(0.3); // "walks forward": the pelvis travels over the 4 s
   await expect(page.locator('#status')).toHaveText(`80 frames at 20 fps, on ${m.backend}`);
   expect(workers.some((u) => /generation\.worker/.test(u))).toBe(true); // generated off the page's thread
+
+  // the camera frames the whole walk: pelvis, head and feet in the picture on every frame (a camera
+  // standing on the +Z axis had the character walk through it and out of view for a quarter of the loop)
+  const outside = await page.evaluate(() => {
+    const { camera, motion } = window.example!;
+    const bad: number[] = [];
+    for (let f = 0; f < motion.frames; f++) {
+      for (const j of [0, 15, 10, 11]) {
+        const o = (f * 22 + j) * 3;
+        const v = camera.position.clone().set(motion.joints[o], motion.joints[o + 1], motion.joints[o + 2]).project(camera);
+        if (!(Math.abs(v.x) <= 1 && Math.abs(v.y) <= 1 && v.z < 1)) {
+          bad.push(f);
+          break;
+        }
+      }
+    }
+    return bad;
+  });
+  expect(outside, 'frames where the character is out of the picture').toEqual([]);
 
   // the player runs and the bones follow it: two reads 0.6 s apart differ
   const names = ['pelvis', 'l_ankle', 'r_ankle', 'l_wrist', 'r_wrist'];
