@@ -6,6 +6,17 @@ import {
   stepChoices, type Mode, type PageState, type StateLimits,
 } from './state';
 
+/**
+ * The note under a prompt with no English word in it ('' otherwise): the text encoder and the captions the
+ * model was trained on are English, so such a prompt (一个人在跳舞, 🕺) still makes a motion, but not one that follows it.
+ */
+export function promptLanguageNote(text: string): string {
+  const t = text.trim();
+  return t !== '' && !/[A-Za-z]{2}/.test(t)
+    ? 'The model was trained on English descriptions: this prompt has no English words, so the motion will not follow it.'
+    : '';
+}
+
 export interface ControlsEvents {
   generate(): void;
   change(state: PageState): void;
@@ -220,6 +231,9 @@ export class Controls {
     if (s.mode === 'text' && empty) hint = 'Type a prompt (or pick an example) to generate.';
     else if (s.mode === 'text' && this.promptNote?.text === s.text) {
       hint = this.promptNote.note;
+      warn = true;
+    } else if (s.mode === 'text' && promptLanguageNote(s.text)) {
+      hint = promptLanguageNote(s.text);
       warn = true;
     }
     this.promptHint.textContent = hint;
