@@ -49,6 +49,19 @@ export function isAbort(e: unknown): boolean {
 export type LoadEvents = Pick<ClientEvents, 'download' | 'fallback'> & Partial<ClientEvents>;
 
 /**
+ * `fallback` called once per reason: without a usable GPU every model the page loads (text, action, the
+ * compare view's diffusion model) falls back for the same reason, and one notice says it (not one per model).
+ */
+export function oncePerReason(fallback: LoadEvents['fallback']): LoadEvents['fallback'] {
+  const said = new Set<string>();
+  return (model, reason) => {
+    if (said.has(reason)) return;
+    said.add(reason);
+    fallback(model, reason);
+  };
+}
+
+/**
  * The page's models, loaded and run in the generation worker (src/worker): the page's thread only
  * sends requests and receives motions (bone rotations solved there too).
  */
@@ -58,7 +71,7 @@ export class Engine {
   private current: { ctrl: AbortController; done: Promise<unknown> } | null = null;
 
   constructor(manifest: Manifest, baseUrl: string, backend: BackendChoice, events: LoadEvents) {
-    this.client = new GenerationClient({ manifest, baseUrl, backend, events });
+    this.client = new GenerationClient({ manifest, baseUrl, backend, events: { ...events, fallback: oncePerReason(events.fallback) } });
   }
 
   /** Load a model in the worker (once; a failed load is forgotten so it can be retried). */
