@@ -176,6 +176,27 @@ test('in-between: the first and last second stay as they were, the middle is new
   expect(Math.max(diff(20), diff(40))).toBeGreaterThan(1e-2);
 });
 
+test('the edit tools as a visitor uses them: an example prompt ready to run, messages inside the tool', async () => {
+  const box = page.locator('fieldset.tl-tool', { has: page.locator('#tl-ib-prompt') });
+  // the prompt box holds an example (a value, not only grey placeholder text): one click runs it
+  expect(await page.locator('#tl-ib-prompt').inputValue()).not.toBe('');
+  expect(await page.locator('#tl-body-prompt').inputValue()).not.toBe('');
+  const before = (await page.evaluate(() => window.emdm.edit!.current()))!;
+  await box.getByRole('button', { name: 'Regenerate the middle' }).click();
+  await page.waitForFunction((f0) => {
+    const c = window.emdm.edit!.current();
+    return !!c && c.features.slice(40 * 263, 41 * 263).some((v, i) => Math.abs(v - f0[i]) > 1e-3);
+  }, before.features.slice(40 * 263, 41 * 263), { timeout: 60_000 });
+  await expect(box.locator('.tl-progress')).toBeHidden();
+  // an empty prompt: the message is said next to the tool (not under the timeline, out of view on a phone)
+  await page.locator('#tl-ib-prompt').fill('');
+  await box.getByRole('button', { name: 'Regenerate the middle' }).click();
+  await expect(box.locator('.tl-message')).toBeVisible();
+  await expect(box.locator('.tl-message')).toHaveText(/prompt is empty/);
+  expect(await page.locator('#edit-panel .tl-body > .tl-message').isHidden()).toBe(true);
+  await page.locator('#tl-ib-prompt').fill('a person jumps up');
+});
+
 test('upper-body edit: legs and root unchanged on every frame, a new upper body', async () => {
   const before = (await page.evaluate(() => window.emdm.edit!.current()))!;
   await page.locator('#tl-body-keep').selectOption('lower');
@@ -236,7 +257,7 @@ test('bad input: a clear message naming the segment, the other segments kept, no
     await page.evaluate((s) => window.emdm.edit!.setSegments(s as never), segs);
     await expect(page.evaluate(() => window.emdm.edit!.generateAll())).rejects.toThrow(msg);
     expect(await page.evaluate(() => window.emdm.edit!.message())).toMatch(msg);
-    await expect(page.locator('.tl-message')).toBeVisible();
+    await expect(page.locator('#edit-panel .tl-body > .tl-message')).toBeVisible();
     expect(await page.evaluate(() => window.emdm.edit!.segments())).toEqual(segs);
     const rows = page.locator('.tl-seg');
     await expect(rows).toHaveCount(3);

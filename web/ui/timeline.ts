@@ -65,7 +65,9 @@ const PROMPT = '';
 export class TimelinePanel {
   private readonly list = el('ol', 'tl-list');
   private readonly total = el('span', 'tl-total');
-  private readonly msg = el('p', 'tl-message');
+  /** each mode's message (errors) and progress line, shown next to that mode's controls */
+  private readonly msgs: Record<EditSummary['kind'], HTMLElement> = { timeline: el('p', 'tl-message'), inbetween: el('p', 'tl-message'), body: el('p', 'tl-message'), loop: el('p', 'tl-message') };
+  private readonly busy: Record<EditSummary['kind'], HTMLElement> = { timeline: el('p', 'tl-progress'), inbetween: el('p', 'tl-progress'), body: el('p', 'tl-progress'), loop: el('p', 'tl-progress') };
   private readonly rows: Row[] = [];
   /** the last generated timeline (its segments are reused when regenerating a later one) and the steps/guidance it ran with */
   private timeline: Timeline | null = null;
@@ -91,12 +93,16 @@ export class TimelinePanel {
     const genAll = this.button('Generate timeline', 'primary tl-generate', () => void this.generateAll().catch(() => undefined));
     const bar = el('div', 'tl-row-actions');
     bar.append(add, this.total);
-    this.msg.setAttribute('role', 'alert');
-    this.msg.hidden = true;
-    body.append(el('h4', undefined, 'Timeline'), intro, this.list, bar, genAll, this.msg);
+    for (const k of Object.keys(this.msgs) as EditSummary['kind'][]) {
+      this.msgs[k].setAttribute('role', 'alert');
+      this.msgs[k].hidden = true;
+      this.busy[k].setAttribute('aria-live', 'polite');
+      this.busy[k].hidden = true;
+    }
+    body.append(el('h4', undefined, 'Timeline'), intro, this.list, bar, genAll, this.busy.timeline, this.msgs.timeline);
 
     // ---- edits of the motion on screen
-    const ibPrompt = this.input('tl-ib-prompt', 'New middle (prompt)', 'a person jumps');
+    const ibPrompt = this.input('tl-ib-prompt', 'New middle (prompt)', 'a person jumps up');
     const ibFirst = this.seconds('tl-ib-first', 'Keep the first seconds', 1);
     const ibLast = this.seconds('tl-ib-last', 'Keep the last seconds', 1);
     const ibKeep = el('span', 'tl-check');
@@ -110,7 +116,7 @@ export class TimelinePanel {
       o.value = v;
       bodyKeep.append(o);
     }
-    const bodyPrompt = this.input('tl-body-prompt', 'New part (prompt)', 'a person waves both hands');
+    const bodyPrompt = this.input('tl-body-prompt', 'New part (prompt)', 'a person waves with both hands');
     const bodyGo = this.button('Edit body part', 'ghost', () => void this.bodyEdit(bodyKeep.value as KeptPart, bodyPrompt.value).catch(() => undefined));
     const inPlace = el('input');
     inPlace.type = 'checkbox';
@@ -121,9 +127,9 @@ export class TimelinePanel {
     body.append(
       el('h4', undefined, 'Edit the motion on screen'),
       el('p', 'tl-hint', 'Works on a motion of one model window (up to 9.8 s).'),
-      this.group('In-between: keep the start and the end', ibKeep, ibPrompt, ibGo),
-      this.group('Body part', bodyKeep, bodyPrompt, bodyGo),
-      this.group('Loop: last pose = first pose', inPlaceLabel, loopGo),
+      this.group('In-between: keep the start and the end', ibKeep, ibPrompt, ibGo, this.busy.inbetween, this.msgs.inbetween),
+      this.group('Body part', bodyKeep, bodyPrompt, bodyGo, this.busy.body, this.msgs.body),
+      this.group('Loop: last pose = first pose', inPlaceLabel, loopGo, this.busy.loop, this.msgs.loop),
     );
 
     // ---- restore from the URL (a shared link), else one example row
@@ -175,7 +181,8 @@ export class TimelinePanel {
     const again = this.button('↻', 'icon', () => void this.regenerate(this.rows.indexOf(row)).catch(() => undefined));
     const remove = this.button('✕', 'icon', () => this.remove(row));
     const unit = el('span', 'tl-unit', 's');
-    li.append(el('span', 'tl-num'), kind, prompt, seconds, unit, up, down, again, remove);
+    // the prompt first (its own line), then prompt-or-action, seconds and the buttons: the Tab order is the reading order
+    li.append(el('span', 'tl-num'), prompt, kind, seconds, unit, up, down, again, remove);
     const sync = () => {
       prompt.disabled = kind.value !== '';
       this.refreshTotal();
@@ -257,9 +264,13 @@ export class TimelinePanel {
   }
 
   // ------------------------------------------------------------ messages
-  private say(text: string, segment: number | null = null): void {
-    this.msg.textContent = text;
-    this.msg.hidden = !text;
+  /** Say `text` next to `kind`'s controls (and clear every other mode's message), marking `segment`'s row. */
+  private say(text: string, segment: number | null = null, kind: EditSummary['kind'] = 'timeline'): void {
+    for (const [k, m] of Object.entries(this.msgs)) {
+      m.textContent = k === kind ? text : '';
+      m.hidden = k !== kind || !text;
+    }
+    if (text) this.msgs[kind].scrollIntoView?.({ block: 'nearest' });
     this.rows.forEach((r, i) => {
       r.li.classList.toggle('invalid', i === segment);
       if (i === segment) r.li.setAttribute('aria-invalid', 'true');
@@ -267,8 +278,15 @@ export class TimelinePanel {
     });
   }
 
+  /** The message shown in the panel ('' when none). */
   message(): string {
-    return this.msg.hidden ? '' : this.msg.textContent ?? '';
+    return Object.values(this.msgs).find((m) => !m.hidden)?.textContent ?? '';
+  }
+
+  /** The progress line next to `kind`'s controls ('' hides it). */
+  private working(kind: EditSummary['kind'], text: string): void {
+    this.busy[kind].textContent = text;
+    this.busy[kind].hidden = !text;
   }
 
   // ------------------------------------------------------------ generating
@@ -291,7 +309,9 @@ export class TimelinePanel {
     const { session, view, controls } = this.page;
     const state = controls.read();
     const t0 = performance.now();
-    this.say('');
+    this.say('', null, kind);
+    for (const k of Object.keys(this.busy) as EditSummary['kind'][]) this.working(k, '');
+    this.working(kind, 'Starting…');
     controls.setBusy(true);
     view.showProgress(0, 'Starting…');
     session.counters.requests++;
@@ -310,6 +330,7 @@ export class TimelinePanel {
             onStep: (d, t) => {
               session.counters.stepsRun++;
               view.showProgress(calls.progress(d / t), calls.text(d, t));
+              this.working(kind, `${calls.text(d, t)} (${Math.round(100 * calls.progress(d / t))} %)`);
             },
           });
           calls.n++;
@@ -326,10 +347,11 @@ export class TimelinePanel {
       if (isAbort(e)) session.counters.cancelled++;
       else {
         session.counters.errors++;
-        this.say(e instanceof EditError || e instanceof Error ? e.message : String(e), e instanceof EditError ? e.segment : null);
+        this.say(e instanceof EditError || e instanceof Error ? e.message : String(e), e instanceof EditError ? e.segment : null, kind);
       }
       throw e;
     } finally {
+      this.working(kind, '');
       if (!session.busy) {
         controls.setBusy(false);
         view.hideProgress();
@@ -489,11 +511,13 @@ export class TimelinePanel {
     return b;
   }
 
-  private input(id: string, label: string, placeholder: string): HTMLInputElement {
+  /** A prompt box holding an example (a value, not only a grey placeholder: a visitor can run the tool at once). */
+  private input(id: string, label: string, example: string): HTMLInputElement {
     const i = el('input');
     i.type = 'text';
     i.id = id;
-    i.placeholder = placeholder;
+    i.value = example;
+    i.placeholder = example;
     i.setAttribute('aria-label', label);
     return i;
   }
