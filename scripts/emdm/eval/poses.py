@@ -244,7 +244,9 @@ def main(argv: list[str] | None = None) -> int:
           f"no impossible pose in {len(rows)} settings")
     if out:
         tmp = out.with_suffix(out.suffix + ".tmp")
-        tmp.write_text(json.dumps({"schema": 1, "task": "poses", "name": str(ref), "model": str(ref),
+        from emdm.eval.evaluate import hardware
+
+        tmp.write_text(json.dumps({"schema": 1, "task": "poses", "name": str(ref), "model": str(ref), "hardware": hardware(),
                                    "variant": a.variant or "fp32", "seeds": a.seeds, "conditions": [c for c, _ in conds],
                                    "bars": {"bone": BONE_TOL, "leg": LEG_TOL, "floor_m": FLOOR_TOL},
                                    "rows": [{**asdict(r), "ok": r.ok} for r in rows]}, indent=1))
