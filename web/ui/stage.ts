@@ -35,6 +35,9 @@ export class Stage {
   /** split view: the right half's camera and follow point, and what each half shows */
   private readonly camera2 = new PerspectiveCamera(38, 1, 0.05, 200);
   private readonly follow2 = new Vector3(0, 0.9, 0);
+  /** the roots of the previous frame: a jump (loop wrap, seek, scrub) snaps the camera instead of trailing */
+  private readonly lastRoot = new Vector3(Number.NaN, 0, 0);
+  private readonly lastRoot2 = new Vector3(Number.NaN, 0, 0);
   private split: { left: Object3D; right: Object3D } | null = null;
   private readonly size = new Vector2();
   /** Adaptive resolution: smoothed frame time (s) and how long it has been too slow. */
@@ -145,10 +148,12 @@ export class Stage {
   frame(dt: number, root: ArrayLike<number> | null, root2: ArrayLike<number> | null = null): void {
     if (this.adaptive) this.adapt(dt);
     if (this.split && root2) {
+      if (Stage.jumped(this.lastRoot2, root2, dt)) this.snapTo2(root2);
       this.tmp.set(root2[0], 0.9, root2[2]);
       this.follow2.add(this.tmp.sub(this.follow2).multiplyScalar(1 - Math.exp(-dt * 3)));
     }
     if (root) {
+      if (Stage.jumped(this.lastRoot, root, dt)) this.snapTo(root);
       this.tmp.set(root[0], 0.9, root[2]);
       const k = 1 - Math.exp(-dt * 3);
       const delta = this.tmp.sub(this.follow).multiplyScalar(k);
@@ -201,6 +206,18 @@ export class Stage {
     if (band < height) cam.setViewOffset(width, band, 0, -this.insets.top, width, height);
     else cam.clearViewOffset();
     cam.updateProjectionMatrix();
+  }
+
+  /**
+   * Did the root jump since the last frame (the player wrapped to the start of a loop, or was sought)? Then
+   * the camera snaps to it: trailing (time constant 1/3 s) would leave the character off its half of the
+   * stage, under the rail's panels, for about a second after every loop. A jump is more horizontal travel
+   * than 0.5 m or 6 m/s × dt (faster than a sprint). Records the root for the next frame.
+   */
+  private static jumped(last: Vector3, root: ArrayLike<number>, dt: number): boolean {
+    const d = Math.hypot(root[0] - last.x, root[2] - last.z);
+    last.set(root[0], 0, root[2]);
+    return d > Math.max(0.5, 6 * dt);
   }
 
   /** Snap the right half's follow point to a root (split view). */
