@@ -182,7 +182,7 @@ export async function retargetMotionAsync(root: Object3D, mapping: BoneMapping, 
 }
 
 /**
- * Give the event loop a turn: a background-priority task (scheduler.postTask) where there is one, so a
+ * Give the event loop a turn: a user-visible-priority task (scheduler.postTask) where there is one, so a
  * frame that is due is drawn and input is handled before the next slice; else a message to ourselves
  * (no 4 ms timer clamp; Node, older browsers).
  */
