@@ -20,6 +20,7 @@
  */
 import type * as OrtTypes from 'onnxruntime-web';
 import { fetchBytes, fetchVerified, ModelFileError, type FileEntry } from '../manifest';
+import { yieldToEventLoop } from '../yield';
 
 export type Backend = 'webgpu' | 'wasm';
 export type BackendRequest = Backend | 'auto';
@@ -177,19 +178,6 @@ export interface OrtSession {
   /** float32 inputs by name → float32 outputs by name */
   run(feeds: Record<string, { data: Float32Array; dims: number[] }>): Promise<Record<string, { data: Float32Array; dims: readonly number[] }>>;
   release(): Promise<void>;
-}
-
-/** Resolve after one macrotask (a MessageChannel message: no 4 ms timer clamp); Node: setImmediate. */
-export function yieldToEventLoop(): Promise<void> {
-  if (isNode) return new Promise((r) => setImmediate(r));
-  return new Promise((resolve) => {
-    const ch = new MessageChannel();
-    ch.port1.onmessage = () => {
-      ch.port1.close();
-      resolve();
-    };
-    ch.port2.postMessage(null);
-  });
 }
 
 interface CacheEntry {

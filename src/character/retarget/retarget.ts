@@ -50,6 +50,7 @@ import { AnimationClip, Matrix4, type Object3D, PropertyBinding, Quaternion, Qua
 import { type IKResult, solveIKSteps } from '../../motion/ik';
 import { type V3, alignFrames, quatFromMat, twoBoneIK } from '../../motion/math3';
 import { JOINT_NAMES, PARENTS, type JointName, type SkeletonLike, standardJoints } from '../../skeleton';
+import { nextTask } from '../../yield';
 import { restPositions } from '../rig';
 import { type BoneInfo, type BoneMapping, MappingError, validateMapping } from './mapping';
 
@@ -179,24 +180,6 @@ export async function retargetMotionAsync(root: Object3D, mapping: BoneMapping, 
     if (signal?.aborted) throw aborted();
     t0 = performance.now();
   }
-}
-
-/**
- * Give the event loop a turn: a user-visible-priority task (scheduler.postTask) where there is one, so a
- * frame that is due is drawn and input is handled before the next slice; else a message to ourselves
- * (no 4 ms timer clamp; Node, older browsers).
- */
-function nextTask(): Promise<void> {
-  const sched = (globalThis as { scheduler?: { postTask?: (cb: () => void, o: { priority: string }) => Promise<void> } }).scheduler;
-  if (typeof sched?.postTask === 'function') return sched.postTask(() => undefined, { priority: 'user-visible' });
-  return new Promise((resolve) => {
-    const ch = new MessageChannel();
-    ch.port1.onmessage = () => {
-      ch.port1.close();
-      resolve();
-    };
-    ch.port2.postMessage(null);
-  });
 }
 
 /**
