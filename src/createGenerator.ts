@@ -62,6 +62,8 @@ export interface MotionRequest {
   steps?: number;
   /** classifier-free guidance scale (default: the model's guidance) */
   guidance?: number;
+  /** guide only the denoising steps whose time is above this, one batch row below (default: the model's guidanceMinTime, else every step) */
+  guidanceMinTime?: number;
   /** uint32 seed: the same seed gives the same motion on the same backend (default: random) */
   seed?: number;
   smooth?: boolean;
@@ -148,6 +150,7 @@ export function resolveRequest(manifest: Manifest, req: MotionRequest): { model:
     model,
     options: {
       condition, frames, steps: req.steps ?? entry.defaultSteps, guidance: req.guidance ?? entry.guidance,
+      ...(req.guidanceMinTime !== undefined ? { guidanceMinTime: req.guidanceMinTime } : {}),
       seed: req.seed ?? randomSeed(), smooth: req.smooth, footCleanup: req.footCleanup,
       ...(req.known ? { known: { features: Float32Array.from(req.known.features), keep: Float32Array.from(req.known.keep) } } : {}),
     },

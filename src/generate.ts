@@ -34,6 +34,11 @@ export interface GenerateOptions {
   steps: number;
   /** classifier-free guidance scale (1 = off) */
   guidance: number;
+  /**
+   * guide only the steps whose time is above this (guidance in a limited interval; the other steps run one
+   * batch row). Default: the model's manifest `guidanceMinTime`, else 0 = every step.
+   */
+  guidanceMinTime?: number;
   /** uint32 seed: the same seed gives bit-identical output in Node and the browser (same backend) */
   seed: number;
   signal?: AbortSignal;
@@ -76,6 +81,8 @@ export interface GenerateResult {
   motion: Motion;
   timings: { encodeMs: number; stepMs: number[]; decodeMs: number; totalMs: number; backend: Backend; threads: number };
   modelCalls: number;
+  /** steps that ran the unconditional batch row too (guidance; only those above guidanceMinTime) */
+  guidedSteps?: number;
   /** the sampler that ran: 'ddgan' (EMDM posterior, objective "ddgan") or 'ddim' (η = 0, objective "diffusion") */
   sampler: SamplerName;
   /** denoising steps run */
@@ -283,7 +290,8 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
       onPreview({ step: done, steps: total, motion: { frames: o.frames, fps: entry.fps, joints, features }, decodeMs: now() - p0 });
     });
     const r = await sample({
-      ...choice, step, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance, signal: o.signal, onStep: o.onStep,
+      ...choice, step, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance,
+      guidanceMinTime: o.guidanceMinTime ?? entry.guidanceMinTime ?? 0, signal: o.signal, onStep: o.onStep,
       ...(onX0 ? { onX0 } : {}),
       ...(o.known ? { known: o.known.features.map((v, i) => (v - mean[i % D]) / std[i % D]), keep: o.known.keep } : {}),
     });
@@ -294,6 +302,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
       motion: { frames: o.frames, fps: entry.fps, joints, features },
       timings: { encodeMs: t1 - t0, stepMs: r.stepMs, decodeMs: t3 - t2, totalMs: t3 - t0, backend, threads: session.threads },
       modelCalls: r.modelCalls,
+      guidedSteps: r.guidedSteps,
       sampler: r.sampler,
       steps: o.steps,
       ...(prompt ? { prompt } : {}),

@@ -51,6 +51,8 @@ export interface ModelEntry {
   fps: number;
   maxFrames: number;
   guidance: number;
+  /** guide only the steps whose time is above this (guidance in a limited interval); absent = every step */
+  guidanceMinTime?: number;
   defaultSteps: number;
   supportedSteps: number[];
   schedules: Record<string, Schedule>;
@@ -238,6 +240,12 @@ export function validateManifest(data: unknown): Manifest {
           fail(`${section}.${name}.files`, `names ${JSON.stringify(f)}, which is not listed under 'files'`);
         }
       }
+    }
+  }
+  for (const [name, entry] of Object.entries(data.models as Record<string, Record<string, unknown>>)) {
+    const g = entry.guidanceMinTime;
+    if (g !== undefined && !(typeof g === 'number' && Number.isFinite(g) && g >= 0)) {
+      fail(`models.${name}.guidanceMinTime`, `is ${JSON.stringify(g)}; it must be a time ≥ 0 (guide only steps whose time is above it), or absent to guide every step`);
     }
   }
   for (const [name, entry] of Object.entries(data.textEncoders as Record<string, Record<string, unknown>>)) {

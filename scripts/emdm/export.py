@@ -189,6 +189,7 @@ def manifest_entry(name: str, meta: dict, summary: dict, files: dict[str, str], 
         "condition": meta["condition"],
         "onnx": files["onnx"],
         "variants": {k: v for k, v in files.items() if k not in ("onnx", "meanStd", "weights")},
+        **({"defaultVariant": extra["defaultVariant"]} if "defaultVariant" in extra else {}),
         **({"trainingWeights": files["weights"]} if "weights" in files else {}),
         "meanStd": files["meanStd"],
         "zDim": meta["generator"]["z_dim"], "featureDim": meta["generator"]["feature_dim"], "fps": 20,
@@ -222,6 +223,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--variants", default="int8,fp16", help="comma list of int8, fp16 (empty for none)")
     p.add_argument("--tolerance", type=float, default=1e-4)
     p.add_argument("--no-manifest", action="store_true")
+    p.add_argument("--guidance-min-time", type=float, default=None, metavar="T",
+                   help="the entry's guidanceMinTime: guide only steps whose time is above T (choose T from "
+                        "`python -m emdm.model.bench_steps --interval`; 0 = every step; default: keep the manifest's)")
+    p.add_argument("--default-variant", default=None, metavar="V",
+                   help="the entry's defaultVariant: the file the page and createGenerator run unless asked otherwise "
+                        "(one of --variants, or fp32); set it only where the variant's quality matches fp32 (docs/MODELS.md "
+                        "'Speed in the browser'); default: keep the manifest's")
     p.add_argument("--bench", action="store_true", help="also time one step (196 frames) on ORT CPU, 1 and 2 threads")
     p.add_argument("--ship-weights", action="store_true",
                    help="also ship the EMA generator as float16 PyTorch tensors (<name>.weights.f16.pt, ~8 MB), so "
@@ -254,6 +262,13 @@ def run(a: argparse.Namespace) -> int:
     if unknown:
         raise ExportError(f"--variants: unknown {', '.join(map(repr, unknown))}; use a comma list of "
                           f"{', '.join(VARIANT_MAKERS)} (empty for none)")
+    g = a.guidance_min_time
+    if g is not None and not (np.isfinite(g) and g >= 0):
+        raise ExportError(f"--guidance-min-time must be a finite time ≥ 0 (0 = guide every step), got {g:g}")
+    dv = a.default_variant
+    if dv is not None and dv != "fp32" and dv not in variants:
+        raise ExportError(f"--default-variant {dv!r} is not among the exported files: use fp32 or one of --variants "
+                          f"({', '.join(variants) or 'none'})")
     out = check_writable(a.out, folder=True)               # before the checkpoint is read or anything exported
     if not a.no_manifest:
         mf.load(out, missing_ok=True)                      # a malformed manifest there is found now, not at the end
@@ -294,6 +309,17 @@ def run(a: argparse.Namespace) -> int:
         extra["ortCpuMsPerStep196"] = bench
         print("ORT CPU ms/step (196 frames, batch 1):", bench)
     if not a.no_manifest:
+        gmin = a.guidance_min_time
+        if gmin is None:     # a re-export keeps the threshold chosen for this model
+            gmin = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("guidanceMinTime", 0.0)
+        if gmin:
+            extra["guidanceMinTime"] = float(gmin)
+        dv = a.default_variant
+        if dv is None:       # a re-export keeps the variant chosen for this model, while that file is still exported
+            dv = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("defaultVariant")
+            dv = dv if dv in var_err else None
+        if dv and dv != "fp32":
+            extra["defaultVariant"] = dv
         entry = manifest_entry(a.name, meta, summary, files, extra)
         mf.update_entry("models", a.name, entry, out)
         print(f"manifest: models.{a.name} written to {out / mf.MANIFEST_NAME}")

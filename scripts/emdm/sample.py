@@ -16,7 +16,8 @@ Writes <out>.npy (joints, (frames, 22, 3) metres; (n, frames, 22, 3) with --num 
 (de-normalised 263-d) and <out>.metres.bvh (one per sample, <out>_<i>.metres.bvh with --num > 1;
 .centimetres.bvh with --bvh-units cm; metres are what Blender's BVH import expects at its scale 1.0).
 The loop is docs/ARCHITECTURE.md "Sampling":
-x_T ~ N(0, I); per step: fresh z, x0 = G(x, z, c, time[k], mask) (with guidance s ≠ 1 one batched call
+x_T ~ N(0, I); per step: fresh z, x0 = G(x, z, c, time[k], mask) (with guidance s ≠ 1, at the steps whose time is above
+--guidance-min-time (the manifest's guidanceMinTime; default every step), one batched call
 [c, 0] with the same x and z, x0 = x0_u + s·(x0_c − x0_u)), x = coef1·x0 + coef2·x + sigma·ε. Random
 draws come from numpy's default_rng(seed) in the order x_T, then per step z, then ε. Models trained with
 ``--objective diffusion`` are sampled with DDIM (η = 0, z = 0) on the same time grid.
@@ -61,8 +62,13 @@ MAX_SEED = 2**32 - 1      # the page's seeds are uint32
 def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10, guidance: float = 1.0,
                     seed: int = 0, num: int = 1, z_dim: int = 64, feature_dim: int = 263,
                     objective: str = "ddgan", known: np.ndarray | None = None,
-                    keep: np.ndarray | None = None) -> np.ndarray:
+                    keep: np.ndarray | None = None, guidance_min_time: float = 0.0) -> np.ndarray:
     """Normalised x̂_0 features (num, frames, 263). ``cond`` (C,) — all zeros = unconditional.
+
+    Guidance in a limited interval (Kynkäänniemi et al. 2024; the manifest's ``guidanceMinTime``): the
+    unconditional row runs only at steps whose time t_k > ``guidance_min_time``; below it the step is one
+    conditional row and x̂_0 = x̂_0(c). 0 (the default) guides every step. The random draws are the same either
+    way (z is drawn once per step for both rows), so only the skipped steps' x̂_0 changes.
 
     Inpainting (docs/ARCHITECTURE.md "Sampling with constraints"): ``known`` (frames, 263) normalised features
     and ``keep`` (frames, 263) 0/1 (``emdm.motion.mask.keep_mask``) impose the kept entries at every step: x_T's
@@ -75,10 +81,11 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
     sch = make_schedule(steps)
     rng = np.random.default_rng(seed)
     cond = np.asarray(cond, np.float32)
+    if not (math.isfinite(guidance_min_time) and guidance_min_time >= 0):
+        raise SampleError(f"guidance_min_time must be a finite time ≥ 0 (0 = guide every step), got {guidance_min_time}")
     use_cfg = guidance != 1.0 and bool(np.any(cond != 0))
-    c = np.repeat(cond[None], num, 0)
-    if use_cfg:
-        c = np.concatenate([c, np.zeros_like(c)])
+    c1 = np.repeat(cond[None], num, 0)
+    c2 = np.concatenate([c1, np.zeros_like(c1)])
     x = rng.standard_normal((num, frames, feature_dim), dtype=np.float32)
     if keep is not None:
         x = np.where(keep, np.float32(sch.a_cum[steps]) * known + np.float32(sch.s_cum[steps]) * x, x)
@@ -86,12 +93,13 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
         z = rng.standard_normal((num, z_dim), dtype=np.float32)
         if objective == "diffusion":
             z = np.zeros_like(z)
-        xin, zin = (np.concatenate([x, x]), np.concatenate([z, z])) if use_cfg else (x, z)
+        guided = use_cfg and sch.time[k] > guidance_min_time
+        xin, zin, c = (np.concatenate([x, x]), np.concatenate([z, z]), c2) if guided else (x, z, c1)
         bsz = xin.shape[0]
         t = np.full((bsz,), sch.time[k], np.float32)
         mask = np.ones((bsz, frames), np.float32)
         x0 = np.asarray(step(xin, zin, c, t, mask), np.float32)
-        if use_cfg:
+        if guided:
             x0 = x0[num:] + np.float32(guidance) * (x0[:num] - x0[num:])
         if keep is not None:
             x0 = np.where(keep, known, x0)
@@ -210,6 +218,9 @@ def check_args(a) -> None:
         raise SampleError(f"--num must be ≥ 1, got {a.num}")
     if a.guidance is not None and not (math.isfinite(a.guidance) and a.guidance >= 0):
         raise SampleError(f"--guidance must be a finite number ≥ 0, got {a.guidance:g} (1 = no guidance)")
+    if a.guidance_min_time is not None and not (math.isfinite(a.guidance_min_time) and a.guidance_min_time >= 0):
+        raise SampleError(f"--guidance-min-time must be a finite time ≥ 0, got {a.guidance_min_time:g} "
+                          f"(0 = guide every step; the step times run from 1 down to 1/steps)")
     if not 0 <= a.seed <= MAX_SEED:
         raise SampleError(f"--seed must be in 0..{MAX_SEED}, got {a.seed}")
     if a.threads < 1:
@@ -405,6 +416,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--frames", type=int, default=None, help="length in frames at 20 fps (≤ 196; default 120)")
     p.add_argument("--guidance", type=float, default=None, help="classifier-free guidance scale (default: model's)")
+    p.add_argument("--guidance-min-time", type=float, default=None, metavar="T",
+                   help="guide only the steps whose time is above T, one batch row below (guidance in a limited "
+                        "interval; default: the model's guidanceMinTime, else 0 = every step)")
     p.add_argument("--num", type=int, default=1, help="number of samples")
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--out", type=Path, required=True, help="output path prefix (.npy, .features.npy, .metres.bvh)")
@@ -460,8 +474,9 @@ def run(a: argparse.Namespace) -> int:
         return write_motion(a, feats[None], joints[None])
     cond = make_condition(entry["condition"], a.text, a.action, a.uncond)
     known, keep = known_and_keep(a, frames, mean, std) if a.keep else (None, None)
+    gmin = float(entry.get("guidanceMinTime", 0.0)) if a.guidance_min_time is None else a.guidance_min_time
     x = sample_features(step, cond, frames, steps, guidance, a.seed, a.num, int(entry.get("zDim", 64)),
-                        objective=entry.get("objective", "ddgan"), known=known, keep=keep)
+                        objective=entry.get("objective", "ddgan"), known=known, keep=keep, guidance_min_time=gmin)
     feats = denormalise(x, mean, std)
     if not np.isfinite(feats).all():
         raise SampleError(f"the model returned non-finite numbers ({int((~np.isfinite(feats)).sum())} of {feats.size} "

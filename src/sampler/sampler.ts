@@ -48,6 +48,13 @@ export type SampleOptions = SamplerChoice & {
   /** classifier-free guidance scale; 1 (or an all-zero cond) = a single conditional pass */
   guidance: number;
   /**
+   * Guidance in a limited interval (Kynkäänniemi et al. 2024; the manifest's `guidanceMinTime`): the
+   * unconditional row runs only at steps whose time `schedule.time[k]` is above this; the other steps are one
+   * conditional row (x̂0 = x̂0(c)), half the work. Absent or 0: every step is guided. The random draws do not
+   * depend on it (z is drawn once per step for both rows), so only the unguided steps' x̂0 changes.
+   */
+  guidanceMinTime?: number;
+  /**
    * Inpainting: a known motion [L, D] in NORMALISED feature space and a 0/1 mask [L, D] (`keepMask`) of its
    * entries to keep. x_T's kept part becomes aCum[T]·known + sCum[T]·x_T and x̂0's kept part is replaced by
    * `known` before every update, so the model sees the known motion noised to each step's level and the
@@ -71,6 +78,8 @@ export interface SampleResult {
   x: Float32Array;
   stepMs: number[];
   modelCalls: number;
+  /** steps that ran the unconditional row too (2 batch rows); the others ran 1 */
+  guidedSteps: number;
   /** the update rule that ran */
   sampler: SamplerName;
 }
@@ -114,7 +123,8 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
   const C = cond.length;
   const conditioned = cond.some((v) => v !== 0);
   const guided = conditioned && o.guidance !== 1;
-  const B = guided ? 2 : 1;
+  const gMin = o.guidanceMinTime ?? 0;
+  if (!Number.isFinite(gMin) || gMin < 0) throw new RangeError(`sampler: guidanceMinTime must be a finite time ≥ 0 (0 = guide every step), got ${gMin}`);
   const s = o.guidance;
   const constraint = checkConstraint(o.known, o.keep, L, D, schedule);
 
@@ -123,14 +133,12 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
   checkLength(x, n, 'x_T noise');
   if (constraint) imposeNoisedKnown(x, constraint, schedule);
 
-  const condB = new Float32Array(B * C);
-  condB.set(cond, 0); // guided: row 1 stays zero (unconditional)
-  const maskB = new Float32Array(B * L).fill(1);
-  const xB = new Float32Array(B * n);
-  const zB = new Float32Array(B * zDim);
-  const tB = new Float32Array(B);
+  // inputs of a 2-row (guided: [c, 0]) and of a 1-row call, made when first needed
+  const rowBuffers: (StepInputs | undefined)[] = [];
+  const buffers = (B: number): StepInputs => (rowBuffers[B] ??= stepBuffers(B, L, n, zDim, cond));
   const stepMs: number[] = [];
   let modelCalls = 0;
+  let guidedSteps = 0;
 
   for (let k = schedule.steps - 1; k >= 0; k--) {
     throwIfAborted(o.signal, schedule.steps - 1 - k, schedule.steps);
@@ -139,16 +147,19 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     const drawn = o.noise.normals(zDim, 'z', k);
     checkLength(drawn, zDim, `z noise at step ${k}`);
     const z = ddim ? new Float32Array(zDim) : drawn;
-    for (let b = 0; b < B; b++) {
-      xB.set(x, b * n);
-      zB.set(z, b * zDim);
-      tB[b] = schedule.time[k];
+    const guidedK = guided && schedule.time[k] > gMin;
+    const inputs = buffers(guidedK ? 2 : 1);
+    for (let b = 0; b < inputs.batch; b++) {
+      inputs.x.set(x, b * n);
+      inputs.z.set(z, b * zDim);
+      inputs.t[b] = schedule.time[k];
     }
-    const out = await o.step({ x: xB, z: zB, cond: condB, t: tB, mask: maskB, batch: B, frames: L });
+    const out = await o.step({ ...inputs });
     modelCalls++;
-    checkLength(out, B * n, `model output x0 at step ${k}`);
+    if (guidedK) guidedSteps++;
+    checkLength(out, inputs.batch * n, `model output x0 at step ${k}`);
     if (ddim) {
-      const x0 = guided ? guidedX0(out, n, s) : constraint ? Float32Array.from(out) : out;
+      const x0 = guidedK ? guidedX0(out, n, s) : constraint ? Float32Array.from(out) : out;
       if (constraint) replaceKnown(x0, constraint);
       const x0copy = o.onX0 ? Float32Array.from(x0) : null;
       ddimUpdate(x, x0, k, schedule);
@@ -165,7 +176,7 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     const x0s = o.onX0 ? new Float32Array(n) : null;
     for (let i = 0; i < n; i++) {
       // guided: x0 = x0_u + s·(x0_c − x0_u), rounded to float32 like the Python reference
-      let x0 = guided ? Math.fround(out[n + i] + Math.fround(s * Math.fround(out[i] - out[n + i]))) : out[i];
+      let x0 = guidedK ? Math.fround(out[n + i] + Math.fround(s * Math.fround(out[i] - out[n + i]))) : out[i];
       if (constraint && constraint.keep[i]) x0 = constraint.known[i];
       if (x0s) x0s[i] = x0;
       let v = c1 * x0 + c2 * x[i];
@@ -176,7 +187,14 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     if (x0s) o.onX0!(x0s, schedule.steps - k, schedule.steps);
     o.onStep?.(schedule.steps - k, schedule.steps);
   }
-  return { x, stepMs, modelCalls, sampler: ddim ? 'ddim' : 'ddgan' };
+  return { x, stepMs, modelCalls, guidedSteps, sampler: ddim ? 'ddim' : 'ddgan' };
+}
+
+/** Step inputs for `B` rows of `L` frames: cond in row 0 (row 1, when there, stays zero: unconditional), mask all 1. */
+function stepBuffers(B: number, L: number, n: number, zDim: number, cond: Float32Array): StepInputs {
+  const c = new Float32Array(B * cond.length);
+  c.set(cond, 0);
+  return { x: new Float32Array(B * n), z: new Float32Array(B * zDim), cond: c, t: new Float32Array(B), mask: new Float32Array(B * L).fill(1), batch: B, frames: L };
 }
 
 type Constraint = { known: Float32Array; keep: Float32Array };

@@ -31,6 +31,8 @@ export interface WireGenerateOptions {
   frames: number;
   steps: number;
   guidance: number;
+  /** guide only steps whose time is above this (GenerateOptions.guidanceMinTime; default the manifest's) */
+  guidanceMinTime?: number;
   seed: number;
   smooth?: boolean;
   footCleanup?: boolean;

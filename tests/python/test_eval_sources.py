@@ -24,6 +24,17 @@ def test_rows_with_one_condition_equal_sample_features_exactly():
     np.testing.assert_array_equal(np.stack(got), ref)
 
 
+def test_guidance_interval_rows_equal_sample_features_exactly():
+    G = _tiny()
+    c = np.random.default_rng(1).normal(size=8).astype(np.float32)
+    ref = sample_features(torch_step(G), c, 30, steps=4, guidance=2.5, seed=7, num=2, guidance_min_time=0.6)
+    got = batched_features(torch_step(G), np.stack([c] * 2), np.array([30, 30]), steps=4, guidance=2.5, seed=7,
+                           guidance_min_time=0.6)
+    np.testing.assert_array_equal(np.stack(got), ref)
+    full = sample_features(torch_step(G), c, 30, steps=4, guidance=2.5, seed=7, num=2)
+    assert np.abs(full - ref).max() > 1e-6
+
+
 def test_each_row_gets_its_condition_and_mask():
     calls = []
 
@@ -56,3 +67,19 @@ def test_variant_from_training_flags():
     assert variant_of({"objective": "ddgan", "args": {"geo_weight": 100.0, "d_cond": True}}) == "emdm"
     assert variant_of({"objective": "ddgan", "args": {"geo_weight": 0.0, "d_cond": False}}) == "ddgan-naive"
     assert variant_of({"objective": "ddgan", "args": {"geo_weight": 100.0, "d_cond": False}}) == "ddgan-nodcond"
+
+
+def test_guidance_interval_runs_the_conditional_rows_alone_below_it():
+    calls = []
+
+    def spy(x, z, c, t, mask):
+        calls.append((float(t[0]), c.copy(), mask.copy()))
+        return np.zeros_like(x)
+
+    conds = np.arange(2 * 4, dtype=np.float32).reshape(2, 4) + 1
+    batched_features(spy, conds, np.array([5, 9]), steps=4, guidance=2.5, seed=0, guidance_min_time=0.6)
+    assert [round(t, 3) for t, _, _ in calls] == [1.0, 0.75, 0.501, 0.251]
+    for t, c, m in calls:
+        want = np.concatenate([conds, np.zeros_like(conds)]) if t > 0.6 else conds
+        np.testing.assert_array_equal(c, want)
+        np.testing.assert_array_equal(m.sum(1), [5, 9] * (len(want) // 2))

@@ -84,3 +84,16 @@ def test_export_keeps_batch_one_and_long_inputs_working(checkpoint, tmp_path):
     path = export_onnx(G, tmp_path / "g.onnx")
     errs = parity(G, path, cases=((1, 196), (5, 3)))
     assert max(errs.values()) <= 1e-4
+
+
+def test_guidance_min_time_is_written_and_kept_by_a_re_export(checkpoint, tmp_path, capsys):
+    def entry():
+        return json.loads((tmp_path / "manifest.json").read_text())["models"]["m"]
+
+    base = ["--ckpt", str(checkpoint), "--name", "m", "--out", str(tmp_path), "--variants", ""]
+    assert export_main(base + ["--guidance-min-time", "0.55"]) == 0
+    assert entry()["guidanceMinTime"] == 0.55
+    assert export_main(base) == 0                            # a re-export keeps the chosen threshold
+    assert entry()["guidanceMinTime"] == 0.55
+    assert export_main(base + ["--guidance-min-time", "-1"]) == 2
+    assert "--guidance-min-time must be a finite time ≥ 0" in capsys.readouterr().err

@@ -128,6 +128,8 @@ def _cli(models, out, *extra):
     (["--guidance", "nan"], r"--guidance must be a finite number ≥ 0, got nan"),
     (["--guidance", "inf"], r"--guidance must be a finite number ≥ 0, got inf"),
     (["--guidance", "-1"], r"--guidance must be a finite number ≥ 0, got -1"),
+    (["--guidance-min-time", "-0.5"], r"--guidance-min-time must be a finite time ≥ 0, got -0.5"),
+    (["--guidance-min-time", "nan"], r"--guidance-min-time must be a finite time ≥ 0, got nan"),
     (["--num", "0"], r"--num must be ≥ 1, got 0"),
     (["--variant", "int4"], r"--variant: model 'm' has no variant 'int4'; use one of fp32"),
     (["--seed", "-1"], r"--seed must be in 0\.\.4294967295, got -1"),
@@ -191,3 +193,51 @@ def test_non_finite_motion_is_an_error_and_not_written(models, tmp_path, capsys,
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "non-finite" in err[0], err
     assert not (tmp_path / "o").exists()
+
+
+def test_guidance_interval_skips_the_unconditional_row_below_its_time_and_keeps_the_draws():
+    """guidance_min_time: 2 rows only at steps with t > it, 1 below; the same random draws (the committed tiny
+    parity model, against the fixture reference that feeds the noise in emdm.sample's order); 0 = today's loop."""
+    from emdm import fixtures as fx
+    from emdm.model.schedule import make_schedule
+
+    path = fx.PARITY_DIR / "tiny-step.onnx"
+    cond = np.random.default_rng(3).standard_normal(fx.TINY_COND_DIM).astype(np.float32)
+    sched, seed = make_schedule(10), 11
+    counting = CountingStep(onnx_step(path))
+    x = sample_features(counting, cond, 12, steps=10, guidance=2.5, seed=seed, guidance_min_time=0.55)[0]
+    assert counting.batches == [2] * 5 + [1] * 5            # t = 1 … 0.6004 guided, 0.5005 … 0.1009 not
+    x_T, zs, epss = fx.draw_noise(np.random.default_rng(seed), 10, 12, 263, 64, sched)
+    ref = fx.reference_sample(fx.step_session(path), x_T, zs, epss, cond, 2.5, sched, guidance_min_time=0.55)
+    np.testing.assert_allclose(x, ref, atol=1e-4)
+    full = sample_features(onnx_step(path), cond, 12, steps=10, guidance=2.5, seed=seed)[0]
+    assert np.abs(x - full).max() > 1e-6
+    np.testing.assert_array_equal(full, sample_features(onnx_step(path), cond, 12, steps=10, guidance=2.5, seed=seed,
+                                                        guidance_min_time=0.0)[0])
+    for bad in (-0.1, float("nan"), float("inf")):
+        with pytest.raises(SampleError, match="guidance_min_time must be a finite time"):
+            sample_features(onnx_step(path), cond, 12, steps=2, guidance=2.5, guidance_min_time=bad)
+
+
+def test_cli_guidance_min_time_defaults_to_the_manifest_entry(models, tmp_path):
+    """--guidance-min-time changes the motion; without it the entry's guidanceMinTime is used (absent: every step)."""
+    import json
+    import shutil
+
+    def run(models_dir, name, *extra):
+        out = tmp_path / name
+        args = ["--model", "m", "--models-dir", str(models_dir), "--action", "0", "--frames", "12", "--steps", "10",
+                "--guidance", "2.5", "--no-bvh", "--out", str(out), *extra]
+        assert sample_main(args) == 0
+        return np.load(out.with_suffix(".features.npy"))
+
+    plain, interval = run(models, "plain"), run(models, "interval", "--guidance-min-time", "0.55")
+    np.testing.assert_array_equal(plain, run(models, "zero", "--guidance-min-time", "0"))
+    assert np.abs(plain - interval).max() > 1e-6
+    other = tmp_path / "models"
+    shutil.copytree(models, other)
+    manifest = json.loads((other / "manifest.json").read_text())
+    manifest["models"]["m"]["guidanceMinTime"] = 0.55
+    (other / "manifest.json").write_text(json.dumps(manifest))
+    np.testing.assert_array_equal(interval, run(other, "from-manifest"))
+    np.testing.assert_array_equal(plain, run(other, "override", "--guidance-min-time", "0"))

@@ -7,7 +7,7 @@ import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
 import { openModel } from '../../src/generate';
 import { assertFinite, NonFiniteMotionError } from '../../src/index';
-import { ModelFileError, loadManifest } from '../../src/manifest';
+import { ModelFileError, loadManifest, validateManifest } from '../../src/manifest';
 import { getSession } from '../../src/runtime/ort';
 import { stepFunction } from '../../src/runtime/stepModel';
 import { MODELS_DIR, fixtureExists, fixtureNoise, loadCase, maxAbsDiff, maxJointDist, tinyModels } from './coreFixtures';
@@ -40,6 +40,30 @@ describe('openModel on the tiny model', () => {
     expect(Buffer.from(a.motion.joints.buffer).equals(Buffer.from(b.motion.joints.buffer))).toBe(true);
     const c = await gen.generate({ ...o, seed: 124 });
     expect(maxAbsDiff(a.motion.features, c.motion.features)).toBeGreaterThan(1e-3);
+    await gen.dispose();
+  });
+
+  it('guides only above the manifest entry\'s guidanceMinTime; a request overrides it; absent = every step', async () => {
+    const { dir } = tinyModels(tmp);
+    const manifest = await loadManifest(dir);
+    const interval = structuredClone(manifest);
+    interval.models.tiny.guidanceMinTime = 0.6;
+    const plain = await openModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
+    const gen = await openModel({ manifest: interval, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
+    const o = { condition: { type: 'action' as const, label: 2 }, frames: 30, steps: 4, guidance: 2.5, seed: 5 };
+    const full = await plain.generate(o);
+    const byEntry = await gen.generate(o);
+    const byRequest = await plain.generate({ ...o, guidanceMinTime: 0.6 });
+    expect([full.guidedSteps, byEntry.guidedSteps, byRequest.guidedSteps]).toEqual([4, 2, 2]); // t = 1, 0.75 > 0.6
+    expect(Buffer.from(byEntry.motion.features.buffer).equals(Buffer.from(byRequest.motion.features.buffer))).toBe(true);
+    expect(maxAbsDiff(full.motion.features, byEntry.motion.features)).toBeGreaterThan(1e-6);
+    const overridden = await gen.generate({ ...o, guidanceMinTime: 0 });
+    expect(Buffer.from(overridden.motion.features.buffer).equals(Buffer.from(full.motion.features.buffer))).toBe(true);
+    await expect(gen.generate({ ...o, guidanceMinTime: -1 })).rejects.toThrow(/guidanceMinTime must be a finite time ≥ 0/);
+    const bad = structuredClone(manifest) as unknown as { models: Record<string, Record<string, unknown>> };
+    bad.models.tiny.guidanceMinTime = 'high';
+    expect(() => validateManifest(bad)).toThrow(/models\.tiny\.guidanceMinTime' is "high"; it must be a time ≥ 0/);
+    await plain.dispose();
     await gen.dispose();
   });
 
@@ -157,6 +181,8 @@ describe('parity with Python on the shipped models', () => {
       const manifest = await loadManifest(MODELS_DIR + '/');
       const entry = manifest.models[name];
       expect(fx.meta.sha256, `fixture model-${name} was made from another ${entry.onnx}: re-run \`.venv/bin/python -m emdm.fixtures\``).toBe(manifest.files[entry.onnx].sha256);
+      // the run below takes the entry's guidanceMinTime (guidance in a limited interval) as the fixture did
+      expect(fx.meta.guidanceMinTime ?? 0, `fixture model-${name} was sampled with another guidanceMinTime: re-run \`.venv/bin/python -m emdm.fixtures --only models\``).toBe(entry.guidanceMinTime ?? 0);
       const L = fx.meta.frames;
       // one step (x_t, z, c, t → x0̂)
       const bytes = fs.readFileSync(path.join(MODELS_DIR, entry.onnx));

@@ -1,13 +1,21 @@
-"""Step-by-step diagnostics of the sampler on a shipped model: where the prompt acts and where the sampler's
-x leaves the distribution the trainer's pairs come from.
+"""Step-by-step diagnostics of the sampler on a shipped model: where the condition acts, where the sampler's
+x leaves the distribution the trainer's pairs come from, and what guidance in a limited interval keeps.
 
     python -m emdm.model.bench_steps --model emdm-t2m-web --steps 1,4,10 --guidance 2.5
     python -m emdm.model.bench_steps --model emdm-t2m-web --prompts "a person kicks" "a person bows" --guidance 1
+    python -m emdm.model.bench_steps --model emdm-t2m-web emdm-a2m-web diffusion-t2m-web --steps 10 --interval
 
 Runs ``emdm.sample.sample_features`` (the sampler itself, with a step function that records what it is given and
 returns), and prints per step k (time t = t_{k+1}): std of the sampler's input x (the trainer's x_{k+1} has
 std √(a² Var x_0 + s²) ≈ 1 for normalised data), std of the conditional x̂_0, and the condition's effect
 |x̂_0(c) − x̂_0(0)| / |x̂_0(0)|; then the final motion's mean within-clip (temporal) std: near 0 is a frozen pose.
+A text model is conditioned on ``--prompts``, an action model on each of its labels (or ``--prompts`` naming labels).
+
+``--interval``: guidance in a limited interval (``sample_features(guidance_min_time=τ)``, the manifest's
+``guidanceMinTime``): for each τ on the step grid, the share of guidance's effect on the final motion that is kept,
+1 − |x(τ) − x(guided everywhere)| / |x(no guidance) − x(guided everywhere)| over all conditions and seeds (same
+seeds, same noise), the largest per-condition loss, and the model rows the sampler runs (2 per guided step, 1 per
+other step; guided everywhere = 2·T).
 """
 
 from __future__ import annotations
@@ -30,41 +38,113 @@ def recorder(step, calls: list):
     return rec
 
 
+def conditions(entry: dict, prompts: list[str] | None) -> list[tuple[str, np.ndarray]]:
+    """(name, condition vector) per prompt (text model) or action label (action model)."""
+    from emdm.sample import make_condition
+
+    spec = entry["condition"]
+    if spec["type"] == "text":
+        from emdm.text import encode_texts
+
+        prompts = prompts or PROMPTS
+        emb = np.asarray(encode_texts(prompts, encoder_id=spec["encoder"], batch_size=1), np.float32)
+        return list(zip(prompts, emb))
+    labels = prompts or list(spec["labels"])
+    return [(lab, make_condition(spec, None, lab, False)) for lab in labels]
+
+
+def per_step(step, conds, entry: dict, T: int, a) -> None:
+    """The per-step table: input std, x̂_0 std, the condition's effect at each step time."""
+    sch = make_schedule(T)
+    objective = entry.get("objective", "ddgan")
+    z_dim = int(entry.get("zDim", 64))
+    effects = np.zeros((len(conds), T))
+    for ci, (name, c) in enumerate(conds):
+        calls: list = []
+        x = sample_features(recorder(step, calls), c, a.frames, steps=T, guidance=a.guidance, seed=a.seed, num=a.num,
+                            z_dim=z_dim, objective=objective)
+        if a.verbose:
+            print(f"  {name!r}: final within-clip std {x.std(axis=1).mean():.3f}")
+        for (xin, out), k in zip(calls, range(T - 1, -1, -1)):
+            xin, xc = xin[:a.num], out[:a.num]
+            xu = out[a.num:] if len(out) > a.num else None
+            fwd = np.sqrt(sch.a_cum[k + 1] ** 2 + sch.s_cum[k + 1] ** 2)
+            effects[ci, k] = np.linalg.norm(xc - xu) / np.linalg.norm(xu) if xu is not None else np.nan
+            if a.verbose:
+                print(f"    k={k} t={sch.time[k]:.2f}  std(x) {xin.std():.3f} (trainer ≈{fwd:.2f})  "
+                      f"std(x̂0|c) {xc.std():.3f}  |x̂0(c)−x̂0(0)|/|x̂0(0)| {effects[ci, k]:.4f}")
+    print(f"  condition's effect |x̂0(c)−x̂0(0)|/|x̂0(0)| per step time (median / max over {len(conds)} conditions):")
+    for k in range(T - 1, -1, -1):
+        col = effects[:, k]
+        print(f"    t={sch.time[k]:.4f}  {np.nanmedian(col):.4f} / {np.nanmax(col):.4f}")
+
+
+def interval_table(step, conds, entry: dict, T: int, a) -> None:
+    """For each threshold τ on the grid: the share of guidance's effect on the final motion kept."""
+    from emdm.sample import sample_features
+
+    sch = make_schedule(T)
+    kw = dict(steps=T, seed=a.seed, num=a.num, z_dim=int(entry.get("zDim", 64)), objective=entry.get("objective", "ddgan"))
+    full, none = [], []
+    for _, c in conds:
+        full.append(sample_features(step, c, a.frames, guidance=a.guidance, **kw))
+        none.append(sample_features(step, c, a.frames, guidance=1.0, **kw))
+    effect = [np.linalg.norm(f - n) for f, n in zip(full, none)]
+    print(f"  guidance in a limited interval (guided where t > τ), final motion vs guided everywhere, "
+          f"{len(conds)} conditions × {a.num} seeds; guidance's effect |x(s={a.guidance:g}) − x(s=1)|/|x(s={a.guidance:g})| "
+          f"{sum(effect) / sum(np.linalg.norm(f) for f in full):.3f}:")
+    print(f"    {'τ':>8}  guided steps  rows (of {2 * T})  kept (all)  kept (worst condition)")
+    for tau in [0.0] + [float(t) for t in sch.time[:-1]]:
+        part = [sample_features(step, c, a.frames, guidance=a.guidance, guidance_min_time=tau, **kw) for _, c in conds]
+        lost = [np.linalg.norm(p - f) for p, f in zip(part, full)]
+        guided = int(np.sum(sch.time > tau))
+        print(f"    {tau:8.4f}  {guided:>12}  {T + guided:>14}  {1 - sum(lost) / sum(effect):10.4f}  "
+              f"{min(1 - lo / e for lo, e in zip(lost, effect)):22.4f}")
+
+
+def sample_features(*args, **kw):
+    from emdm.sample import sample_features as sf
+
+    return sf(*args, **kw)
+
+
 def main(argv=None) -> int:
     from emdm import manifest as mf
     from emdm.paths import MODELS_DIR
-    from emdm.sample import onnx_step, sample_features
-    from emdm.text import encode_texts
+    from emdm.sample import onnx_step
 
     ap = argparse.ArgumentParser(prog="python -m emdm.model.bench_steps", description=__doc__.split("\n\n")[0])
-    ap.add_argument("--model", default="emdm-t2m-web")
+    ap.add_argument("--model", nargs="+", default=["emdm-t2m-web"])
     ap.add_argument("--models-dir", type=Path, default=None)
-    ap.add_argument("--prompts", nargs="+", default=PROMPTS)
+    ap.add_argument("--variant", default=None, help="a manifest variant such as int8 (default: the fp32 file)")
+    ap.add_argument("--prompts", nargs="+", default=None, help="text prompts, or action labels for an action model "
+                    f"(default: {PROMPTS} / every label)")
     ap.add_argument("--steps", default="1,4,10")
     ap.add_argument("--guidance", type=float, default=2.5)
     ap.add_argument("--frames", type=int, default=120)
     ap.add_argument("--num", type=int, default=8, help="seeds (one batch)")
+    ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--interval", action="store_true", help="also the guidance-interval table (one more run per τ)")
+    ap.add_argument("--verbose", action="store_true", help="per condition, per step: input std, x̂0 std, effect")
     a = ap.parse_args(argv)
     models_dir = Path(a.models_dir or MODELS_DIR)
-    entry = mf.load(models_dir)["models"][a.model]
-    step = onnx_step(models_dir / entry["onnx"], a.threads)
-    emb = np.asarray(encode_texts(a.prompts, encoder_id=entry["condition"]["encoder"], batch_size=1), np.float32)
-    for T in [int(s) for s in a.steps.split(",")]:
-        sch = make_schedule(T)
-        print(f"\n{a.model}: {T} steps, guidance {a.guidance}, {a.num} seeds, {a.frames} frames")
-        for prompt, c in zip(a.prompts, emb):
-            calls: list = []
-            x = sample_features(recorder(step, calls), c, a.frames, steps=T, guidance=a.guidance, seed=0, num=a.num,
-                                z_dim=int(entry.get("zDim", 64)))
-            print(f"  {prompt!r}: final within-clip std {x.std(axis=1).mean():.3f}")
-            for (xin, out), k in zip(calls, range(T - 1, -1, -1)):
-                xin, xc = xin[:a.num], out[:a.num]
-                xu = out[a.num:] if len(out) > a.num else None
-                fwd = np.sqrt(sch.a_cum[k + 1] ** 2 + sch.s_cum[k + 1] ** 2)
-                eff = f"{np.linalg.norm(xc - xu) / np.linalg.norm(xu):.3f}" if xu is not None else "-"
-                print(f"    k={k} t={sch.time[k]:.2f}  std(x) {xin.std():.3f} (trainer ≈{fwd:.2f})  "
-                      f"std(x̂0|c) {xc.std():.3f}  |x̂0(c)−x̂0(0)|/|x̂0(0)| {eff}")
+    manifest = mf.load(models_dir)
+    for name in a.model:
+        if name not in manifest["models"]:
+            ap.error(f"--model {name}: not in {models_dir / 'manifest.json'} (models: {', '.join(manifest['models'])})")
+        entry = manifest["models"][name]
+        onnx = entry["variants"][a.variant] if a.variant else entry["onnx"]
+        step = onnx_step(models_dir / onnx, a.threads)
+        conds = conditions(entry, a.prompts)
+        for T in [int(s) for s in a.steps.split(",")]:
+            if T not in entry["supportedSteps"]:
+                print(f"\n{name}: {T} steps not in its supportedSteps {entry['supportedSteps']}; skipped")
+                continue
+            print(f"\n{name} ({onnx}): {T} steps, guidance {a.guidance}, {a.num} seeds, {a.frames} frames")
+            per_step(step, conds, entry, T, a)
+            if a.interval:
+                interval_table(step, conds, entry, T, a)
     return 0
 
 
