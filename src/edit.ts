@@ -51,20 +51,42 @@ export const OVERLAP_FRAMES = 20;
 export const MAX_TIMELINE_SECONDS = 60;
 /** Frames at each end of a loop that are inpainted to the same pose. */
 export const LOOP_END_FRAMES = 10;
-/** Generated frames over which a seam's offset is eased out (`easeSeams`). */
+/** The fewest generated frames over which a seam's offset is eased out (`easeSeams`). */
 export const SEAM_EASE_FRAMES = 10;
+/** The seam easing's peak joint acceleration, m/s²: a larger jump is eased over more frames (`seamEaseFrames`). */
+export const SEAM_EASE_ACCEL = 5;
+
+/**
+ * Frames m over which `easeSeams` fades a seam's offset `o` (de-normalised features, ≥ 67 values; Python
+ * `emdm.motion.edit.seam_ease_frames`): at least `ease`, and enough that the fade's peak joint acceleration,
+ * jump·(π/m)²/2·fps², stays within `accel` m/s², jump being the largest offset of a joint position (root height [3],
+ * a root-relative joint [4:67], metres): m = max(ease, ⌈π·√(jump·fps²/(2·accel))⌉). 1.5 m (standing → lying): 25.
+ */
+export function seamEaseFrames(o: ArrayLike<number>, ease = SEAM_EASE_FRAMES, accel = SEAM_EASE_ACCEL, fps = 20): number {
+  let jump = Math.abs(o[3]);
+  for (let j = 0; j < 21; j++) {
+    const x = o[4 + 3 * j];
+    const y = o[5 + 3 * j];
+    const z = o[6 + 3 * j];
+    jump = Math.max(jump, Math.sqrt(x * x + y * y + z * z));
+  }
+  return Math.max(ease, Math.ceil(Math.PI * Math.sqrt((jump * fps * fps) / (2 * accel)) - 1e-9));
+}
 
 /**
  * Ease out the jump between kept frames and generated ones (Python `emdm.motion.edit.ease_seams`, the same
  * arithmetic): the sampler keeps the known frames exactly, but the model's first generated frame need not
  * continue them (emdm-t2m-web, 10 steps: timeline seams up to 117× the 95th percentile of joint acceleration
- * without this, 2× with it). For every run [s, e) of frames with no kept channel, next to a frame kept whole:
- * o_L = f[s−1] + v − f[s] (v: the mean of f[s−1] − f[s−2] when s−2 is kept and f[s+1] − f[s] when s+1 < e),
- * o_R = f[e] − v − f[e−1] (v: the mean of f[e+1] − f[e] when e+1 is kept and f[e−1] − f[e−2] when e−2 ≥ s), both
- * from the un-eased features; then f[s+i] += w_i·o_L and f[e−1−i] += w_i·o_R with w_i = (1 + cos(π·i/m))/2,
- * i < m = min(ease, e − s). Foot contacts [259:263] stay; frames kept in part (body-part edits) are left alone.
+ * without this), and where the new prompt's pose is far from the kept one it jumps there in one frame (lie-down
+ * after raised hands: root height 0.89 → 0.08 m). For every run [s, e) of frames with no kept channel, next to a
+ * frame kept whole: o_L = f[s−1] + v − f[s] (v: the mean of f[s−1] − f[s−2] when s−2 is kept and f[s+1] − f[s]
+ * when s+1 < e), o_R = f[e] − v − f[e−1] (v: the mean of f[e+1] − f[e] when e+1 is kept and f[e−1] − f[e−2] when
+ * e−2 ≥ s), both from the un-eased features, contacts zeroed; then f[s+i] += w_i·o_L and f[e−1−i] += w_i·o_R with
+ * w_i = (1 + cos(π·i/m))/2, i < m = min(seamEaseFrames(o), e − s): a large jump fades over more frames (a fixed 10
+ * made the 1.5 m one a 0.5 s fall, 2× the timeline's 95th percentile at the seam). Foot contacts [259:263] stay;
+ * frames kept in part (body-part edits) are left alone.
  */
-export function easeSeams(features: ArrayLike<number>, frames: number, keep: ArrayLike<number>, ease = SEAM_EASE_FRAMES, dim = D): Float32Array {
+export function easeSeams(features: ArrayLike<number>, frames: number, keep: ArrayLike<number>, ease = SEAM_EASE_FRAMES, dim = D, accel = SEAM_EASE_ACCEL): Float32Array {
   if (features.length !== frames * dim || keep.length !== frames * dim) {
     throw new RangeError(`easeSeams: features (${features.length}) and keep (${keep.length}) must both hold frames (${frames}) × ${dim} values`);
   }
@@ -101,21 +123,23 @@ export function easeSeams(features: ArrayLike<number>, frames: number, keep: Arr
     const s = t;
     while (t < frames && free[t]) t++;
     const e = t;
-    const m = Math.min(ease, e - s);
-    const w = Array.from({ length: m }, (_, i) => 0.5 * (1 + Math.cos((Math.PI * i) / m)));
+    const fade = (o: Float64Array) => {
+      const m = Math.min(seamEaseFrames(o, ease, accel), e - s);
+      return Array.from({ length: m }, (_, i) => 0.5 * (1 + Math.cos((Math.PI * i) / m)));
+    };
     if (s >= 1 && kept[s - 1]) {
       const terms: [Float64Array, Float64Array][] = [];
       if (s >= 2 && kept[s - 2]) terms.push([row(s - 1), row(s - 2)]);
       if (s + 1 < e) terms.push([row(s + 1), row(s)]);
       const o = offset(row(s - 1), 1, terms, row(s));
-      for (let i = 0; i < m; i++) adds.push({ t: s + i, w: w[i], o });
+      fade(o).forEach((w, i) => adds.push({ t: s + i, w, o }));
     }
     if (e < frames && kept[e]) {
       const terms: [Float64Array, Float64Array][] = [];
       if (e + 1 < frames && kept[e + 1]) terms.push([row(e + 1), row(e)]);
       if (e - 2 >= s) terms.push([row(e - 1), row(e - 2)]);
       const o = offset(row(e), -1, terms, row(e - 1));
-      for (let i = 0; i < m; i++) adds.push({ t: e - 1 - i, w: w[i], o });
+      fade(o).forEach((w, i) => adds.push({ t: e - 1 - i, w, o }));
     }
   }
   for (const { t, w, o } of adds) {

@@ -4,6 +4,7 @@ model — their frame bookkeeping, every bad input, and the tiny-edit parity fix
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -72,7 +73,9 @@ def test_a_timeline_continues_each_segment_from_the_last_second_of_the_sequence(
         assert np.array_equal(c["x"][:20], c["known"][:20])                        # kept exactly
         eased = E.ease_seams(ed.denormalise(c["x"]), c["keep"])
         assert np.array_equal(tl.features[tl.starts[k]:tl.starts[k] + tl.frames[k]], eased[20:])   # then its new frames
-        assert np.abs(eased[30:] - ed.denormalise(c["x"])[30:]).max() == 0         # eased over the first 10 only
+        raw = ed.denormalise(c["x"])
+        m = min(E.seam_ease_frames(eased[20] - raw[20]), len(raw) - 20)         # the seam's offset: its fade length
+        assert np.array_equal(eased[20 + m:], raw[20 + m:]) and not np.array_equal(eased[19 + m], raw[19 + m])
     assert np.array_equal(tl.features[:30], ed.denormalise(spy.calls[0]["x"]))
     assert np.array_equal(tl.x, ed.normalise(tl.features))
 
@@ -96,9 +99,11 @@ def test_easing_a_seam_removes_the_jump_and_leaves_kept_frames_and_contacts_alon
     keep = np.zeros((40, 263), np.float32)
     keep[:20] = 1
     g = E.ease_seams(f, keep)
-    assert np.array_equal(g[:20], f[:20]) and np.array_equal(g[30:], f[30:]) and np.array_equal(g[:, 259:], f[:, 259:])
+    m = E.seam_ease_frames(g[20] - f[20])                              # 0.8·√3 m per joint: 24 frames
+    assert m == 24 and np.array_equal(g[:20], f[:20]) and np.array_equal(g[20 + m:], f[20 + m:])
+    assert np.array_equal(g[:, 259:], f[:, 259:])
     acc = lambda x: np.abs(np.diff(x[:, 0], 2))                         # noqa: E731
-    assert acc(f)[18:20].max() > 0.5 and acc(g).max() < 0.1            # the jump is gone, spread over 10 frames
+    assert acc(f)[18:20].max() > 0.5 and acc(g).max() < 0.1            # the jump is gone, spread over m frames
     keep[35:] = 1                                                      # a kept end too: eased backwards into 34, 33, ...
     f[35:] -= 1.6
     h = E.ease_seams(f, keep)
@@ -106,6 +111,31 @@ def test_easing_a_seam_removes_the_jump_and_leaves_kept_frames_and_contacts_alon
     part = np.zeros((40, 263), np.float32)
     part[:, :7] = 1                                                    # a body-part mask: no row kept whole or free
     assert np.array_equal(E.ease_seams(f, part), f)
+
+
+def test_a_large_jump_at_a_seam_is_eased_over_more_frames_so_the_fade_stays_within_its_acceleration():
+    """The model may jump straight to the new prompt's pose (lie-down after standing: root height 0.89 → 0.08 m in
+    one frame); fading that over the fixed 10 frames made a 0.5 s fall. The fade's length grows with the jump so its
+    peak joint acceleration stays within SEAM_ACCEL; a small jump keeps the 10 frames."""
+    n = 80
+    f = np.zeros((n, 263), np.float32)
+    f[:, 3] = 0.89
+    f[:, 4:67] = 1.0
+    f[20:, 3] = 0.08                                                    # the root drops 0.81 m at frame 20
+    f[20:, 4:67] -= 1.5                                                 # every joint 1.5·√3 = 2.6 m (the largest one counts)
+    keep = np.zeros((n, 263), np.float32)
+    keep[:20] = 1
+    g = E.ease_seams(f, keep)
+    m = E.seam_ease_frames(g[20] - f[20])
+    assert m == math.ceil(math.pi * math.sqrt(1.5 * math.sqrt(3) * 400 / (2 * E.SEAM_ACCEL)))
+    assert np.array_equal(g[20 + m:], f[20 + m:]) and not np.array_equal(g[20 + m - 1], f[20 + m - 1])
+    acc = np.abs(np.diff(g[:, 4], 2)) * math.sqrt(3) * E.FPS**2          # the joint's acceleration, m/s²
+    assert acc.max() <= E.SEAM_ACCEL * 1.01
+    fixed = E.ease_seams(f, keep, accel=math.inf)                       # the fixed 10-frame fade: far faster
+    assert np.abs(np.diff(fixed[:, 4], 2)).max() * math.sqrt(3) * E.FPS**2 > 5 * E.SEAM_ACCEL
+    small = f.copy()
+    small[20:] = f[:20].mean(0) + 0.02                                  # a 2 cm step: the 10 frames of SEAM_EASE
+    assert E.seam_ease_frames(E.ease_seams(small, keep)[20] - small[20]) == E.SEAM_EASE
 
 
 def test_a_first_segment_shorter_than_the_overlap_is_continued_from_all_its_frames(model):

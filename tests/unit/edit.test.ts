@@ -7,8 +7,8 @@ import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
 import { createGenerator } from '../../src/createGenerator';
 import {
-  EditError, LOOP_END_FRAMES, OVERLAP_FRAMES, bodyPartEdit, generateTimeline, inBetween, keptSegments, makeLoop, planTimeline,
-  type EditGenerate, type EditMotion, type EditRequest, type TimelineSegment, withNewSeed,
+  EditError, LOOP_END_FRAMES, OVERLAP_FRAMES, SEAM_EASE_ACCEL, SEAM_EASE_FRAMES, bodyPartEdit, easeSeams, generateTimeline, inBetween,
+  keptSegments, makeLoop, planTimeline, seamEaseFrames, type EditGenerate, type EditMotion, type EditRequest, type TimelineSegment, withNewSeed,
 } from '../../src/edit';
 import { recoverJoints } from '../../src/motion/recover';
 import { groupChannels } from '../../src/sampler/mask';
@@ -227,5 +227,31 @@ describe('the real path: createGenerator (in-process, tiny step model) with know
     const loop = await makeLoop(t, { action: 'a' }, 5, gen, lim);
     expect(maxDiff(loop.full.features.subarray(40 * D, 41 * D), t.features.subarray(0, D))).toBeLessThan(1e-4);
     await g.dispose();
+  });
+});
+
+describe('easeSeams', () => {
+  it('fades a large jump over more frames, so the fade stays within its acceleration; a small one over 10', () => {
+    // the model may jump to the new prompt's pose in one frame (lie-down after standing); a fixed 10-frame fade made it a 0.5 s fall
+    const n = 80;
+    const f = new Float32Array(n * D);
+    const keep = new Float32Array(n * D);
+    for (let t = 0; t < n; t++) {
+      f[t * D + 3] = t < 20 ? 0.89 : 0.08;
+      for (let c = 4; c < 67; c++) f[t * D + c] = t < 20 ? 1 : -0.5; // every joint 1.5·√3 m
+      if (t < 20) keep.fill(1, t * D, (t + 1) * D);
+    }
+    const g = easeSeams(f, n, keep);
+    const m = Math.ceil(Math.PI * Math.sqrt((1.5 * Math.sqrt(3) * 400) / (2 * SEAM_EASE_ACCEL)));
+    const o = new Float64Array(D).map((_, c) => g[20 * D + c] - f[20 * D + c]);
+    expect(seamEaseFrames(o)).toBe(m);
+    expect(Array.from(g.subarray((20 + m) * D))).toEqual(Array.from(f.subarray((20 + m) * D)));
+    expect(g[(19 + m) * D + 4]).not.toBe(f[(19 + m) * D + 4]);
+    let peak = 0;
+    for (let t = 1; t < n - 1; t++) peak = Math.max(peak, Math.abs(g[(t + 1) * D + 4] - 2 * g[t * D + 4] + g[(t - 1) * D + 4]) * Math.sqrt(3) * 400);
+    expect(peak).toBeLessThanOrEqual(SEAM_EASE_ACCEL * 1.01);
+    const small = new Float64Array(D);
+    small[5] = 0.02;
+    expect(seamEaseFrames(small)).toBe(SEAM_EASE_FRAMES);
   });
 });

@@ -50,7 +50,8 @@ FPS = 20
 OVERLAP = 20               # C: frames of the previous segment a new one starts from (1 s)
 MAX_SECONDS = 60.0         # a timeline's total length
 LOOP_ENDS = 10             # K: frames inpainted at each end of a loop
-SEAM_EASE = 10             # M: generated frames over which a seam's offset is eased out (0.5 s)
+SEAM_EASE = 10             # M: the fewest generated frames over which a seam's offset is eased out (0.5 s)
+SEAM_ACCEL = 5.0           # A: the easing's peak joint acceleration, m/s² (a larger jump is eased over more frames)
 CONTACTS = slice(259, 263)  # foot contact channels: not eased
 MAX_SEED = 2**32 - 1
 
@@ -255,23 +256,43 @@ def _check_prompt_seed(what: str, prompt: str, seed: int) -> None:
 
 # ----------------------------------------------------------------------------------------------- seams
 
-def ease_seams(features: np.ndarray, keep: np.ndarray, ease: int = SEAM_EASE) -> np.ndarray:
+def seam_ease_frames(offset: np.ndarray, ease: int = SEAM_EASE, accel: float = SEAM_ACCEL, fps: int = FPS) -> int:
+    """Frames m over which ``ease_seams`` fades a seam's ``offset`` (263-d, de-normalised): at least ``ease``, and
+    enough that the fade's peak joint acceleration, jump·(π/m)²/2·fps², stays within ``accel`` m/s², where jump is
+    the largest offset of a joint position (root height [3], a root-relative joint [4:67], metres):
+    m = max(ease, ⌈π·√(jump·fps²/(2·accel))⌉). A 1.5 m jump (standing → lying) takes 25 frames, 10 cm takes 10."""
+    o = np.asarray(offset, np.float64)
+    jump = max(abs(float(o[3])), float(np.linalg.norm(o[4:67].reshape(21, 3), axis=1).max()))
+    return max(ease, math.ceil(math.pi * math.sqrt(jump * fps * fps / (2 * accel)) - 1e-9))
+
+
+def ease_seams(features: np.ndarray, keep: np.ndarray, ease: int = SEAM_EASE, accel: float = SEAM_ACCEL) -> np.ndarray:
     """Ease out the jump between kept frames and generated ones (de-normalised ``features`` (F, D), ``keep`` (F, D)).
 
     Masked sampling keeps the known frames exactly, but the model's first generated frame need not continue them:
-    measured on emdm-t2m-web at 10 steps, the joint acceleration at a timeline seam was up to 7× the motion's 95th
-    percentile. For every run [s, e) of frames with no kept channel next to a fully kept frame, the offset between
-    where the kept side leads (its last frame plus the mean of the velocities on both sides of the seam) and the
-    first generated frame is added to the generated frames, fading out over m = min(``ease``, e − s) frames with
-    w_i = (1 + cos(π·i/m))/2 (left: f[s+i] += w_i·o_L; right, mirrored: f[e−1−i] += w_i·o_R; i = 0..m−1); both
-    offsets are taken from the un-eased features. With these weights the 12 seams of 6 timelines went from
-    median 0.67× (max 6.9×) the 95th percentile to 0.09× (max 1.9×). Foot contacts [259:263] stay. Frames that keep only some channels (body-part edits) are
-    neither kept nor free: nothing is eased next to them."""
+    measured on emdm-t2m-web at 10 steps, the joint acceleration at a timeline seam was up to 117× the motion's 95th
+    percentile, and where the new prompt's pose is far from the kept one the model jumps to it in one frame
+    (lie-down after raised hands: root height 0.89 → 0.08 m). For every run [s, e) of frames with no kept channel
+    next to a fully kept frame, the offset between where the kept side leads (its last frame plus the mean of the
+    velocities on both sides of the seam) and the first generated frame is added to the generated frames, fading out
+    over m = min(``seam_ease_frames``(o), e − s) frames with w_i = (1 + cos(π·i/m))/2 (left: f[s+i] += w_i·o_L;
+    right, mirrored: f[e−1−i] += w_i·o_R; i = 0..m−1); both offsets are taken from the un-eased features. A fixed
+    m = 10 left that 1.5 m jump a 0.5 s fall (29 m/s², 2× the timeline's 95th percentile at the seam, 3.8× after
+    it); m from the jump keeps the fade's peak acceleration within ``accel`` (5 m/s²: 25 frames for 1.5 m). Foot
+    contacts [259:263] stay. Frames that keep only some channels (body-part edits) are neither kept nor free:
+    nothing is eased next to them."""
     f = np.asarray(features, np.float64).copy()
     k = np.asarray(keep).astype(bool)
     kept, free = k.all(1), ~k.any(1)
     n = len(f)
     offsets = []
+
+    def fade(o):
+        o = o.copy()
+        o[CONTACTS] = 0
+        m = min(seam_ease_frames(o, ease, accel), e - s)
+        return o, 0.5 * (1 + np.cos(np.pi * np.arange(m) / m))
+
     t = 0
     while t < n:
         if not free[t]:
@@ -280,21 +301,18 @@ def ease_seams(features: np.ndarray, keep: np.ndarray, ease: int = SEAM_EASE) ->
         s = t
         while t < n and free[t]:
             t += 1
-        e, m = t, min(ease, t - s)
-        w = 0.5 * (1 + np.cos(np.pi * np.arange(m) / m))
+        e = t
         if s >= 1 and kept[s - 1]:
             v = [f[s - 1] - f[s - 2]] if s >= 2 and kept[s - 2] else []
             v += [f[s + 1] - f[s]] if s + 1 < e else []
-            o = f[s - 1] + (np.mean(v, 0) if v else 0) - f[s]
-            offsets += [(s + i, w[i] * o) for i in range(m)]
+            o, w = fade(f[s - 1] + (np.mean(v, 0) if v else 0) - f[s])
+            offsets += [(s + i, w[i] * o) for i in range(len(w))]
         if e < n and kept[e]:
             v = [f[e + 1] - f[e]] if e + 1 < n and kept[e + 1] else []
             v += [f[e - 1] - f[e - 2]] if e - 2 >= s else []
-            o = f[e] - (np.mean(v, 0) if v else 0) - f[e - 1]
-            offsets += [(e - 1 - i, w[i] * o) for i in range(m)]
+            o, w = fade(f[e] - (np.mean(v, 0) if v else 0) - f[e - 1])
+            offsets += [(e - 1 - i, w[i] * o) for i in range(len(w))]
     for row, o in offsets:
-        o = o.copy()
-        o[CONTACTS] = 0
         f[row] += o
     return f.astype(np.float32)
 

@@ -5,7 +5,7 @@ the noise of every sampling call, which ``src/edit.ts`` must reproduce (≤ 1e-4
 
 The model is the ``tiny`` entry of tests/fixtures/parity/tinyManifest.ts (tiny-step.onnx, tiny.meanstd.f32, an
 8-label action model: label i's condition is the one-hot vector e_i), DDGAN, ``steps`` 2, guidance 2.5, the real
-constants (C = 20, K = 10, seam easing M = 10, 20 fps, maxFrames 196). Operations, in order (JSON ``ops``):
+constants (C = 20, K = 10, seam easing M ≥ 10 frames at ≤ 5 m/s², 20 fps, maxFrames 196). Operations, in order (JSON ``ops``):
 
 1. ``timeline``: segments (label, seconds, seed) → sequence ``timeline_features`` (48, 263) de-normalised and
    ``timeline_joints`` (48, 22, 3) (windows of 24, 34 and 30 frames; 14 and 10 new frames after the first).
@@ -107,7 +107,7 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
         "model": "tiny-step.onnx", "meanStd": "tiny.meanstd.f32", "labels": list(LABELS), "condition": "one-hot e_label",
         "objective": "ddgan", "steps": STEPS, "guidance": GUIDANCE, "zDim": 64, "featureDim": 263, "fps": E.FPS,
         "maxFrames": 196, "overlap": E.OVERLAP, "loopEnds": E.LOOP_ENDS,
-        "seamEase": E.SEAM_EASE,
+        "seamEase": E.SEAM_EASE, "seamAccel": E.SEAM_ACCEL,
         "ops": {
             "timeline": {"segments": [seg(s) for s in SEGMENTS], "frames": list(tl.frames), "starts": tl.starts,
                          "total": n},
