@@ -23,6 +23,8 @@ export interface HarnessRequest {
   frames: number;
   steps: number;
   guidance: number;
+  /** guide only steps whose time is above this (default: the manifest entry's guidanceMinTime, else every step) */
+  guidanceMinTime?: number;
   seed: number;
 }
 
@@ -91,7 +93,10 @@ const harness = {
   },
   async generate(req: HarnessRequest) {
     const gen = await generatorFor(req.model, req.variant);
-    const r = await gen.generate({ condition: req.condition, frames: req.frames, steps: req.steps, guidance: req.guidance, seed: req.seed });
+    const r = await gen.generate({
+      condition: req.condition, frames: req.frames, steps: req.steps, guidance: req.guidance, seed: req.seed,
+      ...(req.guidanceMinTime !== undefined ? { guidanceMinTime: req.guidanceMinTime } : {}),
+    });
     return {
       featuresSha256: await hex(r.motion.features),
       jointsSha256: await hex(r.motion.joints),
