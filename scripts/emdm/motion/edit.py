@@ -81,6 +81,7 @@ class Editor:
     z_dim: int = 64
     objective: str = "ddgan"
     max_frames: int = 196
+    guidance_min_time: float = 0.0       # guidance only at steps above it (the manifest's guidanceMinTime)
 
     @classmethod
     def open(cls, opened, steps: int | None = None, guidance: float | None = None) -> "Editor":
@@ -107,7 +108,8 @@ class Editor:
         return cls(step, np.asarray(mean, np.float32), np.asarray(std, np.float32), condition,
                    int(meta.get("defaultSteps", 10)) if steps is None else steps,
                    float(meta.get("guidance", 2.5)) if guidance is None else guidance,
-                   int(meta.get("zDim", 64)), meta.get("objective", "ddgan"), int(meta.get("maxFrames", 196)))
+                   int(meta.get("zDim", 64)), meta.get("objective", "ddgan"), int(meta.get("maxFrames", 196)),
+                   float(meta.get("guidanceMinTime", 0.0)))
 
     def sample(self, prompt: str, frames: int, seed: int, known: np.ndarray | None = None,
                keep: np.ndarray | None = None) -> np.ndarray:
@@ -115,7 +117,8 @@ class Editor:
         from emdm.sample import sample_features
 
         return sample_features(self.step, self.condition(prompt), frames, self.steps, self.guidance, seed, 1,
-                               self.z_dim, objective=self.objective, known=known, keep=keep)[0]
+                               self.z_dim, objective=self.objective, known=known, keep=keep,
+                               guidance_min_time=self.guidance_min_time)[0]
 
     def normalise(self, features: np.ndarray) -> np.ndarray:
         return ((np.asarray(features, np.float32) - self.mean) / self.std).astype(np.float32)
