@@ -57,6 +57,19 @@ def test_foot_skate_near_seams_against_the_rest():
     assert ev.seam_skate([(joints, [5])])["ratio"] < 1.0
 
 
+def test_a_one_frame_flip_is_found_and_a_step_is_not():
+    f = read_case_array(PARITY_DIR, "recover", "features").astype(np.float64)      # (120, 263), real
+    assert ev.flips(f).max() < ev.FLIP_M
+    flipped = f.copy()
+    flipped[50, 4 + 3 * 19 + 1] -= 0.5                           # the left wrist (joint 20) 50 cm down for one frame
+    fl = ev.flips(flipped)
+    assert fl[50] > 0.45 and np.argmax(fl) == 50
+    assert ev.seam_flips(flipped, [52, 60]) == [fl[50], pytest.approx(ev.flips(f)[57:63].max())]
+    stepped = f.copy()
+    stepped[50:, 4 + 3 * 19 + 1] -= 0.5                          # 50 cm down from frame 50 on: a step, not a flip
+    assert ev.flips(stepped).max() < ev.FLIP_M
+
+
 def test_pose_ignores_where_the_body_stands_and_faces(clip):
     moved = rot_y(np.full((120, 1), 1.1), clip) + [2.0, 0.0, -3.0]
     assert np.abs(ev.pose(moved) - ev.pose(clip)).max() < 1e-9

@@ -46,6 +46,8 @@ FPS = 20
 ACTIONS = ("walk", "raise-both-hands", "walk-backward", "walk-turn-left", "climb", "lie-down")
 LAST_ONLY = ("lie-down",)          # a timeline puts these last (nothing in the data gets up from lying down)
 SEAM_SKATE_FRAMES = 3              # frame pairs within this many frames of a seam count as "at the seam"
+FLIP_M = 0.10                      # a joint leaving its neighbours' mean by more and coming back (a one-frame flip)
+FLIP_FRAMES = 3                    # a seam "sits on a flip" when one is within this many frames of it
 BARS = {"seam_acceleration": 1.5, "seam_skate": 1.2, "seam_root": 1.5, "semantics": 0.8, "kept_mm": 1.0,
         "loop_pose_cm": 2.0, "in_place_cm": 5.0, "time_ratio": 3.0}
 LEGS = (0, 1, 2, 4, 5, 7, 8, 10, 11)                    # pelvis, hips, knees, ankles, feet
@@ -90,6 +92,29 @@ def skate_pairs(joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     speed = np.linalg.norm(feet[1:, :, [0, 2]] - feet[:-1, :, [0, 2]], axis=2) * FPS
     t = np.broadcast_to(np.arange(len(feet) - 1)[:, None], contact.shape)
     return speed[contact], t[contact]
+
+
+def flips(features: np.ndarray) -> np.ndarray:
+    """(F,) per frame t = 1..F−2 (0 at the ends): the largest one-frame flip of a joint, metres — the distance of its
+    position from the mean of its neighbours' (x_t − (x_{t−1} + x_{t+1})/2), counted when the neighbours are closer
+    to each other than that (out and back within a frame, not a step). Joints as the features hold them: the root
+    height and the 21 root-relative positions [4:67]."""
+    f = np.asarray(features, np.float64)
+    x = np.zeros((len(f), 22, 3))
+    x[:, 0, 1] = f[:, 3]
+    x[:, 1:] = f[:, 4:67].reshape(-1, 21, 3)
+    out = np.zeros(len(f))
+    if len(f) >= 3:
+        d = np.linalg.norm(x[1:-1] - (x[:-2] + x[2:]) / 2, axis=2)
+        across = np.linalg.norm(x[2:] - x[:-2], axis=2)
+        out[1:-1] = np.where(across < d, d, 0.0).max(axis=1)
+    return out
+
+
+def seam_flips(features: np.ndarray, seams) -> list[float]:
+    """Per seam s: the largest flip (``flips``) on frames s − FLIP_FRAMES .. s + FLIP_FRAMES − 1, metres."""
+    fl = flips(features)
+    return [float(fl[max(0, s - FLIP_FRAMES):s + FLIP_FRAMES].max()) for s in seams]
 
 
 def seam_skate(motions_and_seams) -> dict:
@@ -188,8 +213,9 @@ class Recorder:
                 rec.windows.append(x)
                 return x
 
-        self.editor = Recording(editor.step, editor.mean, editor.std, editor.condition, editor.steps, editor.guidance,
-                                editor.z_dim, editor.objective, editor.max_frames)
+        from dataclasses import fields
+
+        self.editor = Recording(**{f.name: getattr(editor, f.name) for f in fields(editor)})   # every setting
 
 
 def uneased_joints(model, tl, windows) -> np.ndarray:
@@ -294,6 +320,12 @@ def measure(model, bench, a, log=print) -> dict:
                "single": summary([r for _, j in singles for r in seam_acceleration(j, [len(j) // 2])], bar)}
     ref_root = {"real": [r for j in real for r in seam_root(j, [len(j) // 2])],
                 "single": [r for _, j in singles for r in seam_root(j, [len(j) // 2])]}
+    near = [r for tl, s in zip(timelines, seams) for r in seam_flips(tl.features, s)]
+    failing = [i for i, r in enumerate(acc) if r > bar]
+    where = [(ti, k + 1) for ti, s in enumerate(seams) for k in range(len(s))]     # (timeline, seam) of acc[i]
+    flip_share = {"real": float(np.mean(np.concatenate([flips(m)[1:-1] for m in bench.test.motions if len(m) >= 3]) > FLIP_M)),
+                  "single": float(np.mean(np.concatenate([flips(f)[1:-1] for f, _ in singles]) > FLIP_M)),
+                  "timeline": float(np.mean(np.concatenate([flips(tl.features)[1:-1] for tl in timelines]) > FLIP_M))}
     skate = seam_skate([(tl.joints, s) for tl, s in zip(timelines, seams)])
     ref_skate = {"real": seam_skate([(j, [len(j) // 2]) for j in real]),
                  "single": seam_skate([(j, [len(j) // 2]) for _, j in singles])}
@@ -331,6 +363,10 @@ def measure(model, bench, a, log=print) -> dict:
         "orders": [list(o) for o in tl_orders],
         "seams": {"count": len(acc), "acceleration_ratio": summary(acc),
                   "acceleration_within_bar": int(np.sum(np.asarray(acc) <= BARS["seam_acceleration"])),
+                  "failing": [{"timeline": where[i][0], "order": list(tl_orders[where[i][0]]), "seam": where[i][1],
+                               "acceleration_ratio": acc[i], "flip_m": near[i]} for i in failing],
+                  "failing_on_flip": int(sum(near[i] > FLIP_M for i in failing)),
+                  "flip_share_of_frames": flip_share,
                   "uneased_acceleration_ratio": summary(acc_uneased, BARS["seam_acceleration"]),
                   "reference_acceleration_ratio": ref_acc,
                   "skate": skate, "reference_skate": ref_skate,
@@ -425,7 +461,7 @@ def section(r: dict) -> list[str]:
            f"max {_f(s['acceleration_ratio']['max'])}×; {b['seam_acceleration']['figure']} (reference at a middle frame: real clips "
            f"median {_f(ra['real']['median'])}×, max {_f(ra['real']['max'])}×, {_pct(ra['real'].get('share_within_bar'))} ≤ 1.5× of "
            f"{ra['real']['n']}; single generated motions median {_f(ra['single']['median'])}×, max {_f(ra['single']['max'])}×)"
-           f"{_uneased(s)} | {yes('seam_acceleration')} |",
+           f"{_uneased(s)}{_flips(s)} | {yes('seam_acceleration')} |",
            f"| foot skate at seams ≤ 1.2× within segments | {_f(sk['seam_cm_s'], 1)} vs {_f(sk['within_cm_s'], 1)} cm/s "
            f"(ratio {_f(sk['ratio'])}; {sk['seam_pairs']} contact pairs within {SEAM_SKATE_FRAMES} frames of a seam); reference "
            f"ratio at a middle frame: real {_f(rsk['real']['ratio'])}, single {_f(rsk['single']['ratio'])} | {yes('seam_skate')} |",
@@ -461,6 +497,19 @@ def section(r: dict) -> list[str]:
     return out
 
 
+def _flips(s: dict) -> str:
+    fs = s.get("flip_share_of_frames")
+    if not fs:
+        return ""
+    fail = s.get("failing", [])
+    worst = "; ".join(f"{' → '.join(x['order'])} seam {x['seam']} {x['acceleration_ratio']:.2f}× (flip {x['flip_m'] * 100:.0f} cm)"
+                      for x in sorted(fail, key=lambda x: -x["acceleration_ratio"])[:4])
+    return (f"; {s['failing_on_flip']} of the {len(fail)} seams over the bar sit on a one-frame flip of the model's output "
+            f"(a joint > {FLIP_M * 100:.0f} cm off its neighbours' mean and back, within {FLIP_FRAMES} frames"
+            f"{': ' + worst if worst else ''}); such flips: real clips {fs['real']:.2%} of frames, single generated "
+            f"motions {fs['single']:.2%}, timelines {fs['timeline']:.2%}")
+
+
 def _uneased(s: dict) -> str:
     u = s.get("uneased_acceleration_ratio")
     if not u:
@@ -478,7 +527,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--model", default="emdm-t2m-web", help="a shipped text model of public/models/manifest.json")
     ap.add_argument("--models-dir", type=Path, default=None)
     ap.add_argument("--steps", type=int, default=10)
-    ap.add_argument("--timelines", type=int, default=18, help="3-segment timelines (each action in about half of them)")
+    ap.add_argument("--timelines", type=int, default=36, help="3-segment timelines (each action in about half of them)")
     ap.add_argument("--seconds", type=float, default=5.0, help="seconds per segment and per single motion")
     ap.add_argument("--actions", type=lambda s: tuple(x.strip() for x in s.split(",") if x.strip()), default=ACTIONS)
     ap.add_argument("--seed", type=int, default=0)
