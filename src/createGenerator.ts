@@ -16,7 +16,7 @@
  *   while generating) are src/backends.ts's; the results are bit-identical on the same backend.
  */
 import type { GenerateResult } from './generate';
-import { type Manifest, type ModelEntry, loadManifest } from './manifest';
+import { type Manifest, type ModelEntry, chooseVariant, loadManifest } from './manifest';
 import type { Motion } from './motion/types';
 import type { Backend, BackendRequest } from './runtime/ort';
 import type { Skeleton } from './skeleton';
@@ -33,9 +33,10 @@ export interface CreateGeneratorOptions {
   /** WASM threads (default: up to 4 when cross-origin isolated, else 1) */
   threads?: number;
   /**
-   * Which file of each model to run: 'fp32' (default) or a variant of its manifest entry, e.g. 'int8'
-   * (4.3 instead of 15.6 MB, about half the WASM compute per step, the same coverage per step count:
-   * docs/MODELS.md "Speed in the browser"). fp32 results are bit-identical between Node and the page.
+   * Which file of each model to run: 'fp32' or a variant of its manifest entry, e.g. 'int8' (4.3 instead of
+   * 15.6 MB, about half the WASM compute per step, the same coverage per step count: docs/MODELS.md "Speed in
+   * the browser"). Default: the entry's `defaultVariant` (the shipped EMDM models: int8), else fp32; the
+   * manifest's chooseVariant decides, for the page too. Results are bit-identical between Node and the page.
    */
   variant?: string;
   /** run in a Web Worker (default: true where `Worker` exists, i.e. in browsers; false in Node) */
@@ -169,11 +170,11 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
   };
 
   const variantOf = (model: string): string | undefined => {
-    const v = opts.variant;
-    if (v === undefined || v === 'fp32') return undefined;
-    const have = Object.keys(manifest.models[model]?.variants ?? {});
-    if (!have.includes(v)) throw new Error(`createGenerator: model '${model}' has no '${v}' file (its variants: ${have.join(', ') || 'none'}); use variant 'fp32' or one of those`);
-    return v;
+    try {
+      return chooseVariant(manifest, model, opts.variant);
+    } catch (e) {
+      throw new Error(`createGenerator: ${(e as Error).message}`);
+    }
   };
 
   if (inWorker) {

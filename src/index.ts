@@ -10,7 +10,7 @@ export type { LoadModelOptions } from './backends';
 export { GenerationClient } from './worker/client';
 export type { ClientEvents, FileEvent, GenerationClientOptions, ModelInfo, RemoteGenerateOptions, RemoteResult, WirePose, WireStepPreview, WorkerEnvironment } from './worker/client';
 export { clearModelCache, modelCacheUsage } from './cache/modelCache';
-export { loadManifest, fetchVerified, ModelFileError, sha256Hex } from './manifest';
+export { loadManifest, fetchVerified, ModelFileError, sha256Hex, chooseVariant, stepFileOf } from './manifest';
 export { assertFinite, NonFiniteMotionError } from './errors';
 export type { Manifest, ModelEntry } from './manifest';
 export { JOINT_NAMES, PARENTS, KINEMATIC_CHAINS, SkeletonFormatError, checkSkeleton, standardJoints } from './skeleton';

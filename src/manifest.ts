@@ -45,6 +45,11 @@ export interface ModelEntry {
   /** training objective: 'ddgan' (EMDM, sampled with the posterior; the default) or 'diffusion' (sampled with DDIM) */
   objective?: 'ddgan' | 'diffusion';
   variants?: Record<string, string>;
+  /**
+   * the variant (a key of `variants`) the page and createGenerator run unless asked for another ('fp32' = the
+   * `onnx` file); absent = fp32. Set where the variant's quality matches fp32 (docs/MODELS.md "Speed in the browser").
+   */
+  defaultVariant?: string;
   meanStd: string;
   zDim: number;
   featureDim: number;
@@ -248,12 +253,40 @@ export function validateManifest(data: unknown): Manifest {
       fail(`models.${name}.guidanceMinTime`, `is ${JSON.stringify(g)}; it must be a time ≥ 0 (guide only steps whose time is above it), or absent to guide every step`);
     }
   }
+  for (const [name, entry] of Object.entries(data.models as Record<string, Record<string, unknown>>)) {
+    const d = entry.defaultVariant;
+    const have = isObject(entry.variants) ? Object.keys(entry.variants) : [];
+    if (d !== undefined && !(typeof d === 'string' && have.includes(d))) {
+      fail(`models.${name}.defaultVariant`, `is ${JSON.stringify(d)}; it must name one of the model's variants (${have.join(', ') || 'none'}), or be absent to run the fp32 file`);
+    }
+  }
   for (const [name, entry] of Object.entries(data.textEncoders as Record<string, Record<string, unknown>>)) {
     if (entry.kind !== 'minilm' && entry.kind !== 'clip') fail(`textEncoders.${name}.kind`, `is ${JSON.stringify(entry.kind)}, expected "minilm" or "clip"`);
     if (typeof entry.dim !== 'number' || entry.dim <= 0) fail(`textEncoders.${name}.dim`, 'must be a positive number');
     if (typeof entry.dir !== 'string') fail(`textEncoders.${name}.dir`, 'must be a folder path');
   }
   return data as unknown as Manifest;
+}
+
+/**
+ * Which file of `model` runs: the one place that decides. `requested` 'fp32' → the `onnx` file (undefined is
+ * returned), a key of the entry's `variants` → that variant, undefined → the entry's `defaultVariant` (absent: fp32).
+ * The result is what openModel, the generation worker and the harness take as `variant` (undefined = fp32 file).
+ */
+export function chooseVariant(manifest: Manifest, model: string, requested?: string): string | undefined {
+  const entry = manifest.models[model];
+  if (!entry) throw new Error(`model '${model}' is not in the manifest (models: ${Object.keys(manifest.models).join(', ') || 'none'})`);
+  const v = requested ?? entry.defaultVariant;
+  if (v === undefined || v === 'fp32') return undefined;
+  const have = Object.keys(entry.variants ?? {});
+  if (!have.includes(v)) throw new Error(`model '${model}' has no '${v}' file (its variants: ${have.join(', ') || 'none'}); use 'fp32' or one of those`);
+  return v;
+}
+
+/** The ONNX file `model` runs with `chooseVariant`'s answer for `requested` (a path in the models folder). */
+export function stepFileOf(manifest: Manifest, model: string, requested?: string): string {
+  const v = chooseVariant(manifest, model, requested);
+  return v === undefined ? manifest.models[model].onnx : manifest.models[model].variants![v];
 }
 
 /** Fetch and validate `<baseUrl>manifest.json` (the root of trust: it is not itself hashed). */

@@ -10,7 +10,7 @@ import { clearModelCache, loadManifest, ModelFileError, modelCacheUsage, type Ma
 import { compareNote } from './ui/compare';
 import { Controls } from './ui/controls';
 import { byId } from './ui/dom';
-import { isAbort, modelForMode, pickModels } from './ui/engine';
+import { isAbort, modelForMode, pageVariant, pickModels } from './ui/engine';
 import { examplePrompts } from './ui/examples';
 import { CacheControl, FileList } from './ui/files';
 import { ErrorPanel, Notices } from './ui/notices';
@@ -76,6 +76,8 @@ async function main(): Promise<void> {
   const unknownParams = unknownParamsNotice(location.search);
   if (unknownParams) notices.show('warn', unknownParams, 14000);
   for (const n of pageFlagNotices(location.search)) notices.show('warn', n, 14000);
+  const variant = pageVariant(manifest, location.search);
+  if (variant.notice) notices.show('warn', variant.notice, 14000);
 
   // ------------------------------------------------------------ session: the models in the worker
   const session = new Session(manifest, limits, MODELS_URL, parsed.state.backend, {
@@ -86,7 +88,7 @@ async function main(): Promise<void> {
       if (e.state === 'done' && api.ready) void cacheControl.refresh(); // a model loaded later (compare view)
     },
     notice: (kind, text) => notices.show(kind, text, 14000),
-  }, api.counters);
+  }, api.counters, variant.variant);
   session.onLoad = (model, e) => {
     if (e.phase === 'start') view.status.begin(model);
     else if (e.phase === 'ready') view.status.end(model, 'ready', view.status.last?.kind === 'ready' ? view.status.last.text : `Ready · ${e.info.backend === 'webgpu' ? 'WebGPU' : 'WASM'}`);

@@ -36,11 +36,12 @@ async function tinyNode(): Promise<{ manifest: Manifest; baseUrl: string }> {
   return { manifest, baseUrl: PARITY + '/' };
 }
 
-interface Req { model: string; condition: GenerateOptions['condition']; frames: number; steps: number; guidance: number; seed: number }
+/** `variant`: a manifest variant (the page runs the entry's defaultVariant, e.g. int8); absent = the fp32 file */
+interface Req { model: string; variant?: string; condition: GenerateOptions['condition']; frames: number; steps: number; guidance: number; seed: number }
 
 async function nodeRun(req: Req) {
   const { manifest, baseUrl } = req.model === 'tiny' || req.model === 'tiny-ddim' ? await tinyNode() : { manifest: await loadManifest(MODELS), baseUrl: MODELS };
-  const gen = await openModel({ manifest, baseUrl, model: req.model, backend: 'wasm', threads: 1 });
+  const gen = await openModel({ manifest, baseUrl, model: req.model, variant: req.variant, backend: 'wasm', threads: 1 });
   try {
     const r = await gen.generate(req);
     return { featuresSha256: sha(r.motion.features), jointsSha256: sha(r.motion.joints) };
@@ -58,9 +59,11 @@ function shippedRequests(): Req[] {
   const p = path.join(MODELS, 'manifest.json');
   const models = fs.existsSync(p) ? (JSON.parse(fs.readFileSync(p, 'utf8')).models ?? {}) : {};
   const out: Req[] = [];
-  for (const [name, e] of Object.entries(models as Record<string, { condition: { type: string }; defaultSteps: number; guidance: number }>)) {
+  for (const [name, e] of Object.entries(models as Record<string, { condition: { type: string }; defaultSteps: number; guidance: number; defaultVariant?: string }>)) {
     const condition: GenerateOptions['condition'] = e.condition.type === 'action' ? { type: 'action', label: 0 } : e.condition.type === 'text' ? { type: 'text', text: 'a person walks forward and waves' } : { type: 'none' };
     out.push({ model: name, condition, frames: 60, steps: e.defaultSteps, guidance: e.guidance, seed: 7 });
+    // the file the page runs by default, where it is not the fp32 one
+    if (e.defaultVariant) out.push({ model: name, variant: e.defaultVariant, condition, frames: 60, steps: e.defaultSteps, guidance: e.guidance, seed: 9 });
     out.push({ model: name, condition: { type: 'none' }, frames: 40, steps: e.defaultSteps, guidance: 1, seed: 8 });
   }
   return out;
@@ -79,7 +82,7 @@ test.describe('core determinism: Chromium == Node', () => {
     ...shippedRequests(),
   ];
   for (const req of cases) {
-    test(`${req.model} ${req.condition.type} seed ${req.seed}: bit-identical twice in Chromium and equal to Node`, async ({ page, baseURL }) => {
+    test(`${req.model}${req.variant ? ` (${req.variant})` : ''} ${req.condition.type} seed ${req.seed}: bit-identical twice in Chromium and equal to Node`, async ({ page, baseURL }) => {
       const watch = watchPage(page);
       const external = watchExternalRequests(page, baseURL!);
       await openHarness(page);

@@ -41,3 +41,51 @@ export function watchExternalRequests(page: Page, baseURL: string): string[] {
   });
   return external;
 }
+
+/** What the page's thread did while something ran: see `probeResponsiveness`. */
+export interface Responsiveness {
+  /** requestAnimationFrame callbacks */
+  frames: number;
+  maxFrameGap: number;
+  medianFrameGap: number;
+  /** ticks of a 50 ms setInterval, and the most one came late (ms past its 50) */
+  timerTicks: number;
+  maxTimerDelay: number;
+  /** how long the work ran */
+  ms: number;
+}
+
+/** The work `probeResponsiveness` watches: a generation through the demo page's test API or the core harness. */
+export type ProbedWork = { api: 'emdm'; req: Parameters<Window['emdm']['generate']>[0] } | { api: 'coreHarness'; req: Parameters<Window['coreHarness']['generate']>[0] };
+
+/**
+ * requestAnimationFrame gaps and the lateness of a 50 ms setInterval on the page's thread while `work` runs
+ * (or for `idleMs` when it is null). Measured in the page, so nothing else is on its thread.
+ */
+export async function probeResponsiveness(page: Page, work: ProbedWork | null, idleMs = 2500): Promise<Responsiveness> {
+  return page.evaluate(async ([w, idle]) => {
+    const frames: number[] = [];
+    const ticks: number[] = [];
+    let on = true;
+    const raf = (t: number) => {
+      frames.push(t);
+      if (on) requestAnimationFrame(raf);
+    };
+    requestAnimationFrame(raf);
+    const timer = setInterval(() => ticks.push(performance.now()), 50);
+    const t0 = performance.now();
+    if (w?.api === 'emdm') await window.emdm.generate(w.req);
+    else if (w?.api === 'coreHarness') await window.coreHarness.generate(w.req);
+    else await new Promise((res) => setTimeout(res, idle));
+    const ms = performance.now() - t0;
+    on = false;
+    clearInterval(timer);
+    const gaps = frames.slice(1).map((t, i) => t - frames[i]);
+    const sorted = [...gaps].sort((a, b) => a - b);
+    const late = ticks.slice(1).map((t, i) => t - ticks[i] - 50);
+    return {
+      frames: frames.length, maxFrameGap: Math.max(0, ...gaps), medianFrameGap: sorted[sorted.length >> 1] ?? 0,
+      timerTicks: ticks.length, maxTimerDelay: Math.max(0, ...late), ms,
+    };
+  }, [work, idleMs] as const);
+}

@@ -13,6 +13,8 @@
 import fs from 'node:fs';
 import os from 'node:os';
 import { expect, test, type Page } from '@playwright/test';
+import { chooseVariant } from '../../src/manifest';
+import { probeResponsiveness } from './helpers';
 
 const PROMPT = 'a person walks forward';
 
@@ -163,7 +165,8 @@ test('benchmark: EMDM vs DDIM, ms per motion and per frame through the page (iss
 // (ORT's thread count is fixed per worker); every configuration is warmed up twice, then the configurations
 // take turns, rep by rep, so a load change on a shared machine hits them alike. Levers: WASM threads 1 / 2,
 // the model file (fp32 and each manifest variant: int8, fp16), and classifier-free guidance (guided = batch 2,
-// guidance 1 = one batch row). With each thread count, the page thread's longest requestAnimationFrame gap
+// guidance 1 = one batch row), and one row for what the demo page runs (the manifest's default file, its guidance
+// interval, the page's default thread count: a harness opened without one). With each thread count, the page thread's longest requestAnimationFrame gap
 // and 50 ms-timer lateness during one generation (and idle) tell what the threads cost the page.
 //
 //   EMDM_BENCH=1 npx playwright test tests/e2e/page-bench.spec.ts -g "speed levers"
@@ -184,9 +187,10 @@ test('benchmark: speed levers for 10 steps × 196 frames (threads, int8/fp16 fil
   const steps = 10;
   const ctx = await browser.newContext();
   const pages = new Map<number, Page>();
-  for (const t of threadCounts) {
+  // threads 0: the harness opened without a thread count, i.e. the page's default (src/runtime/ort.ts defaultThreads)
+  for (const t of [...threadCounts, 0]) {
     const page = await ctx.newPage();
-    await page.goto(`/harness/?via=worker&backend=wasm&threads=${t}`);
+    await page.goto(`/harness/?via=worker&backend=wasm${t ? `&threads=${t}` : ''}`);
     await page.waitForFunction(() => window.coreHarness?.ready === true, null, { timeout: 120_000 });
     const info = await page.evaluate(() => window.coreHarness.info());
     if (!info.crossOriginIsolated && t > 1) throw new Error(`the harness is not cross-origin isolated: ${t} threads cannot run (serve with COOP/COEP, see vite.config.ts)`);
@@ -195,13 +199,16 @@ test('benchmark: speed levers for 10 steps × 196 frames (threads, int8/fp16 fil
   // guidance in a limited interval (docs/MODELS.md "Speed in the browser"): the entry's guidanceMinTime, else 0.55
   const gMin: number = entry.guidanceMinTime ?? 0.55;
   const guidedSteps = (c: Config) => (c.guidance === 1 ? 0 : (entry.schedules[String(steps)].time as number[]).filter((t) => t > c.guidanceMinTime).length);
-  type Config = { threads: number; file: string; guidance: number; guidanceMinTime: number };
+  type Config = { threads: number; file: string; guidance: number; guidanceMinTime: number; pageDefault?: boolean };
   const configs: Config[] = [];
   for (const t of threadCounts) {
     for (const file of files) configs.push({ threads: t, file, guidance: entry.guidance, guidanceMinTime: 0 });
     configs.push({ threads: t, file: 'fp32', guidance: 1, guidanceMinTime: 0 });
     for (const file of files.filter((f) => f === 'fp32' || f === 'int8')) configs.push({ threads: t, file, guidance: entry.guidance, guidanceMinTime: gMin });
   }
+  // what the demo page runs: the manifest's file choice (chooseVariant: the entry's defaultVariant), its guidance
+  // interval (the entry's guidanceMinTime, absent = every step) and the page's default thread count
+  configs.push({ threads: 0, file: chooseVariant(manifest, model) ?? 'fp32', guidance: entry.guidance, guidanceMinTime: entry.guidanceMinTime ?? 0, pageDefault: true });
   const request = (c: Config, seed: number) => ({
     model, ...(c.file === 'fp32' ? {} : { variant: c.file }), condition: { type: 'text' as const, text: PROMPT }, frames, steps, guidance: c.guidance,
     guidanceMinTime: c.guidanceMinTime, seed,
@@ -226,31 +233,11 @@ test('benchmark: speed levers for 10 steps × 196 frames (threads, int8/fp16 fil
   // the page's thread while the worker generates (fp32 and int8 where shipped), per thread count
   const responsiveness: Array<{ threads: number; file: string; idleMaxFrameGap: number; maxFrameGap: number; frames: number; maxTimerLate: number; ms: number }> = [];
   for (const [t, page] of pages) {
+    if (t === 0) continue;
     for (const file of files.filter((f) => f === 'fp32' || f === 'int8')) {
-      const probe = await page.evaluate(async (req) => {
-        const watch = async (work: () => Promise<unknown>) => {
-          const frameTimes: number[] = [];
-          const ticks: number[] = [];
-          let on = true;
-          const raf = (t: number) => {
-            frameTimes.push(t);
-            if (on) requestAnimationFrame(raf);
-          };
-          requestAnimationFrame(raf);
-          const timer = setInterval(() => ticks.push(performance.now()), 50);
-          const t0 = performance.now();
-          await work();
-          const ms = performance.now() - t0;
-          on = false;
-          clearInterval(timer);
-          const gaps = frameTimes.slice(1).map((x, i) => x - frameTimes[i]);
-          const late = ticks.slice(1).map((x, i) => x - ticks[i] - 50);
-          return { frames: frameTimes.length, maxFrameGap: Math.max(0, ...gaps), maxTimerLate: Math.max(0, ...late), ms };
-        };
-        const idle = await watch(() => new Promise((r) => setTimeout(r, 1000)));
-        const busy = await watch(() => window.coreHarness.generate(req));
-        return { idleMaxFrameGap: idle.maxFrameGap, ...busy };
-      }, request({ threads: t, file, guidance: entry.guidance, guidanceMinTime: 0 }, 7));
+      const idle = await probeResponsiveness(page, null, 1000);
+      const busy = await probeResponsiveness(page, { api: 'coreHarness', req: request({ threads: t, file, guidance: entry.guidance, guidanceMinTime: 0 }, 7) });
+      const probe = { idleMaxFrameGap: idle.maxFrameGap, frames: busy.frames, maxFrameGap: busy.maxFrameGap, maxTimerLate: busy.maxTimerDelay, ms: busy.ms };
       responsiveness.push({ threads: t, file, ...probe });
     }
   }
@@ -264,7 +251,7 @@ test('benchmark: speed levers for 10 steps × 196 frames (threads, int8/fp16 fil
   const lines = [
     `10 steps × ${frames} frames, ${model}, harness in the generation worker (Chromium, ORT-web WASM), median of ${reps} (turns taken), ${os.cpus().length} cores, load average ${load0.toFixed(1)} → ${load1.toFixed(1)}`,
     `threads  file  guidance  rows (batch rows over the ${steps} steps; guided only above t = ${gMin} in the 'interval' rows)  ms/motion  ms/step  × base  fastest  runs (ms)`,
-    ...rows.map((r) => `${String(r.threadsRan).padStart(7)}  ${r.file.padEnd(4)}  ${(String(r.guidance) + (r.guidanceMinTime ? ' interval' : '')).padStart(8)}  ${String(r.rows).padStart(4)}  ${r.medianMs.toFixed(0).padStart(9)}  ${r.msPerStep.toFixed(1).padStart(7)}  ${(r.medianMs / base.medianMs).toFixed(2).padStart(6)}  ${r.minMs.toFixed(0).padStart(7)}  ${r.runsMs.join(' ')}`),
+    ...rows.map((r) => `${String(r.threadsRan).padStart(7)}  ${r.file.padEnd(4)}  ${(String(r.guidance) + (r.guidanceMinTime ? ' interval' : '')).padStart(8)}  ${String(r.rows).padStart(4)}  ${r.medianMs.toFixed(0).padStart(9)}  ${r.msPerStep.toFixed(1).padStart(7)}  ${(r.medianMs / base.medianMs).toFixed(2).padStart(6)}  ${r.minMs.toFixed(0).padStart(7)}  ${r.runsMs.join(' ')}${r.pageDefault ? '  ← the page\'s default' : ''}`),
     'page thread during one generation: threads  file  idle max frame gap  max frame gap  frames  max 50 ms-timer lateness  ms',
     ...responsiveness.map((p) => `  ${String(p.threads).padStart(7)}  ${p.file.padEnd(4)}  ${p.idleMaxFrameGap.toFixed(0).padStart(18)}  ${p.maxFrameGap.toFixed(0).padStart(13)}  ${String(p.frames).padStart(6)}  ${p.maxTimerLate.toFixed(0).padStart(25)}  ${p.ms.toFixed(0)}`),
   ];

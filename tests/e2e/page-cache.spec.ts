@@ -3,6 +3,7 @@
 // and downloaded again with a notice, a manifest that names a new sha256 replaces the entry, and the
 // page's "Clear cached models" button empties the cache. Prints cold vs second-visit ready time and bytes.
 import { expect, test, type BrowserContext, type Page, type Route } from '@playwright/test';
+import { stepFileOf, validateManifest } from '../../src/manifest';
 import { watchPage } from './helpers';
 
 const CACHE = 'emdm-models-v1';
@@ -88,8 +89,9 @@ test.describe('model cache', () => {
     test.setTimeout(300_000);
     const page = await context.newPage();
     await openReady(page);
-    const manifest = await page.evaluate(async () => (await (await fetch('/models/manifest.json')).json()) as { models: Record<string, { task: string; objective?: string; onnx: string }> });
-    const onnx = Object.values(manifest.models).find((m) => m.task === 'text' && m.objective !== 'diffusion')!.onnx;
+    const manifest = validateManifest(await page.evaluate(async () => (await fetch('/models/manifest.json')).json()));
+    const text = Object.entries(manifest.models).find(([, m]) => m.task === 'text' && m.objective !== 'diffusion')![0];
+    const onnx = stepFileOf(manifest, text); // the step-model file the page runs (its default variant)
     // flip one byte of the cached step model, keeping its key and headers
     const flipped = await page.evaluate(async ([name, file]) => {
       const cache = await caches.open(name);

@@ -2,7 +2,12 @@
 // (not after them) and counted as a file; a file the server does not have — HTTP 404, or the site's
 // index.html answered with status 200 by a single-page-app fallback — is reported as MISSING with its
 // path (never as a checksum mismatch, "corrupt or replaced file"), and the status line says it failed.
+import fs from 'node:fs';
 import { expect, test, type Page, type Route } from '@playwright/test';
+import { stepFileOf, validateManifest } from '../../src/manifest';
+
+/** The step-model file the page loads for text (the manifest's default variant of emdm-t2m-web). */
+const STEP_FILE = stepFileOf(validateManifest(JSON.parse(fs.readFileSync('public/models/manifest.json', 'utf8'))), 'emdm-t2m-web');
 
 async function open(page: Page): Promise<void> {
   await page.goto('/?noauto=1&backend=wasm');
@@ -30,10 +35,10 @@ function expectMissing(f: Awaited<ReturnType<typeof failure>>, file: string) {
 test('a model file answered with the site\'s index.html (SPA fallback, status 200) is reported missing with its path', async ({ page }) => {
   const html = await (await page.request.get('/')).text();
   expect(html).toMatch(/<!doctype html/i);
-  await page.route('**/models/emdm-t2m-web.onnx', (r: Route) => r.fulfill({ status: 200, contentType: 'text/html', body: html }));
+  await page.route(`**/models/${STEP_FILE}`, (r: Route) => r.fulfill({ status: 200, contentType: 'text/html', body: html }));
   await open(page);
-  const f = await failure(page, 'emdm-t2m-web.onnx');
-  expectMissing(f, 'emdm-t2m-web.onnx');
+  const f = await failure(page, STEP_FILE);
+  expectMissing(f, STEP_FILE);
   expect(f.hint).toMatch(/answered with an HTML page \(HTTP 200\)/);
 });
 

@@ -3,15 +3,16 @@
 // - the newest request wins: five requests 30 ms apart finish only the last, a click on Generate
 //   during a generation stops it at the next step boundary;
 // - the motions are bit-identical to the same code run on the page's thread (the core harness) and in
-//   Node: the worker changes where the sampler runs, not what it computes;
+//   Node, on the model file the page runs (the manifest's defaultVariant: int8 for the shipped EMDM models):
+//   the worker changes where the sampler runs, not what it computes;
 // - "Show steps": each step's x̂0 comes back (character + strip), and the final motion is unchanged.
 import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { expect, test, type Page } from '@playwright/test';
 import { openModel, type GenerateOptions } from '../../src/generate';
-import { loadManifest } from '../../src/manifest';
-import { watchPage } from './helpers';
+import { chooseVariant, loadManifest } from '../../src/manifest';
+import { probeResponsiveness, watchPage } from './helpers';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
 const MODELS = path.join(ROOT, 'public', 'models') + '/';
@@ -21,39 +22,6 @@ async function openReady(page: Page, query = 'noauto=1&backend=wasm'): Promise<v
   await page.goto(`/?${query}`);
   await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
   expect(await page.evaluate(() => window.emdm.error)).toBe('');
-}
-
-interface Responsiveness { frames: number; maxFrameGap: number; medianFrameGap: number; timerTicks: number; maxTimerDelay: number; ms: number }
-
-/**
- * requestAnimationFrame gaps and the lateness of a 50 ms setInterval, on the page's thread, while
- * `during` runs (or for `idleMs` when it is null). Measured in the page, so nothing else is on its thread.
- */
-async function measure(page: Page, req: Record<string, unknown> | null, idleMs = 2500): Promise<Responsiveness> {
-  return page.evaluate(async ([r, idle]) => {
-    const frames: number[] = [];
-    const ticks: number[] = [];
-    let on = true;
-    const raf = (t: number) => {
-      frames.push(t);
-      if (on) requestAnimationFrame(raf);
-    };
-    requestAnimationFrame(raf);
-    const timer = setInterval(() => ticks.push(performance.now()), 50);
-    const t0 = performance.now();
-    if (r) await window.emdm.generate(r);
-    else await new Promise((res) => setTimeout(res, idle as number));
-    const ms = performance.now() - t0;
-    on = false;
-    clearInterval(timer);
-    const gaps = frames.slice(1).map((t, i) => t - frames[i]);
-    const sorted = [...gaps].sort((a, b) => a - b);
-    const late = ticks.slice(1).map((t, i) => t - ticks[i] - 50);
-    return {
-      frames: frames.length, maxFrameGap: Math.max(...gaps), medianFrameGap: sorted[sorted.length >> 1],
-      timerTicks: ticks.length, maxTimerDelay: Math.max(0, ...late), ms,
-    };
-  }, [req, idleMs] as const);
 }
 
 test.describe('generation worker', () => {
@@ -66,8 +34,8 @@ test.describe('generation worker', () => {
     const req = { mode: 'text' as const, text: PROMPT, seconds: 9.8, steps: 10, seed: 5 };
     await page.evaluate((r) => window.emdm.generate(r), req); // warm-up: WASM tiers up, the character plays
     await page.evaluate(() => window.emdm.seek(0, true));
-    const idle = await measure(page, null);
-    const busy = await measure(page, req);
+    const idle = await probeResponsiveness(page, null);
+    const busy = await probeResponsiveness(page, { api: 'emdm', req });
     console.log(`frame gap idle: max ${idle.maxFrameGap.toFixed(1)} ms, median ${idle.medianFrameGap.toFixed(1)} ms (${idle.frames} frames in ${idle.ms.toFixed(0)} ms); `
       + `during generation: max ${busy.maxFrameGap.toFixed(1)} ms, median ${busy.medianFrameGap.toFixed(1)} ms (${busy.frames} frames in ${busy.ms.toFixed(0)} ms); `
       + `50 ms timer: max late ${idle.maxTimerDelay.toFixed(1)} ms idle, ${busy.maxTimerDelay.toFixed(1)} ms during`);
@@ -151,8 +119,9 @@ test.describe('generation worker', () => {
     const actionModel = Object.entries(manifest.models).find(([, e]) => e.task === 'action');
     await openReady(page);
     const common = { frames: 60, steps: 4, guidance: 2.5, seed: 31, smooth: true, footCleanup: true };
+    // like with like: Node opens the file the page runs (chooseVariant, the one place that decides)
     const node = async (model: string, condition: GenerateOptions['condition']) => {
-      const gen = await openModel({ manifest, baseUrl: MODELS, model, backend: 'wasm', threads: 1 });
+      const gen = await openModel({ manifest, baseUrl: MODELS, model, variant: chooseVariant(manifest, model), backend: 'wasm', threads: 1 });
       try {
         return Array.from((await gen.generate({ ...common, condition })).motion.joints);
       } finally {

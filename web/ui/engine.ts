@@ -2,8 +2,10 @@
 // NEWEST request wins: starting one aborts the one before it (the worker stops it at the next denoising
 // step) and waits for it to stop before running. Backend choice and the WebGPU → WASM fallback (at load
 // and at run time) are not made here or in web/main.ts: the page's `backend` (URL) goes to the worker,
-// where src/backends.ts decides, in one place for the page and the library (createGenerator).
-import { type Manifest, type ModelEntry, GenerationClient, type ClientEvents, type ModelInfo, type RemoteGenerateOptions, type RemoteResult } from '../../src/index';
+// where src/backends.ts decides, in one place for the page and the library (createGenerator). Which file of a
+// model runs (fp32 or a variant such as int8) is the manifest's chooseVariant: the entry's defaultVariant
+// unless the page asks for another (URL `variant=fp32`).
+import { type Manifest, type ModelEntry, GenerationClient, chooseVariant, type ClientEvents, type ModelInfo, type RemoteGenerateOptions, type RemoteResult } from '../../src/index';
 import type { BackendChoice, Mode } from './state';
 
 export interface ModelChoice {
@@ -33,6 +35,19 @@ export function pickModels(m: Manifest): { text: ModelChoice | null; action: Mod
 
 export function modelForMode(models: ReturnType<typeof pickModels>, mode: Mode): ModelChoice | null {
   return mode === 'action' ? models.action : models.text;
+}
+
+/**
+ * The page's `variant` URL flag: 'fp32' or a variant every model of the manifest has (e.g. 'int8', 'fp16');
+ * absent = each model's manifest default. Anything else is ignored with a notice saying what is known.
+ */
+export function pageVariant(m: Manifest, search: string): { variant: string | undefined; notice: string } {
+  const v = new URLSearchParams(search).get('variant');
+  if (v === null) return { variant: undefined, notice: '' };
+  const entries = Object.values(m.models);
+  const common = entries.length ? Object.keys(entries[0].variants ?? {}).filter((k) => entries.every((e) => k in (e.variants ?? {}))) : [];
+  if (v === 'fp32' || common.includes(v)) return { variant: v, notice: '' };
+  return { variant: undefined, notice: `URL variant='${v}' is not a model file every model has (fp32${common.map((k) => `, ${k}`).join('')}); each model runs its default file.` };
 }
 
 export class SupersededError extends Error {
@@ -70,15 +85,26 @@ export class Engine {
   private readonly loads = new Map<string, Promise<ModelInfo>>();
   private current: { ctrl: AbortController; done: Promise<unknown> } | null = null;
 
-  constructor(manifest: Manifest, baseUrl: string, backend: BackendChoice, events: LoadEvents) {
+  private readonly manifest: Manifest;
+  /** the variant the page asked for ('fp32', 'int8', …; undefined: each model's manifest default) */
+  private readonly variant: string | undefined;
+
+  constructor(manifest: Manifest, baseUrl: string, backend: BackendChoice, events: LoadEvents, variant?: string) {
+    this.manifest = manifest;
+    this.variant = variant;
     this.client = new GenerationClient({ manifest, baseUrl, backend, events: { ...events, fallback: oncePerReason(events.fallback) } });
+  }
+
+  /** The variant `model` runs (undefined: its fp32 file): chooseVariant of the page's request. */
+  variantOf(model: string): string | undefined {
+    return chooseVariant(this.manifest, model, this.variant);
   }
 
   /** Load a model in the worker (once; a failed load is forgotten so it can be retried). */
   load(model: string): Promise<ModelInfo> {
     let p = this.loads.get(model);
     if (!p) {
-      p = this.client.load(model);
+      p = (async () => this.client.load(model, this.variantOf(model)))();
       this.loads.set(model, p);
       p.catch(() => this.loads.delete(model));
     }
@@ -87,7 +113,7 @@ export class Engine {
 
   /** One motion with its pose track (WebGPU failures are retried on WASM in the worker). */
   generate(model: string, o: RemoteGenerateOptions): Promise<RemoteResult> {
-    return this.client.generate(model, { ...o, pose: true });
+    return this.client.generate(model, { ...o, pose: true }, this.variantOf(model));
   }
 
   /** Run `job` as the newest request: the previous one is aborted and awaited first. */

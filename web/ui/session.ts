@@ -99,9 +99,10 @@ export class Session {
     backend: BackendChoice,
     events: LoadEvents,
     readonly counters: Counters = emptyCounters(),
+    variant?: string,
   ) {
     this.models = pickModels(manifest);
-    this.engine = new Engine(manifest, baseUrl, backend, events);
+    this.engine = new Engine(manifest, baseUrl, backend, events, variant);
   }
 
   /** Told when a model's load starts and how it ends (the view's status line follows it). */

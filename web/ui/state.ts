@@ -145,8 +145,11 @@ export function parseState(search: string, l: StateLimits, fallbackSeed: number)
 
 /** The URL parameters of a state (parseState reads them; stateToSearch writes them). */
 export const STATE_PARAMS = ['mode', 'text', 'action', 'steps', 'seconds', 'guidance', 'seed', 'backend', 'compare'] as const;
-/** Page flags read elsewhere: `noauto` (no first motion on load), `quality=high` (no adaptive resolution), `tl` (a timeline, web/ui/timeline-url.ts). */
-export const PAGE_FLAGS = ['noauto', 'quality', 'tl'] as const;
+/**
+ * Page flags read elsewhere: `noauto` (no first motion on load), `quality=high` (no adaptive resolution), `tl` (a
+ * timeline, web/ui/timeline-url.ts), `variant` (the model file: fp32, int8, …; web/ui/engine.ts pageVariant).
+ */
+export const PAGE_FLAGS = ['noauto', 'quality', 'tl', 'variant'] as const;
 
 /** The notice for URL parameters the page does not know ('' when there are none): it names them and the known ones. */
 export function unknownParamsNotice(search: string): string {
