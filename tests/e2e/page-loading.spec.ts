@@ -90,3 +90,24 @@ test('the runtime .wasm is requested beside the models, before they have arrived
   const list = await (await page.request.get('/ort/files.json')).json() as Record<string, { bytes: number }>;
   expect(runtime).toMatchObject({ state: 'done', total: list['ort-wasm-simd-threaded.wasm'].bytes });
 });
+
+test("the page loads each model's default file (the text model's int8, not fp32), and the fp32 one with ?variant=fp32", async ({ page, context }) => {
+  const stepFiles = (p: Page) => {
+    const seen: string[] = [];
+    p.on('request', (r) => {
+      const m = new URL(r.url()).pathname.match(/\/models\/([^/]+\.onnx)$/);
+      if (m) seen.push(m[1]);
+    });
+    return seen;
+  };
+  const dflt = stepFiles(page);
+  await open(page);
+  expect(STEP_FILE).toBe('emdm-t2m-web.int8.onnx');
+  expect(dflt).toEqual([STEP_FILE]);
+  const fp32Page = await context.newPage();
+  const fp32 = stepFiles(fp32Page);
+  await fp32Page.goto('/?noauto=1&backend=wasm&variant=fp32');
+  await fp32Page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 180_000 });
+  expect(await fp32Page.evaluate(() => window.emdm.error)).toBe('');
+  expect(fp32).toEqual(['emdm-t2m-web.onnx']);
+});
