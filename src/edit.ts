@@ -33,7 +33,9 @@
  * - Body part: keep the root + legs groups on every frame (new upper body) or the upper group (new legs + root).
  * - Loop (K = LOOP_END_FRAMES): known = X with frames [N−K, N) replaced by X[0:K]; frames [0, K) ∪ [N−K, N) kept
  *   (the root at N−K pinned where X had it, eased and pinned again as the in-between). The clip is frames [0, N−K): played in a loop, frame N−K (the first
- *   pose again) follows its last frame.
+ *   pose again) follows its last frame. A longer X (a timeline, ≤ MAX_TIMELINE_SECONDS) has only its last window
+ *   W = maxFrames sampled: known = X[N−W:] with its last K frames replaced by X[0:K], frames [0, C) ∪ [W−K, W) of
+ *   the window kept (it continues X[:N−W], which stays as it was).
  *   In place: the root's x/z velocity (features [1:3]) is set to 0 on every frame (heading may still turn).
  *
  * Features here are de-normalised (`Motion.features`, what `known` takes); the sampler keeps the kept entries
@@ -432,15 +434,25 @@ export async function makeLoop(motion: EditMotion, cond: EditCondition, seed: nu
   opts: { inPlace?: boolean; decode?: (features: Float32Array, frames: number) => Float32Array } = {}): Promise<LoopResult> {
   const c = conditionOf(cond, null);
   const K = LOOP_END_FRAMES;
-  checkEditable(motion, limits, 'looping', 2 * K + 1);
   const N = motion.frames;
-  const known = Float32Array.from(motion.features);
-  known.set(motion.features.subarray(0, K * D), (N - K) * D);
-  const keep = keepMask(N, [{ frames: [[0, K - 1], [N - K, N - 1]] }]);
-  let full = await gen({ ...c, frames: N, seed, known: { features: known, keep } });
-  checkMotion(full, N, 'looping');
-  const eased = pinKeptRoot(easeSeams(full.features, N, keep), N, keep, known); // as inBetween
-  full = { frames: N, fps: full.fps, features: eased, joints: (opts.decode ?? ((f, n) => recoverJoints(f, n)))(eased, N) };
+  // a motion longer than the model's window (a timeline) has only its last window W sampled, continuing the frames
+  // before it (its first C frames kept, as a timeline window's)
+  const longest = MAX_TIMELINE_SECONDS * limits.fps;
+  if (N > longest) throw new EditError(`looping works on a motion of at most ${longest} frames (${fmtS(MAX_TIMELINE_SECONDS)}, a timeline's longest); this one is ${N} frames`);
+  if (N < 2 * K + 1) throw new EditError(`looping needs a motion of at least ${2 * K + 1} frames (${fmtS((2 * K + 1) / motion.fps)}); this one is ${N}`);
+  if (motion.features.length !== N * D) throw new Error(`looping: the motion has ${motion.features.length} feature values, expected ${N} × ${D}`);
+  const W = Math.min(N, limits.maxFrames);
+  const first = W === N ? K : OVERLAP_FRAMES;
+  if (W - K - first < 1) throw new EditError(`looping: the model's window (${limits.maxFrames} frames) leaves no frame to regenerate between the ${first} kept at its start and the ${K} at its end`);
+  const known = Float32Array.from(motion.features.subarray((N - W) * D));
+  known.set(motion.features.subarray(0, K * D), (W - K) * D);
+  const keep = keepMask(W, [{ frames: [[0, first - 1], [W - K, W - 1]] }]);
+  const win = await gen({ ...c, frames: W, seed, known: { features: known, keep } });
+  checkMotion(win, W, 'looping');
+  const eased = new Float32Array(N * D);
+  eased.set(motion.features.subarray(0, (N - W) * D), 0);
+  eased.set(pinKeptRoot(easeSeams(win.features, W, keep), W, keep, known), (N - W) * D); // as inBetween
+  let full: EditMotion = { frames: N, fps: win.fps, features: eased, joints: (opts.decode ?? ((f, n) => recoverJoints(f, n)))(eased, N) };
   if (opts.inPlace) {
     const features = Float32Array.from(full.features);
     for (let t = 0; t < N; t++) {

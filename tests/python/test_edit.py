@@ -265,6 +265,28 @@ def test_a_loop_ends_on_its_first_pose(model, tl):
     assert np.abs(lp.features[10:40] - src[10:40]).mean() > 1e-2
 
 
+def test_a_timeline_longer_than_the_window_loops_by_sampling_only_its_last_window(tl):
+    """A timeline (here 90 frames, the model's window 60) loops: its last window continues the frames before it (its
+    first second kept, those frames untouched) and ends on the timeline's first pose."""
+    from dataclasses import replace
+
+    spy = Spy()
+    ed = replace(spy.editor(), max_frames=60)
+    lp = E.loop(ed, tl.features, "b", 6)
+    (call,) = spy.calls
+    assert call["frames"] == 60
+    keep = call["keep"].astype(bool)
+    assert keep[:20].all() and keep[50:].all() and not keep[20:50].any()
+    assert np.array_equal(call["known"][:20], ed.normalise(tl.features[30:50]))        # the window continues frame 30..49
+    assert np.array_equal(call["known"][50:], ed.normalise(tl.features[:10]))          # and ends on the first 10 frames
+    assert len(lp.full.features) == 90 and lp.features.shape == (80, 263)
+    assert np.array_equal(lp.full.features[:30], tl.features[:30])                    # before the window: as it was
+    np.testing.assert_allclose(lp.full.features[30:50], tl.features[30:50], atol=1e-5)  # kept (through mean/std)
+    assert np.abs(lp.full.joints[:50] - recover_joints(tl.features[:50])).max() < 1e-5
+    assert np.abs(_rel(lp.full.joints[80:81]) - _rel(lp.full.joints[:1])).max() < 1e-3  # the wrap: the first pose
+    assert np.abs(lp.full.features[50:80] - tl.features[50:80]).mean() > 1e-2           # the free frames are new
+
+
 def test_an_in_place_loop_does_not_travel(model, tl):
     src = tl.features[:50]
     moving = E.loop(model, src, "b", 6)
@@ -283,7 +305,7 @@ def test_an_in_place_loop_does_not_travel(model, tl):
     (lambda m, f: E.inbetween(m, f[:60, :200], "d", 1), r"shape \(60, 200\), expected \(frames, 263\)"),
     (lambda m, f: E.inbetween(m, np.full((60, 263), np.nan, np.float32), "d", 1), r"NaN/Infinity"),
     (lambda m, f: E.edit_body(m, f[:60], "f", 1, keep="arms"), r"keep must be 'lower' \(legs and root\) or 'upper'"),
-    (lambda m, f: E.loop(m, f[:20], "b", 1), r"loop: the motion has 20 frames; this edit needs 21..196"),
+    (lambda m, f: E.loop(m, f[:20], "b", 1), r"loop: the motion has 20 frames; this edit needs 21..1200"),
     (lambda m, f: E.loop(m, f[:60], "b", 1, ends=0), r"ends must be a positive number of frames"),
 ])
 def test_bad_edits_are_refused_with_one_line(model, tl, call, says):
@@ -314,10 +336,13 @@ def test_the_tiny_edit_fixture_is_current(tmp_path):
 
 def test_the_fixture_holds_what_the_typescript_side_needs():
     meta = json.loads((PARITY / "tiny-edit.json").read_text())
-    assert [r["op"] for r in meta["runs"]] == ["timeline"] * 3 + ["regenerate"] * 2 + ["inbetween", "body", "loop"]
+    assert [r["op"] for r in meta["runs"]] == ["timeline"] * 3 + ["regenerate"] * 2 + ["inbetween", "body", "loop", "loop_long"]
     assert meta["ops"]["timeline"]["frames"] == [24, 14, 10] and meta["overlap"] == 20 and meta["loopEnds"] == 10
-    assert [r["frames"] for r in meta["runs"]] == [24, 34, 30, 34, 30, 48, 48, 48]
+    assert [r["frames"] for r in meta["runs"]] == [24, 34, 30, 34, 30, 48, 48, 48, 34]
+    assert meta["runs"][-1]["noise"] == meta["runs"][1]["noise"]        # the long loop's window reuses a timeline window's noise
     tl = read_case_array(PARITY, "tiny-edit", "timeline_features")
     regen = read_case_array(PARITY, "tiny-edit", "regen_features")
     assert np.array_equal(regen[:24], tl[:24]) and np.abs(regen[38:] - tl[38:]).mean() > 1e-3
     assert read_case_array(PARITY, "tiny-edit", "loop_features").shape == (38, 263)
+    long_loop = read_case_array(PARITY, "tiny-edit", "loop_long_features")
+    assert long_loop.shape == (38, 263) and np.array_equal(long_loop[:14], tl[:14])   # frames before its window stay

@@ -23,6 +23,7 @@ const meta = fx.meta as unknown as {
     inbetween: { seed: number; label: string; keepUntil: number; keepFrom: number };
     body: { seed: number; label: string; keep: 'lower' | 'upper' };
     loop: { seed: number; label: string; ends: number; clipFrames: number };
+    loopLong: { seed: number; label: string; maxFrames: number; clipFrames: number };
   };
   runs: { op: string; frames: number; label: string; seed: number; noise: string }[];
 };
@@ -126,5 +127,17 @@ describe('src/edit.ts = emdm.motion.edit (tiny-edit fixture)', () => {
     expect(maxJointDist(r.clip.joints, fx.get('loop_joints'))).toBeLessThan(1e-4);
     const p = await makeLoop(base(), { action: o.label }, o.seed, gen, limits, { inPlace: true });
     expect(maxJointDist(p.clip.joints, fx.get('loop_in_place_joints'))).toBeLessThan(1e-4);
+  });
+
+  it('loop of a motion longer than the model window (only its last window sampled): within 1e-4', async () => {
+    const o = meta.ops.loopLong;
+    calls.length = 0;
+    const r = await makeLoop(base(), { action: o.label }, o.seed, gen, { ...limits, maxFrames: o.maxFrames });
+    expect(calls.map((c) => [c.frames, c.action, c.seed])).toEqual(meta.runs.filter((x) => x.op === 'loop_long').map((x) => [x.frames, x.label, x.seed]));
+    expect(r.clip.frames).toBe(o.clipFrames);
+    expect(maxAbsDiff(r.clip.features, fx.get('loop_long_features'))).toBeLessThan(1e-4);
+    expect(maxJointDist(r.clip.joints, fx.get('loop_long_joints'))).toBeLessThan(1e-4 * Math.max(1, ...Array.from(fx.get('loop_long_joints'), Math.abs)));
+    const n = meta.ops.timeline.total - o.maxFrames;
+    expect(maxAbsDiff(rows(r.full.features, 0, n, D), rows(base().features, 0, n, D))).toBe(0); // before the window: as it was
   });
 });

@@ -31,7 +31,9 @@ Frame bookkeeping (the contract with ``src/edit.ts``; FPS 20, C = ``OVERLAP`` = 
 * loop (K = ``LOOP_ENDS`` = 10): known = the motion X with frames [N−K, N) replaced by X[0:K]; kept frames
   [0, K) ∪ [N−K, N); pinned and eased like an edit (frame N−K's root stays where X had it); the clip is frames [0, N−K) (frame N−K, the copy
   of frame 0, is where it wraps to). In place: the de-normalised root x/z velocity [1:3] is set to 0 on every
-  frame (the root turns but does not travel).
+  frame (the root turns but does not travel). A longer X (a timeline, N ≤ 60 s) samples only its last window
+  W = maxFrames: known = X[N−W:] with its last K frames replaced by X[0:K], kept frames [0, C) ∪ [W−K, W) of the
+  window (it continues X[:N−W], which stays), the features X[:N−W] followed by the edited window.
 """
 
 from __future__ import annotations
@@ -238,13 +240,13 @@ def read_segments(path, seed: int = 0) -> list[Segment]:
     return out
 
 
-def _check_motion(features, what: str, max_frames: int, min_frames: int) -> np.ndarray:
+def _check_motion(features, what: str, max_frames: int, min_frames: int, span: str = "one model window") -> np.ndarray:
     f = np.asarray(features, np.float32)
     if f.ndim != 2 or f.shape[1] != 263:
         raise EditError(f"{what}: the motion's features have shape {f.shape}, expected (frames, 263) de-normalised")
     if not min_frames <= len(f) <= max_frames:
         raise EditError(f"{what}: the motion has {len(f)} frames; this edit needs {min_frames}..{max_frames} "
-                        f"({min_frames / FPS:g}..{max_frames / FPS:g} s, one model window)")
+                        f"({min_frames / FPS:g}..{max_frames / FPS:g} s, {span})")
     if not np.isfinite(f).all():
         raise EditError(f"{what}: the motion's features hold NaN/Infinity")
     return f
@@ -423,17 +425,24 @@ def edit_body(model: Editor, features: np.ndarray, prompt: str, seed: int, keep:
 def loop(model: Editor, features: np.ndarray, prompt: str, seed: int, ends: int = LOOP_ENDS,
          in_place: bool = False) -> Loop:
     """A seamless loop of ``features`` (made from ``prompt``): its last ``ends`` frames are inpainted to be its first
-    ones, so the clip [0, N−ends) wraps onto its first frame; ``in_place`` removes the root's x/z travel."""
+    ones, so the clip [0, N−ends) wraps onto its first frame; ``in_place`` removes the root's x/z travel. A motion
+    longer than the model's window (a timeline, up to MAX_SECONDS) has only its last window W = maxFrames sampled:
+    that window's first OVERLAP frames are kept too (it continues the motion before it, which stays as it was)."""
     what = "loop"
     _check_prompt_seed(what, prompt, seed)
     if not isinstance(ends, (int, np.integer)) or ends < 1:
         raise EditError(f"{what}: ends must be a positive number of frames, got {ends!r}")
-    f = _check_motion(features, what, model.max_frames, 2 * ends + 1)
+    f = _check_motion(features, what, int(MAX_SECONDS * FPS), 2 * ends + 1, "a timeline's longest")
     n = len(f)
-    known = f.copy()
-    known[n - ends:] = f[:ends]
-    keep = keep_mask(n, [KeepRect(frames=((0, ends - 1), (n - ends, None)))])
-    full = _edit(model, f, prompt, seed, keep, known).features
+    w = min(n, model.max_frames)                    # the frames sampled: [n − w, n)
+    first = ends if w == n else OVERLAP             # kept at the window's start
+    if w - ends - first < 1:
+        raise EditError(f"{what}: the model's window ({model.max_frames} frames) leaves no frame to regenerate between "
+                        f"the {first} kept at its start and the {ends} at its end")
+    known = f[n - w:].copy()
+    known[w - ends:] = f[:ends]
+    keep = keep_mask(w, [KeepRect(frames=((0, first - 1), (w - ends, None)))])
+    full = np.concatenate([f[: n - w], _edit(model, f[n - w:], prompt, seed, keep, known).features])
     if in_place:
         full = full.copy()
         full[:, 1:3] = 0.0

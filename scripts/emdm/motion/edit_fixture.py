@@ -16,6 +16,8 @@ constants (C = 20, K = 10, seam easing M ≥ 10 frames at ≤ 5 m/s², 20 fps, m
 5. ``loop`` of ``timeline_features`` (K = 10; the clip is 38 frames; pinned and eased like the in-between) → ``loop_*``; with ``in_place`` the same
    sampling with root x/z velocity zeroed → ``loop_in_place_joints`` (its features are ``loop_features`` with
    [:, 1:3] = 0).
+6. ``loop`` of ``timeline_features`` by a model whose window is 34 frames (``loopLong``): only the last 34 frames are
+   sampled (their first 20 and last 10 kept; the noise of the timeline's 34-frame window) → ``loop_long_*``.
 
 Every sampling call is a ``run`` (JSON ``runs``, in call order) with its frames, label, seed and the key prefix of
 its noise arrays: ``<prefix>x_T``, then for k = steps−1..0 ``<prefix>z_<k>`` and ``<prefix>eps_<k>`` when drawn
@@ -46,6 +48,7 @@ REGEN = (1, E.Segment("c", 0.7, 202))                   # (0-based segment, its 
 INBETWEEN = ("d", 301)
 BODY = ("f", 401, "lower")
 LOOP = ("b", 501)
+LOOP_LONG = ("h", 102, 34)      # label, seed, the model's window (the 48-frame timeline is longer); the noise of run r1_
 
 
 def tiny_editor(parity_dir: Path = PARITY_DIR, record: list | None = None) -> E.Editor:
@@ -80,7 +83,10 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
     body = E.edit_body(model, tl.features, BODY[0], BODY[1], keep=BODY[2])
     lp = E.loop(model, tl.features, *LOOP)
     lp_in_place = E.loop(model, tl.features, *LOOP, in_place=True)
-    calls = calls[:-1]                           # the in-place loop samples exactly as the loop before it
+    del calls[-1]                                # the in-place loop samples exactly as the loop before it
+    from dataclasses import replace
+
+    lp_long = E.loop(replace(model, max_frames=LOOP_LONG[2]), tl.features, LOOP_LONG[0], LOOP_LONG[1])
     n = len(tl.features)
     if not np.array_equal(regen.features[:tl.frames[0]], tl.features[:tl.frames[0]]):
         raise AssertionError("edit_fixture: regenerating segment 2 changed segment 1")
@@ -88,7 +94,7 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
     sched = make_schedule(STEPS)
     arrays: dict[str, np.ndarray] = {}
     runs, by_noise = [], {}
-    ops = ["timeline"] * 3 + ["regenerate"] * 2 + ["inbetween", "body", "loop"]
+    ops = ["timeline"] * 3 + ["regenerate"] * 2 + ["inbetween", "body", "loop", "loop_long"]
     for (frames, label, seed), op in zip(calls, ops, strict=True):
         key = (frames, seed)
         if key not in by_noise:
@@ -98,7 +104,7 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
             arrays.update({prefix + k: v for k, v in noise.items()})
         runs.append({"op": op, "frames": frames, "label": label, "cond": LABELS.index(label), "seed": seed,
                      "noise": by_noise[key]})
-    for name, m in (("timeline", tl), ("regen", regen), ("inbetween", mid), ("body", body), ("loop", lp)):
+    for name, m in (("timeline", tl), ("regen", regen), ("inbetween", mid), ("body", body), ("loop", lp), ("loop_long", lp_long)):
         arrays[f"{name}_features"] = m.features
         arrays[f"{name}_joints"] = m.joints
     arrays["loop_in_place_joints"] = lp_in_place.joints
@@ -118,6 +124,8 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
                      "keep": BODY[2], "groups": list(E.BODY_KEEP[BODY[2]])},
             "loop": {"of": "timeline_features", "label": LOOP[0], "cond": LABELS.index(LOOP[0]), "seed": LOOP[1],
                      "ends": E.LOOP_ENDS, "clipFrames": len(lp.features), "inPlace": "loop_in_place_joints"},
+            "loopLong": {"of": "timeline_features", "label": LOOP_LONG[0], "cond": LABELS.index(LOOP_LONG[0]),
+                         "seed": LOOP_LONG[1], "maxFrames": LOOP_LONG[2], "clipFrames": len(lp_long.features)},
         },
         "runs": runs,
     }
