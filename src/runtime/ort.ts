@@ -79,7 +79,8 @@ export function defaultThreads(): number {
 }
 
 function configure(ort: Ort, cfg: RuntimeConfig): void {
-  const threads = cfg.threads ?? defaultThreads();
+  // no count asked for (e.g. the text encoder after a generator that asked for one): join the one in use
+  const threads = cfg.threads ?? configuredThreads ?? defaultThreads();
   if (!Number.isInteger(threads) || threads < 1) throw new RangeError(`runtime: threads must be a positive integer, got ${threads}`);
   if (configuredThreads !== null && configuredThreads !== threads) {
     throw new Error(

@@ -138,4 +138,15 @@ test.describe('core determinism: Chromium == Node', () => {
     expect(two.featuresSha256).toBe(one.featuresSha256);
     expect(two.jointsSha256).toBe(one.jointsSha256);
   });
+
+  test('a text model on 2 WASM threads: the text encoder joins the thread count the generator set', async ({ page }) => {
+    // the encoder asks for no count; it used to ask for the default (1 on 2 cores) and fail with
+    // "ONNX Runtime already initialised with 2 WASM thread(s); 1 requested" (scripts/bench/core-bench.mjs --threads 2)
+    const req = shippedRequests().find((r) => r.condition.type === 'text');
+    test.skip(!req, 'no text model in public/models');
+    await openHarness(page, 2);
+    const r = await page.evaluate((q) => window.coreHarness.generate(q), req!);
+    expect(r.timings.threads).toBe(2);
+    expect(r.joints.every((v) => Number.isFinite(v))).toBe(true);
+  });
 });
