@@ -32,6 +32,10 @@ export interface EditSummary {
   ms: number;
   /** model calls (one per denoising step and window) */
   windows: number;
+  /** where `ms` went, ms: the worker's text encoding, denoising steps and decoding (summed over the windows), the
+   * worker round trips beyond them (messages, copies, queueing), this thread's edit work (seam easing, decoding,
+   * stitching; nothing else runs meanwhile), the IK solve (worker) and showing the result */
+  parts: { encodeMs: number; stepMs: number; decodeMs: number; roundTripMs: number; mainMs: number; ikMs: number; showMs: number; windowStepMs: number[]; windowFrames: number[] };
 }
 
 /** The panel's hooks for Playwright (window.emdm.edit). */
@@ -316,12 +320,16 @@ export class TimelinePanel {
     view.showProgress(0, 'Starting…');
     session.counters.requests++;
     try {
+      let genMs = 0;
+      let jobMs = 0;
       const shown = await session.engine.run(async (signal) => {
         const calls: Calls = { n: 0, results: [], progress: (f) => f, text: (d, t) => `Denoising step ${d} / ${t}` };
         const gen: EditGenerate = async (r) => {
+          const g0 = performance.now();
           const model = this.modelFor(r);
           await session.load(model);
           const label = r.action !== undefined ? this.actions.indexOf(String(r.action)) : -1;
+          // the file the page's own generations run (the manifest's default variant, e.g. int8), not the client's fp32 default
           const res: RemoteResult = await session.engine.client.generate(model, {
             condition: r.action !== undefined ? { type: 'action', label } : { type: 'text', text: r.prompt ?? '' },
             frames: r.frames, steps: state.steps, guidance: state.guidance, seed: r.seed, signal,
@@ -332,17 +340,31 @@ export class TimelinePanel {
               view.showProgress(calls.progress(d / t), calls.text(d, t));
               this.working(kind, `${calls.text(d, t)} (${Math.round(100 * calls.progress(d / t))} %)`);
             },
-          });
+          }, session.engine.variantOf(model));
           calls.n++;
           calls.results.push(res);
+          genMs += performance.now() - g0;
           return { frames: res.motion.frames, fps: res.motion.fps, features: res.motion.features, joints: res.motion.joints };
         };
-        return job(gen, signal, calls);
+        const j0 = performance.now();
+        const out = await job(gen, signal, calls);
+        jobMs = performance.now() - j0;
+        return out;
       });
+      const s0 = performance.now();
       const track = await this.solve(shown.display, shown.motion);
-      this.show(state, shown, track, performance.now() - t0);
+      const s1 = performance.now();
+      this.show(state, shown, track, s1 - t0);
+      const s2 = performance.now();
       session.counters.generations++;
-      return { kind, frames: shown.motion.frames, fps: shown.motion.fps, starts: shown.starts, ms: performance.now() - t0, windows: shown.windows };
+      const sum = (f: (r: GenerateResult) => number) => shown.results.reduce((a, r) => a + f(r), 0);
+      const worker = sum((r) => r.timings.totalMs);
+      const parts = {
+        encodeMs: sum((r) => r.timings.encodeMs), stepMs: sum((r) => r.timings.stepMs.reduce((a, b) => a + b, 0)), decodeMs: sum((r) => r.timings.decodeMs),
+        roundTripMs: genMs - worker, mainMs: jobMs - genMs, ikMs: s1 - s0, showMs: s2 - s1,
+        windowStepMs: shown.results.map((r) => r.timings.stepMs.reduce((a, b) => a + b, 0)), windowFrames: shown.results.map((r) => r.motion.frames),
+      };
+      return { kind, frames: shown.motion.frames, fps: shown.motion.fps, starts: shown.starts, ms: performance.now() - t0, windows: shown.windows, parts };
     } catch (e) {
       if (isAbort(e)) session.counters.cancelled++;
       else {
@@ -489,8 +511,11 @@ export class TimelinePanel {
 
   async loop(inPlace: boolean): Promise<EditSummary> {
     return this.request('loop', async (gen, _signal, calls) => {
-      const { motion, condition } = this.base();
-      if (!condition) throw new EditError('looping keeps the motion\'s own prompt; this motion has none (a random motion or a timeline of several prompts): generate one from a prompt or an action first');
+      const { motion, condition: own } = this.base();
+      // a timeline of several prompts loops its last window with its last segment's prompt (src/edit.ts makeLoop)
+      const last = this.timeline && motion.features === this.timeline.features ? this.timeline.segments.at(-1)?.segment : undefined;
+      const condition = own ?? (last ? (last.action !== undefined ? { action: last.action } : { prompt: last.prompt }) : null);
+      if (!condition) throw new EditError('looping keeps the motion\'s own prompt; this motion has none (a random motion): generate one from a prompt or an action first');
       const seed = randomSeed();
       const r = await makeLoop(motion, condition, seed, gen, this.limits(), { inPlace, decode: (f, n) => recoverJoints(f, n) });
       this.lastLoop = r.full;
