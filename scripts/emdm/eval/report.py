@@ -225,7 +225,9 @@ def coverage_section(r: dict, plot: str | None) -> list[str]:
     cond = "its plain label prompt and paraphrases (`scripts/emdm/eval/prompts.json`)" if r.get("condition") == "text" \
         else "its one-hot label"
     seeds = r.get("key", {}).get("seeds", "?")
-    out = [f"### {r['name']} ({r.get('condition', '?')} model, guidance {r.get('key', {}).get('guidance', '?')})", "",
+    key = r.get("key", {})
+    interval = f" at t > {key['guidance_min_time']:g}" if key.get("guidance_min_time") else ""
+    out = [f"### {r['name']} ({r.get('condition', '?')} model, guidance {key.get('guidance', '?')}{interval})", "",
            f"Each action asked for with {cond}, {seeds} motions per prompt, lengths drawn from the action's real test "
            f"clips; a cell is the share of its motions the classifier names as that action. *Ref.* marks the "
            f"reference set (real clips recognised ≥ {COVERED:.0%}); actions with fewer than "
