@@ -37,7 +37,7 @@
  *     holds ours), and vertically the lower of heel (ankle) and ball (toe) is at its rest height, frame
  *     by frame (the foot rolls heel → toe as ours does). A rig without a toe bone, on the ball of its
  *     foot only, keeps its ankle as high above its rest height as ours is above our standing ankle
- *     height (scaled). The root makes the feet's mean horizontal move (no limb turns for that) and, of
+ *     height (scaled), less any lift of our toe above its floor height (the ball is in contact). The root makes the feet's mean horizontal move (no limb turns for that) and, of
  *     the heights between the feet's needs, the vertical move that leaves the feet nearest their
  *     targets once the legs have done what they can; a two-bone IK on thigh and shin (keeping the knee's
  *     bend plane) moves each ankle the rest of the way and the foot keeps its world rotation. Where the
@@ -319,6 +319,16 @@ function* retargetSteps(root: Object3D, mapping: BoneMapping, motion: RetargetMo
   if (!ankleHeights.length) for (let f = 0; f < frames; f++) ankleHeights.push(Math.min(P(f, 'l_ankle').y, P(f, 'r_ankle').y));
   ankleHeights.sort((a, b) => a - b);
   const ho = ankleHeights[Math.floor((ankleHeights.length - 1) * (motion.contacts && ankleHeights.length ? 0.5 : 0.05))];
+  // our toe's height when on the floor (the median over ball-contact frames; else the lowest 5 %), for a rig
+  // without a toe bone standing on the ball of its foot
+  const toeHeights: number[] = [];
+  for (let f = 0; f < frames; f++) {
+    if (contact(f, 1)) toeHeights.push(P(f, 'l_foot').y);
+    if (contact(f, 3)) toeHeights.push(P(f, 'r_foot').y);
+  }
+  if (!toeHeights.length) for (let f = 0; f < frames; f++) toeHeights.push(Math.min(P(f, 'l_foot').y, P(f, 'r_foot').y));
+  toeHeights.sort((a, b) => a - b);
+  const hoToe = toeHeights[Math.floor((toeHeights.length - 1) * (motion.contacts && toeHeights.length ? 0.5 : 0.05))];
   const hc = (restPos('l_ankle').y + restPos('r_ankle').y) / 2;
   // the root is placed through the hip joints' midpoint (rigs put their pelvis bone at different
   // places around the hips; a lever between them would move the feet as the pelvis turns)
@@ -463,7 +473,12 @@ function* retargetSteps(root: Object3D, mapping: BoneMapping, motion: RetargetMo
       holdRuns(heel, ankles[li], () => false);
       if (hasToe) holdRuns(ball, toes[li], heel);
       const correction = (f: number): Vector3 => {
-        if (tiptoe(f)) return new Vector3(0, scale * Math.max(0, P(f, `${s}_ankle`).y - ho) - (ankles[li][f].y - restA), 0);
+        if (tiptoe(f)) {
+          // the ball is on the floor: only the foot's pitch raises the ankle, not a lift of our whole foot
+          // (our toe above its floor height on a frame flagged as ball contact)
+          const lift = Math.max(0, P(f, `${s}_foot`).y - hoToe);
+          return new Vector3(0, scale * Math.max(0, P(f, `${s}_ankle`).y - ho - lift) - (ankles[li][f].y - restA), 0);
+        }
         const pt = heel(f) ? ankles[li][f] : toes[li][f];
         const dy = Math.min(ankles[li][f].y - restA, hasToe ? toes[li][f].y - restT! : Infinity);
         return new Vector3(held[f]!.x - pt.x, -dy, held[f]!.z - pt.z);
