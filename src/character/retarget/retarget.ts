@@ -311,24 +311,24 @@ function* retargetSteps(root: Object3D, mapping: BoneMapping, motion: RetargetMo
   const ourLeg = (offLen('l_knee') + offLen('l_ankle') + offLen('r_knee') + offLen('r_ankle')) / 2;
   const scale = charLeg / ourLeg;
   const contact = (f: number, c: number) => (motion.contacts ? motion.contacts[f * 4 + c] > threshold : false);
-  const ankleHeights: number[] = [];
-  for (let f = 0; f < frames; f++) {
-    if (contact(f, 0)) ankleHeights.push(P(f, 'l_ankle').y);
-    if (contact(f, 2)) ankleHeights.push(P(f, 'r_ankle').y);
-  }
-  if (!ankleHeights.length) for (let f = 0; f < frames; f++) ankleHeights.push(Math.min(P(f, 'l_ankle').y, P(f, 'r_ankle').y));
-  ankleHeights.sort((a, b) => a - b);
-  const ho = ankleHeights[Math.floor((ankleHeights.length - 1) * (motion.contacts && ankleHeights.length ? 0.5 : 0.05))];
-  // our toe's height when on the floor (the median over ball-contact frames; else the lowest 5 %), for a rig
-  // without a toe bone standing on the ball of its foot
-  const toeHeights: number[] = [];
-  for (let f = 0; f < frames; f++) {
-    if (contact(f, 1)) toeHeights.push(P(f, 'l_foot').y);
-    if (contact(f, 3)) toeHeights.push(P(f, 'r_foot').y);
-  }
-  if (!toeHeights.length) for (let f = 0; f < frames; f++) toeHeights.push(Math.min(P(f, 'l_foot').y, P(f, 'r_foot').y));
-  toeHeights.sort((a, b) => a - b);
-  const hoToe = toeHeights[Math.floor((toeHeights.length - 1) * (motion.contacts && toeHeights.length ? 0.5 : 0.05))];
+  // our joint's height when on the floor: over the frames where its contact channel (c: left, c + 2: right)
+  // is on, else over both sides' lower one per frame; the median where the motion has contacts, else the
+  // lowest 5 %. The ankle's places the root; the toe's serves a rig without a toe bone standing on the ball
+  // of its foot
+  const floorHeight = (c: number, joint: 'ankle' | 'foot'): number => {
+    const l = `l_${joint}` as const;
+    const r = `r_${joint}` as const;
+    const hs: number[] = [];
+    for (let f = 0; f < frames; f++) {
+      if (contact(f, c)) hs.push(P(f, l).y);
+      if (contact(f, c + 2)) hs.push(P(f, r).y);
+    }
+    if (!hs.length) for (let f = 0; f < frames; f++) hs.push(Math.min(P(f, l).y, P(f, r).y));
+    hs.sort((a, b) => a - b);
+    return hs[Math.floor((hs.length - 1) * (motion.contacts ? 0.5 : 0.05))];
+  };
+  const ho = floorHeight(0, 'ankle');
+  const hoToe = floorHeight(1, 'foot');
   const hc = (restPos('l_ankle').y + restPos('r_ankle').y) / 2;
   // the root is placed through the hip joints' midpoint (rigs put their pelvis bone at different
   // places around the hips; a lever between them would move the feet as the pelvis turns)
