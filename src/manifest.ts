@@ -252,8 +252,6 @@ export function validateManifest(data: unknown): Manifest {
     if (g !== undefined && !(typeof g === 'number' && Number.isFinite(g) && g >= 0)) {
       fail(`models.${name}.guidanceMinTime`, `is ${JSON.stringify(g)}; it must be a time ≥ 0 (guide only steps whose time is above it), or absent to guide every step`);
     }
-  }
-  for (const [name, entry] of Object.entries(data.models as Record<string, Record<string, unknown>>)) {
     const d = entry.defaultVariant;
     const have = isObject(entry.variants) ? Object.keys(entry.variants) : [];
     if (d !== undefined && !(typeof d === 'string' && have.includes(d))) {
