@@ -96,7 +96,7 @@ export class Engine {
   }
 
   /** The variant `model` runs (undefined: its fp32 file): chooseVariant of the page's request. */
-  variantOf(model: string): string | undefined {
+  private variantOf(model: string): string | undefined {
     return chooseVariant(this.manifest, model, this.variant);
   }
 
@@ -111,9 +111,10 @@ export class Engine {
     return p;
   }
 
-  /** One motion with its pose track (WebGPU failures are retried on WASM in the worker). */
+  /** One motion on the page's file of `model` (variantOf), with its pose track unless `pose: false` (a timeline
+   * window, whose stitched result is solved once); WebGPU failures are retried on WASM in the worker. */
   generate(model: string, o: RemoteGenerateOptions): Promise<RemoteResult> {
-    return this.client.generate(model, { ...o, pose: true }, this.variantOf(model));
+    return this.client.generate(model, { pose: true, ...o }, this.variantOf(model));
   }
 
   /** Run `job` as the newest request: the previous one is aborted and awaited first. */

@@ -329,8 +329,10 @@ export class TimelinePanel {
           const model = this.modelFor(r);
           await session.load(model);
           const label = r.action !== undefined ? this.actions.indexOf(String(r.action)) : -1;
-          // the file the page's own generations run (the manifest's default variant, e.g. int8), not the client's fp32 default
-          const res: RemoteResult = await session.engine.client.generate(model, {
+          // through the engine: the file the page's own generations run (the manifest's default variant, e.g. int8);
+          // no pose track per window (the stitched motion is solved once, below)
+          const res: RemoteResult = await session.engine.generate(model, {
+            pose: false,
             condition: r.action !== undefined ? { type: 'action', label } : { type: 'text', text: r.prompt ?? '' },
             frames: r.frames, steps: state.steps, guidance: state.guidance, seed: r.seed, signal,
             // copies: the client transfers these buffers to the worker, and src/edit.ts reads `keep` again after
@@ -340,7 +342,7 @@ export class TimelinePanel {
               view.showProgress(calls.progress(d / t), calls.text(d, t));
               this.working(kind, `${calls.text(d, t)} (${Math.round(100 * calls.progress(d / t))} %)`);
             },
-          }, session.engine.variantOf(model));
+          });
           calls.n++;
           calls.results.push(res);
           genMs += performance.now() - g0;
