@@ -226,6 +226,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--guidance-min-time", type=float, default=None, metavar="T",
                    help="the entry's guidanceMinTime: guide only steps whose time is above T (choose T from "
                         "`python -m emdm.model.bench_steps --interval`; 0 = every step; default: keep the manifest's)")
+    p.add_argument("--x0-smoothing", type=float, default=None, metavar="SIGMA",
+                   help="the entry's x0Smoothing: smooth x̂0 along time (σ frames) at every step but the last (0 = off; "
+                        "default: keep the manifest's)")
     p.add_argument("--default-variant", default=None, metavar="V",
                    help="the entry's defaultVariant: the file the page and createGenerator run unless asked otherwise "
                         "(one of --variants, or fp32); set it only where the variant's quality matches fp32 (docs/MODELS.md "
@@ -265,6 +268,8 @@ def run(a: argparse.Namespace) -> int:
     g = a.guidance_min_time
     if g is not None and not (np.isfinite(g) and g >= 0):
         raise ExportError(f"--guidance-min-time must be a finite time ≥ 0 (0 = guide every step), got {g:g}")
+    if a.x0_smoothing is not None and not (np.isfinite(a.x0_smoothing) and a.x0_smoothing >= 0):
+        raise ExportError(f"--x0-smoothing must be a finite σ ≥ 0 in frames (0 = off), got {a.x0_smoothing:g}")
     dv = a.default_variant
     if dv is not None and dv != "fp32" and dv not in variants:
         raise ExportError(f"--default-variant {dv!r} is not among the exported files: use fp32 or one of --variants "
@@ -314,6 +319,11 @@ def run(a: argparse.Namespace) -> int:
             gmin = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("guidanceMinTime", 0.0)
         if gmin:
             extra["guidanceMinTime"] = float(gmin)
+        sigma = a.x0_smoothing
+        if sigma is None:    # a re-export keeps the smoothing chosen for this model
+            sigma = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("x0Smoothing", 0.0)
+        if sigma:
+            extra["x0Smoothing"] = float(sigma)
         dv = a.default_variant
         if dv is None:       # a re-export keeps the variant chosen for this model, while that file is still exported
             dv = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("defaultVariant")

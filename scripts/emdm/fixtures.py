@@ -8,7 +8,8 @@ What it writes (each case = ``<name>.json`` index + ``<name>.bin`` float32 littl
 * ``tiny-step.onnx`` + ``tiny``: a tiny random step model with the real ONNX contract
   (x_t, z, cond, t, mask -> x0), one step and a guided 4-step run with supplied noise, so the
   runtime and sampler are tested without the shipped models; the same run with guidance in a limited
-  interval (``guidanceMinTime``: guided only at t > 0.6, one conditional row below) and the same noise.
+  interval (``guidanceMinTime``: guided only at t > 0.6, one conditional row below) and the same noise; the same
+  guided run with x̂0 smoothed along time at every step but the last (``x0Smoothing`` σ = 1 frame).
 * ``tiny-ddim``: the same step model sampled as a diffusion-objective model with DDIM
   (``emdm.sample.sample_features(objective="diffusion")``, guided and unconditional, 5 steps) with
   the noise it drew, and the DDIM marginals a_cum / s_cum of ``emdm.model.schedule`` for the step
@@ -18,7 +19,7 @@ What it writes (each case = ``<name>.json`` index + ``<name>.bin`` float32 littl
 * ``model-<name>`` for every model in ``public/models/manifest.json``: one step (x_t, z, cond, t
   -> x0) and a whole ``defaultSteps`` run with classifier-free guidance and supplied noise
   (-> final normalised x, de-normalised features, joints; guided only above the entry's
-  ``guidanceMinTime`` when it has one), computed with onnxruntime (CPU) by
+  ``guidanceMinTime`` when it has one, x̂0 smoothed by its ``x0Smoothing`` when it has one), computed with onnxruntime (CPU) by
   ``reference_sample``, the numpy transcription of docs/ARCHITECTURE.md "Sampling" (DDIM for a
   model whose ``objective`` is ``"diffusion"``).
 
@@ -46,6 +47,7 @@ FRAMES = 40          # fixture motion length (the models take any L <= 196)
 TINY_COND_DIM = 8
 TINY_DDIM_STEPS = 5
 TINY_GUIDANCE_MIN_TIME = 0.6   # of the tiny 4-step grid (0.25, 0.5005, 0.75, 1): guided at 1 and 0.75 only
+TINY_X0_SMOOTHING = 1.0        # σ (frames) of the tiny smoothed run
 DDIM_STEP_COUNTS = (1, 2, 4, 5, 8, 10, 20, 50, 100)   # the diffusion baseline's supportedSteps
 
 
@@ -93,12 +95,13 @@ def run_step(sess, x: np.ndarray, z: np.ndarray, cond: np.ndarray, t: np.ndarray
 
 def reference_sample(sess, x_T: np.ndarray, zs: list[np.ndarray], epss: list[np.ndarray | None],
                      cond: np.ndarray, guidance: float, sched, objective: str = "ddgan",
-                     guidance_min_time: float = 0.0) -> np.ndarray:
+                     guidance_min_time: float = 0.0, x0_smoothing: float = 0.0) -> np.ndarray:
     """x_T (L, D); zs[k] (zDim,), epss[k] (L, D) or None, indexed by step k; cond (C,) -> x_0 (L, D).
 
     Guidance (s != 1 and a non-zero condition) at the steps whose time is above ``guidance_min_time`` (all
     of them for 0): one batched call with rows [cond, 0], same x and z, x0 = x0_u + s (x0_c - x0_u); at the
-    other steps one conditional call. ``objective="diffusion"``: z = 0 (the drawn z is ignored) and the
+    other steps one conditional call. ``x0_smoothing`` σ > 0: at every step but the last (k > 0), x0 ← the Gaussian
+    along frames of ``emdm.sample.smooth_frames`` (src/motion/smooth.ts smoothJoints). ``objective="diffusion"``: z = 0 (the drawn z is ignored) and the
     DDIM update (η = 0) of docs/ARCHITECTURE.md "DDIM sampling", in float32 like emdm.sample."""
     x = x_T.astype(np.float32)[None]
     guided = bool(np.any(cond != 0)) and guidance != 1.0
@@ -111,6 +114,10 @@ def reference_sample(sess, x_T: np.ndarray, zs: list[np.ndarray], epss: list[np.
             x0 = out[1:2] + np.float32(guidance) * (out[0:1] - out[1:2])
         else:
             x0 = run_step(sess, x, z[None], cond[None], np.array([t], np.float32))
+        if x0_smoothing > 0 and k > 0:
+            from emdm.sample import smooth_frames
+
+            x0 = smooth_frames(x0, x0_smoothing)
         if objective == "diffusion":
             if k == 0:
                 x = x0.astype(np.float32)
@@ -217,10 +224,13 @@ def make_tiny(out_dir: Path, export: bool = True) -> dict[str, Any]:
     x = reference_sample(sess, x_T, zs, epss, cond, 2.5, sched)
     x_u = reference_sample(sess, x_T, zs, epss, np.zeros(C, np.float32), 2.5, sched)
     x_i = reference_sample(sess, x_T, zs, epss, cond, 2.5, sched, guidance_min_time=TINY_GUIDANCE_MIN_TIME)
+    x_s = reference_sample(sess, x_T, zs, epss, cond, 2.5, sched, x0_smoothing=TINY_X0_SMOOTHING)
     arrays = {"step_x_t": step_x, "step_z": step_z, "step_cond": step_c, "step_t": step_t, "step_x0": step_x0,
-              "cond": cond, **noise_arrays(x_T, zs, epss), "final_x": x, "final_x_uncond": x_u, "final_x_interval": x_i}
+              "cond": cond, **noise_arrays(x_T, zs, epss), "final_x": x, "final_x_uncond": x_u, "final_x_interval": x_i,
+              "final_x_smooth": x_s}
     meta = {"model": "tiny-step.onnx", "frames": L, "featureDim": D, "zDim": Z, "condDim": C,
             "steps": sched.steps, "guidance": 2.5, "intervalGuidanceMinTime": TINY_GUIDANCE_MIN_TIME,
+            "smoothX0Smoothing": TINY_X0_SMOOTHING,
             "schedule": schedule_meta(sched)}
     write_case(out_dir, "tiny", meta, arrays)
     # mean/std file in the manifest layout (float32 LE mean[263] then std[263]) for the browser harness
@@ -351,6 +361,7 @@ def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[s
     steps = int(entry["defaultSteps"])
     guidance = float(entry["guidance"])
     gmin = float(entry.get("guidanceMinTime", 0.0))
+    sigma = float(entry.get("x0Smoothing", 0.0))
     ms = np.fromfile(models_dir / entry["meanStd"], dtype="<f4")
     if ms.shape != (2 * D,):
         raise ValueError(f"{models_dir / entry['meanStd']}: {ms.size} floats, expected {2 * D}")
@@ -373,12 +384,12 @@ def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[s
     step_x0 = run_step(sess, step_x, step_z, cond[None], step_t)
     seed = 1000 + len(name)
     x_T, zs, epss = draw_noise(np.random.default_rng(seed), steps, L, D, Z, sched, objective)
-    x = reference_sample(sess, x_T, zs, epss, cond, guidance, sched, objective, gmin)
+    x = reference_sample(sess, x_T, zs, epss, cond, guidance, sched, objective, gmin, sigma)
     # the fixture run must be what the Python pipeline itself samples with this seed
     from emdm.sample import onnx_step, sample_features
 
     x_py = sample_features(onnx_step(onnx_path), cond, L, steps=steps, guidance=guidance, seed=seed, z_dim=Z, feature_dim=D,
-                           objective=objective, guidance_min_time=gmin)[0]
+                           objective=objective, guidance_min_time=gmin, x0_smoothing=sigma)[0]
     # float32 rounding (the reference updates x in float64) grows over the steps, amplified by guidance:
     # compare relative to the motion's scale
     scale = max(1.0, float(np.max(np.abs(x))))
@@ -395,7 +406,8 @@ def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[s
     meta = {"model": name, "onnx": onnx_rel, "sha256": meta_file["sha256"], "objective": objective,
             "sampler": "ddim" if objective == "diffusion" else "ddgan", "frames": L, "featureDim": D, "zDim": Z,
             "condDim": C, "condition": cond_desc, "seed": seed, "steps": steps, "guidance": guidance,
-            **({"guidanceMinTime": gmin} if gmin else {}), "schedule": schedule_meta(sched)}
+            **({"guidanceMinTime": gmin} if gmin else {}), **({"x0Smoothing": sigma} if sigma else {}),
+            "schedule": schedule_meta(sched)}
     write_case(out_dir, case, meta, arrays)
     return {"case": case, "model": name, "sha256": meta_file["sha256"]}
 

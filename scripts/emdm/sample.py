@@ -18,7 +18,8 @@ Writes <out>.npy (joints, (frames, 22, 3) metres; (n, frames, 22, 3) with --num 
 The loop is docs/ARCHITECTURE.md "Sampling":
 x_T ~ N(0, I); per step: fresh z, x0 = G(x, z, c, time[k], mask) (with guidance s ≠ 1, at the steps whose time is above
 --guidance-min-time (the manifest's guidanceMinTime; default every step), one batched call
-[c, 0] with the same x and z, x0 = x0_u + s·(x0_c − x0_u)), x = coef1·x0 + coef2·x + sigma·ε. Random
+[c, 0] with the same x and z, x0 = x0_u + s·(x0_c − x0_u)); with --x0-smoothing σ (the manifest's x0Smoothing),
+at every step but the last, x0 ← x0 smoothed along time (``smooth_frames``); x = coef1·x0 + coef2·x + sigma·ε. Random
 draws come from numpy's default_rng(seed) in the order x_T, then per step z, then ε. Models trained with
 ``--objective diffusion`` are sampled with DDIM (η = 0, z = 0) on the same time grid.
 
@@ -39,6 +40,7 @@ as in the page, with a "prompt truncated to N tokens" line on stderr.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import sys
 from pathlib import Path
@@ -59,16 +61,58 @@ class SampleError(ValueError):
 MAX_SEED = 2**32 - 1      # the page's seeds are uint32
 
 
+def smooth_frames(x: np.ndarray, sigma: float, lengths: np.ndarray | None = None) -> np.ndarray:
+    """A Gaussian filter along the frame axis (axis −2) of ``x`` (..., frames, D): radius r = max(1, ⌈3σ⌉), weights
+    exp(−d²/2σ²) renormalised over the frames inside the clip (no padding), accumulated in float64 and returned as
+    float32 — ``smoothJoints`` of src/motion/smooth.ts, which the page's sampler uses for the same step. σ = 0 or
+    fewer than 3 frames: a copy. ``lengths`` (rows,) for x (rows, frames, D) padded past each row's length: each row
+    is smoothed over its own first lengths[i] frames (its clip), its padding left as it is."""
+    x = np.asarray(x, np.float32)
+    if lengths is not None:
+        out = x.copy()
+        for i, n in enumerate(np.asarray(lengths, np.int64)):
+            out[i, :n] = smooth_frames(x[i, :n], sigma)
+        return out
+    frames = x.shape[-2]
+    if sigma == 0 or frames < 3:
+        return x.copy()
+    r = max(1, math.ceil(3 * sigma))
+    w = np.exp(-np.arange(-r, r + 1, dtype=np.float64) ** 2 / (2 * sigma * sigma))
+    xd = x.astype(np.float64)
+    out = np.empty(x.shape, np.float64)
+    for f in range(frames):
+        lo, hi = max(0, f - r), min(frames - 1, f + r)
+        ww = w[lo - f + r:hi - f + r + 1]
+        out[..., f, :] = np.einsum("k,...kd->...d", ww, xd[..., lo:hi + 1, :]) / ww.sum()
+    return out.astype(np.float32)
+
+
+def check_x0_smoothing(sigma: float, name: str = "x0_smoothing") -> float:
+    """σ in frames, finite and ≥ 0 (0 = off); anything else is a SampleError naming ``name``."""
+    if isinstance(sigma, bool) or not isinstance(sigma, (int, float, np.floating)) or not (math.isfinite(sigma) and sigma >= 0):
+        raise SampleError(f"{name} must be a finite σ ≥ 0 in frames (0 = off), got {sigma!r}")
+    return float(sigma)
+
+
 def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10, guidance: float = 1.0,
                     seed: int = 0, num: int = 1, z_dim: int = 64, feature_dim: int = 263,
                     objective: str = "ddgan", known: np.ndarray | None = None,
-                    keep: np.ndarray | None = None, guidance_min_time: float = 0.0) -> np.ndarray:
+                    keep: np.ndarray | None = None, guidance_min_time: float = 0.0,
+                    x0_smoothing: float = 0.0, lengths: np.ndarray | None = None) -> np.ndarray:
     """Normalised x̂_0 features (num, frames, 263). ``cond`` (C,) — all zeros = unconditional.
 
     Guidance in a limited interval (Kynkäänniemi et al. 2024; the manifest's ``guidanceMinTime``): the
     unconditional row runs only at steps whose time t_k > ``guidance_min_time``; below it the step is one
     conditional row and x̂_0 = x̂_0(c). 0 (the default) guides every step. The random draws are the same either
     way (z is drawn once per step for both rows), so only the skipped steps' x̂_0 changes.
+
+    Smoothing x̂_0 along time (the manifest's ``x0Smoothing``, σ in frames; 0 = off, bit for bit as without it): at
+    every step but the last, after guidance and before the kept part is replaced, x̂_0 ← ``smooth_frames(x̂_0, σ)``.
+    The model's x̂_0 at intermediate steps chooses each frame's phase on its own (a wrist front, back, front on
+    consecutive frames); the smoothed estimate is what is re-noised, so the next step sees one coherent motion.
+    The last x̂_0 (the result) is the model's own. docs/ARCHITECTURE.md "Sampling"; the same random draws.
+    ``lengths`` (num,): rows padded past their length (a batch of clips of several lengths, the step masking the
+    rest) are smoothed within their own frames.
 
     Inpainting (docs/ARCHITECTURE.md "Sampling with constraints"): ``known`` (frames, 263) normalised features
     and ``keep`` (frames, 263) 0/1 (``emdm.motion.mask.keep_mask``) impose the kept entries at every step: x_T's
@@ -83,6 +127,7 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
     cond = np.asarray(cond, np.float32)
     if not (math.isfinite(guidance_min_time) and guidance_min_time >= 0):
         raise SampleError(f"guidance_min_time must be a finite time ≥ 0 (0 = guide every step), got {guidance_min_time}")
+    sigma = check_x0_smoothing(x0_smoothing)
     use_cfg = guidance != 1.0 and bool(np.any(cond != 0))
     c1 = np.repeat(cond[None], num, 0)
     c2 = np.concatenate([c1, np.zeros_like(c1)])
@@ -101,6 +146,8 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
         x0 = np.asarray(step(xin, zin, c, t, mask), np.float32)
         if guided:
             x0 = x0[num:] + np.float32(guidance) * (x0[:num] - x0[num:])
+        if sigma > 0 and k > 0:
+            x0 = smooth_frames(x0, sigma, lengths)
         if keep is not None:
             x0 = np.where(keep, known, x0)
         if objective == "diffusion":     # DDIM, η = 0
@@ -221,6 +268,8 @@ def check_args(a) -> None:
     if a.guidance_min_time is not None and not (math.isfinite(a.guidance_min_time) and a.guidance_min_time >= 0):
         raise SampleError(f"--guidance-min-time must be a finite time ≥ 0, got {a.guidance_min_time:g} "
                           f"(0 = guide every step; the step times run from 1 down to 1/steps)")
+    if a.x0_smoothing is not None:
+        check_x0_smoothing(a.x0_smoothing, "--x0-smoothing")
     if not 0 <= a.seed <= MAX_SEED:
         raise SampleError(f"--seed must be in 0..{MAX_SEED}, got {a.seed}")
     if a.threads < 1:
@@ -362,6 +411,10 @@ def run_edit(a, step, entry: dict, mean, std, steps: int, guidance: float, frame
     from emdm.motion import edit as E
 
     model = E.Editor.from_entry(step, entry, mean, std, steps, guidance)
+    if a.guidance_min_time is not None:
+        model = dataclasses.replace(model, guidance_min_time=a.guidance_min_time)
+    if a.x0_smoothing is not None:
+        model = dataclasses.replace(model, x0_smoothing=a.x0_smoothing)
     mode = edit_mode(a)
     prompt = a.text if a.text is not None else a.action
     try:
@@ -419,6 +472,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--guidance-min-time", type=float, default=None, metavar="T",
                    help="guide only the steps whose time is above T, one batch row below (guidance in a limited "
                         "interval; default: the model's guidanceMinTime, else 0 = every step)")
+    p.add_argument("--x0-smoothing", type=float, default=None, metavar="SIGMA",
+                   help="smooth x̂0 along time (Gaussian, σ frames) at every step but the last (default: the model's "
+                        "x0Smoothing, else 0 = off)")
     p.add_argument("--num", type=int, default=1, help="number of samples")
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--out", type=Path, required=True, help="output path prefix (.npy, .features.npy, .metres.bvh)")
@@ -475,8 +531,10 @@ def run(a: argparse.Namespace) -> int:
     cond = make_condition(entry["condition"], a.text, a.action, a.uncond)
     known, keep = known_and_keep(a, frames, mean, std) if a.keep else (None, None)
     gmin = float(entry.get("guidanceMinTime", 0.0)) if a.guidance_min_time is None else a.guidance_min_time
+    sigma = float(entry.get("x0Smoothing", 0.0)) if a.x0_smoothing is None else a.x0_smoothing
     x = sample_features(step, cond, frames, steps, guidance, a.seed, a.num, int(entry.get("zDim", 64)),
-                        objective=entry.get("objective", "ddgan"), known=known, keep=keep, guidance_min_time=gmin)
+                        objective=entry.get("objective", "ddgan"), known=known, keep=keep, guidance_min_time=gmin,
+                        x0_smoothing=sigma)
     feats = denormalise(x, mean, std)
     if not np.isfinite(feats).all():
         raise SampleError(f"the model returned non-finite numbers ({int((~np.isfinite(feats)).sum())} of {feats.size} "

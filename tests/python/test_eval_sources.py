@@ -83,3 +83,35 @@ def test_guidance_interval_runs_the_conditional_rows_alone_below_it():
         want = np.concatenate([conds, np.zeros_like(conds)]) if t > 0.6 else conds
         np.testing.assert_array_equal(c, want)
         np.testing.assert_array_equal(m.sum(1), [5, 9] * (len(want) // 2))
+
+
+def test_x0_smoothing_rows_equal_sample_features_and_stay_within_each_length():
+    """batched_features with x0_smoothing: rows of one length equal sample_features exactly; a shorter row padded in
+    the batch is smoothed over its own frames (equal to sampling it alone at its length, up to the model's batch
+    numerics), not over the padding."""
+    G = _tiny()
+    c = np.random.default_rng(2).normal(size=8).astype(np.float32)
+    ref = sample_features(torch_step(G), c, 30, steps=4, guidance=2.5, seed=7, num=2, x0_smoothing=1.0)
+    got = batched_features(torch_step(G), np.stack([c] * 2), np.array([30, 30]), steps=4, guidance=2.5, seed=7,
+                           x0_smoothing=1.0)
+    np.testing.assert_array_equal(np.stack(got), ref)
+    plain = sample_features(torch_step(G), c, 30, steps=4, guidance=2.5, seed=7, num=2)
+    assert np.abs(plain - ref).max() > 1e-6
+    calls = []
+
+    def spy(x, z, c, t, mask):
+        calls.append(x.copy())
+        return np.where(mask[..., None] > 0, 1.0, 50.0).astype(np.float32) * np.ones_like(x)
+
+    batched_features(spy, np.ones((2, 4), np.float32), np.array([9, 5]), steps=2, guidance=1.0, seed=0, x0_smoothing=1.0)
+    # the second call's x holds coef1·smooth(x̂0) + …: a row smoothed over its padding (50s) would carry them in
+    from emdm.model.schedule import make_schedule
+
+    sch = make_schedule(2)
+    rng = np.random.default_rng(0)
+    x_T = rng.standard_normal((2, 9, 263), dtype=np.float32)
+    rng.standard_normal((2, 64), dtype=np.float32)
+    eps = rng.standard_normal((2, 9, 263), dtype=np.float32)
+    smooth_part = (calls[1] - np.float32(sch.coef2[1]) * x_T - np.float32(sch.sigma[1]) * eps) / np.float32(sch.coef1[1])
+    np.testing.assert_allclose(smooth_part[1, :5], 1.0, atol=1e-4)
+    np.testing.assert_allclose(smooth_part[0], 1.0, atol=1e-4)

@@ -97,3 +97,18 @@ def test_guidance_min_time_is_written_and_kept_by_a_re_export(checkpoint, tmp_pa
     assert entry()["guidanceMinTime"] == 0.55
     assert export_main(base + ["--guidance-min-time", "-1"]) == 2
     assert "--guidance-min-time must be a finite time ≥ 0" in capsys.readouterr().err
+
+
+def test_x0_smoothing_is_written_and_kept_by_a_re_export(checkpoint, tmp_path, capsys):
+    def entry():
+        return json.loads((tmp_path / "manifest.json").read_text())["models"]["m"]
+
+    base = ["--ckpt", str(checkpoint), "--name", "m", "--out", str(tmp_path), "--variants", ""]
+    assert export_main(base + ["--x0-smoothing", "1"]) == 0
+    assert entry()["x0Smoothing"] == 1.0
+    assert export_main(base) == 0                            # a re-export keeps the chosen smoothing
+    assert entry()["x0Smoothing"] == 1.0
+    assert export_main(base + ["--x0-smoothing", "0"]) == 0  # 0 turns it off: the field goes
+    assert "x0Smoothing" not in entry()
+    assert export_main(base + ["--x0-smoothing", "nan"]) == 2
+    assert "--x0-smoothing must be a finite σ ≥ 0 in frames" in capsys.readouterr().err

@@ -129,6 +129,8 @@ def _cli(models, out, *extra):
     (["--guidance", "inf"], r"--guidance must be a finite number ≥ 0, got inf"),
     (["--guidance", "-1"], r"--guidance must be a finite number ≥ 0, got -1"),
     (["--guidance-min-time", "-0.5"], r"--guidance-min-time must be a finite time ≥ 0, got -0.5"),
+    (["--x0-smoothing", "-1"], r"--x0-smoothing must be a finite σ ≥ 0 in frames \(0 = off\), got -1"),
+    (["--x0-smoothing", "nan"], r"--x0-smoothing must be a finite σ ≥ 0 in frames \(0 = off\), got nan"),
     (["--guidance-min-time", "nan"], r"--guidance-min-time must be a finite time ≥ 0, got nan"),
     (["--num", "0"], r"--num must be ≥ 1, got 0"),
     (["--variant", "int4"], r"--variant: model 'm' has no variant 'int4'; use one of fp32"),
@@ -241,3 +243,103 @@ def test_cli_guidance_min_time_defaults_to_the_manifest_entry(models, tmp_path):
     (other / "manifest.json").write_text(json.dumps(manifest))
     np.testing.assert_array_equal(interval, run(other, "from-manifest"))
     np.testing.assert_array_equal(plain, run(other, "override", "--guidance-min-time", "0"))
+
+
+def test_x0_smoothing_smooths_every_x0_but_the_last_and_keeps_the_draws():
+    """x0_smoothing σ: x̂0 is smoothed along time at every step but the last (a spy sees the smoothed estimate in the
+    x it is given next), the result equals the fixture reference fed the same noise; 0 = today's loop bit for bit."""
+    from emdm import fixtures as fx
+    from emdm.model.schedule import make_schedule
+    from emdm.sample import smooth_frames
+
+    path = fx.PARITY_DIR / "tiny-step.onnx"
+    cond = np.random.default_rng(4).standard_normal(fx.TINY_COND_DIM).astype(np.float32)
+    sched, seed = make_schedule(4), 5
+    x = sample_features(onnx_step(path), cond, 12, steps=4, guidance=2.5, seed=seed, x0_smoothing=1.0)[0]
+    x_T, zs, epss = fx.draw_noise(np.random.default_rng(seed), 4, 12, 263, 64, sched)
+    ref = fx.reference_sample(fx.step_session(path), x_T, zs, epss, cond, 2.5, sched, x0_smoothing=1.0)
+    np.testing.assert_allclose(x, ref, atol=1e-4)
+    plain = sample_features(onnx_step(path), cond, 12, steps=4, guidance=2.5, seed=seed)[0]
+    assert np.abs(x - plain).max() > 1e-3
+    np.testing.assert_array_equal(plain, sample_features(onnx_step(path), cond, 12, steps=4, guidance=2.5, seed=seed,
+                                                         x0_smoothing=0.0)[0])
+
+    # a step returning a spike train: the last x̂0 (the result) is the model's own, the others are smoothed
+    spikes = np.zeros((1, 12, 263), np.float32)
+    spikes[0, ::2] = 1.0
+
+    def spiky(x, z, c, t, mask):
+        return np.repeat(spikes, x.shape[0], 0)
+
+    out = sample_features(spiky, cond, 12, steps=1, seed=0, x0_smoothing=1.0)
+    np.testing.assert_array_equal(out, spikes)               # one step: nothing before the last
+    seen = []
+
+    def spy(x, z, c, t, mask):
+        seen.append(x.copy())
+        return np.repeat(spikes, x.shape[0], 0)
+
+    sched2 = make_schedule(2)
+    out = sample_features(spy, cond, 12, steps=2, seed=0, guidance=1.0, x0_smoothing=1.0)
+    np.testing.assert_array_equal(out, spikes)
+    # the second call's x = coef1·smooth(x̂0) + coef2·x_T + σ·ε: remove the known parts and compare
+    rng = np.random.default_rng(0)
+    x_T = rng.standard_normal((1, 12, 263), dtype=np.float32)
+    rng.standard_normal((1, 64), dtype=np.float32)
+    eps = rng.standard_normal((1, 12, 263), dtype=np.float32)
+    want = np.float32(sched2.coef1[1]) * smooth_frames(spikes, 1.0) + np.float32(sched2.coef2[1]) * x_T \
+        + np.float32(sched2.sigma[1]) * eps
+    np.testing.assert_allclose(seen[1], want, atol=1e-6)
+    for bad in (-0.1, float("nan"), float("inf")):
+        with pytest.raises(SampleError, match="x0_smoothing must be a finite σ ≥ 0 in frames"):
+            sample_features(onnx_step(path), cond, 12, steps=2, guidance=2.5, x0_smoothing=bad)
+
+
+def test_smooth_frames_is_the_pages_kernel_and_keeps_rows_within_their_length():
+    from emdm.sample import smooth_frames
+
+    x = np.zeros((2, 15, 1), np.float32)
+    x[:, 7] = 1.0
+    y = smooth_frames(x, 1.0)
+    w = np.exp(-np.arange(-3, 4) ** 2 / 2.0)
+    np.testing.assert_allclose(y[0, 4:11, 0], w / w.sum(), rtol=1e-6)   # interior: the whole kernel (r = 3), normalised
+    assert y[0, 3, 0] == 0 and y[0, 11, 0] == 0
+    # at the ends the kernel is renormalised over the frames inside the clip (frame 0 sees frames 0..3)
+    x = np.zeros((9, 1), np.float32)
+    x[0] = 1.0
+    np.testing.assert_allclose(smooth_frames(x, 1.0)[0, 0], w[3] / w[3:].sum(), rtol=1e-6)
+    # a padded row is smoothed over its own frames only; its padding is left alone
+    x = np.random.default_rng(0).standard_normal((2, 9, 3)).astype(np.float32)
+    y = smooth_frames(x, 1.0, lengths=np.array([9, 5]))
+    np.testing.assert_array_equal(y[1, :5], smooth_frames(x[1, :5], 1.0))
+    np.testing.assert_array_equal(y[1, 5:], x[1, 5:])
+    np.testing.assert_array_equal(y[0], smooth_frames(x[0], 1.0))
+    np.testing.assert_array_equal(smooth_frames(x, 0.0), x)
+
+
+def test_cli_x0_smoothing_defaults_to_the_manifest_entry(models, tmp_path):
+    """--x0-smoothing changes the motion; without it the entry's x0Smoothing is used (absent: none); the edit modes
+    take it too."""
+    import json
+    import shutil
+
+    def run(models_dir, name, *extra):
+        out = tmp_path / name
+        args = ["--model", "m", "--models-dir", str(models_dir), "--action", "0", "--frames", "12", "--steps", "10",
+                "--guidance", "2.5", "--no-bvh", "--out", str(out), *extra]
+        assert sample_main(args) == 0
+        return np.load(out.with_suffix(".features.npy"))
+
+    plain, smooth = run(models, "plain"), run(models, "smooth", "--x0-smoothing", "1")
+    np.testing.assert_array_equal(plain, run(models, "zero", "--x0-smoothing", "0"))
+    assert np.abs(plain - smooth).max() > 1e-6
+    other = tmp_path / "models"
+    shutil.copytree(models, other)
+    manifest = json.loads((other / "manifest.json").read_text())
+    manifest["models"]["m"]["x0Smoothing"] = 1.0
+    (other / "manifest.json").write_text(json.dumps(manifest))
+    np.testing.assert_array_equal(smooth, run(other, "from-manifest"))
+    np.testing.assert_array_equal(plain, run(other, "override", "--x0-smoothing", "0"))
+    loop_plain = run(models, "loop-plain", "--loop", "--frames", "30")
+    loop_smooth = run(models, "loop-smooth", "--loop", "--frames", "30", "--x0-smoothing", "1")
+    assert np.abs(loop_plain - loop_smooth).max() > 1e-6

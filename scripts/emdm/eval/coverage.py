@@ -248,11 +248,12 @@ def model_defaults(opened) -> tuple[float, int]:
     return float(opened.meta.get("guidance", 2.5)), int(opened.meta.get("defaultSteps", 10))
 
 
-def _key(a, guidance: float, guidance_min_time: float = 0.0) -> dict:
+def _key(a, guidance: float, guidance_min_time: float = 0.0, x0_smoothing: float = 0.0) -> dict:
     prompts = hashlib.sha256(Path(a.prompts).read_bytes()).hexdigest()[:16]
     return {"seeds": a.seeds, "seed": a.seed, "guidance": guidance, "prompts_sha256": prompts,
             "variant_file": a.variant or "fp32", "split": a.split,
-            **({"guidance_min_time": guidance_min_time} if guidance_min_time else {})}
+            **({"guidance_min_time": guidance_min_time} if guidance_min_time else {}),
+            **({"x0_smoothing": x0_smoothing} if x0_smoothing else {})}
 
 
 def default_out(a) -> Path:
@@ -287,17 +288,18 @@ def run(a) -> Path:
     guidance, default_steps = model_defaults(opened)
     guidance = guidance if a.guidance is None else a.guidance
     gmin = float(opened.meta.get("guidanceMinTime", 0.0)) if a.guidance_min_time is None else a.guidance_min_time
+    sigma = float(opened.meta.get("x0Smoothing", 0.0)) if a.x0_smoothing is None else a.x0_smoothing
     bench = Benchmark(a.dataset, a.split, a.classifier, a.prompts, a.seeds, a.seed, a.min_clips)
     seen = seen_paraphrases(load_prompts(a.prompts, bench.labels), dataset_captions(a.dataset))
     if seen:
         raise CoverageError(f"{a.prompts}: {len(seen)} paraphrase(s) are captions of the dataset {a.dataset}, so they "
                             f"do not test generalisation: " + "; ".join(seen[:5]))
-    key = _key(a, guidance, gmin)
+    key = _key(a, guidance, gmin, sigma)
     old = read_result(out)
     runs = {r["steps"]: r for r in (old or {}).get("runs", [])} if old and old.get("key") == key else {}
     result = {}
     for T in a.steps:
-        src = ModelSource(opened=opened, steps=T, guidance=guidance, guidance_min_time=gmin, batch_size=a.batch,
+        src = ModelSource(opened=opened, steps=T, guidance=guidance, guidance_min_time=gmin, x0_smoothing=sigma, batch_size=a.batch,
                           threads=a.threads, device=a.device)
         runs[T] = bench.measure(src)
         info = {k: v for k, v in src.info.items() if k != "steps"}
@@ -341,6 +343,8 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--guidance", type=float, default=None, help="default: the manifest's (2.5 for checkpoints)")
     ap.add_argument("--guidance-min-time", type=float, default=None, metavar="T",
                     help="guide only steps whose time is above T (default: the manifest's guidanceMinTime, else 0 = every step)")
+    ap.add_argument("--x0-smoothing", type=float, default=None, metavar="SIGMA",
+                    help="smooth x̂0 along time (σ frames) at every step but the last (default: the manifest's x0Smoothing, else 0)")
     ap.add_argument("--dataset", type=Path, default=DATASET_DIR)
     ap.add_argument("--split", default="test")
     ap.add_argument("--classifier", type=Path, default=RUNS_DIR / "eval" / "classifier.pt")

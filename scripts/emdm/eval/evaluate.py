@@ -106,7 +106,7 @@ def run_quality(a) -> Path:
         from emdm.eval.sources import ModelSource
 
         source = ModelSource(ckpt=a.ckpt, model=a.model, onnx_variant=a.variant, models_dir=a.models_dir, steps=a.steps, guidance=a.guidance,
-                             guidance_min_time=a.guidance_min_time, batch_size=a.batch, threads=a.threads, device=a.device, name=a.name or "")
+                             guidance_min_time=a.guidance_min_time, x0_smoothing=a.x0_smoothing, batch_size=a.batch, threads=a.threads, device=a.device, name=a.name or "")
         if source.task != a.task:
             raise SystemExit(f"error: {a.ckpt or a.model} is a {source.task} model, not {a.task}")
     test = evdata.load_split(a.dataset, a.split, max_items=a.max_items or None,
@@ -248,6 +248,8 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--guidance", type=float, default=2.5)
         p.add_argument("--guidance-min-time", type=float, default=None, metavar="T",
                        help="guide only steps whose time is above T (default: the manifest's guidanceMinTime, else 0)")
+        p.add_argument("--x0-smoothing", type=float, default=None, metavar="SIGMA",
+                       help="smooth x̂0 along time (σ frames) at every step but the last (default: the manifest's x0Smoothing, else 0)")
         p.add_argument("--name", default=None, help="row label (default from the checkpoint's flags)")
         p.add_argument("--dataset", type=Path, default=DATASET_DIR)
         p.add_argument("--split", default="test")

@@ -85,7 +85,8 @@ def measure_file(entry: dict, onnx: Path) -> dict:
         for seed in SEEDS:
             x = sample_features(step, cond, FRAMES, entry["defaultSteps"], entry["guidance"], seed, 1, entry["zDim"],
                                 objective=entry.get("objective", "ddgan"),
-                                guidance_min_time=float(entry.get("guidanceMinTime", 0.0)))
+                                guidance_min_time=float(entry.get("guidanceMinTime", 0.0)),
+                                x0_smoothing=float(entry.get("x0Smoothing", 0.0)))
             per_bone = np.maximum(per_bone, bone_errors(recover_joints(denormalise(x[0], mean, std))))
     worst = int(np.argmax(per_bone))
     return {"worst": float(per_bone[worst]), "worst_bone": sk.JOINT_NAMES[worst + 1], "mean": float(per_bone.mean())}

@@ -137,9 +137,10 @@ def conditions(opened, prompts: list[str], actions: list[str] | None) -> list[tu
 
 def run_grid(opened, steps: list[int], guidance: list[float], seconds: list[float], seeds: int,
              conds: list[tuple[str, np.ndarray]], seed: int = 0, log=print,
-             guidance_min_time: float | None = None) -> list[Row]:
+             guidance_min_time: float | None = None, x0_smoothing: float | None = None) -> list[Row]:
     """Sample every (steps, guidance, seconds) setting for every condition and ``seeds`` seeds; one row each.
-    ``guidance_min_time``: guide only steps above it (None: the model's manifest guidanceMinTime, else 0)."""
+    ``guidance_min_time``: guide only steps above it (None: the model's manifest guidanceMinTime, else 0);
+    ``x0_smoothing``: σ of x̂_0's smoothing along time (None: the manifest's x0Smoothing, else 0)."""
     from emdm.motion.features import recover_joints
     from emdm.sample import sample_features
 
@@ -155,6 +156,7 @@ def run_grid(opened, steps: list[int], guidance: list[float], seconds: list[floa
     if any(not np.isfinite(g) or g < 1 for g in guidance):
         raise PosesError(f"--guidance {guidance}: scales must be finite and ≥ 1")
     gmin = float(meta.get("guidanceMinTime", 0.0)) if guidance_min_time is None else guidance_min_time
+    sigma = float(meta.get("x0Smoothing", 0.0)) if x0_smoothing is None else x0_smoothing
     rows = []
     for T, g, sec in itertools.product(steps, guidance, seconds):
         t0 = time.perf_counter()
@@ -162,7 +164,7 @@ def run_grid(opened, steps: list[int], guidance: list[float], seconds: list[floa
         motions = []
         for ci, (_, c) in enumerate(conds):
             x = sample_features(opened.step, c, frames, T, g, seed + 1000 * ci, seeds, meta["zDim"],
-                                objective=meta.get("objective", "ddgan"), guidance_min_time=gmin)
+                                objective=meta.get("objective", "ddgan"), guidance_min_time=gmin, x0_smoothing=sigma)
             motions += [recover_joints(xi * opened.std + opened.mean) for xi in x]
         row = setting_row(T, g, sec, motions)
         rows.append(row)
@@ -211,6 +213,8 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--guidance", type=floats, default=GUIDANCE)
     ap.add_argument("--guidance-min-time", type=float, default=None, metavar="T",
                     help="guide only steps whose time is above T (default: the manifest's guidanceMinTime, else 0)")
+    ap.add_argument("--x0-smoothing", type=float, default=None, metavar="SIGMA",
+                    help="smooth x̂0 along time (σ frames) at every step but the last (default: the manifest's x0Smoothing, else 0)")
     ap.add_argument("--seconds", type=floats, default=SECONDS)
     ap.add_argument("--seeds", type=int, default=5, help="motions per prompt and setting")
     ap.add_argument("--seed", type=int, default=0)
@@ -241,7 +245,7 @@ def main(argv: list[str] | None = None) -> int:
         steps = a.steps if a.steps is not None else [s for s in STEPS if not supported or s in supported]
         conds = conditions(opened, a.prompts, a.actions)
         rows = run_grid(opened, steps, a.guidance, a.seconds, a.seeds, conds, a.seed,
-                        guidance_min_time=a.guidance_min_time)
+                        guidance_min_time=a.guidance_min_time, x0_smoothing=a.x0_smoothing)
     except (PosesError, SampleError, ModelError, OutputRefused, FileNotFoundError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

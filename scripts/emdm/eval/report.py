@@ -227,6 +227,7 @@ def coverage_section(r: dict, plot: str | None) -> list[str]:
     seeds = r.get("key", {}).get("seeds", "?")
     key = r.get("key", {})
     interval = f" at t > {key['guidance_min_time']:g}" if key.get("guidance_min_time") else ""
+    interval += f", x̂0 smoothed along time (σ {key['x0_smoothing']:g} frames)" if key.get("x0_smoothing") else ""
     out = [f"### {r['name']} ({r.get('condition', '?')} model, guidance {key.get('guidance', '?')}{interval})", "",
            f"Each action asked for with {cond}, {seeds} motions per prompt, lengths drawn from the action's real test "
            f"clips; a cell is the share of its motions the classifier names as that action. *Ref.* marks the "

@@ -34,7 +34,8 @@ def variant_of(meta: dict) -> str:
 
 
 def batched_features(step, conds: np.ndarray, lengths: np.ndarray, *, steps: int, guidance: float, seed: int,
-                     objective: str = "ddgan", z_dim: int = 64, guidance_min_time: float = 0.0) -> list[np.ndarray]:
+                     objective: str = "ddgan", z_dim: int = 64, guidance_min_time: float = 0.0,
+                     x0_smoothing: float = 0.0) -> list[np.ndarray]:
     """Normalised x̂_0 for B rows with their own condition (B, C) and length (B,), via
     ``emdm.sample.sample_features`` on one padded batch; returns B arrays (length_i, 263)."""
     from emdm.sample import sample_features
@@ -62,7 +63,8 @@ def batched_features(step, conds: np.ndarray, lengths: np.ndarray, *, steps: int
     # a non-zero stand-in makes sample_features apply guidance; the wrapper swaps in the real rows
     stand_in = np.ones(conds.shape[1], np.float32) if any_cond else np.zeros(conds.shape[1], np.float32)
     x = sample_features(row_step, stand_in, frames, steps, guidance if any_cond else 1.0, seed, b, z_dim,
-                        objective=objective, guidance_min_time=guidance_min_time)
+                        objective=objective, guidance_min_time=guidance_min_time, x0_smoothing=x0_smoothing,
+                        lengths=lengths)
     return [x[i, : lengths[i]] for i in range(b)]
 
 
@@ -80,6 +82,7 @@ class ModelSource:
     steps: int = 10
     guidance: float = DEFAULT_GUIDANCE
     guidance_min_time: float | None = None   # guided only where t > this (None: the manifest's guidanceMinTime, else 0)
+    x0_smoothing: float | None = None        # σ of x̂_0's smoothing along time (None: the manifest's x0Smoothing, else 0)
     batch_size: int = 64
     threads: int = 1
     device: str = "cpu"                      # with ckpt=: "cuda" runs the generator on the GPU
@@ -105,6 +108,8 @@ class ModelSource:
         self.flags, self.origin = m.flags, m.info
         if self.guidance_min_time is None:
             self.guidance_min_time = float(m.meta.get("guidanceMinTime", 0.0))
+        if self.x0_smoothing is None:
+            self.x0_smoothing = float(m.meta.get("x0Smoothing", 0.0))
         variant = variant_of({"objective": self.objective, "args": self.flags})
         sampler = "DDIM" if self.objective == "diffusion" else "DDGAN"
         if not self.name:
@@ -113,6 +118,7 @@ class ModelSource:
             self.name = f"{label} ({self.steps} steps)"
         self.info = {"variant": variant, "sampler": sampler, "steps": self.steps, "guidance": self.guidance,
                      **({"guidance_min_time": self.guidance_min_time} if self.guidance_min_time else {}),
+                     **({"x0_smoothing": self.x0_smoothing} if self.x0_smoothing else {}),
                      "geo_weight": self.flags.get("geo_weight"), "d_cond": self.flags.get("d_cond"),
                      **self.origin, **self.info}
 
@@ -148,7 +154,7 @@ class ModelSource:
             idx = order[s:s + self.batch_size]
             xs = batched_features(self.step, c[idx], lengths[idx], steps=self.steps, guidance=self.guidance,
                                   seed=seed * 100003 + s, objective=self.objective, z_dim=self.z_dim,
-                                  guidance_min_time=self.guidance_min_time)
+                                  guidance_min_time=self.guidance_min_time, x0_smoothing=self.x0_smoothing)
             for i, x in zip(idx, xs):
                 out[i] = x * self.std + self.mean
         return out  # type: ignore[return-value]

@@ -84,6 +84,7 @@ class Editor:
     objective: str = "ddgan"
     max_frames: int = 196
     guidance_min_time: float = 0.0       # guidance only at steps above it (the manifest's guidanceMinTime)
+    x0_smoothing: float = 0.0            # σ (frames) of x̂_0's smoothing along time (the manifest's x0Smoothing)
 
     @classmethod
     def open(cls, opened, steps: int | None = None, guidance: float | None = None) -> "Editor":
@@ -111,7 +112,7 @@ class Editor:
                    int(meta.get("defaultSteps", 10)) if steps is None else steps,
                    float(meta.get("guidance", 2.5)) if guidance is None else guidance,
                    int(meta.get("zDim", 64)), meta.get("objective", "ddgan"), int(meta.get("maxFrames", 196)),
-                   float(meta.get("guidanceMinTime", 0.0)))
+                   float(meta.get("guidanceMinTime", 0.0)), float(meta.get("x0Smoothing", 0.0)))
 
     def sample(self, prompt: str, frames: int, seed: int, known: np.ndarray | None = None,
                keep: np.ndarray | None = None) -> np.ndarray:
@@ -120,7 +121,7 @@ class Editor:
 
         return sample_features(self.step, self.condition(prompt), frames, self.steps, self.guidance, seed, 1,
                                self.z_dim, objective=self.objective, known=known, keep=keep,
-                               guidance_min_time=self.guidance_min_time)[0]
+                               guidance_min_time=self.guidance_min_time, x0_smoothing=self.x0_smoothing)[0]
 
     def normalise(self, features: np.ndarray) -> np.ndarray:
         return ((np.asarray(features, np.float32) - self.mean) / self.std).astype(np.float32)
