@@ -68,6 +68,13 @@ def test_a_one_frame_flip_is_found_and_a_step_is_not():
     stepped = f.copy()
     stepped[50:, 4 + 3 * 19 + 1] -= 0.5                          # 50 cm down from frame 50 on: a step, not a flip
     assert ev.flips(stepped).max() < ev.FLIP_M
+    # the share of frames with a flip, pooled over motions (the coverage benchmark's temporal-coherence row)
+    from emdm.eval.plausibility import flip_share
+
+    assert flip_share([f]) == 0.0 and flip_share([stepped]) == 0.0
+    assert flip_share([flipped]) == pytest.approx(1 / (len(f) - 2))
+    assert flip_share([flipped, f]) == pytest.approx(1 / (2 * (len(f) - 2)))
+    assert flip_share([f[:2]]) == 0.0                            # too short to flip
 
 
 def test_pose_ignores_where_the_body_stands_and_faces(clip):

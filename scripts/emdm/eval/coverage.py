@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from emdm.paths import DATASET_DIR, RUNS_DIR, display_path
+from emdm.eval.plausibility import flip_share
 
 PROMPTS_FILE = Path(__file__).with_name("prompts.json")
 COVERED = 0.5          # an action is covered when recognised in at least this share of its motions
@@ -185,6 +186,7 @@ class Benchmark:
         t0 = time.time()
         self.real = real_summary(self.labels, self.test.actions, self.predict(self.test.motions), min_clips)
         self.real["n"] = len(self.test)
+        self.real["flip_share"] = flip_share(self.test.motions)
         log(f"real test clips: {len(self.test)}, reference set {len(self.real['reference'])}/{len(self.labels)} actions, "
             f"too few clips: {self.real['too_few']} ({time.time() - t0:.0f} s)")
 
@@ -232,13 +234,14 @@ class Benchmark:
         pred = self.predict(motions)
         per = rates(self.labels, action, pred)
         run = {"steps": source.steps, "motions": len(motions), **run_summary(per, self.real["reference"]),
+               "flip_share": flip_share(motions),
                "per_action": per, "generate_seconds": round(t_gen, 1), "seconds": round(time.time() - t0, 1),
                "load_avg_1min_end": os.getloadavg()[0]}
         if source.task == "text":
             run["prompts"] = prompt_rates(prompt_of, action, pred, self.labels)
         self.log(f"[{source.name}] {len(motions)} motions in {run['seconds']:.0f} s: macro {run['macro_accuracy']:.3f}, "
                  f"covered {len(run['covered'])}/{len(self.labels)}, reference {len(run['covered_reference'])}/"
-                 f"{run['reference_size']}")
+                 f"{run['reference_size']}, frames with a one-frame flip {run['flip_share']:.1%}")
         return run
 
 

@@ -39,14 +39,13 @@ from pathlib import Path
 
 import numpy as np
 
-from emdm.eval.plausibility import CONTACT_HEIGHT, FOOT_JOINTS
+from emdm.eval.plausibility import CONTACT_HEIGHT, FLIP_M, FOOT_JOINTS, flip_share, flips
 from emdm.paths import DATASET_DIR, RUNS_DIR, display_path
 
 FPS = 20
 ACTIONS = ("walk", "raise-both-hands", "walk-backward", "walk-turn-left", "climb", "lie-down")
 LAST_ONLY = ("lie-down",)          # a timeline puts these last (nothing in the data gets up from lying down)
 SEAM_SKATE_FRAMES = 3              # frame pairs within this many frames of a seam count as "at the seam"
-FLIP_M = 0.10                      # a joint leaving its neighbours' mean by more and coming back (a one-frame flip)
 FLIP_FRAMES = 3                    # a seam "sits on a flip" when one is within this many frames of it
 BARS = {"seam_acceleration": 1.5, "seam_skate": 1.2, "seam_root": 1.5, "semantics": 0.8, "kept_mm": 1.0,
         "loop_pose_cm": 2.0, "in_place_cm": 5.0, "time_ratio": 3.0}
@@ -92,23 +91,6 @@ def skate_pairs(joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     speed = np.linalg.norm(feet[1:, :, [0, 2]] - feet[:-1, :, [0, 2]], axis=2) * FPS
     t = np.broadcast_to(np.arange(len(feet) - 1)[:, None], contact.shape)
     return speed[contact], t[contact]
-
-
-def flips(features: np.ndarray) -> np.ndarray:
-    """(F,) per frame t = 1..F−2 (0 at the ends): the largest one-frame flip of a joint, metres — the distance of its
-    position from the mean of its neighbours' (x_t − (x_{t−1} + x_{t+1})/2), counted when the neighbours are closer
-    to each other than that (out and back within a frame, not a step). Joints as the features hold them: the root
-    height and the 21 root-relative positions [4:67]."""
-    f = np.asarray(features, np.float64)
-    x = np.zeros((len(f), 22, 3))
-    x[:, 0, 1] = f[:, 3]
-    x[:, 1:] = f[:, 4:67].reshape(-1, 21, 3)
-    out = np.zeros(len(f))
-    if len(f) >= 3:
-        d = np.linalg.norm(x[1:-1] - (x[:-2] + x[2:]) / 2, axis=2)
-        across = np.linalg.norm(x[2:] - x[:-2], axis=2)
-        out[1:-1] = np.where(across < d, d, 0.0).max(axis=1)
-    return out
 
 
 def seam_flips(features: np.ndarray, seams) -> list[float]:
@@ -332,9 +314,8 @@ def measure(model, bench, a, log=print) -> dict:
     near = [r for tl, s in zip(timelines, seams) for r in seam_flips(tl.features, s)]
     failing = [i for i, r in enumerate(acc) if r > bar]
     where = [(ti, k + 1) for ti, s in enumerate(seams) for k in range(len(s))]     # (timeline, seam) of acc[i]
-    flip_share = {"real": float(np.mean(np.concatenate([flips(m)[1:-1] for m in bench.test.motions if len(m) >= 3]) > FLIP_M)),
-                  "single": float(np.mean(np.concatenate([flips(f)[1:-1] for f, _ in singles]) > FLIP_M)),
-                  "timeline": float(np.mean(np.concatenate([flips(tl.features)[1:-1] for tl in timelines]) > FLIP_M))}
+    shares = {"real": flip_share(bench.test.motions), "single": flip_share([f for f, _ in singles]),
+              "timeline": flip_share([tl.features for tl in timelines])}
     skate = seam_skate([(tl.joints, s) for tl, s in zip(timelines, seams)])
     ref_skate = {"real": seam_skate([(j, [len(j) // 2]) for j in real]),
                  "single": seam_skate([(j, [len(j) // 2]) for _, j in singles])}
@@ -375,7 +356,7 @@ def measure(model, bench, a, log=print) -> dict:
                   "failing": [{"timeline": where[i][0], "order": list(tl_orders[where[i][0]]), "seam": where[i][1],
                                "acceleration_ratio": acc[i], "flip_m": near[i]} for i in failing],
                   "failing_on_flip": int(sum(near[i] > FLIP_M for i in failing)),
-                  "flip_share_of_frames": flip_share,
+                  "flip_share_of_frames": shares,
                   "uneased_acceleration_ratio": summary(acc_uneased, BARS["seam_acceleration"]),
                   "reference_acceleration_ratio": ref_acc,
                   "skate": skate, "reference_skate": ref_skate,

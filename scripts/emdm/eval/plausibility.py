@@ -31,6 +31,7 @@ FOOT_JOINTS = (10, 11)        # SMPL l_foot, r_foot (toe joints)
 CONTACT_HEIGHT = 0.05         # m: a foot joint below this is touching the floor
 FLOAT_TOL = 0.05              # m: lowest joint allowed above the floor without counting as floating
 SKATE_SPEED = 0.5             # m/s: sliding faster than this while in contact counts as skating
+FLIP_M = 0.10                 # m: a joint leaving its neighbours' mean by more and coming back (a one-frame flip)
 
 
 @dataclass(frozen=True)
@@ -104,3 +105,27 @@ def batch_plausibility(motions, fps: float = 20.0, **kw) -> dict[str, np.ndarray
         raise ValueError("batch_plausibility: no motions")
     keys = rows[0].as_dict().keys()
     return {k: np.array([r.as_dict()[k] for r in rows]) for k in keys}
+
+
+def flips(features: np.ndarray) -> np.ndarray:
+    """(F,) per frame t = 1..F−2 (0 at the ends): the largest one-frame flip of a joint, metres — the distance of its
+    position from the mean of its neighbours' (x_t − (x_{t−1} + x_{t+1})/2), counted when the neighbours are closer
+    to each other than that (out and back within a frame, not a step). Joints as the features hold them: the root
+    height and the 21 root-relative positions [4:67]."""
+    f = np.asarray(features, np.float64)
+    x = np.zeros((len(f), 22, 3))
+    x[:, 0, 1] = f[:, 3]
+    x[:, 1:] = f[:, 4:67].reshape(-1, 21, 3)
+    out = np.zeros(len(f))
+    if len(f) >= 3:
+        d = np.linalg.norm(x[1:-1] - (x[:-2] + x[2:]) / 2, axis=2)
+        across = np.linalg.norm(x[2:] - x[:-2], axis=2)
+        out[1:-1] = np.where(across < d, d, 0.0).max(axis=1)
+    return out
+
+
+def flip_share(features_list) -> float:
+    """Share of frames (t = 1..F−2 of every motion of ≥ 3 frames, pooled) with a one-frame flip (``flips``) of more
+    than FLIP_M: how often a motion's joints jump out and back within one frame (real clips: 0.04 %)."""
+    per = [flips(f)[1:-1] for f in features_list if len(f) >= 3]
+    return float(np.mean(np.concatenate(per) > FLIP_M)) if per else 0.0

@@ -246,6 +246,9 @@ def coverage_section(r: dict, plot: str | None) -> list[str]:
                 [f"{len(x['covered'])}/{len(r['labels'])}" for x in runs])
     rows.append(["**covered of the reference set**", "", f"{len(ref)}/{len(ref)}"] +
                 [f"{len(x['covered_reference'])}/{x['reference_size']}" for x in runs])
+    if all("flip_share" in x for x in runs) and "flip_share" in real:
+        rows.append(["**frames with a one-frame flip** (a joint > 10 cm out and back)", "", f"{real['flip_share']:.2%}"] +
+                    [f"{x['flip_share']:.1%}" for x in runs])
     out += [_table(header, rows), ""]
     if few:
         out += ["Too few real test clips to judge the classifier on (listed, not dropped; their generated rates are "
