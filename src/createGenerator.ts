@@ -65,6 +65,8 @@ export interface MotionRequest {
   guidance?: number;
   /** guide only the denoising steps whose time is above this, one batch row below (default: the model's guidanceMinTime, else every step) */
   guidanceMinTime?: number;
+  /** smooth x̂0 along time (σ frames) at every denoising step but the last (default: the model's x0Smoothing, else off) */
+  x0Smoothing?: number;
   /** uint32 seed: the same seed gives the same motion on the same backend (default: random) */
   seed?: number;
   smooth?: boolean;
@@ -152,6 +154,7 @@ export function resolveRequest(manifest: Manifest, req: MotionRequest): { model:
     options: {
       condition, frames, steps: req.steps ?? entry.defaultSteps, guidance: req.guidance ?? entry.guidance,
       ...(req.guidanceMinTime !== undefined ? { guidanceMinTime: req.guidanceMinTime } : {}),
+      ...(req.x0Smoothing !== undefined ? { x0Smoothing: req.x0Smoothing } : {}),
       seed: req.seed ?? randomSeed(), smooth: req.smooth, footCleanup: req.footCleanup,
       ...(req.known ? { known: { features: Float32Array.from(req.known.features), keep: Float32Array.from(req.known.keep) } } : {}),
     },

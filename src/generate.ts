@@ -39,6 +39,11 @@ export interface GenerateOptions {
    * batch row). Default: the model's manifest `guidanceMinTime`, else 0 = every step.
    */
   guidanceMinTime?: number;
+  /**
+   * smooth x̂0 along time (Gaussian, σ frames) at every denoising step but the last, so the motion stays coherent
+   * from step to step. Default: the model's manifest `x0Smoothing`, else 0 = off.
+   */
+  x0Smoothing?: number;
   /** uint32 seed: the same seed gives bit-identical output in Node and the browser (same backend) */
   seed: number;
   signal?: AbortSignal;
@@ -291,7 +296,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     });
     const r = await sample({
       ...choice, step, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance,
-      guidanceMinTime: o.guidanceMinTime ?? entry.guidanceMinTime ?? 0, signal: o.signal, onStep: o.onStep,
+      guidanceMinTime: o.guidanceMinTime ?? entry.guidanceMinTime ?? 0, x0Smoothing: o.x0Smoothing ?? entry.x0Smoothing ?? 0, signal: o.signal, onStep: o.onStep,
       ...(onX0 ? { onX0 } : {}),
       ...(o.known ? { known: o.known.features.map((v, i) => (v - mean[i % D]) / std[i % D]), keep: o.known.keep } : {}),
     });

@@ -58,6 +58,8 @@ export interface ModelEntry {
   guidance: number;
   /** guide only the steps whose time is above this (guidance in a limited interval); absent = every step */
   guidanceMinTime?: number;
+  /** σ (frames) of x̂0's smoothing along time at every denoising step but the last; absent = none */
+  x0Smoothing?: number;
   defaultSteps: number;
   supportedSteps: number[];
   schedules: Record<string, Schedule>;
@@ -251,6 +253,10 @@ export function validateManifest(data: unknown): Manifest {
     const g = entry.guidanceMinTime;
     if (g !== undefined && !(typeof g === 'number' && Number.isFinite(g) && g >= 0)) {
       fail(`models.${name}.guidanceMinTime`, `is ${JSON.stringify(g)}; it must be a time ≥ 0 (guide only steps whose time is above it), or absent to guide every step`);
+    }
+    const sm = entry.x0Smoothing;
+    if (sm !== undefined && !(typeof sm === 'number' && Number.isFinite(sm) && sm >= 0)) {
+      fail(`models.${name}.x0Smoothing`, `is ${JSON.stringify(sm)}; it must be a σ ≥ 0 in frames (smooth x̂0 along time at every step but the last), or absent for none`);
     }
     const d = entry.defaultVariant;
     const have = isObject(entry.variants) ? Object.keys(entry.variants) : [];

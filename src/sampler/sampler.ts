@@ -5,6 +5,7 @@
  * deterministic DDIM (z drawn then zeroed, no ε) for the plain diffusion baseline. With `known` and
  * `keep` (src/sampler/mask.ts) the loop inpaints: docs/ARCHITECTURE.md "Sampling with constraints".
  */
+import { smoothJoints } from '../motion/smooth';
 import { ddimUpdate } from './ddim';
 import type { Schedule } from './schedule';
 
@@ -54,6 +55,14 @@ export type SampleOptions = SamplerChoice & {
    * depend on it (z is drawn once per step for both rows), so only the unguided steps' x̂0 changes.
    */
   guidanceMinTime?: number;
+  /**
+   * Smoothing x̂0 along time (the manifest's `x0Smoothing`, σ in frames; docs/ARCHITECTURE.md "Sampling"): at every
+   * step but the last, after guidance and before the kept part is replaced, x̂0 is filtered along frames, each
+   * channel, with `smoothJoints`' Gaussian — what is re-noised for the next step is then one coherent motion rather
+   * than per-frame phase choices. The last x̂0 (the result) is the model's own. Absent or 0: off, bit for bit; the
+   * random draws do not depend on it.
+   */
+  x0Smoothing?: number;
   /**
    * Inpainting: a known motion [L, D] in NORMALISED feature space and a 0/1 mask [L, D] (`keepMask`) of its
    * entries to keep. x_T's kept part becomes aCum[T]·known + sCum[T]·x_T and x̂0's kept part is replaced by
@@ -125,6 +134,8 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
   const guided = conditioned && o.guidance !== 1;
   const gMin = o.guidanceMinTime ?? 0;
   if (!Number.isFinite(gMin) || gMin < 0) throw new RangeError(`sampler: guidanceMinTime must be a finite time ≥ 0 (0 = guide every step), got ${gMin}`);
+  const xs = o.x0Smoothing ?? 0;
+  if (!Number.isFinite(xs) || xs < 0) throw new RangeError(`sampler: x0Smoothing must be a finite σ ≥ 0 in frames (0 = off), got ${xs}`);
   const s = o.guidance;
   const constraint = checkConstraint(o.known, o.keep, L, D, schedule);
 
@@ -158,8 +169,10 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     modelCalls++;
     if (guidedK) guidedSteps++;
     checkLength(out, inputs.batch * n, `model output x0 at step ${k}`);
+    // x̂0 smoothed along time at every step but the last (x0Smoothing), before the kept part is replaced
+    const smoothed = xs > 0 && k > 0 ? smoothJoints(guidedK ? guidedX0(out, n, s) : out, L, xs) : null;
     if (ddim) {
-      const x0 = guidedK ? guidedX0(out, n, s) : constraint ? Float32Array.from(out) : out;
+      const x0 = smoothed ?? (guidedK ? guidedX0(out, n, s) : constraint ? Float32Array.from(out) : out);
       if (constraint) replaceKnown(x0, constraint);
       const x0copy = o.onX0 ? Float32Array.from(x0) : null;
       ddimUpdate(x, x0, k, schedule);
@@ -176,7 +189,7 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     const x0s = o.onX0 ? new Float32Array(n) : null;
     for (let i = 0; i < n; i++) {
       // guided: x0 = x0_u + s·(x0_c − x0_u), rounded to float32 like the Python reference
-      let x0 = guidedK ? Math.fround(out[n + i] + Math.fround(s * Math.fround(out[i] - out[n + i]))) : out[i];
+      let x0 = smoothed ? smoothed[i] : guidedK ? Math.fround(out[n + i] + Math.fround(s * Math.fround(out[i] - out[n + i]))) : out[i];
       if (constraint && constraint.keep[i]) x0 = constraint.known[i];
       if (x0s) x0s[i] = x0;
       let v = c1 * x0 + c2 * x[i];

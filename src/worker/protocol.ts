@@ -33,6 +33,8 @@ export interface WireGenerateOptions {
   guidance: number;
   /** guide only steps whose time is above this (GenerateOptions.guidanceMinTime; default the manifest's) */
   guidanceMinTime?: number;
+  /** σ (frames) of x̂0's smoothing along time (GenerateOptions.x0Smoothing; default the manifest's) */
+  x0Smoothing?: number;
   seed: number;
   smooth?: boolean;
   footCleanup?: boolean;

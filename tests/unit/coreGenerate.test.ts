@@ -67,6 +67,31 @@ describe('openModel on the tiny model', () => {
     await gen.dispose();
   });
 
+  it('smooths x̂0 by the manifest entry\'s x0Smoothing; a request overrides it; absent = off', async () => {
+    const { dir } = tinyModels(tmp);
+    const manifest = await loadManifest(dir);
+    const smoothed = structuredClone(manifest);
+    smoothed.models.tiny.x0Smoothing = 1;
+    const plain = await openModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
+    const gen = await openModel({ manifest: smoothed, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
+    const o = { condition: { type: 'action' as const, label: 2 }, frames: 30, steps: 4, guidance: 2.5, seed: 5 };
+    const off = await plain.generate(o);
+    const byEntry = await gen.generate(o);
+    const byRequest = await plain.generate({ ...o, x0Smoothing: 1 });
+    expect(Buffer.from(byEntry.motion.features.buffer).equals(Buffer.from(byRequest.motion.features.buffer))).toBe(true);
+    expect(maxAbsDiff(off.motion.features, byEntry.motion.features)).toBeGreaterThan(1e-4);
+    const overridden = await gen.generate({ ...o, x0Smoothing: 0 });
+    expect(Buffer.from(overridden.motion.features.buffer).equals(Buffer.from(off.motion.features.buffer))).toBe(true);
+    await expect(gen.generate({ ...o, x0Smoothing: -1 })).rejects.toThrow(/x0Smoothing must be a finite σ ≥ 0 in frames/);
+    for (const v of ['high', -1]) {
+      const bad = structuredClone(manifest) as unknown as { models: Record<string, Record<string, unknown>> };
+      bad.models.tiny.x0Smoothing = v;
+      expect(() => validateManifest(bad)).toThrow(new RegExp(`models\\.tiny\\.x0Smoothing' is ${JSON.stringify(v)}; it must be a σ ≥ 0 in frames`));
+    }
+    await plain.dispose();
+    await gen.dispose();
+  });
+
   it('rejects bad requests with clear errors', async () => {
     const { dir, manifest } = tinyModels(tmp);
     const gen = await openModel({ manifest, baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
@@ -183,6 +208,8 @@ describe('parity with Python on the shipped models', () => {
       expect(fx.meta.sha256, `fixture model-${name} was made from another ${entry.onnx}: re-run \`.venv/bin/python -m emdm.fixtures\``).toBe(manifest.files[entry.onnx].sha256);
       // the run below takes the entry's guidanceMinTime (guidance in a limited interval) as the fixture did
       expect(fx.meta.guidanceMinTime ?? 0, `fixture model-${name} was sampled with another guidanceMinTime: re-run \`.venv/bin/python -m emdm.fixtures --only models\``).toBe(entry.guidanceMinTime ?? 0);
+      // …and its x0Smoothing (x̂0 smoothed along time)
+      expect(fx.meta.x0Smoothing ?? 0, `fixture model-${name} was sampled with another x0Smoothing: re-run \`.venv/bin/python -m emdm.fixtures --only models\``).toBe(entry.x0Smoothing ?? 0);
       const L = fx.meta.frames;
       // one step (x_t, z, c, t → x0̂)
       const bytes = fs.readFileSync(path.join(MODELS_DIR, entry.onnx));

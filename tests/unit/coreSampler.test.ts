@@ -73,6 +73,57 @@ describe('runtime + sampler on the tiny step model', () => {
     }
   });
 
+  it('x0Smoothing: x̂0 smoothed along time at every step but the last, equal to the Python reference, same draws', async () => {
+    const step = await tinyStep();
+    const schedule = scheduleFromEntry(tiny.meta.schedule!, 4, 'tiny.schedule');
+    const sigma = tiny.meta.smoothX0Smoothing as number;
+    const noise = fixtureNoise(tiny);
+    const r = await sample({ step, schedule, noise, frames: L, featureDim: D, zDim: Z, cond: tiny.get('cond'), guidance: 2.5, x0Smoothing: sigma });
+    expect(noise.calls).toEqual(['x_T', 'z_3', 'eps_3', 'z_2', 'eps_2', 'z_1', 'eps_1', 'z_0']);
+    expect(maxAbsDiff(r.x, tiny.get('final_x_smooth'))).toBeLessThan(1e-4);
+    expect(maxAbsDiff(r.x, tiny.get('final_x'))).toBeGreaterThan(1e-3);
+    // 0 is off: bit-identical to leaving it out
+    const zero = await sample({ step, schedule, noise: fixtureNoise(tiny), frames: L, featureDim: D, zDim: Z, cond: tiny.get('cond'), guidance: 2.5, x0Smoothing: 0 });
+    const plain = await sample({ step, schedule, noise: fixtureNoise(tiny), frames: L, featureDim: D, zDim: Z, cond: tiny.get('cond'), guidance: 2.5 });
+    expect(Buffer.from(zero.x.buffer).equals(Buffer.from(plain.x.buffer))).toBe(true);
+    for (const bad of [-1, Number.NaN, Infinity]) {
+      await expect(sample({ step, schedule, noise: new SeededRandom(1), frames: L, featureDim: D, zDim: Z, cond: tiny.get('cond'), guidance: 2.5, x0Smoothing: bad }))
+        .rejects.toThrow(/x0Smoothing must be a finite σ ≥ 0 in frames \(0 = off\)/);
+    }
+  });
+
+  for (const method of ['ddgan', 'ddim'] as const) {
+    it(`x0Smoothing (${method}): the previews show x̂0 smoothed before the last step and the model's own at it; kept entries stay known`, async () => {
+      // a step model whose x̂0 is a spike train along frames: smoothing is visible in every channel
+      const spikes = new Float32Array(L * D);
+      for (let f = 0; f < L; f += 2) spikes.fill(1, f * D, (f + 1) * D);
+      const spiky: StepFn = async (i) => {
+        const out = new Float32Array(i.batch * L * D);
+        for (let b = 0; b < i.batch; b++) out.set(spikes, b * L * D);
+        return out;
+      };
+      const schedule = scheduleFromEntry(tiny.meta.schedule!, 4, 'tiny.schedule');
+      const keep = new Float32Array(L * D);
+      const known = new Float32Array(L * D);
+      keep.fill(1, 0, D); // frame 0 kept, all channels
+      known.fill(0.25, 0, D);
+      const previews: Float32Array[] = [];
+      const r = await sample({
+        method, step: spiky, schedule, noise: new SeededRandom(3), frames: L, featureDim: D, zDim: Z, cond: tiny.get('cond'), guidance: 2.5,
+        x0Smoothing: 1, known, keep, onX0: (x0) => previews.push(Float32Array.from(x0)),
+      });
+      expect(previews).toHaveLength(4);
+      const { smoothJoints } = await import('../../src/motion/smooth');
+      const want = smoothJoints(spikes, L, 1);
+      want.set(known.subarray(0, D), 0);
+      const raw = Float32Array.from(spikes);
+      raw.set(known.subarray(0, D), 0);
+      for (const p of previews.slice(0, 3)) expect(maxAbsDiff(p, want)).toBeLessThan(1e-6);
+      expect(maxAbsDiff(previews[3], raw)).toBe(0);
+      expect(maxAbsDiff(r.x, raw)).toBe(0); // the result is the last x̂0: the model's own, kept part known
+    });
+  }
+
   it('a zero condition runs unguided (single pass) and equals the Python unconditional run', async () => {
     const step = await tinyStep();
     const schedule = scheduleFromEntry(tiny.meta.schedule!, 4, 'tiny.schedule');

@@ -25,6 +25,8 @@ export interface HarnessRequest {
   guidance: number;
   /** guide only steps whose time is above this (default: the manifest entry's guidanceMinTime, else every step) */
   guidanceMinTime?: number;
+  /** σ (frames) of x̂0's smoothing along time (default: the manifest entry's x0Smoothing, else off) */
+  x0Smoothing?: number;
   seed: number;
 }
 
@@ -96,6 +98,7 @@ const harness = {
     const r = await gen.generate({
       condition: req.condition, frames: req.frames, steps: req.steps, guidance: req.guidance, seed: req.seed,
       ...(req.guidanceMinTime !== undefined ? { guidanceMinTime: req.guidanceMinTime } : {}),
+      ...(req.x0Smoothing !== undefined ? { x0Smoothing: req.x0Smoothing } : {}),
     });
     return {
       featuresSha256: await hex(r.motion.features),
