@@ -9,6 +9,7 @@
  * renderer.setAnimationLoop(() => { character.update(clock.getDelta()); renderer.render(scene, camera); });
  * ```
  */
+import { Box3, type PerspectiveCamera, Vector3 } from 'three';
 import { applyPose, type Character, createCharacter as createSkinnedCharacter } from './character/character';
 import { MotionPlayer, type PoseTrack } from './character/player';
 import { solveIK } from './motion/ik';
@@ -57,4 +58,35 @@ export function createCharacter(skeleton: SkeletonLike): PlayableCharacter {
       applyPose(character.bones, player.root, player.quats);
     },
   };
+}
+
+/**
+ * Aim `camera` from its current view direction at the whole motion: every joint on every frame in the
+ * picture (the joints' bounding box fitted to the field of view, `margin` to spare). Returns the point
+ * it now looks at (for OrbitControls: `controls.target.copy(frameMotion(camera, motion)); controls.update()`).
+ * A walk of 4 s covers 5–10 m and a run more, so a fixed camera loses the character on the way.
+ */
+export function frameMotion(camera: PerspectiveCamera, motion: Pick<Motion, 'joints' | 'frames'>, margin = 1.1): Vector3 {
+  const box = new Box3();
+  const p = new Vector3();
+  for (let i = 0; i + 2 < motion.joints.length; i += 3) box.expandByPoint(p.set(motion.joints[i], motion.joints[i + 1], motion.joints[i + 2]));
+  if (box.isEmpty()) throw new RangeError(`frameMotion: the motion has no joints (frames ${motion.frames}, joints ${motion.joints.length})`);
+  const center = box.getCenter(new Vector3());
+  // camera axes: right u, up v, forward w; a corner at offset (cu, cv, cw) from the centre is inside the
+  // picture at distance d when |cu| ≤ tanH·(d + cw)/margin and |cv| ≤ tanV·(d + cw)/margin
+  camera.updateMatrixWorld();
+  const u = new Vector3().setFromMatrixColumn(camera.matrixWorld, 0);
+  const v = new Vector3().setFromMatrixColumn(camera.matrixWorld, 1);
+  const w = camera.getWorldDirection(new Vector3());
+  const tanV = Math.tan((camera.fov * Math.PI) / 360);
+  const tanH = tanV * camera.aspect;
+  let distance = camera.near + 0.5;
+  for (let k = 0; k < 8; k++) {
+    p.set(k & 1 ? box.max.x : box.min.x, k & 2 ? box.max.y : box.min.y, k & 4 ? box.max.z : box.min.z).sub(center);
+    const cw = p.dot(w);
+    distance = Math.max(distance, (margin * Math.abs(p.dot(u))) / tanH - cw, (margin * Math.abs(p.dot(v))) / tanV - cw);
+  }
+  camera.position.copy(center).addScaledVector(w, -distance);
+  camera.updateMatrixWorld();
+  return center;
 }

@@ -11,6 +11,7 @@ import {
   PerspectiveCamera, Scene, SkinnedMesh, SRGBColorSpace, Vector2, Vector3, WebGLRenderer, type Object3D,
 } from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { RootFollower } from './follow';
 
 const BG = 0x161b26;
 
@@ -31,13 +32,10 @@ export class Stage {
   private readonly sun: DirectionalLight;
   private readonly path: Line;
   private readonly pathGeometry = new BufferGeometry();
-  private readonly follow = new Vector3(0, 0.9, 0);
+  private readonly follow = new RootFollower();
   /** split view: the right half's camera and follow point, and what each half shows */
   private readonly camera2 = new PerspectiveCamera(38, 1, 0.05, 200);
-  private readonly follow2 = new Vector3(0, 0.9, 0);
-  /** the roots of the previous frame: a jump (loop wrap, seek, scrub) snaps the camera instead of trailing */
-  private readonly lastRoot = new Vector3(Number.NaN, 0, 0);
-  private readonly lastRoot2 = new Vector3(Number.NaN, 0, 0);
+  private readonly follow2 = new RootFollower();
   private split: { left: Object3D; right: Object3D } | null = null;
   private readonly size = new Vector2();
   /** Adaptive resolution: smoothed frame time (s) and how long it has been too slow. */
@@ -100,7 +98,7 @@ export class Stage {
 
     this.camera.position.set(2.2, 1.5, 3.6);
     this.controls = new OrbitControls(this.camera, canvas);
-    this.controls.target.copy(this.follow);
+    this.controls.target.copy(this.follow.point);
     this.controls.enableDamping = true;
     this.controls.dampingFactor = 0.08;
     this.controls.minDistance = 1.2;
@@ -144,25 +142,11 @@ export class Stage {
     return this.split !== null;
   }
 
-  /** Move the orbit target (and the camera with it) smoothly towards the root, then render. */
+  /** Move the orbit target (and the camera with it) towards the root (RootFollower), then render. */
   frame(dt: number, root: ArrayLike<number> | null, root2: ArrayLike<number> | null = null): void {
     if (this.adaptive) this.adapt(dt);
-    if (this.split && root2) {
-      if (Stage.jumped(this.lastRoot2, root2, dt)) this.snapTo2(root2);
-      this.tmp.set(root2[0], 0.9, root2[2]);
-      this.follow2.add(this.tmp.sub(this.follow2).multiplyScalar(1 - Math.exp(-dt * 3)));
-    }
-    if (root) {
-      if (Stage.jumped(this.lastRoot, root, dt)) this.snapTo(root);
-      this.tmp.set(root[0], 0.9, root[2]);
-      const k = 1 - Math.exp(-dt * 3);
-      const delta = this.tmp.sub(this.follow).multiplyScalar(k);
-      this.follow.add(delta);
-      this.controls.target.add(delta);
-      this.camera.position.add(delta);
-      this.sun.position.set(this.follow.x + 3, 6, this.follow.z + 4);
-      this.sun.target.position.set(this.follow.x, 0, this.follow.z);
-    }
+    if (this.split && root2) this.follow2.update(root2, dt);
+    if (root) this.moveView(this.follow.update(root, dt));
     this.controls.update();
     this.resize();
     if (!this.split) {
@@ -177,7 +161,7 @@ export class Stage {
     const h = this.size.y;
     this.frameView(this.camera, half, h);
     this.camera2.copy(this.camera);
-    this.camera2.position.add(this.tmp.copy(this.follow2).sub(this.follow));
+    this.camera2.position.add(this.tmp.copy(this.follow2.point).sub(this.follow.point));
     r.setScissorTest(true);
     const pass = (x: number, w: number, cam: PerspectiveCamera, show: Object3D, hide: Object3D) => {
       show.visible = true;
@@ -208,29 +192,23 @@ export class Stage {
     cam.updateProjectionMatrix();
   }
 
-  /**
-   * Did the root jump since the last frame (the player wrapped to the start of a loop, or was sought)? Then
-   * the camera snaps to it: trailing (time constant 1/3 s) would leave the character off its half of the
-   * stage, under the rail's panels, for about a second after every loop. A jump is more horizontal travel
-   * than 0.5 m or 6 m/s × dt (faster than a sprint). Records the root for the next frame.
-   */
-  private static jumped(last: Vector3, root: ArrayLike<number>, dt: number): boolean {
-    const d = Math.hypot(root[0] - last.x, root[2] - last.z);
-    last.set(root[0], 0, root[2]);
-    return d > Math.max(0.5, 6 * dt);
-  }
-
   /** Snap the right half's follow point to a root (split view). */
   snapTo2(root: ArrayLike<number>): void {
-    this.follow2.set(root[0], 0.9, root[2]);
+    this.follow2.snap(root);
   }
 
   /** Snap the follow point to the root (used when a new motion starts far away). */
   snapTo(root: ArrayLike<number>): void {
-    const d = new Vector3(root[0], 0.9, root[2]).sub(this.follow);
-    this.follow.add(d);
-    this.controls.target.add(d);
-    this.camera.position.add(d);
+    this.moveView(this.follow.snap(root));
+  }
+
+  /** Move the orbit target, the camera and the sun's shadow box by `delta` (the follow point's move). */
+  private moveView(delta: Vector3): void {
+    this.controls.target.add(delta);
+    this.camera.position.add(delta);
+    const p = this.follow.point;
+    this.sun.position.set(p.x + 3, 6, p.z + 4);
+    this.sun.target.position.set(p.x, 0, p.z);
   }
 
   /**
