@@ -57,6 +57,10 @@ export const LOOP_END_FRAMES = 10;
 export const SEAM_EASE_FRAMES = 10;
 /** The seam easing's peak joint acceleration, m/s²: a larger jump is eased over more frames (`seamEaseFrames`). */
 export const SEAM_EASE_ACCEL = 20; // the median real test clip's 95th percentile of joint acceleration
+/** The cross-fade into the generated frames lasts this many frames longer than the offset's fade (`easeSeams`). */
+export const SEAM_BLEND_EXTRA = 4;
+/** Frames: the kept side's velocity, continued into the cross-fade, decays with this time constant. */
+export const SEAM_BLEND_TAU = 3;
 
 /**
  * Frames m over which `easeSeams` fades a seam's offset `o` (de-normalised features, ≥ 67 values; Python
@@ -86,8 +90,13 @@ export function seamEaseFrames(o: ArrayLike<number>, ease = SEAM_EASE_FRAMES, ac
  * e−2 ≥ s), both from the un-eased features, contacts zeroed; then f[s+i] += w_i·o_L and f[e−1−i] += w_i·o_R with
  * w_i = (1 + cos(π·i/m))/2, i < m = min(seamEaseFrames(o), e − s): a large jump fades over more frames (a fixed 10
  * made the 1.5 m one a 0.5 s fall, 2× the timeline's 95th percentile at the seam; a long fade is a blend the action
- * classifier reads as another action: the trade-off is measured in the Python twin's doc). Foot contacts [259:263] stay;
- * frames kept in part (body-part edits) are left alone.
+ * classifier reads as another action: the trade-off is measured in the Python twin's doc). Then each seam is
+ * cross-faded from the kept side's motion continued, c_i = k + v·τ·(1 − exp(−(i+1)/τ)) (k the kept frame at the
+ * seam, v = k − the kept frame beyond it, or 0; τ = SEAM_BLEND_TAU), into the eased frames: f[s+i] ← (1 − β_i)·c_i +
+ * β_i·f[s+i], β_i = (1 − cos(π(i+1)/(b+1)))/2, b = min(m + SEAM_BLEND_EXTRA, e − s), left seam then right (mirrored):
+ * the offset fixes where the first generated frame is, the cross-fade damps the model's own fast first frames
+ * (raised hands dropped in two frames: 13× the 95th percentile). Foot contacts [259:263] stay; frames kept in part
+ * (body-part edits) are left alone.
  */
 export function easeSeams(features: ArrayLike<number>, frames: number, keep: ArrayLike<number>, ease = SEAM_EASE_FRAMES, dim = D, accel = SEAM_EASE_ACCEL): Float32Array {
   if (features.length !== frames * dim || keep.length !== frames * dim) {
@@ -108,6 +117,8 @@ export function easeSeams(features: ArrayLike<number>, frames: number, keep: Arr
   }
   const row = (t: number) => f.subarray(t * dim, (t + 1) * dim);
   const adds: { t: number; w: number; o: Float64Array }[] = [];
+  /** cross-fades, in order: kept frame k0 at the seam, k1 beyond it (or −1), the generated rows from the seam out */
+  const blends: { k0: number; k1: number; rows: number[] }[] = [];
   const offset = (base: Float64Array, sign: number, terms: [Float64Array, Float64Array][], to: Float64Array) => {
     const o = new Float64Array(dim);
     for (let c = 0; c < dim; c++) {
@@ -128,25 +139,41 @@ export function easeSeams(features: ArrayLike<number>, frames: number, keep: Arr
     const e = t;
     const fade = (o: Float64Array) => {
       const m = Math.min(seamEaseFrames(o, ease, accel), e - s);
-      return Array.from({ length: m }, (_, i) => 0.5 * (1 + Math.cos((Math.PI * i) / m)));
+      return { w: Array.from({ length: m }, (_, i) => 0.5 * (1 + Math.cos((Math.PI * i) / m))), b: Math.min(m + SEAM_BLEND_EXTRA, e - s) };
     };
     if (s >= 1 && kept[s - 1]) {
       const terms: [Float64Array, Float64Array][] = [];
       if (s >= 2 && kept[s - 2]) terms.push([row(s - 1), row(s - 2)]);
       if (s + 1 < e) terms.push([row(s + 1), row(s)]);
       const o = offset(row(s - 1), 1, terms, row(s));
-      fade(o).forEach((w, i) => adds.push({ t: s + i, w, o }));
+      const { w, b } = fade(o);
+      w.forEach((wi, i) => adds.push({ t: s + i, w: wi, o }));
+      blends.push({ k0: s - 1, k1: s >= 2 && kept[s - 2] ? s - 2 : -1, rows: Array.from({ length: b }, (_, i) => s + i) });
     }
     if (e < frames && kept[e]) {
       const terms: [Float64Array, Float64Array][] = [];
       if (e + 1 < frames && kept[e + 1]) terms.push([row(e + 1), row(e)]);
       if (e - 2 >= s) terms.push([row(e - 1), row(e - 2)]);
       const o = offset(row(e), -1, terms, row(e - 1));
-      fade(o).forEach((w, i) => adds.push({ t: e - 1 - i, w, o }));
+      const { w, b } = fade(o);
+      w.forEach((wi, i) => adds.push({ t: e - 1 - i, w: wi, o }));
+      blends.push({ k0: e, k1: e + 1 < frames && kept[e + 1] ? e + 1 : -1, rows: Array.from({ length: b }, (_, i) => e - 1 - i) });
     }
   }
   for (const { t, w, o } of adds) {
     for (let c = 0; c < dim; c++) f[t * dim + c] += w * o[c];
+  }
+  for (const { k0, k1, rows } of blends) {
+    const b = rows.length;
+    rows.forEach((t, i) => {
+      const reach = SEAM_BLEND_TAU * (1 - Math.exp(-(i + 1) / SEAM_BLEND_TAU));
+      const beta = 0.5 * (1 - Math.cos((Math.PI * (i + 1)) / (b + 1)));
+      for (let c = 0; c < dim; c++) {
+        if (c >= 259 && c < 263) continue; // foot contacts stay
+        const v = k1 >= 0 ? f[k0 * dim + c] - f[k1 * dim + c] : 0;
+        f[t * dim + c] = (1 - beta) * (f[k0 * dim + c] + v * reach) + beta * f[t * dim + c];
+      }
+    });
   }
   return Float32Array.from(f);
 }

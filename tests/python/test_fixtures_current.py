@@ -27,9 +27,11 @@ COMMITTED = fx.PARITY_DIR
 REGENERATE = "regenerate them with `.venv/bin/python -m emdm.fixtures` and commit tests/fixtures/parity/"
 # float32 arrays: the same computation on another CPU (other SIMD kernels in onnxruntime) may differ in the last
 # bits, which the guided steps amplify (the float64 reference and the float32 pipeline differ by 2e-6 of the
-# motion's scale). The TypeScript parity tests allow 1e-4 (absolute); this check is ten times stricter, so a
-# Python change the TypeScript tests could still notice is never absorbed by a stale fixture.
-ARRAY_RTOL = 1e-5
+# motion's scale). Measured: the 20 guided DDIM steps of diffusion-t2m-web on one AMD EPYC differ from the committed
+# run (made on another CPU) by 1.3e-5 of the motion's largest value (1.5e-4 of 11), while the TypeScript sampler
+# (WASM, the same arithmetic on every CPU) still agrees with the committed file within its 1e-4. A Python change
+# moves these arrays by far more (a perturbed schedule: see the test at the end).
+ARRAY_RTOL = 3e-5
 META_RTOL = 1e-9            # schedule coefficients etc., float64 in JSON
 
 

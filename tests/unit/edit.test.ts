@@ -7,7 +7,7 @@ import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
 import { createGenerator } from '../../src/createGenerator';
 import {
-  EditError, LOOP_END_FRAMES, OVERLAP_FRAMES, SEAM_EASE_ACCEL, SEAM_EASE_FRAMES, bodyPartEdit, easeSeams, generateTimeline, inBetween,
+  EditError, LOOP_END_FRAMES, OVERLAP_FRAMES, SEAM_BLEND_EXTRA, SEAM_EASE_ACCEL, SEAM_EASE_FRAMES, bodyPartEdit, easeSeams, generateTimeline, inBetween,
   keptSegments, makeLoop, planTimeline, seamEaseFrames, type EditGenerate, type EditMotion, type EditRequest, type TimelineSegment, withNewSeed,
 } from '../../src/edit';
 import { recoverJoints } from '../../src/motion/recover';
@@ -245,11 +245,12 @@ describe('easeSeams', () => {
     const m = Math.ceil(Math.PI * Math.sqrt((1.5 * Math.sqrt(3) * 400) / (2 * SEAM_EASE_ACCEL)));
     const o = new Float64Array(D).map((_, c) => g[20 * D + c] - f[20 * D + c]);
     expect(seamEaseFrames(o)).toBe(m);
-    expect(Array.from(g.subarray((20 + m) * D))).toEqual(Array.from(f.subarray((20 + m) * D)));
-    expect(g[(19 + m) * D + 4]).not.toBe(f[(19 + m) * D + 4]);
+    const b = m + SEAM_BLEND_EXTRA; // the offset's fade, then the cross-fade's extra frames
+    expect(Array.from(g.subarray((20 + b) * D))).toEqual(Array.from(f.subarray((20 + b) * D)));
+    expect(g[(19 + b) * D + 4]).not.toBe(f[(19 + b) * D + 4]);
     let peak = 0;
     for (let t = 1; t < n - 1; t++) peak = Math.max(peak, Math.abs(g[(t + 1) * D + 4] - 2 * g[t * D + 4] + g[(t - 1) * D + 4]) * Math.sqrt(3) * 400);
-    expect(peak).toBeLessThanOrEqual(SEAM_EASE_ACCEL * 1.01);
+    expect(peak).toBeLessThanOrEqual(SEAM_EASE_ACCEL * 1.1); // the cross-fade on top adds 7.5 % here
     const small = new Float64Array(D);
     small[5] = 0.02;
     expect(seamEaseFrames(small)).toBe(SEAM_EASE_FRAMES);
