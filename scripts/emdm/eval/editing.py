@@ -417,10 +417,14 @@ def run(a) -> Path:
 
     out = check_writable(a.out or (RESULTS_DIR / "json" / f"editing-{a.model}.json"))
     t0, load0 = time.time(), os.getloadavg()[0]
-    model = Editor.open(open_model(a.model, models_dir=a.models_dir, threads=a.threads), steps=a.steps)
+    opened = open_model(a.model, models_dir=a.models_dir, threads=a.threads, variant=None if a.variant == "page" else a.variant)
+    if a.variant == "page" and opened.meta.get("defaultVariant") not in (None, "fp32"):    # the file the page runs
+        opened = open_model(a.model, models_dir=a.models_dir, threads=a.threads, variant=opened.meta["defaultVariant"])
+    model = Editor.open(opened, steps=a.steps)
     bench = Benchmark(a.dataset, a.split, a.classifier, a.prompts, seeds=1, seed=a.seed)
     m = measure(model, bench, a)
-    result = {"schema": SCHEMA, "task": "editing", "name": a.model, "steps": a.steps, "guidance": model.guidance,
+    result = {"schema": SCHEMA, "task": "editing", "name": a.model, "variant": opened.variant, "steps": a.steps,
+              "guidance": model.guidance, "guidance_min_time": model.guidance_min_time, "x0_smoothing": model.x0_smoothing,
               "seed": a.seed, **m, "bars": bars(m), "classifier": _evaluator_info(bench.classifier, a.classifier),
               "classifier_real_macro": bench.real.get("macro_accuracy"),
               "dataset": dataset_info(Path(a.dataset), a.split), "hardware": hardware(), "threads": a.threads,
@@ -445,7 +449,10 @@ def section(r: dict) -> list[str]:
     yes = lambda key: "**met**" if b[key]["met"] else "**not met**"  # noqa: E731
     ra, rr = s["reference_acceleration_ratio"], s["reference_root_step_ratio"]
     sk, rsk = s["skate"], s["reference_skate"]
-    out = [f"### {r['name']}, {r['steps']} steps (guidance {r['guidance']:g})", "",
+    how = [f"guidance {r['guidance']:g}"] + ([f"{r['variant']} file"] if "variant" in r else [])
+    how += [f"guided at t > {r['guidance_min_time']:g}"] if r.get("guidance_min_time") else []
+    how += [f"x̂0 smoothed σ = {r['x0_smoothing']:g}"] if r.get("x0_smoothing") else []
+    out = [f"### {r['name']}, {r['steps']} steps ({', '.join(how)})", "",
            f"{r['timelines']} timelines of 3 × {r['segment_seconds']:g} s ({s['count']} seams) from the plain prompts of "
            f"{', '.join(r['actions'])} in random orders; {sem['singles']} single {r['segment_seconds']:g} s motions of the same "
            f"prompts. Measured on {r['hardware']}, ONNX Runtime on {r['threads']} thread(s), in {r['seconds']:.0f} s; load average "
@@ -544,6 +551,8 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--split", default="test")
     ap.add_argument("--classifier", type=Path, default=RUNS_DIR / "eval" / "classifier.pt")
     ap.add_argument("--prompts", type=Path, default=PROMPTS_FILE)
+    ap.add_argument("--variant", default="page", help="the ONNX file: fp32, int8, fp16, or page (default: the entry's "
+                    "defaultVariant, the file the page runs)")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--out", type=Path, default=None, help="default docs/results/json/editing-<model>.json")
     return ap
