@@ -18,6 +18,7 @@
 import type { GenerateResult } from './generate';
 import { type Manifest, type ModelEntry, chooseVariant, loadManifest } from './manifest';
 import type { Motion } from './motion/types';
+import type { KnownMotion } from './sampler/mask';
 import type { Backend, BackendRequest } from './runtime/ort';
 import type { Skeleton } from './skeleton';
 import { GenerationClient, type ClientEvents } from './worker/client';
@@ -76,8 +77,9 @@ export interface MotionRequest {
    * in-betweening, body-part edits and loops): keep the entries of `features` (frames × 263, de-normalised: an
    * earlier result's `features`) where `keep` (`keepMask(frames, …)`) is 1 and generate the rest. The arrays are
    * copied, not taken. Kept frames after free ones decode where the known motion has them (`pinKeptRoot`).
+   * `fromTime`: impose them only at the steps with t ≤ it (and the last; default every step).
    */
-  known?: { features: Float32Array; keep: Float32Array };
+  known?: KnownMotion;
   onStep?: (done: number, total: number) => void;
   signal?: AbortSignal;
 }
@@ -156,7 +158,7 @@ export function resolveRequest(manifest: Manifest, req: MotionRequest): { model:
       ...(req.guidanceMinTime !== undefined ? { guidanceMinTime: req.guidanceMinTime } : {}),
       ...(req.x0Smoothing !== undefined ? { x0Smoothing: req.x0Smoothing } : {}),
       seed: req.seed ?? randomSeed(), smooth: req.smooth, footCleanup: req.footCleanup,
-      ...(req.known ? { known: { features: Float32Array.from(req.known.features), keep: Float32Array.from(req.known.keep) } } : {}),
+      ...(req.known ? { known: { ...req.known, features: Float32Array.from(req.known.features), keep: Float32Array.from(req.known.keep) } } : {}),
     },
   };
 }

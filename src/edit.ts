@@ -43,12 +43,18 @@
  */
 import { recoverJoints } from './motion/recover';
 import { appendSegment, pinKeptRoot } from './motion/stitch';
-import { keepMask, type FeatureGroup } from './sampler/mask';
+import { keepMask, type FeatureGroup, type KnownMotion } from './sampler/mask';
 import { AbortError } from './sampler/sampler';
 
 const D = 263;
 /** Frames each timeline window repeats from the one before (1 s at 20 fps). */
 export const OVERLAP_FRAMES = 20;
+/**
+ * A timeline window imposes its kept second only at the denoising steps with t ≤ this (the sampler's
+ * keepFromTime; the last step always): the earlier steps belong to the prompt. Imposed at every step, a window mostly
+ * went on with the previous segment's action (Python twin `TIMELINE_KEEP_FROM`, where the figures are).
+ */
+export const TIMELINE_KEEP_FROM = 0.55;
 /** The longest timeline, seconds. */
 export const MAX_TIMELINE_SECONDS = 60;
 /** Frames at each end of a loop that are inpainted to the same pose. */
@@ -194,7 +200,7 @@ export interface TimelineSegment extends EditCondition {
 export interface EditRequest extends EditCondition {
   frames: number;
   seed: number;
-  known?: { features: Float32Array; keep: Float32Array };
+  known?: KnownMotion;
 }
 
 /** A motion with its de-normalised features (frames × 263) and joints (frames × 22 × 3). */
@@ -382,7 +388,7 @@ export async function generateTimeline(segments: readonly TimelineSegment[], gen
         const known = new Float32Array((c + m) * D);
         known.set(prev.features.subarray((prev.frames - c) * D), 0);
         const keep = keepMask(c + m, [{ frames: [[0, c - 1]] }]);
-        const raw = await gen({ ...cond, frames: c + m, seed, known: { features: known, keep } });
+        const raw = await gen({ ...cond, frames: c + m, seed, known: { features: known, keep, fromTime: TIMELINE_KEEP_FROM } });
         checkMotion(raw, c + m, label(i));
         const features = easeSeams(raw.features, c + m, keep); // the seam eased before the next window continues it
         w = { ...raw, features, joints: recoverJoints(features, c + m) };

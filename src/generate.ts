@@ -16,6 +16,7 @@ import { type Backend, type OrtSession, getSession } from './runtime/ort';
 import { IncompatibleModelError, stepFunction } from './runtime/stepModel';
 import { SeededRandom } from './sampler/rng';
 import { type NoiseSource, type SamplerChoice, type SamplerName, type StepFn, sample } from './sampler/sampler';
+import type { KnownMotion } from './sampler/mask';
 import { ddimScheduleFor, scheduleFor } from './sampler/schedule';
 import { type TextEncoder, createTextEncoder } from './text';
 
@@ -59,8 +60,9 @@ export interface GenerateOptions {
    * (frames × featureDim, de-normalised like `Motion.features`) where `keep` (`keepMask`) is 1; the rest is
    * generated around them. The result's features equal `features` there (up to float rounding), and kept
    * frames decode to `recoverJoints(features)`'s joints (free frames' root velocities are adjusted: `pinKeptRoot`).
+   * `fromTime`: the sampler's `keepFromTime` (default every step).
    */
-  known?: { features: Float32Array; keep: Float32Array };
+  known?: KnownMotion;
   /**
    * Watch it denoise: each step's prediction x̂0, decoded to a motion exactly as the final result is
    * (de-normalised, joints recovered, smoothed and cleaned up as asked), after the step and before the
@@ -298,7 +300,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
       ...choice, step, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance,
       guidanceMinTime: o.guidanceMinTime ?? entry.guidanceMinTime ?? 0, x0Smoothing: o.x0Smoothing ?? entry.x0Smoothing ?? 0, signal: o.signal, onStep: o.onStep,
       ...(onX0 ? { onX0 } : {}),
-      ...(o.known ? { known: o.known.features.map((v, i) => (v - mean[i % D]) / std[i % D]), keep: o.known.keep } : {}),
+      ...(o.known ? { known: o.known.features.map((v, i) => (v - mean[i % D]) / std[i % D]), keep: o.known.keep, keepFromTime: o.known.fromTime } : {}),
     });
     const t2 = now();
     const { features, joints } = decode(r.x, o);

@@ -38,12 +38,12 @@ export { ddimUpdate } from './sampler/ddim';
 export { AbortError } from './sampler/sampler';
 // beyond one prompt: timelines, in-betweening, body-part edits and loops (inpainting with known/keep)
 export {
-  EditError, LOOP_END_FRAMES, MAX_TIMELINE_SECONDS, OVERLAP_FRAMES, bodyPartEdit, generateTimeline, inBetween, keptSegments, makeLoop,
+  EditError, LOOP_END_FRAMES, MAX_TIMELINE_SECONDS, OVERLAP_FRAMES, TIMELINE_KEEP_FROM, bodyPartEdit, generateTimeline, inBetween, keptSegments, makeLoop,
   planTimeline, stitchTimeline, withNewSeed,
 } from './edit';
 export type { EditCondition, EditGenerate, EditLimits, EditMotion, EditRequest, KeptPart, LoopResult, SegmentResult, Timeline, TimelineOptions, TimelinePlan, TimelineSegment } from './edit';
 export { FEATURE_GROUPS, GROUP_JOINTS, KeepSpecError, groupChannels, keepMask, parseKeep } from './sampler/mask';
-export type { FeatureGroup, KeepRect } from './sampler/mask';
+export type { FeatureGroup, KeepRect, KnownMotion } from './sampler/mask';
 export type { NoiseSource, SamplerName } from './sampler/sampler';
 export { webgpuAvailable } from './runtime/ort';
 export type { Backend, BackendRequest } from './runtime/ort';

@@ -98,7 +98,8 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
                     seed: int = 0, num: int = 1, z_dim: int = 64, feature_dim: int = 263,
                     objective: str = "ddgan", known: np.ndarray | None = None,
                     keep: np.ndarray | None = None, guidance_min_time: float = 0.0,
-                    x0_smoothing: float = 0.0, lengths: np.ndarray | None = None) -> np.ndarray:
+                    x0_smoothing: float = 0.0, lengths: np.ndarray | None = None,
+                    keep_from_time: float = 1.0) -> np.ndarray:
     """Normalised x̂_0 features (num, frames, 263). ``cond`` (C,) — all zeros = unconditional.
 
     Guidance in a limited interval (Kynkäänniemi et al. 2024; the manifest's ``guidanceMinTime``): the
@@ -118,6 +119,10 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
     and ``keep`` (frames, 263) 0/1 (``emdm.motion.mask.keep_mask``) impose the kept entries at every step: x_T's
     kept part is a_cum[T]·known + s_cum[T]·x_T, and x̂_0's kept part is replaced by ``known`` before each update,
     so the model always sees the known motion noised to its step's level and the result equals ``known`` there.
+    ``keep_from_time`` (the default 1 = every step): the kept part is imposed only at the steps whose time t_k ≤ it
+    (x_T's when the first step's is) and always at the last, so the earlier steps are shaped by the condition alone
+    and the later ones reconcile the motion with the known part (a timeline window: ``emdm.motion.edit``
+    ``TIMELINE_KEEP_FROM``). The random draws are the same either way.
     """
     if frames < 1:
         raise SampleError(f"frames must be ≥ 1, got {frames}")
@@ -128,11 +133,13 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
     if not (math.isfinite(guidance_min_time) and guidance_min_time >= 0):
         raise SampleError(f"guidance_min_time must be a finite time ≥ 0 (0 = guide every step), got {guidance_min_time}")
     sigma = check_x0_smoothing(x0_smoothing)
+    if not (math.isfinite(keep_from_time) and keep_from_time >= 0):
+        raise SampleError(f"keep_from_time must be a finite time ≥ 0 (1 = impose the kept part at every step), got {keep_from_time}")
     use_cfg = guidance != 1.0 and bool(np.any(cond != 0))
     c1 = np.repeat(cond[None], num, 0)
     c2 = np.concatenate([c1, np.zeros_like(c1)])
     x = rng.standard_normal((num, frames, feature_dim), dtype=np.float32)
-    if keep is not None:
+    if keep is not None and sch.time[steps - 1] <= keep_from_time:
         x = np.where(keep, np.float32(sch.a_cum[steps]) * known + np.float32(sch.s_cum[steps]) * x, x)
     for k in range(steps - 1, -1, -1):
         z = rng.standard_normal((num, z_dim), dtype=np.float32)
@@ -148,7 +155,7 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
             x0 = x0[num:] + np.float32(guidance) * (x0[:num] - x0[num:])
         if sigma > 0 and k > 0:
             x0 = smooth_frames(x0, sigma, lengths)
-        if keep is not None:
+        if keep is not None and (sch.time[k] <= keep_from_time or k == 0):
             x0 = np.where(keep, known, x0)
         if objective == "diffusion":     # DDIM, η = 0
             eps = (x - np.float32(sch.a_cum[k + 1]) * x0) / np.float32(sch.s_cum[k + 1])

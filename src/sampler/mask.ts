@@ -27,6 +27,17 @@ export const GROUP_JOINTS: Readonly<Record<FeatureGroup, readonly JointName[]>> 
   upper: ['spine1', 'spine2', 'spine3', 'neck', 'head', 'l_collar', 'r_collar', 'l_shoulder', 'r_shoulder', 'l_elbow', 'r_elbow', 'l_wrist', 'r_wrist'],
 };
 
+/**
+ * A motion to keep part of (generate()'s and createGenerator's `known`): its de-normalised `features`
+ * (frames × 263, like `Motion.features`), the 0/1 `keep` mask (`keepMask`), and optionally `fromTime`, the
+ * sampler's `keepFromTime` (the kept part imposed at the steps with t ≤ it and at the last; default 1: every step).
+ */
+export interface KnownMotion {
+  features: Float32Array;
+  keep: Float32Array;
+  fromTime?: number;
+}
+
 const DIM = 263;
 
 /** A rectangle to keep: inclusive [start, end] frame ranges (end `null` = the last frame; absent = every

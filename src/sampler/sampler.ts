@@ -71,6 +71,13 @@ export type SampleOptions = SamplerChoice & {
    */
   known?: Float32Array;
   keep?: Float32Array;
+  /**
+   * The kept part is imposed only at the steps whose time t_k ≤ keepFromTime (x_T's when the first step's is)
+   * and always at the last step: the earlier steps are shaped by the condition alone, the later ones reconcile
+   * the motion with the known part (a timeline window: src/edit.ts TIMELINE_KEEP_FROM). Absent or 1: every step.
+   * The random draws do not depend on it.
+   */
+  keepFromTime?: number;
   signal?: AbortSignal;
   onStep?: (done: number, total: number) => void;
   /**
@@ -138,11 +145,14 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
   if (!Number.isFinite(xs) || xs < 0) throw new RangeError(`sampler: x0Smoothing must be a finite σ ≥ 0 in frames (0 = off), got ${xs}`);
   const s = o.guidance;
   const constraint = checkConstraint(o.known, o.keep, L, D, schedule);
+  const keepFrom = o.keepFromTime ?? 1;
+  if (!Number.isFinite(keepFrom) || keepFrom < 0) throw new RangeError(`sampler: keepFromTime must be a finite time ≥ 0 (1 = impose the kept part at every step), got ${keepFrom}`);
+  const imposeAt = (k: number) => constraint !== null && (schedule.time[k] <= keepFrom || k === 0);
 
   throwIfAborted(o.signal, 0, schedule.steps);
   const x = Float32Array.from(o.noise.normals(n, 'xT', schedule.steps));
   checkLength(x, n, 'x_T noise');
-  if (constraint) imposeNoisedKnown(x, constraint, schedule);
+  if (constraint && imposeAt(schedule.steps - 1)) imposeNoisedKnown(x, constraint, schedule);
 
   // inputs of a 2-row (guided: [c, 0]) and of a 1-row call, made when first needed
   const rowBuffers: (StepInputs | undefined)[] = [];
@@ -159,6 +169,7 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     checkLength(drawn, zDim, `z noise at step ${k}`);
     const z = ddim ? new Float32Array(zDim) : drawn;
     const guidedK = guided && schedule.time[k] > gMin;
+    const kept = imposeAt(k) ? constraint : null;
     const inputs = buffers(guidedK ? 2 : 1);
     for (let b = 0; b < inputs.batch; b++) {
       inputs.x.set(x, b * n);
@@ -172,8 +183,8 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     // x̂0 smoothed along time at every step but the last (x0Smoothing), before the kept part is replaced
     const smoothed = xs > 0 && k > 0 ? smoothJoints(guidedK ? guidedX0(out, n, s) : out, L, xs) : null;
     if (ddim) {
-      const x0 = smoothed ?? (guidedK ? guidedX0(out, n, s) : constraint ? Float32Array.from(out) : out);
-      if (constraint) replaceKnown(x0, constraint);
+      const x0 = smoothed ?? (guidedK ? guidedX0(out, n, s) : kept ? Float32Array.from(out) : out);
+      if (kept) replaceKnown(x0, kept);
       const x0copy = o.onX0 ? Float32Array.from(x0) : null;
       ddimUpdate(x, x0, k, schedule);
       stepMs.push(now() - t0);
@@ -190,7 +201,7 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     for (let i = 0; i < n; i++) {
       // guided: x0 = x0_u + s·(x0_c − x0_u), rounded to float32 like the Python reference
       let x0 = smoothed ? smoothed[i] : guidedK ? Math.fround(out[n + i] + Math.fround(s * Math.fround(out[i] - out[n + i]))) : out[i];
-      if (constraint && constraint.keep[i]) x0 = constraint.known[i];
+      if (kept && kept.keep[i]) x0 = kept.known[i];
       if (x0s) x0s[i] = x0;
       let v = c1 * x0 + c2 * x[i];
       if (eps) v += sig * eps[i];

@@ -9,6 +9,7 @@ import type { FileEvent } from '../cache/modelCache';
 import type { Condition, GenerateResult } from '../generate';
 import type { Manifest } from '../manifest';
 import type { BackendRequest } from '../runtime/ort';
+import type { KnownMotion } from '../sampler/mask';
 
 export type { FileEvent };
 
@@ -48,9 +49,9 @@ export interface WireGenerateOptions {
   /**
    * Inpainting (GenerateOptions.known): a known motion's de-normalised features (frames × featureDim, like
    * `Motion.features` of an earlier result) and the 0/1 `keep` mask (`keepMask`) of the entries to keep.
-   * Both are copied to the worker (not transferred: the sender keeps its arrays).
+   * Both are copied to the worker (not transferred: the sender keeps its arrays). `fromTime`: the sampler's keepFromTime.
    */
-  known?: { features: Float32Array; keep: Float32Array };
+  known?: KnownMotion;
 }
 
 export type ToWorker =

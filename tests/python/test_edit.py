@@ -28,9 +28,10 @@ class Spy:
         spy = self
 
         class Spying(E.Editor):
-            def sample(self, prompt, frames, seed, known=None, keep=None):
-                x = super().sample(prompt, frames, seed, known, keep)
-                spy.calls.append({"prompt": prompt, "frames": frames, "seed": seed, "known": known, "keep": keep, "x": x})
+            def sample(self, prompt, frames, seed, known=None, keep=None, keep_from_time=1.0):
+                x = super().sample(prompt, frames, seed, known, keep, keep_from_time)
+                spy.calls.append({"prompt": prompt, "frames": frames, "seed": seed, "known": known, "keep": keep,
+                                  "keep_from_time": keep_from_time, "x": x})
                 return x
 
         base = edit_fixture.tiny_editor()

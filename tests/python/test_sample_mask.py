@@ -115,6 +115,30 @@ def test_the_model_sees_the_known_motion_noised_to_each_steps_level(tiny_step):
                 assert abs(eps.mean()) < 0.05 and abs(eps.std() - 1) < 0.05, (k, eps.mean(), eps.std())
 
 
+def test_keep_from_time_imposes_the_kept_part_only_at_the_later_steps(tiny_step, real_features):
+    """A timeline window keeps its second of context only from t ≤ keep_from_time on (and at the last step): the
+    model inputs before carry no trace of it, the result still equals it exactly, and 1 is every step, bit for bit."""
+    known, keep = _known_keep(real_features)
+    kept = keep.astype(bool)
+    cond = np.random.default_rng(0).standard_normal(TINY_COND_DIM).astype(np.float32)
+    def run(**kw):
+        inputs = []
+        def recording(x, z, c, t, mask):
+            inputs.append(x[0].copy())
+            return tiny_step(x, z, c, t, mask)
+        return sample_features(recording, cond, 16, steps=4, guidance=2.5, seed=3, known=known, keep=keep, **kw)[0], inputs
+    every, _ = run()
+    assert np.array_equal(run(keep_from_time=1.0)[0], every)
+    late, inputs = run(keep_from_time=0.6)                     # t = 1, 0.75 free; 0.5, 0.25 kept
+    free, free_inputs = run(keep_from_time=0.0)                # only the last step
+    assert np.array_equal(late[kept], known[kept]) and np.array_equal(free[kept], known[kept])
+    assert all(np.array_equal(a, b) for a, b in zip(inputs[:3], free_inputs[:3]))   # no trace of it yet (the input
+    assert not np.array_equal(inputs[3], free_inputs[3])        # of t = 0.5 comes from t = 0.75's x̂0); then it steers
+    assert np.abs(late - every)[~kept].mean() > 1e-3
+    with pytest.raises(SampleError, match="keep_from_time must be a finite time"):
+        sample_features(tiny_step, cond, 16, steps=2, known=known, keep=keep, keep_from_time=float("nan"))
+
+
 @pytest.mark.parametrize("known, keep, says", [
     (np.zeros((16, 263)), None, "both known"),
     (np.zeros((15, 263)), np.ones((16, 263)), r"known has shape \(15, 263\)"),

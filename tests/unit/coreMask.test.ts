@@ -127,6 +127,28 @@ describe('sampler with a known motion and a keep mask (tiny step model)', () => 
     expect(free / n).toBeGreaterThan(1e-3);
   });
 
+  it('keepFromTime: the kept part imposed only at steps with t ≤ it and at the last; 1 = every step, bit for bit', async () => {
+    const step = await tinyStep();
+    const schedule = computeSchedule(4); // t = 1, 0.75, 0.5, 0.25 (about)
+    const base = { method: 'ddgan' as const, schedule, step, frames: L, featureDim: D, zDim: 64, cond: fx.get('cond'), guidance: 2.5, known, keep };
+    const run = async (keepFromTime?: number) => {
+      const x0s: Float32Array[] = [];
+      const r = await sample({ ...base, noise: fixtureNoise(runCase('')), onX0: (x0) => x0s.push(x0), ...(keepFromTime === undefined ? {} : { keepFromTime }) });
+      return { x: r.x, x0s };
+    };
+    const every = await run();
+    expect(maxAbsDiff((await run(1)).x, every.x)).toBe(0);
+    const late = await run(0.6);
+    const keptEqual = (x: Float32Array) => keep.every((k, i) => !k || x[i] === known[i]);
+    expect(late.x0s.map(keptEqual)).toEqual([false, false, true, true]); // t = 1 and 0.75 are the model's own
+    expect(every.x0s.map(keptEqual)).toEqual([true, true, true, true]);
+    expect(keptEqual(late.x)).toBe(true); // the result keeps them exactly
+    expect(maxAbsDiff(late.x, every.x)).toBeGreaterThan(1e-3); // and the free part differs
+    expect(keptEqual((await run(0)).x)).toBe(true); // 0: only the last step
+    const none: StepFn = async () => new Float32Array(L * D);
+    await expect(sample({ ...base, step: none, noise: new SeededRandom(1), keepFromTime: Number.NaN })).rejects.toThrow(/keepFromTime must be a finite time ≥ 0/);
+  });
+
   it('refuses half a constraint, a wrong size, a soft mask and NaN where kept', async () => {
     const step: StepFn = async () => new Float32Array(L * D);
     const base = { schedule: computeSchedule(2), step, noise: new SeededRandom(1), frames: L, featureDim: D, zDim: 64, cond: new Float32Array(8), guidance: 1 };

@@ -6,7 +6,10 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
-import { type EditGenerate, type EditRequest, type TimelineSegment, bodyPartEdit, generateTimeline, inBetween, makeLoop } from '../../src/edit';
+import {
+  type EditGenerate, type EditRequest, type TimelineSegment, LOOP_END_FRAMES, OVERLAP_FRAMES, SEAM_BLEND_EXTRA, SEAM_BLEND_TAU, SEAM_EASE_ACCEL,
+  SEAM_EASE_FRAMES, TIMELINE_KEEP_FROM, bodyPartEdit, generateTimeline, inBetween, makeLoop,
+} from '../../src/edit';
 import { type Generator, openModel } from '../../src/generate';
 import { type Manifest, loadManifest } from '../../src/manifest';
 import { recoverJoints } from '../../src/motion/recover';
@@ -69,12 +72,20 @@ beforeAll(async () => {
 afterAll(() => model?.dispose());
 
 describe('src/edit.ts = emdm.motion.edit (tiny-edit fixture)', () => {
+  it('uses the same constants: overlap, loop ends, seam fade and cross-fade, the timeline windows\' keepFromTime', () => {
+    expect(fx.meta).toMatchObject({
+      overlap: OVERLAP_FRAMES, loopEnds: LOOP_END_FRAMES, seamEase: SEAM_EASE_FRAMES, seamAccel: SEAM_EASE_ACCEL,
+      seamBlendExtra: SEAM_BLEND_EXTRA, seamBlendTau: SEAM_BLEND_TAU, timelineKeepFrom: TIMELINE_KEEP_FROM,
+    });
+  });
+
   const tlSegs = segsOf(meta.ops.timeline.segments);
   const base = () => ({ frames: meta.ops.timeline.total, fps: meta.fps, features: fx.get('timeline_features'), joints: fx.get('timeline_joints') });
 
   it('timeline and regenerating segment 2: same windows, features and stitched joints within 1e-4', async () => {
     calls.length = 0;
     const t = await generateTimeline(tlSegs, gen, limits);
+    expect(calls.map((c) => c.known?.fromTime)).toEqual(calls.map((c, i) => (i === 0 ? undefined : TIMELINE_KEEP_FROM)));
     expect(t.segments.map((s) => s.frames)).toEqual(meta.ops.timeline.frames);
     expect(t.starts).toEqual(meta.ops.timeline.starts);
     expect(t.frames).toBe(meta.ops.timeline.total);

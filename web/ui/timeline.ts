@@ -336,7 +336,7 @@ export class TimelinePanel {
             condition: r.action !== undefined ? { type: 'action', label } : { type: 'text', text: r.prompt ?? '' },
             frames: r.frames, steps: state.steps, guidance: state.guidance, seed: r.seed, signal,
             // copies: the client transfers these buffers to the worker, and src/edit.ts reads `keep` again after
-            ...(r.known ? { known: { features: r.known.features.slice(), keep: r.known.keep.slice() } } : {}),
+            ...(r.known ? { known: { ...r.known, features: r.known.features.slice(), keep: r.known.keep.slice() } } : {}),
             onStep: (d, t) => {
               session.counters.stepsRun++;
               view.showProgress(calls.progress(d / t), calls.text(d, t));

@@ -192,9 +192,9 @@ class Recorder:
         self.seconds: list[float] = []
 
         class Recording(E.Editor):
-            def sample(self, prompt, frames, seed, known=None, keep=None):
+            def sample(self, prompt, frames, seed, known=None, keep=None, keep_from_time=1.0):
                 t0 = time.perf_counter()
-                x = super().sample(prompt, frames, seed, known, keep)
+                x = super().sample(prompt, frames, seed, known, keep, keep_from_time)
                 rec.seconds.append(time.perf_counter() - t0)
                 rec.windows.append(x)
                 return x

@@ -60,10 +60,10 @@ def tiny_editor(parity_dir: Path = PARITY_DIR, record: list | None = None) -> E.
     eye = np.eye(len(LABELS), dtype=np.float32)
 
     class Recording(E.Editor):
-        def sample(self, prompt, frames, seed, known=None, keep=None):
+        def sample(self, prompt, frames, seed, known=None, keep=None, keep_from_time=1.0):
             if record is not None:
                 record.append((frames, prompt, seed))
-            return super().sample(prompt, frames, seed, known, keep)
+            return super().sample(prompt, frames, seed, known, keep, keep_from_time)
 
     def condition(label: str) -> np.ndarray:
         if label not in LABELS:
@@ -113,7 +113,8 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
         "model": "tiny-step.onnx", "meanStd": "tiny.meanstd.f32", "labels": list(LABELS), "condition": "one-hot e_label",
         "objective": "ddgan", "steps": STEPS, "guidance": GUIDANCE, "zDim": 64, "featureDim": 263, "fps": E.FPS,
         "maxFrames": 196, "overlap": E.OVERLAP, "loopEnds": E.LOOP_ENDS,
-        "seamEase": E.SEAM_EASE, "seamAccel": E.SEAM_ACCEL,
+        "seamEase": E.SEAM_EASE, "seamAccel": E.SEAM_ACCEL, "seamBlendExtra": E.SEAM_BLEND_EXTRA,
+        "seamBlendTau": E.SEAM_BLEND_TAU, "timelineKeepFrom": E.TIMELINE_KEEP_FROM,
         "ops": {
             "timeline": {"segments": [seg(s) for s in SEGMENTS], "frames": list(tl.frames), "starts": tl.starts,
                          "total": n},
