@@ -133,7 +133,11 @@ def test_bone_lengths_match_the_reference_skeleton(generated):
     row = next((r for r in models_report.load_bones()["rows"] if r["file"] == entry_file(name, entry)), None)
     fix = "run `python -m emdm.eval.models_report measure` then `python -m emdm.eval.models_report`"
     assert row is not None, f"{name}: not in {models_report.BONES_JSON.name}; {fix}"
-    assert abs(row["worst"] - worst_rel) < 1e-6, (f"{name}: {models_report.BONES_JSON.name} says worst bone "
+    # an int8 file's matmuls run on CPU-specific kernels (onnxruntime's u8s8 GEMM: AVX2's saturating multiply-add
+    # vs AVX-512/VNNI), so its motions differ from machine to machine: measured on an AVX2-only AMD EPYC against the
+    # table made elsewhere, the worst bone moved by up to 0.23 points (3.13 % → 2.90 %); fp32 agrees within 1e-6
+    tol = 5e-3 if name.endswith(".int8") else 1e-6
+    assert abs(row["worst"] - worst_rel) < tol, (f"{name}: {models_report.BONES_JSON.name} says worst bone "
                                                   f"{row['worst']:.2%}, measured {worst_rel:.2%}; {fix}")
 
 
