@@ -41,9 +41,12 @@ test.describe('generation worker', () => {
       + `50 ms timer: max late ${idle.maxTimerDelay.toFixed(1)} ms idle, ${busy.maxTimerDelay.toFixed(1)} ms during`);
     // Before the worker no frame and no timer ran during a generation: one gap as long as the generation.
     // Always: frames and timer ticks keep coming, no gap spans half of the generation.
-    expect(busy.frames).toBeGreaterThanOrEqual(5);
+    // At least 3 frames and 3 ticks: a frozen page draws one frame and ticks once, after the freeze. (5 of each
+    // failed on a loaded 2-core machine whose SwiftShader frames kept even an idle 50 ms timer 133 ms late: 4 ticks
+    // in a 1 s generation, the page not frozen.)
+    expect(busy.frames).toBeGreaterThanOrEqual(3);
     expect(busy.maxFrameGap).toBeLessThan(busy.ms / 2);
-    expect(busy.timerTicks).toBeGreaterThanOrEqual(5);
+    expect(busy.timerTicks).toBeGreaterThanOrEqual(3);
     expect(busy.maxTimerDelay).toBeLessThan(busy.ms / 2);
     // The issue's bounds, where the machine itself keeps them while idle (a 50 ms timer on time within
     // 25 ms, frames within 50 ms): the longest frame gap at most twice the idle one, floored at 50 ms (three
@@ -88,6 +91,9 @@ test.describe('generation worker', () => {
   });
 
   test('a click on Generate during a generation cancels it at the next step boundary', async ({ page }) => {
+    // a small view, as above: at full size SwiftShader's frames held the page's thread long enough on a loaded
+    // machine that the wait for step 2 below saw the generation only when all 10 steps were done
+    await page.setViewportSize({ width: 480, height: 360 });
     await openReady(page);
     // warm-up, and the duration of one step on this machine now
     const warm = await page.evaluate((t) => window.emdm.generate({ mode: 'text', text: t, seconds: 9.8, steps: 10, seed: 1 }), PROMPT);
