@@ -148,22 +148,24 @@ export function easeSeams(features: ArrayLike<number>, frames: number, keep: Arr
       return { w: Array.from({ length: m }, (_, i) => 0.5 * (1 + Math.cos((Math.PI * i) / m))), b: Math.min(m + SEAM_BLEND_EXTRA, e - s) };
     };
     if (s >= 1 && kept[s - 1]) {
+      const beyond = s >= 2 && kept[s - 2] ? s - 2 : -1; // a second kept frame: the kept side's velocity
       const terms: [Float64Array, Float64Array][] = [];
-      if (s >= 2 && kept[s - 2]) terms.push([row(s - 1), row(s - 2)]);
+      if (beyond >= 0) terms.push([row(s - 1), row(beyond)]);
       if (s + 1 < e) terms.push([row(s + 1), row(s)]);
       const o = offset(row(s - 1), 1, terms, row(s));
       const { w, b } = fade(o);
       w.forEach((wi, i) => adds.push({ t: s + i, w: wi, o }));
-      blends.push({ k0: s - 1, k1: s >= 2 && kept[s - 2] ? s - 2 : -1, rows: Array.from({ length: b }, (_, i) => s + i) });
+      blends.push({ k0: s - 1, k1: beyond, rows: Array.from({ length: b }, (_, i) => s + i) });
     }
     if (e < frames && kept[e]) {
+      const beyond = e + 1 < frames && kept[e + 1] ? e + 1 : -1;
       const terms: [Float64Array, Float64Array][] = [];
-      if (e + 1 < frames && kept[e + 1]) terms.push([row(e + 1), row(e)]);
+      if (beyond >= 0) terms.push([row(beyond), row(e)]);
       if (e - 2 >= s) terms.push([row(e - 1), row(e - 2)]);
       const o = offset(row(e), -1, terms, row(e - 1));
       const { w, b } = fade(o);
       w.forEach((wi, i) => adds.push({ t: e - 1 - i, w: wi, o }));
-      blends.push({ k0: e, k1: e + 1 < frames && kept[e + 1] ? e + 1 : -1, rows: Array.from({ length: b }, (_, i) => e - 1 - i) });
+      blends.push({ k0: e, k1: beyond, rows: Array.from({ length: b }, (_, i) => e - 1 - i) });
     }
   }
   for (const { t, w, o } of adds) {

@@ -147,12 +147,14 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
   const constraint = checkConstraint(o.known, o.keep, L, D, schedule);
   const keepFrom = o.keepFromTime ?? 1;
   if (!Number.isFinite(keepFrom) || keepFrom < 0) throw new RangeError(`sampler: keepFromTime must be a finite time ≥ 0 (1 = impose the kept part at every step), got ${keepFrom}`);
-  const imposeAt = (k: number) => constraint !== null && (schedule.time[k] <= keepFrom || k === 0);
+  /** the constraint imposed at step k: at the steps with t ≤ keepFromTime and at the last */
+  const keptAt = (k: number): Constraint | null => (constraint && (schedule.time[k] <= keepFrom || k === 0) ? constraint : null);
 
   throwIfAborted(o.signal, 0, schedule.steps);
   const x = Float32Array.from(o.noise.normals(n, 'xT', schedule.steps));
   checkLength(x, n, 'x_T noise');
-  if (constraint && imposeAt(schedule.steps - 1)) imposeNoisedKnown(x, constraint, schedule);
+  const first = keptAt(schedule.steps - 1);
+  if (first) imposeNoisedKnown(x, first, schedule);
 
   // inputs of a 2-row (guided: [c, 0]) and of a 1-row call, made when first needed
   const rowBuffers: (StepInputs | undefined)[] = [];
@@ -169,7 +171,7 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     checkLength(drawn, zDim, `z noise at step ${k}`);
     const z = ddim ? new Float32Array(zDim) : drawn;
     const guidedK = guided && schedule.time[k] > gMin;
-    const kept = imposeAt(k) ? constraint : null;
+    const kept = keptAt(k);
     const inputs = buffers(guidedK ? 2 : 1);
     for (let b = 0; b < inputs.batch; b++) {
       inputs.x.set(x, b * n);

@@ -405,6 +405,18 @@ def bars(m: dict) -> dict:
     return {k: {"met": bool(v[0]), "figure": v[1]} for k, v in out.items()}
 
 
+def page_variant(model: str, models_dir: Path | None) -> str | None:
+    """The file the page runs for a shipped model: its entry's ``defaultVariant`` (None: the fp32 file, also when the
+    manifest cannot be read, which ``open_model`` then reports)."""
+    from emdm import manifest as mf
+    from emdm.paths import MODELS_DIR
+
+    try:
+        return mf.load(Path(models_dir or MODELS_DIR))["models"].get(model, {}).get("defaultVariant")
+    except mf.ManifestError:
+        return None
+
+
 def run(a) -> Path:
     from emdm.eval.coverage import Benchmark
     from emdm.eval.evaluate import _evaluator_info, dataset_info, hardware, write_result
@@ -417,9 +429,8 @@ def run(a) -> Path:
 
     out = check_writable(a.out or (RESULTS_DIR / "json" / f"editing-{a.model}.json"))
     t0, load0 = time.time(), os.getloadavg()[0]
-    opened = open_model(a.model, models_dir=a.models_dir, threads=a.threads, variant=None if a.variant == "page" else a.variant)
-    if a.variant == "page" and opened.meta.get("defaultVariant") not in (None, "fp32"):    # the file the page runs
-        opened = open_model(a.model, models_dir=a.models_dir, threads=a.threads, variant=opened.meta["defaultVariant"])
+    variant = page_variant(a.model, a.models_dir) if a.variant == "page" else a.variant
+    opened = open_model(a.model, models_dir=a.models_dir, threads=a.threads, variant=variant)
     model = Editor.open(opened, steps=a.steps)
     bench = Benchmark(a.dataset, a.split, a.classifier, a.prompts, seeds=1, seed=a.seed)
     m = measure(model, bench, a)

@@ -333,17 +333,19 @@ def ease_seams(features: np.ndarray, keep: np.ndarray, ease: int = SEAM_EASE, ac
             t += 1
         e = t
         if s >= 1 and kept[s - 1]:
-            v = [f[s - 1] - f[s - 2]] if s >= 2 and kept[s - 2] else []
+            beyond = s - 2 if s >= 2 and kept[s - 2] else None          # a second kept frame: the kept side's velocity
+            v = [f[s - 1] - f[beyond]] if beyond is not None else []
             v += [f[s + 1] - f[s]] if s + 1 < e else []
             o, w, b = fade(f[s - 1] + (np.mean(v, 0) if v else 0) - f[s])
             offsets += [(s + i, w[i] * o) for i in range(len(w))]
-            blends.append((s - 1, s - 2 if s >= 2 and kept[s - 2] else None, s + np.arange(b)))
+            blends.append((s - 1, beyond, s + np.arange(b)))
         if e < n and kept[e]:
-            v = [f[e + 1] - f[e]] if e + 1 < n and kept[e + 1] else []
+            beyond = e + 1 if e + 1 < n and kept[e + 1] else None
+            v = [f[beyond] - f[e]] if beyond is not None else []
             v += [f[e - 1] - f[e - 2]] if e - 2 >= s else []
             o, w, b = fade(f[e] - (np.mean(v, 0) if v else 0) - f[e - 1])
             offsets += [(e - 1 - i, w[i] * o) for i in range(len(w))]
-            blends.append((e, e + 1 if e + 1 < n and kept[e + 1] else None, e - 1 - np.arange(b)))
+            blends.append((e, beyond, e - 1 - np.arange(b)))
     for row, o in offsets:
         f[row] += o
     for k0, k1, rows in blends:                    # in order: a run's left seam, then its right one
