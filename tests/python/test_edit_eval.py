@@ -34,13 +34,41 @@ def test_a_continuous_clip_has_no_seam_and_a_planted_jump_is_one(clip):
 def test_root_jumps_at_a_seam_are_found(clip):
     r = ev.seam_root(clip, [60])[0]
     assert r["step_ratio"] < 1.5 and r["turn_ratio"] < 1.5
+    assert r["jump_ratio"] < 1.5 and r["turn_jump_ratio"] < 1.5
     moved = clip.copy()
     moved[60:, :, 0] += 0.3
-    assert ev.seam_root(moved, [60])[0]["step_ratio"] > 1.5
+    r = ev.seam_root(moved, [60])[0]
+    assert r["step_ratio"] > 1.5 and r["jump_ratio"] > 1.5
     turned = clip.copy()
     pelvis = turned[60, 0] * [1, 0, 1]
     turned[60:] = rot_y(np.full((60, 1), 1.2), turned[60:] - pelvis) + pelvis   # 69°; the clip turns ≤ 30° a frame (p95)
-    assert ev.seam_root(turned, [60])[0]["turn_ratio"] > 1.5
+    r = ev.seam_root(turned, [60])[0]
+    assert r["turn_ratio"] > 1.5 and r["turn_jump_ratio"] > 1.5
+
+
+def test_a_steady_turn_through_a_seam_is_not_a_jump():
+    # a 15 s walk, 5 cm a frame with a 2 cm sway per step and a slight wobble of the heading, turns 2° a frame on
+    # frames 55–64 only: at a seam in the turn the heading's change is far above its 95th percentile, but neither
+    # the heading nor the root changes faster there than the frames around it
+    f = 300
+    t = np.arange(f)
+    rate = np.radians(0.3 * np.sin(2 * np.pi * t / 40) + np.where((t >= 55) & (t < 65), 2.0, 0.0))
+    theta = np.cumsum(rate)
+    root = np.cumsum(0.05 * np.stack([np.sin(theta), np.zeros(f), np.cos(theta)], 1), 0)
+    root[:, 0] += 0.02 * np.sin(2 * np.pi * t / 20)
+    body = np.zeros((f, 22, 3))
+    body[:, 1], body[:, 2] = [0.1, -0.1, 0.0], [-0.1, -0.1, 0.0]         # hips: the heading's across-vector
+    body[:, 16], body[:, 17] = [0.2, 0.4, 0.0], [-0.2, 0.4, 0.0]          # shoulders
+    joints = rot_y(theta[:, None], body) + root[:, None] + [0.0, 0.9, 0.0]
+    r = ev.seam_root(joints, [60])[0]
+    assert r["turn_ratio"] > 1.5                                       # a large turn for this walk ...
+    assert r["turn_jump_ratio"] < 1.5 and r["jump_ratio"] < 1.5        # ... but no jump
+    kinked = joints.copy()                                             # the same walk turned 17° at once at the seam
+    kinked[60:] = rot_y(np.full((f - 60, 1), 0.3), kinked[60:] - root[60] * [1, 0, 1]) + root[60] * [1, 0, 1]
+    assert ev.seam_root(kinked, [60])[0]["turn_jump_ratio"] > 1.5
+    slid = joints.copy()                                               # or slid 10 cm sideways at once
+    slid[60:, :, 0] += 0.1
+    assert ev.seam_root(slid, [60])[0]["jump_ratio"] > 1.5
 
 
 def test_foot_skate_near_seams_against_the_rest():
@@ -105,3 +133,17 @@ def test_the_committed_result_claims_only_what_its_figures_say(tmp_path):
     assert text.count("**met**") == sum(b["met"] for b in r["bars"].values())
     assert text.count("**not met**") == sum(not b["met"] for b in r["bars"].values())
     assert r["bars"]["seam_acceleration"]["figure"] in text
+
+
+def test_semantics_and_root_are_judged_on_their_bar_figures():
+    path = RESULTS_DIR / "json" / "editing-emdm-t2m-web.json"
+    if not path.is_file():
+        pytest.skip(f"{path} not measured yet (python -m emdm.eval.editing)")
+    r = json.loads(path.read_text())
+    sem, seams = r["semantics"], r["seams"]
+    sem.update(ratio=0.5, ratio_after_transition=0.8)                 # read after the first second, at the bar: met
+    assert ev.bars(r)["semantics"]["met"]
+    sem.update(ratio=1.0, ratio_after_transition=0.79)
+    assert not ev.bars(r)["semantics"]["met"]
+    seams["root_within_bar"] = seams["count"] - 1                      # one seam whose root jumps
+    assert not ev.bars(r)["seam_root"]["met"]
