@@ -135,15 +135,13 @@ def seam_root(joints: np.ndarray, seams) -> list[dict]:
     step itself and the heading change from s−1 to s over their p95 (``step_ratio``, ``turn_ratio``) are kept as
     figures: they are not jumps, a walk that turns on through a seam at its own rate is a large step or turn there,
     and real clips reach 1.8× on them at their middle frame."""
-    step, turn = root_steps(joints)
-    j = np.asarray(joints, np.float64)
-    acc = np.zeros(len(j))
-    acc[1:-1] = np.linalg.norm(j[2:, 0, [0, 2]] - 2 * j[1:-1, 0, [0, 2]] + j[:-2, 0, [0, 2]], axis=1)
     from emdm.motion.features import heading_angles
 
-    d = np.angle(np.exp(1j * np.diff(heading_angles(j))))
-    tacc = np.zeros(len(j))
-    tacc[1:-1] = np.abs(np.angle(np.exp(1j * np.diff(d))))
+    step, turn = root_steps(joints)
+    j = np.asarray(joints, np.float64)
+    acc, tacc = np.zeros(len(j)), np.zeros(len(j))                     # per frame t = 1..F−2 (0 at the ends)
+    acc[1:-1] = np.linalg.norm(j[2:, 0, [0, 2]] - 2 * j[1:-1, 0, [0, 2]] + j[:-2, 0, [0, 2]], axis=1)
+    tacc[1:-1] = np.abs(np.angle(np.exp(1j * np.diff(np.diff(heading_angles(j))))))
     away = _away(len(step), seams, 1)
     ps, pt = np.percentile(step[away], 95), np.percentile(turn[away], 95)
     away2 = _away(len(j), seams, 2)
@@ -331,8 +329,8 @@ def measure(model, bench, a, log=print) -> dict:
               for k in range(3)]
     late_hits, single_late_hits = int(sum(hit(pred_late, seg_action))), int(sum(hit(pred_single_late, single_action)))
     raw_rate = float(np.mean(hit(pred_raw, seg_action))) if pred_raw is not None else None
-    later = [i for i in range(len(seg_action)) if i % 3]                 # segments 2 and 3, and the one before each
-    before = [tl_orders[i // 3][i % 3 - 1] for i in later]
+    later = [i for i in range(len(seg_action)) if i % 3]                 # segments 2 and 3 of every timeline
+    before = [tl_orders[i // 3][i % 3 - 1] for i in later]               # the action of the segment before each
     # how long the transition is, to the classifier: segments 2 and 3 recognised without their first d frames
     later_after = {d: float(np.mean(hit(bench.predict([seg_feats[i][d:] for i in later]), [seg_action[i] for i in later])))
                    for d in TRANSITION_FRAMES}
