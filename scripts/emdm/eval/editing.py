@@ -129,28 +129,25 @@ def root_steps(joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def seam_root(joints: np.ndarray, seams) -> list[dict]:
     """Per seam s: whether the root jumps there, in position and in heading.
 
-    A jump is a second difference: the root's x/z acceleration (|p[t+1] − 2p[t] + p[t−1]|) and its heading's
-    (|Δθ[t] − Δθ[t−1]|, wrapped), the larger of the two that span the step from s−1 to s, over their 95th percentile
-    away from seams (``jump_ratio``, ``turn_jump_ratio``: the bar), as ``seam_acceleration`` does for the joints. The
+    A jump is a second difference: ``seam_acceleration`` of the root on the floor and of the (unwrapped) heading,
+    each as a one-joint motion: the larger of the two second differences that span the step from s−1 to s, over
+    their 95th percentile away from seams (``jump_ratio``, ``turn_jump_ratio``: the bar). The
     step itself and the heading change from s−1 to s over their p95 (``step_ratio``, ``turn_ratio``) are kept as
     figures: they are not jumps, a walk that turns on through a seam at its own rate is a large step or turn there,
     and real clips reach 1.8× on them at their middle frame."""
     from emdm.motion.features import heading_angles
 
     step, turn = root_steps(joints)
-    j = np.asarray(joints, np.float64)
-    acc, tacc = np.zeros(len(j)), np.zeros(len(j))                     # per frame t = 1..F−2 (0 at the ends)
-    acc[1:-1] = np.linalg.norm(j[2:, 0, [0, 2]] - 2 * j[1:-1, 0, [0, 2]] + j[:-2, 0, [0, 2]], axis=1)
-    tacc[1:-1] = np.abs(np.angle(np.exp(1j * np.diff(np.diff(heading_angles(j))))))
     away = _away(len(step), seams, 1)
     ps, pt = np.percentile(step[away], 95), np.percentile(turn[away], 95)
-    away2 = _away(len(j), seams, 2)
-    away2[[0, -1]] = False
-    pa, pta = np.percentile(acc[away2], 95), np.percentile(tacc[away2], 95)
+    j = np.asarray(joints, np.float64)
+    root = j[:, :1] * np.array([1.0, 0.0, 1.0])                            # the root on the floor, as one joint
+    heading = np.zeros_like(root)
+    heading[:, 0, 0] = np.unwrap(heading_angles(j))                      # the heading, as a joint moving along x
+    jump, turn_jump = seam_acceleration(root, seams), seam_acceleration(heading, seams)
     return [{"step_ratio": float(step[s - 1] / ps), "turn_ratio": float(turn[s - 1] / pt),
              "step_cm": float(step[s - 1] * 100), "turn_deg": float(np.degrees(turn[s - 1])),
-             "jump_ratio": float(max(acc[s - 1], acc[s]) / pa), "turn_jump_ratio": float(max(tacc[s - 1], tacc[s]) / pta)}
-            for s in seams]
+             "jump_ratio": jump[i], "turn_jump_ratio": turn_jump[i]} for i, s in enumerate(seams)]
 
 
 def pose(joints: np.ndarray) -> np.ndarray:
@@ -303,13 +300,16 @@ def measure(model, bench, a, log=print) -> dict:
         for k, x in enumerate(o):
             seg_feats.append(tl.features[tl.starts[k]:tl.starts[k] + tl.frames[k]])
             seg_action.append(x)
-    pred_seg = bench.predict(seg_feats)
+    # each segment classified whole, after its first second (the bar, below) and after the first d frames of the
+    # drop curve (TRANSITION_FRAMES), once per d
+    pred_without = {d: bench.predict([f[d:] for f in seg_feats]) for d in sorted({0, FPS, *TRANSITION_FRAMES})}
+    pred_seg = pred_without[0]
     pred_single = bench.predict([f for f, _ in singles])
     # after the transition: each segment and each single motion without its first second. A segment's first second
     # holds its seam's blend (``ease_seams``: the previous action faded into the new one over ≥ 14 frames, which the
     # seam bars need), and the classifier's backward GRU ends its reading on a clip's first frames; the single
     # motions lose the same second, so both are read from the same length.
-    pred_late = bench.predict([f[FPS:] for f in seg_feats])
+    pred_late = pred_without[FPS]
     pred_single_late = bench.predict([f[FPS:] for f, _ in singles])
     pred_raw = bench.predict(raw_segments) if raw_segments else None   # diagnostic: the windows as sampled, un-eased
     per_action = {}
@@ -332,7 +332,7 @@ def measure(model, bench, a, log=print) -> dict:
     later = [i for i in range(len(seg_action)) if i % 3]                 # segments 2 and 3 of every timeline
     before = [tl_orders[i // 3][i % 3 - 1] for i in later]               # the action of the segment before each
     # how long the transition is, to the classifier: segments 2 and 3 recognised without their first d frames
-    later_after = {d: float(np.mean(hit(bench.predict([seg_feats[i][d:] for i in later]), [seg_action[i] for i in later])))
+    later_after = {d: float(np.mean(hit([pred_without[d][i] for i in later], [seg_action[i] for i in later])))
                    for d in TRANSITION_FRAMES}
     read_as_previous = {name: float(np.mean(hit([preds[i] for i in later], before)))
                         for name, preds in (("whole", pred_seg), ("after_transition", pred_late), ("uneased", pred_raw))
