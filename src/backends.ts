@@ -60,13 +60,24 @@ export async function runWithFallback(
   reloadOnWasm: () => Promise<Generator>,
   onFallback: (reason: string) => void = () => undefined,
 ): Promise<{ gen: Generator; result: GenerateResult }> {
-  if (o.signal?.aborted) throw o.signal.reason;
+  return withFallback(gen, o.signal, (g) => g.generate(o), reloadOnWasm, onFallback);
+}
+
+/** runWithFallback for any call of a generator (`run(gen)`, e.g. its begin): a WebGPU failure runs it again on WASM. */
+export async function withFallback<T>(
+  gen: Generator,
+  signal: AbortSignal | undefined,
+  run: (g: Generator) => Promise<T>,
+  reloadOnWasm: () => Promise<Generator>,
+  onFallback: (reason: string) => void = () => undefined,
+): Promise<{ gen: Generator; result: T }> {
+  if (signal?.aborted) throw signal.reason;
   try {
-    return { gen, result: await gen.generate(o) };
+    return { gen, result: await run(gen) };
   } catch (e) {
     if (isAbort(e) || gen.backend !== 'webgpu' || e instanceof ModelFileError) throw e;
     onFallback(`WebGPU failed while generating (${message(e)})`);
     const wasm = await reloadOnWasm();
-    return { gen: wasm, result: await wasm.generate(o) };
+    return { gen: wasm, result: await run(wasm) };
   }
 }

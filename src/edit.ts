@@ -45,6 +45,7 @@ import { recoverJoints } from './motion/recover';
 import { appendSegment, pinKeptRoot } from './motion/stitch';
 import { keepMask, type FeatureGroup, type KnownMotion } from './sampler/mask';
 import { AbortError } from './sampler/sampler';
+import type { SampleState } from './generate';
 
 const D = 263;
 /** Frames each timeline window repeats from the one before (1 s at 20 fps). */
@@ -203,7 +204,28 @@ export interface EditRequest extends EditCondition {
   frames: number;
   seed: number;
   known?: KnownMotion;
+  /** finish what `EditBegin` started for this request (the generator's SampleState) */
+  resume?: SampleState;
 }
+
+/**
+ * A timeline window's steps before its context joins, as `EditBegin` gets them: its condition, frames and seed, the
+ * frames it will keep (`keep`, imposed from `keepFromTime` on; absent for the timeline's first window) and `stopAt`.
+ */
+export interface EditBeginRequest extends EditCondition {
+  frames: number;
+  seed: number;
+  stopAt: number;
+  keep?: Float32Array;
+  keepFromTime?: number;
+}
+
+/**
+ * Start several windows together, one model call per step (the generator's `begin`): a timeline window's steps
+ * above TIMELINE_KEEP_FROM need nothing from the window before it, so they all run at once and each window is then
+ * finished in turn with its state (`EditRequest.resume`). Optional: without it each window runs whole, in turn.
+ */
+export type EditBegin = (reqs: EditBeginRequest[]) => Promise<SampleState[]>;
 
 /** A motion with its de-normalised features (frames × 263) and joints (frames × 22 × 3). */
 export interface EditMotion {
@@ -309,6 +331,8 @@ export interface TimelineOptions {
   signal?: AbortSignal;
   /** before each window is generated: its segment, and windows done / to do in this call */
   onWindow?: (segment: number, done: number, total: number) => void;
+  /** start the windows to generate together (see EditBegin); onWindow is first called with done = 0 before it */
+  begin?: EditBegin;
 }
 
 const sameSegment = (a: TimelineSegment, b: TimelineSegment) =>
@@ -371,6 +395,24 @@ export async function generateTimeline(segments: readonly TimelineSegment[], gen
   const todo = plan.windows.slice(keep).reduce((a, w) => a + w.length, 0);
   let sofar = out.reduce((a, s) => a + s.frames, 0);
   let done = 0;
+  // every window's steps before its context joins, together: known from the plan alone (frames, seed, overlap)
+  let states: SampleState[] | null = null;
+  if (opts.begin && todo > 0) {
+    const reqs: EditBeginRequest[] = [];
+    let at = sofar;
+    for (let i = keep; i < segments.length; i++) {
+      plan.windows[i].forEach((m, j) => {
+        const c = at > 0 ? Math.min(OVERLAP_FRAMES, at) : 0;
+        const cond = conditionOf(segments[i], i);
+        reqs.push({ ...cond, frames: c + m, seed: (segments[i].seed + j) >>> 0, stopAt: TIMELINE_KEEP_FROM, ...(c ? { keep: keepMask(c + m, [{ frames: [[0, c - 1]] }]), keepFromTime: TIMELINE_KEEP_FROM } : {}) });
+        at += m;
+      });
+    }
+    throwIfAborted(opts.signal);
+    opts.onWindow?.(keep, 0, todo);
+    states = await opts.begin(reqs);
+    if (states.length !== reqs.length) throw new Error(`timeline: begin returned ${states.length} states for ${reqs.length} windows`);
+  }
   for (let i = keep; i < segments.length; i++) {
     const seg = { ...segments[i] };
     const cond = conditionOf(seg, i);
@@ -383,14 +425,15 @@ export async function generateTimeline(segments: readonly TimelineSegment[], gen
       // the sequence so far ends with this window's predecessor: its last c frames are the sequence's last c
       const prev = result.windows.at(-1) ?? out.at(-1)?.windows.at(-1) ?? null;
       const c = prev ? Math.min(OVERLAP_FRAMES, sofar) : 0;
+      const resume = states ? { resume: states[done] } : {};
       let w: EditMotion;
       if (!prev) {
-        w = await gen({ ...cond, frames: m, seed });
+        w = await gen({ ...cond, frames: m, seed, ...resume });
       } else {
         const known = new Float32Array((c + m) * D);
         known.set(prev.features.subarray((prev.frames - c) * D), 0);
         const keep = keepMask(c + m, [{ frames: [[0, c - 1]] }]);
-        const raw = await gen({ ...cond, frames: c + m, seed, known: { features: known, keep, fromTime: TIMELINE_KEEP_FROM } });
+        const raw = await gen({ ...cond, frames: c + m, seed, known: { features: known, keep, fromTime: TIMELINE_KEEP_FROM }, ...resume });
         checkMotion(raw, c + m, label(i));
         const features = easeSeams(raw.features, c + m, keep); // the seam eased before the next window continues it
         w = { ...raw, features, joints: recoverJoints(features, c + m) };

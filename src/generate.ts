@@ -14,8 +14,9 @@ import { pinKeptRoot } from './motion/stitch';
 import type { Motion } from './motion/types';
 import { type Backend, type OrtSession, getSession } from './runtime/ort';
 import { IncompatibleModelError, stepFunction } from './runtime/stepModel';
-import { SeededRandom } from './sampler/rng';
-import { type NoiseSource, type SamplerChoice, type SamplerName, type StepFn, sample } from './sampler/sampler';
+import { together } from './sampler/lockstep';
+import { type RandomState, SeededRandom } from './sampler/rng';
+import { type NoiseSource, type SampleOptions, type SamplerChoice, type SamplerName, type StepFn, sample } from './sampler/sampler';
 import type { KnownMotion } from './sampler/mask';
 import { ddimScheduleFor, scheduleFor } from './sampler/schedule';
 import { type TextEncoder, createTextEncoder } from './text';
@@ -64,6 +65,11 @@ export interface GenerateOptions {
    */
   known?: KnownMotion;
   /**
+   * Go on from where `Generator.begin` stopped this request (the same options, now with `known.features` when it
+   * keeps something): the result is that of one whole generation with the seed, bit for bit on the same backend.
+   */
+  resume?: SampleState;
+  /**
    * Watch it denoise: each step's prediction x̂0, decoded to a motion exactly as the final result is
    * (de-normalised, joints recovered, smoothed and cleaned up as asked), after the step and before the
    * next one runs. It draws no random numbers: the final result is bit-identical with or without it.
@@ -98,6 +104,30 @@ export interface GenerateResult {
   prompt?: { tokens: number; maxTokens: number; truncated: boolean };
 }
 
+/**
+ * A request to `Generator.begin`: a generation's options and `stopAt`, the time before which it stops (the sampler's
+ * stopAt). It may keep `known.keep` without `known.features` when it stops before they are imposed.
+ */
+export type BeginOptions = Omit<GenerateOptions, 'known' | 'resume' | 'onPreview'> & {
+  stopAt: number;
+  known?: Omit<KnownMotion, 'features'> & { features?: Float32Array };
+};
+
+/**
+ * A generation stopped part way (`Generator.begin`), to be finished by `generate({ ...sameOptions, resume })`: plain
+ * numbers and arrays, so it can cross to and from a worker.
+ */
+export interface SampleState {
+  /** x before step `next`, normalised, frames × featureDim */
+  x: Float32Array;
+  frames: number;
+  steps: number;
+  /** the denoising step to run next (index into the schedule, counting down) */
+  next: number;
+  /** the seeded noise's state there (absent when the request gave its own noise source: pass the same one again) */
+  rng?: RandomState;
+}
+
 export interface Generator {
   readonly modelName: string;
   readonly backend: Backend;
@@ -107,6 +137,12 @@ export interface Generator {
   readonly sampler: SamplerName;
   /** Rejects with NonFiniteMotionError (src/errors.ts) when the model's output holds NaN or ±Infinity. */
   generate(o: GenerateOptions): Promise<GenerateResult>;
+  /**
+   * Start several generations together, one model call per step for all of them, and stop each before its first
+   * step whose time is ≤ its `stopAt`; `generate({ ...o, resume: state })` finishes each. A timeline's windows
+   * (src/edit.ts) are begun together: their steps before their context joins need nothing from one another.
+   */
+  begin(os: readonly BeginOptions[]): Promise<SampleState[]>;
   dispose(): Promise<void>;
 }
 
@@ -127,6 +163,8 @@ export interface GeneratorOptions {
 }
 
 const now = () => performance.now();
+/** Prompts whose embedding a generator keeps (oldest dropped first). */
+const EMBEDDING_CACHE = 64;
 
 function modelEntry(manifest: Manifest, name: string): ModelEntry {
   const entry = manifest.models[name];
@@ -211,6 +249,8 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
   const { session, step } = await open(backend);
 
   let encoder: Promise<TextEncoder> | null = opts.textEncoder ? Promise.resolve(opts.textEncoder) : null;
+  // the prompts encoded last (a timeline's windows and a regenerated segment ask for the same prompt again)
+  const embeddings = new Map<string, Float32Array>();
   let queue: Promise<unknown> = Promise.resolve();
   let disposed = false;
 
@@ -244,8 +284,12 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
           encoder = null;
           throw e;
         }
+        const hit = embeddings.get(c.text);
+        if (hit) return Float32Array.from(hit);
         const v = await enc.encode(c.text);
         if (v.length !== C) throw new Error(`generate: text encoder ${enc.id} gives ${v.length}-d vectors, model ${model} expects ${C}`);
+        if (embeddings.size >= EMBEDDING_CACHE) embeddings.delete(embeddings.keys().next().value!);
+        embeddings.set(c.text, Float32Array.from(v));
         return v;
       }
       default:
@@ -276,9 +320,9 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     return { features, joints };
   }
 
-  async function run(o: GenerateOptions): Promise<GenerateResult> {
+  /** The sampler's options for a request (checked; its condition encoded), all but the step function. */
+  async function samplerOptions(o: GenerateOptions | BeginOptions, noise: NoiseSource): Promise<{ options: Omit<SampleOptions, 'step'>; prompt: GenerateResult['prompt'] }> {
     if (disposed) throw new Error(`generator for ${model} was disposed`);
-    const t0 = now();
     if (!Number.isInteger(o.frames) || o.frames < 1 || o.frames > entry.maxFrames) {
       throw new RangeError(`generate: frames must be an integer in 1…${entry.maxFrames}, got ${o.frames}`);
     }
@@ -286,9 +330,41 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     const choice: SamplerChoice = samplerName === 'ddim'
       ? { method: 'ddim', schedule: ddimScheduleFor(entry, o.steps, model) }
       : { method: 'ddgan', schedule: scheduleFor(entry, o.steps, model) };
-    const noise = o.noise ?? new SeededRandom(o.seed);
+    const resume = 'resume' in o ? o.resume : undefined;
+    if (resume && (resume.frames !== o.frames || resume.steps !== o.steps)) {
+      throw new RangeError(`generate: resume is a state of ${resume.frames} frames and ${resume.steps} steps; this request asks for ${o.frames} frames and ${o.steps} steps (resume with the options it was begun with)`);
+    }
     const cond = await conditionVector(o.condition);
     const prompt = o.condition.type === 'text' ? await promptTokens(o.condition.text) : undefined;
+    const known = o.known?.features?.map((v, i) => (v - mean[i % D]) / std[i % D]);
+    return {
+      prompt,
+      options: {
+        ...choice, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance,
+        guidanceMinTime: o.guidanceMinTime ?? entry.guidanceMinTime ?? 0, x0Smoothing: o.x0Smoothing ?? entry.x0Smoothing ?? 0, signal: o.signal, onStep: o.onStep,
+        ...(o.known ? { ...(known ? { known } : {}), keep: o.known.keep, keepFromTime: o.known.fromTime } : {}),
+        ...(resume ? { resume: { x: resume.x, next: resume.next } } : {}),
+      },
+    };
+  }
+
+  async function begin(os: readonly BeginOptions[]): Promise<SampleState[]> {
+    if (!Array.isArray(os) || os.length === 0) throw new RangeError('begin: give at least one request');
+    const rngs = os.map((o) => (o.noise ? null : new SeededRandom(o.seed)));
+    const runs: Omit<SampleOptions, 'step'>[] = [];
+    for (const [i, o] of os.entries()) {
+      const { options } = await samplerOptions(o, o.noise ?? rngs[i]!);
+      if (typeof o.stopAt !== 'number') throw new RangeError(`begin: request ${i + 1} needs stopAt, the time before which it stops (got ${o.stopAt})`);
+      runs.push({ ...options, stopAt: o.stopAt });
+    }
+    const done = await together(step, runs.map((r) => (st: StepFn) => sample({ ...r, step: st })));
+    return done.map((r, i) => ({ x: r.x, frames: os[i].frames, steps: os[i].steps, next: r.next!, ...(rngs[i] ? { rng: rngs[i]!.state() } : {}) }));
+  }
+
+  async function run(o: GenerateOptions): Promise<GenerateResult> {
+    const t0 = now();
+    const noise = o.noise ?? (o.resume?.rng ? SeededRandom.fromState(o.resume.rng) : new SeededRandom(o.seed));
+    const { options, prompt } = await samplerOptions(o, noise);
     const t1 = now();
     const onPreview = o.onPreview;
     const onX0 = onPreview && ((x0: Float32Array, done: number, total: number) => {
@@ -296,12 +372,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
       const { features, joints } = decode(x0, o);
       onPreview({ step: done, steps: total, motion: { frames: o.frames, fps: entry.fps, joints, features }, decodeMs: now() - p0 });
     });
-    const r = await sample({
-      ...choice, step, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance,
-      guidanceMinTime: o.guidanceMinTime ?? entry.guidanceMinTime ?? 0, x0Smoothing: o.x0Smoothing ?? entry.x0Smoothing ?? 0, signal: o.signal, onStep: o.onStep,
-      ...(onX0 ? { onX0 } : {}),
-      ...(o.known ? { known: o.known.features.map((v, i) => (v - mean[i % D]) / std[i % D]), keep: o.known.keep, keepFromTime: o.known.fromTime } : {}),
-    });
+    const r = await sample({ ...options, step, ...(onX0 ? { onX0 } : {}) });
     const t2 = now();
     const { features, joints } = decode(r.x, o);
     const t3 = now();
@@ -325,6 +396,11 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     generate(o) {
       // one generation at a time per generator: ORT sessions are not re-entrant
       const p = queue.then(() => run(o));
+      queue = p.catch(() => undefined);
+      return p;
+    },
+    begin(os) {
+      const p = queue.then(() => begin(os));
       queue = p.catch(() => undefined);
       return p;
     },

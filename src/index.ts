@@ -3,12 +3,13 @@ export { createGenerator, modelFor, resolveRequest } from './createGenerator';
 export type { CreateGeneratorOptions, GeneratedMotion, MotionGenerator, MotionRequest } from './createGenerator';
 // one model on one backend, and the backend choice / fallback (used by createGenerator's host)
 export { openModel } from './generate';
-export type { Condition, GenerateOptions, GenerateResult, Generator, GeneratorOptions, Motion, StepPreview } from './generate';
-export { loadModel, runWithFallback } from './backends';
+export type { BeginOptions, Condition, GenerateOptions, GenerateResult, Generator, GeneratorOptions, Motion, SampleState, StepPreview } from './generate';
+export { loadModel, runWithFallback, withFallback } from './backends';
 export type { LoadModelOptions } from './backends';
 // the generation worker's page side (createGenerator uses it; the demo page drives it directly)
 export { GenerationClient } from './worker/client';
 export type { ClientEvents, FileEvent, GenerationClientOptions, ModelInfo, RemoteGenerateOptions, RemoteResult, WirePose, WireStepPreview, WorkerEnvironment } from './worker/client';
+export type { WireBeginOptions } from './worker/protocol';
 export { clearModelCache, modelCacheUsage } from './cache/modelCache';
 export { loadManifest, fetchVerified, ModelFileError, sha256Hex, chooseVariant, stepFileOf } from './manifest';
 export { assertFinite, NonFiniteMotionError } from './errors';
@@ -32,6 +33,8 @@ export type { AutoMapResult, BoneInfo, BoneMapping } from './character/retarget/
 export { retargetMotion, retargetMotionAsync } from './character/retarget/retarget';
 export type { RetargetMotion, RetargetOptions, RetargetResult, RetargetSliceOptions } from './character/retarget/retarget';
 export { SeededRandom } from './sampler/rng';
+export type { RandomState } from './sampler/rng';
+export { lockstep, together } from './sampler/lockstep';
 export { computeSchedule, ddimScheduleFor, scheduleFor } from './sampler/schedule';
 export type { DdimSchedule, Schedule } from './sampler/schedule';
 export { ddimUpdate } from './sampler/ddim';
@@ -41,7 +44,7 @@ export {
   EditError, LOOP_END_FRAMES, MAX_TIMELINE_SECONDS, OVERLAP_FRAMES, TIMELINE_KEEP_FROM, bodyPartEdit, generateTimeline, inBetween, keptSegments, makeLoop,
   planTimeline, stitchTimeline, withNewSeed,
 } from './edit';
-export type { EditCondition, EditGenerate, EditLimits, EditMotion, EditRequest, KeptPart, LoopResult, SegmentResult, Timeline, TimelineOptions, TimelinePlan, TimelineSegment } from './edit';
+export type { EditBegin, EditBeginRequest, EditCondition, EditGenerate, EditLimits, EditMotion, EditRequest, KeptPart, LoopResult, SegmentResult, Timeline, TimelineOptions, TimelinePlan, TimelineSegment } from './edit';
 export { FEATURE_GROUPS, GROUP_JOINTS, KeepSpecError, groupChannels, keepMask, parseKeep } from './sampler/mask';
 export type { FeatureGroup, KeepRect, KnownMotion } from './sampler/mask';
 export type { NoiseSource, SamplerName } from './sampler/sampler';

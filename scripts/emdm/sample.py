@@ -122,7 +122,12 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
     ``keep_from_time`` (the default 1 = every step): the kept part is imposed only at the steps whose time t_k ≤ it
     (x_T's when the first step's is) and always at the last, so the earlier steps are shaped by the condition alone
     and the later ones reconcile the motion with the known part (a timeline window: ``emdm.motion.edit``
-    ``TIMELINE_KEEP_FROM``). The random draws are the same either way.
+    ``TIMELINE_KEEP_FROM``). The frames kept on every channel at the start (``lead_frames``: a window's context)
+    sit those earlier steps out: the model sees frames [lead, frames) only, a generation of its own, and they join
+    at the first imposing step k as a_cum[k+1]·known + s_cum[k+1]·(their x_T draw), the known motion noised to that
+    step's level. That saves the model their rows at the steps they would not shape, and leaves each window's early
+    steps independent of the motion it continues. The random draws are the same either way (x_T and every ε are
+    drawn for all frames; the rows left out go unused).
     """
     if frames < 1:
         raise SampleError(f"frames must be ≥ 1, got {frames}")
@@ -139,32 +144,48 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
     c1 = np.repeat(cond[None], num, 0)
     c2 = np.concatenate([c1, np.zeros_like(c1)])
     x = rng.standard_normal((num, frames, feature_dim), dtype=np.float32)
-    if keep is not None and sch.time[steps - 1] <= keep_from_time:
+    imposed = [keep is not None and (sch.time[k] <= keep_from_time or k == 0) for k in range(steps)]
+    # a deferred kept part: its leading whole-kept frames sit out the steps before it is imposed (``lead_frames``)
+    lead = lead_frames(keep) if keep is not None and not imposed[steps - 1] else 0
+    if keep is not None and imposed[steps - 1]:
         x = np.where(keep, np.float32(sch.a_cum[steps]) * known + np.float32(sch.s_cum[steps]) * x, x)
     for k in range(steps - 1, -1, -1):
+        if lead and imposed[k] and not imposed[k + 1]:   # they join, drawn from q(x_t | known) with x_T's own draw
+            x[:, :lead] = np.float32(sch.a_cum[k + 1]) * known[:lead] + np.float32(sch.s_cum[k + 1]) * x[:, :lead]
+        f0 = 0 if imposed[k] else lead   # the frames the model sees at this step: [f0, frames)
         z = rng.standard_normal((num, z_dim), dtype=np.float32)
         if objective == "diffusion":
             z = np.zeros_like(z)
         guided = use_cfg and sch.time[k] > guidance_min_time
-        xin, zin, c = (np.concatenate([x, x]), np.concatenate([z, z]), c2) if guided else (x, z, c1)
+        xs = x[:, f0:]
+        xin, zin, c = (np.concatenate([xs, xs]), np.concatenate([z, z]), c2) if guided else (xs, z, c1)
         bsz = xin.shape[0]
         t = np.full((bsz,), sch.time[k], np.float32)
-        mask = np.ones((bsz, frames), np.float32)
+        mask = np.ones((bsz, frames - f0), np.float32)
         x0 = np.asarray(step(xin, zin, c, t, mask), np.float32)
         if guided:
             x0 = x0[num:] + np.float32(guidance) * (x0[:num] - x0[num:])
         if sigma > 0 and k > 0:
-            x0 = smooth_frames(x0, sigma, lengths)
-        if keep is not None and (sch.time[k] <= keep_from_time or k == 0):
+            x0 = smooth_frames(x0, sigma, None if lengths is None else np.asarray(lengths) - f0)
+        if imposed[k]:
             x0 = np.where(keep, known, x0)
         if objective == "diffusion":     # DDIM, η = 0
-            eps = (x - np.float32(sch.a_cum[k + 1]) * x0) / np.float32(sch.s_cum[k + 1])
-            x = (np.float32(sch.a_cum[k]) * x0 + np.float32(sch.s_cum[k]) * eps) if k > 0 else x0
+            eps = (xs - np.float32(sch.a_cum[k + 1]) * x0) / np.float32(sch.s_cum[k + 1])
+            x[:, f0:] = (np.float32(sch.a_cum[k]) * x0 + np.float32(sch.s_cum[k]) * eps) if k > 0 else x0
         else:
-            x = np.float32(sch.coef1[k]) * x0 + np.float32(sch.coef2[k]) * x
+            xn = np.float32(sch.coef1[k]) * x0 + np.float32(sch.coef2[k]) * xs
             if sch.sigma[k] > 0:
-                x = x + np.float32(sch.sigma[k]) * rng.standard_normal(x.shape, dtype=np.float32)
+                xn = xn + np.float32(sch.sigma[k]) * rng.standard_normal(x.shape, dtype=np.float32)[:, f0:]
+            x[:, f0:] = xn
     return x.astype(np.float32)
+
+
+def lead_frames(keep: np.ndarray) -> int:
+    """How many leading frames ``keep`` (frames, D) keeps on every channel, fewer than all (a timeline window's
+    context: 0 for a mask that keeps no whole first frame, or every frame)."""
+    whole = np.asarray(keep, bool).all(axis=1)
+    n = int(np.argmin(whole)) if not whole.all() else 0
+    return n
 
 
 def check_known(known, keep, frames: int, feature_dim: int) -> tuple[np.ndarray | None, np.ndarray | None]:

@@ -28,6 +28,13 @@ export function splitmix32(seed: number): () => number {
 
 const TWO_POW_32 = 4294967296;
 
+/** A SeededRandom's state (`state()`, `SeededRandom.fromState`): plain numbers, so it can be posted to a worker. */
+export interface RandomState {
+  seed: number;
+  words: number[];
+  spare: number | null;
+}
+
 export class SeededRandom {
   private a: number;
   private b: number;
@@ -47,6 +54,22 @@ export class SeededRandom {
     this.c = sm();
     this.d = sm();
     for (let i = 0; i < 12; i++) this.nextUint32();
+  }
+
+  /** Where the generator stands: its seed, the four sfc32 words and the Box–Muller half kept for the next call. */
+  state(): RandomState {
+    return { seed: this.seed, words: [this.a, this.b, this.c, this.d], spare: this.spare };
+  }
+
+  /** A generator that goes on exactly where `state()` was taken (a sampling run resumed in another call or thread). */
+  static fromState(s: RandomState): SeededRandom {
+    const ok = s && Array.isArray(s.words) && s.words.length === 4 && s.words.every((w) => Number.isInteger(w) && w >= -0x80000000 && w <= 0xffffffff)
+      && (s.spare === null || Number.isFinite(s.spare));
+    if (!ok) throw new RangeError(`SeededRandom.fromState: expected { seed, words: four 32-bit integers, spare: a number or null }, got ${JSON.stringify(s)}`);
+    const r = new SeededRandom(s.seed);
+    [r.a, r.b, r.c, r.d] = s.words.map((w) => w | 0);
+    r.spare = s.spare;
+    return r;
   }
 
   /** sfc32: the next unsigned 32-bit integer. */

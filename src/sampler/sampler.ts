@@ -75,9 +75,27 @@ export type SampleOptions = SamplerChoice & {
    * The kept part is imposed only at the steps whose time t_k ≤ keepFromTime (x_T's when the first step's is)
    * and always at the last step: the earlier steps are shaped by the condition alone, the later ones reconcile
    * the motion with the known part (a timeline window: src/edit.ts TIMELINE_KEEP_FROM). Absent or 1: every step.
-   * The random draws do not depend on it.
+   * The frames kept on every channel at the start (`leadFrames`: a window's context) sit the earlier steps out: the
+   * model sees frames [lead, L) only, a generation of its own, and they join at the first imposing step k as
+   * aCum[k+1]·known + sCum[k+1]·(their x_T draw), the known motion noised to that step's level. That saves their
+   * rows at the steps they would not shape and leaves a window's early steps independent of what it continues.
+   * The random draws do not depend on it (x_T and every ε are drawn for all L frames; the rows left out go unused).
    */
   keepFromTime?: number;
+  /**
+   * Stop before the first step whose time is ≤ stopAt (at the latest before the last step; with one step, before
+   * it) and return the state there (`SampleResult.next`): the first
+   * part of a run that `resume` finishes — a timeline window's steps before its context joins, sampled together with
+   * the other windows' (src/edit.ts, src/sampler/lockstep.ts). A run that stops before any step imposes the kept
+   * part may give `keep` without `known` (the lead frames sit out all the same).
+   */
+  stopAt?: number;
+  /**
+   * Go on from a stopped run: its `x` (all L frames) before step `next`. x_T is not drawn; the noise source must go
+   * on where the stopped run's left off (the same object, or a SeededRandom restored from its state). The two parts
+   * give the result of one whole run, bit for bit.
+   */
+  resume?: { x: Float32Array; next: number };
   signal?: AbortSignal;
   onStep?: (done: number, total: number) => void;
   /**
@@ -90,8 +108,10 @@ export type SampleOptions = SamplerChoice & {
 };
 
 export interface SampleResult {
-  /** final x_0 in normalised feature space [L, D] */
+  /** final x_0 in normalised feature space [L, D]; with `next`, the state x before step `next` */
   x: Float32Array;
+  /** a run stopped by `stopAt`: the step to resume at (absent when every step ran, i.e. without stopAt) */
+  next?: number;
   stepMs: number[];
   modelCalls: number;
   /** steps that ran the unconditional row too (2 batch rows); the others ran 1 */
@@ -144,26 +164,51 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
   const xs = o.x0Smoothing ?? 0;
   if (!Number.isFinite(xs) || xs < 0) throw new RangeError(`sampler: x0Smoothing must be a finite σ ≥ 0 in frames (0 = off), got ${xs}`);
   const s = o.guidance;
+  const T = schedule.steps;
+  // the steps this call runs: from T − 1 (or resume.next) down to just above the first step with t ≤ stopAt
+  const start = o.resume ? o.resume.next : T - 1;
+  if (!Number.isInteger(start) || start < 0 || start >= T) throw new RangeError(`sampler: resume.next must be a step index in 0…${T - 1}, got ${o.resume?.next}`);
+  if (o.stopAt !== undefined && !(Number.isFinite(o.stopAt) && o.stopAt >= 0)) throw new RangeError(`sampler: stopAt must be a finite time ≥ 0, got ${o.stopAt}`);
+  let stop = -1;
+  if (o.stopAt !== undefined) {
+    while (stop + 1 < T && schedule.time[stop + 1] <= o.stopAt) stop++;
+    stop = Math.max(stop, 0); // at the latest before the last step (which imposes any kept part)
+  }
   const constraint = checkConstraint(o.known, o.keep, L, D, schedule);
   const keepFrom = o.keepFromTime ?? 1;
   if (!Number.isFinite(keepFrom) || keepFrom < 0) throw new RangeError(`sampler: keepFromTime must be a finite time ≥ 0 (1 = impose the kept part at every step), got ${keepFrom}`);
   /** the constraint imposed at step k: at the steps with t ≤ keepFromTime and at the last */
   const keptAt = (k: number): Constraint | null => (constraint && (schedule.time[k] <= keepFrom || k === 0) ? constraint : null);
+  for (let k = start; k > stop; k--) {
+    if (keptAt(k) && !constraint!.known) throw new Error(`sampler: the kept part is imposed at step ${k} (t = ${schedule.time[k]}), so known is needed; give it, or stop this run before (stopAt)`);
+  }
 
-  throwIfAborted(o.signal, 0, schedule.steps);
-  const x = Float32Array.from(o.noise.normals(n, 'xT', schedule.steps));
-  checkLength(x, n, 'x_T noise');
-  const first = keptAt(schedule.steps - 1);
-  if (first) imposeNoisedKnown(x, first, schedule);
+  throwIfAborted(o.signal, 0, T);
+  const first = keptAt(T - 1);
+  let x: Float32Array;
+  if (o.resume) {
+    x = Float32Array.from(o.resume.x);
+    checkLength(x, n, 'resume.x');
+  } else {
+    x = Float32Array.from(o.noise.normals(n, 'xT', T));
+    checkLength(x, n, 'x_T noise');
+  }
+  // a deferred kept part: its leading whole-kept frames sit out the steps before it is imposed
+  const lead = constraint && !first ? leadFrames(constraint.keep, L, D) : 0;
 
-  // inputs of a 2-row (guided: [c, 0]) and of a 1-row call, made when first needed
-  const rowBuffers: (StepInputs | undefined)[] = [];
-  const buffers = (B: number): StepInputs => (rowBuffers[B] ??= stepBuffers(B, L, n, zDim, cond));
+  // inputs of a 2-row (guided: [c, 0]) and of a 1-row call, of all L frames or the L − lead free ones, made when first needed
+  const rowBuffers = new Map<string, StepInputs>();
+  const buffers = (B: number, frames: number): StepInputs => {
+    const key = `${B}x${frames}`;
+    let b = rowBuffers.get(key);
+    if (!b) rowBuffers.set(key, (b = stepBuffers(B, frames, frames * D, zDim, cond)));
+    return b;
+  };
   const stepMs: number[] = [];
   let modelCalls = 0;
   let guidedSteps = 0;
 
-  for (let k = schedule.steps - 1; k >= 0; k--) {
+  for (let k = start; k > stop; k--) {
     throwIfAborted(o.signal, schedule.steps - 1 - k, schedule.steps);
     const t0 = now();
     // z is drawn at every step even for DDIM (then zeroed), so the draw order is the same for both
@@ -172,23 +217,37 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     const z = ddim ? new Float32Array(zDim) : drawn;
     const guidedK = guided && schedule.time[k] > gMin;
     const kept = keptAt(k);
-    const inputs = buffers(guidedK ? 2 : 1);
+    // the kept part enters x where it is first imposed: all of it at the first step (x_T's), or the lead frames
+    if (kept && k === T - 1) imposeNoisedKnown(x, kept, T, n, schedule);
+    else if (lead && kept && !keptAt(k + 1)) imposeNoisedKnown(x, kept, k + 1, lead * D, schedule);
+    // the model sees frames [f0, L): all of them, or the free ones while the lead frames sit out
+    const f0 = kept ? 0 : lead;
+    const nk = n - f0 * D;
+    const xk = f0 ? x.subarray(f0 * D) : x;
+    const inputs = buffers(guidedK ? 2 : 1, L - f0);
     for (let b = 0; b < inputs.batch; b++) {
-      inputs.x.set(x, b * n);
+      inputs.x.set(xk, b * nk);
       inputs.z.set(z, b * zDim);
       inputs.t[b] = schedule.time[k];
     }
     const out = await o.step({ ...inputs });
     modelCalls++;
     if (guidedK) guidedSteps++;
-    checkLength(out, inputs.batch * n, `model output x0 at step ${k}`);
+    checkLength(out, inputs.batch * nk, `model output x0 at step ${k}`);
     // x̂0 smoothed along time at every step but the last (x0Smoothing), before the kept part is replaced
-    const smoothed = xs > 0 && k > 0 ? smoothJoints(guidedK ? guidedX0(out, n, s) : out, L, xs) : null;
+    const smoothed = xs > 0 && k > 0 ? smoothJoints(guidedK ? guidedX0(out, nk, s) : out, L - f0, xs) : null;
+    /** what onX0 sees: all L frames (the lead frames sitting out shown as their known motion) */
+    const fullX0 = (x0: ArrayLike<number>): Float32Array => {
+      const a = new Float32Array(n);
+      if (f0 && constraint!.known) a.set(constraint!.known.subarray(0, f0 * D));
+      a.set(x0, f0 * D);
+      return a;
+    };
     if (ddim) {
-      const x0 = smoothed ?? (guidedK ? guidedX0(out, n, s) : kept ? Float32Array.from(out) : out);
+      const x0 = smoothed ?? (guidedK ? guidedX0(out, nk, s) : kept ? Float32Array.from(out) : out);
       if (kept) replaceKnown(x0, kept);
-      const x0copy = o.onX0 ? Float32Array.from(x0) : null;
-      ddimUpdate(x, x0, k, schedule);
+      const x0copy = o.onX0 ? fullX0(x0) : null;
+      ddimUpdate(xk, x0, k, schedule);
       stepMs.push(now() - t0);
       if (x0copy) o.onX0!(x0copy, schedule.steps - k, schedule.steps);
       o.onStep?.(schedule.steps - k, schedule.steps);
@@ -199,21 +258,22 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     const sig = schedule.sigma[k];
     const eps = sig !== 0 ? o.noise.normals(n, 'eps', k) : null;
     if (eps) checkLength(eps, n, `ε noise at step ${k}`);
-    const x0s = o.onX0 ? new Float32Array(n) : null;
-    for (let i = 0; i < n; i++) {
+    const x0s = o.onX0 ? new Float32Array(nk) : null;
+    const off = f0 * D;
+    for (let i = 0; i < nk; i++) {
       // guided: x0 = x0_u + s·(x0_c − x0_u), rounded to float32 like the Python reference
-      let x0 = smoothed ? smoothed[i] : guidedK ? Math.fround(out[n + i] + Math.fround(s * Math.fround(out[i] - out[n + i]))) : out[i];
-      if (kept && kept.keep[i]) x0 = kept.known[i];
+      let x0 = smoothed ? smoothed[i] : guidedK ? Math.fround(out[nk + i] + Math.fround(s * Math.fround(out[i] - out[nk + i]))) : out[i];
+      if (kept && kept.keep[i]) x0 = kept.known![i];
       if (x0s) x0s[i] = x0;
-      let v = c1 * x0 + c2 * x[i];
-      if (eps) v += sig * eps[i];
-      x[i] = v;
+      let v = c1 * x0 + c2 * x[off + i];
+      if (eps) v += sig * eps[off + i];
+      x[off + i] = v;
     }
     stepMs.push(now() - t0);
-    if (x0s) o.onX0!(x0s, schedule.steps - k, schedule.steps);
+    if (x0s) o.onX0!(fullX0(x0s), schedule.steps - k, schedule.steps);
     o.onStep?.(schedule.steps - k, schedule.steps);
   }
-  return { x, stepMs, modelCalls, guidedSteps, sampler: ddim ? 'ddim' : 'ddgan' };
+  return { x, ...(stop >= 0 ? { next: stop } : {}), stepMs, modelCalls, guidedSteps, sampler: ddim ? 'ddim' : 'ddgan' };
 }
 
 /** Step inputs for `B` rows of `L` frames: cond in row 0 (row 1, when there, stays zero: unconditional), mask all 1. */
@@ -223,17 +283,18 @@ function stepBuffers(B: number, L: number, n: number, zDim: number, cond: Float3
   return { x: new Float32Array(B * n), z: new Float32Array(B * zDim), cond: c, t: new Float32Array(B), mask: new Float32Array(B * L).fill(1), batch: B, frames: L };
 }
 
-type Constraint = { known: Float32Array; keep: Float32Array };
+/** `known` may be absent in a run that stops before the kept part is imposed (`stopAt`; checked by the caller). */
+type Constraint = { known?: Float32Array; keep: Float32Array };
 
-/** Both or neither; [L, D] each; keep only 0/1; known finite where kept; the marginals the noising reads. */
+/** Both or neither (keep alone: see Constraint); [L, D] each; keep only 0/1; known finite where kept; the marginals the noising reads. */
 function checkConstraint(known: Float32Array | undefined, keep: Float32Array | undefined, L: number, D: number, sch: Schedule): Constraint | null {
   if (known === undefined && keep === undefined) return null;
-  if (!known || !keep) throw new Error('sampler: inpainting needs both known (the motion to keep) and keep (its mask); give both or neither');
-  checkLength(known, L * D, `known (frames ${L} × ${D})`);
+  if (!keep) throw new Error('sampler: inpainting needs both known (the motion to keep) and keep (its mask); give both or neither');
+  if (known) checkLength(known, L * D, `known (frames ${L} × ${D})`);
   checkLength(keep, L * D, `keep (frames ${L} × ${D})`);
   for (let i = 0; i < keep.length; i++) {
     if (keep[i] !== 0 && keep[i] !== 1) throw new RangeError(`sampler: keep[${i}] is ${keep[i]}; the mask holds only 0 and 1 (build it with keepMask)`);
-    if (keep[i] && !Number.isFinite(known[i])) throw new RangeError(`sampler: known is ${known[i]} at frame ${Math.floor(i / D)}, channel ${i % D}, which keep marks as kept`);
+    if (known && keep[i] && !Number.isFinite(known[i])) throw new RangeError(`sampler: known is ${known[i]} at frame ${Math.floor(i / D)}, channel ${i % D}, which keep marks as kept`);
   }
   if (sch.aCum?.length !== sch.steps + 1 || sch.sCum?.length !== sch.steps + 1) {
     throw new Error(`sampler: inpainting needs schedule.aCum and schedule.sCum of ${sch.steps + 1} values (see scheduleFor / computeSchedule)`);
@@ -241,17 +302,27 @@ function checkConstraint(known: Float32Array | undefined, keep: Float32Array | u
   return { known, keep };
 }
 
-/** x_T's kept part := aCum[T]·known + sCum[T]·x_T (float32 operations, as numpy in emdm.sample). */
-function imposeNoisedKnown(x: Float32Array, c: Constraint, sch: Schedule): void {
-  const a = Math.fround(sch.aCum[sch.steps]);
-  const sd = Math.fround(sch.sCum[sch.steps]);
-  for (let i = 0; i < x.length; i++) {
-    if (c.keep[i]) x[i] = Math.fround(Math.fround(a * c.known[i]) + Math.fround(sd * x[i]));
+/** The kept part of x's first `upto` values := aCum[j]·known + sCum[j]·x (x_T's draw there; float32 operations, as
+ * numpy in emdm.sample): x_T's when j = T, the lead frames' when they join at step j − 1. */
+function imposeNoisedKnown(x: Float32Array, c: Constraint, j: number, upto: number, sch: Schedule): void {
+  const a = Math.fround(sch.aCum[j]);
+  const sd = Math.fround(sch.sCum[j]);
+  for (let i = 0; i < upto; i++) {
+    if (c.keep[i]) x[i] = Math.fround(Math.fround(a * c.known![i]) + Math.fround(sd * x[i]));
   }
 }
 
+/** How many leading frames `keep` [L, D] keeps on every channel, fewer than all (Python `emdm.sample.lead_frames`). */
+export function leadFrames(keep: ArrayLike<number>, L: number, D: number): number {
+  let f = 0;
+  for (; f < L; f++) {
+    for (let c = 0; c < D; c++) if (keep[f * D + c] !== 1) return f;
+  }
+  return 0;
+}
+
 function replaceKnown(x0: Float32Array, c: Constraint): void {
-  for (let i = 0; i < x0.length; i++) if (c.keep[i]) x0[i] = c.known[i];
+  for (let i = 0; i < x0.length; i++) if (c.keep[i]) x0[i] = c.known![i];
 }
 
 /** x0 = x0_u + s·(x0_c − x0_u) from a batched [cond, uncond] output, rounded to float32 like Python. */

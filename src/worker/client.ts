@@ -14,11 +14,11 @@
  */
 import type { FileEvent } from '../cache/modelCache';
 import { NonFiniteMotionError } from '../errors';
-import type { GenerateResult } from '../generate';
+import type { GenerateResult, SampleState } from '../generate';
 import { ModelFileError, type Manifest, type ModelFileErrorReason } from '../manifest';
 import type { BackendRequest } from '../runtime/ort';
 import { AbortError } from '../sampler/sampler';
-import type { FromWorker, ModelInfo, ToWorker, WireError, WireGenerateOptions, WirePose, WireStepPreview } from './protocol';
+import type { FromWorker, ModelInfo, ToWorker, WireError, WireBeginOptions, WireGenerateOptions, WirePose, WireStepPreview } from './protocol';
 
 export type { FileEvent, ModelInfo, WireGenerateOptions, WirePose, WireStepPreview };
 
@@ -188,6 +188,25 @@ export class GenerationClient {
       const m = await this.request({ type: 'generate', id, model, variant, options }, onStep, onPreview);
       if (m.type !== 'result') throw new Error(`generation worker answered '${m.type}' to generate`);
       return { ...m.result, info: m.info, pose: m.pose };
+    } finally {
+      signal?.removeEventListener('abort', cancel);
+    }
+  }
+
+  /**
+   * Start several generations together in the worker (Generator.begin): one model call per step for all, each stopped
+   * before its first step with t ≤ its stopAt; finish each with generate({ ...o, resume: state }). The signal cancels
+   * them; `onStep` counts the first one's steps.
+   */
+  async begin(model: string, options: WireBeginOptions[], variant?: string, signal?: AbortSignal, onStep?: (done: number, total: number) => void): Promise<SampleState[]> {
+    if (signal?.aborted) throw new AbortError('generation cancelled before it started');
+    const id = this.nextId++;
+    const cancel = () => this.send({ type: 'cancel', id });
+    signal?.addEventListener('abort', cancel, { once: true });
+    try {
+      const m = await this.request({ type: 'begin', id, model, variant, options }, onStep);
+      if (m.type !== 'begun') throw new Error(`generation worker answered '${m.type}' to begin`);
+      return m.states;
     } finally {
       signal?.removeEventListener('abort', cancel);
     }

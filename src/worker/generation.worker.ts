@@ -116,6 +116,21 @@ async function handle(msg: ToWorker): Promise<void> {
       }
       return;
     }
+    case 'begin': {
+      const ctrl = new AbortController();
+      running.set(msg.id, ctrl);
+      try {
+        // progress: the first request's steps (they all run together)
+        const os = msg.options.map((w, i) => ({ ...w, signal: ctrl.signal, ...(i === 0 ? { onStep: (done: number, total: number) => post({ type: 'step', id: msg.id, done, total }) } : {}) }));
+        const { gen, states } = await needHost().begin(msg.model, os, msg.variant);
+        post({ type: 'begun', id: msg.id, info: infoOf(msg.model, gen), states }, states.map((s) => s.x.buffer as ArrayBuffer));
+      } catch (e) {
+        post({ type: 'error', id: msg.id, error: wireError(e) });
+      } finally {
+        running.delete(msg.id);
+      }
+      return;
+    }
     case 'solve': {
       try {
         const t0 = performance.now();

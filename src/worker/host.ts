@@ -6,8 +6,8 @@
  * Runs wherever createGenerator (src/createGenerator.ts) runs it: the worker in the browser, or
  * in-process (Node, `{worker: false}`).
  */
-import { loadModel, runWithFallback } from '../backends';
-import type { GenerateOptions, GenerateResult, Generator } from '../generate';
+import { loadModel, runWithFallback, withFallback } from '../backends';
+import type { BeginOptions, GenerateOptions, GenerateResult, Generator, SampleState } from '../generate';
 import type { Manifest } from '../manifest';
 import { type BackendRequest, loadMark, preloadWasmRuntime } from '../runtime/ort';
 import { createTextEncoder, type TextEncoder } from '../text';
@@ -67,6 +67,13 @@ export class GenerationHost {
   async generate(model: string, o: GenerateOptions, variant?: string): Promise<{ gen: Generator; result: GenerateResult }> {
     const gen = await this.load(model, variant);
     return runWithFallback(gen, o, () => this.reloadOnWasm(model, variant), (reason) => this.events.fallback(model, reason));
+  }
+
+  /** Start several generations together (Generator.begin), with the same WebGPU → WASM fallback. */
+  async begin(model: string, os: readonly BeginOptions[], variant?: string): Promise<{ gen: Generator; states: SampleState[] }> {
+    const gen = await this.load(model, variant);
+    const r = await withFallback(gen, os[0]?.signal, (g) => g.begin(os), () => this.reloadOnWasm(model, variant), (reason) => this.events.fallback(model, reason));
+    return { gen: r.gen, states: r.result };
   }
 
   private reloadOnWasm(model: string, variant: string | undefined): Promise<Generator> {

@@ -6,7 +6,7 @@
  * buffers (no copy).
  */
 import type { FileEvent } from '../cache/modelCache';
-import type { Condition, GenerateResult } from '../generate';
+import type { Condition, GenerateResult, SampleState } from '../generate';
 import type { Manifest } from '../manifest';
 import type { BackendRequest } from '../runtime/ort';
 import type { KnownMotion } from '../sampler/mask';
@@ -52,12 +52,22 @@ export interface WireGenerateOptions {
    * Both are copied to the worker (not transferred: the sender keeps its arrays). `fromTime`: the sampler's keepFromTime.
    */
   known?: KnownMotion;
+  /** finish a generation `begin` stopped (GenerateOptions.resume; the same options it was begun with) */
+  resume?: SampleState;
 }
+
+/** A request of `begin` as it crosses (BeginOptions): one generation's options, stopped before the first step with t ≤ stopAt. */
+export type WireBeginOptions = Omit<WireGenerateOptions, 'known' | 'resume' | 'pose' | 'previewSteps'> & {
+  stopAt: number;
+  known?: Omit<KnownMotion, 'features'> & { features?: Float32Array };
+};
 
 export type ToWorker =
   | { type: 'init'; init: WorkerInit }
   | { type: 'load'; id: number; model: string; variant?: string }
   | { type: 'generate'; id: number; model: string; variant?: string; options: WireGenerateOptions }
+  /** Start several generations together (Generator.begin): answered by `begun` with their states; `step` events count the first one's steps */
+  | { type: 'begin'; id: number; model: string; variant?: string; options: WireBeginOptions[] }
   /** Solve bone rotations (IK) for joints made on the page's side (a stitched timeline, a loop in place); answered by `solved` */
   | { type: 'solve'; id: number; joints: Float32Array; frames: number }
   | { type: 'cancel'; id: number }
@@ -109,6 +119,7 @@ export interface WireError {
 export type FromWorker =
   | { type: 'loaded'; id: number; info: ModelInfo }
   | { type: 'result'; id: number; info: ModelInfo; result: GenerateResult; pose?: WirePose }
+  | { type: 'begun'; id: number; info: ModelInfo; states: SampleState[] }
   | { type: 'solved'; id: number; pose: WirePose }
   | { type: 'error'; id: number; error: WireError }
   | { type: 'step'; id: number; done: number; total: number }

@@ -117,7 +117,9 @@ def test_the_model_sees_the_known_motion_noised_to_each_steps_level(tiny_step):
 
 def test_keep_from_time_imposes_the_kept_part_only_at_the_later_steps(tiny_step, real_features):
     """A timeline window keeps its second of context only from t ≤ keep_from_time on (and at the last step): the
-    model inputs before carry no trace of it, the result still equals it exactly, and 1 is every step, bit for bit."""
+    model inputs before carry no trace of it (the whole-kept leading frames sit those steps out), it joins as the
+    known motion noised to its step's level from x_T's own draw, the result still equals it exactly, and 1 is every
+    step, bit for bit."""
     known, keep = _known_keep(real_features)
     kept = keep.astype(bool)
     cond = np.random.default_rng(0).standard_normal(TINY_COND_DIM).astype(np.float32)
@@ -132,8 +134,12 @@ def test_keep_from_time_imposes_the_kept_part_only_at_the_later_steps(tiny_step,
     late, inputs = run(keep_from_time=0.6)                     # t = 1, 0.75 free; 0.5, 0.25 kept
     free, free_inputs = run(keep_from_time=0.0)                # only the last step
     assert np.array_equal(late[kept], known[kept]) and np.array_equal(free[kept], known[kept])
-    assert all(np.array_equal(a, b) for a, b in zip(inputs[:3], free_inputs[:3]))   # no trace of it yet (the input
-    assert not np.array_equal(inputs[3], free_inputs[3])        # of t = 0.5 comes from t = 0.75's x̂0); then it steers
+    assert [len(a) for a in inputs] == [10, 10, 16, 16] and [len(a) for a in free_inputs] == [10, 10, 10, 16]
+    assert all(np.array_equal(a, b) for a, b in zip(inputs[:2], free_inputs[:2]))   # frames 6.. alone, no trace of it
+    sch = make_schedule(4)
+    x_T = np.random.default_rng(3).standard_normal((1, 16, 263), dtype=np.float32)[0]
+    np.testing.assert_array_equal(inputs[2][:6], np.float32(sch.a_cum[2]) * known[:6] + np.float32(sch.s_cum[2]) * x_T[:6])
+    np.testing.assert_array_equal(inputs[2][6:], free_inputs[2])                     # joined at t = 0.5; then it steers
     assert np.abs(late - every)[~kept].mean() > 1e-3
     with pytest.raises(SampleError, match="keep_from_time must be a finite time"):
         sample_features(tiny_step, cond, 16, steps=2, known=known, keep=keep, keep_from_time=float("nan"))

@@ -127,7 +127,7 @@ describe('sampler with a known motion and a keep mask (tiny step model)', () => 
     expect(free / n).toBeGreaterThan(1e-3);
   });
 
-  it('keepFromTime: the kept part imposed only at steps with t ≤ it and at the last; 1 = every step, bit for bit', async () => {
+  it('keepFromTime: the kept part imposed only at steps with t ≤ it and at the last, its whole-kept leading frames sitting out the others; 1 = every step, bit for bit', async () => {
     const step = await tinyStep();
     const schedule = computeSchedule(4); // t = 1, 0.75, 0.5, 0.25 (about)
     const base = { method: 'ddgan' as const, schedule, step, frames: L, featureDim: D, zDim: 64, cond: fx.get('cond'), guidance: 2.5, known, keep };
@@ -145,6 +145,22 @@ describe('sampler with a known motion and a keep mask (tiny step model)', () => 
     expect(keptEqual(late.x)).toBe(true); // the result keeps them exactly
     expect(maxAbsDiff(late.x, every.x)).toBeGreaterThan(1e-3); // and the free part differs
     expect(keptEqual((await run(0)).x)).toBe(true); // 0: only the last step
+    // the whole-kept leading frames (0…5) sit out the free steps: the model sees frames 6… alone, as with 0, and they
+    // join at t = 0.5 as the known motion noised to its level from their x_T draw (Python's test, the same numbers)
+    const seen = async (keepFromTime: number) => {
+      const xs: Float32Array[] = [];
+      const rec: StepFn = async (i) => (xs.push(i.x.slice(0, i.frames * D)), step(i));
+      await sample({ ...base, step: rec, noise: fixtureNoise(runCase('')), keepFromTime });
+      return xs;
+    };
+    const [lateIn, freeIn] = [await seen(0.6), await seen(0)];
+    expect(lateIn.map((x) => x.length / D)).toEqual([10, 10, 16, 16]);
+    expect(freeIn.map((x) => x.length / D)).toEqual([10, 10, 10, 16]);
+    for (const k of [0, 1]) expect(maxAbsDiff(lateIn[k], freeIn[k])).toBe(0);
+    expect(maxAbsDiff(lateIn[2].subarray(6 * D), freeIn[2])).toBe(0);
+    const xT = runCase('').get('x_T');
+    const joined = known.subarray(0, 6 * D).map((v, i) => Math.fround(Math.fround(Math.fround(schedule.aCum[2]) * v) + Math.fround(Math.fround(schedule.sCum[2]) * xT[i])));
+    expect(maxAbsDiff(lateIn[2].subarray(0, 6 * D), joined)).toBe(0);
     const none: StepFn = async () => new Float32Array(L * D);
     await expect(sample({ ...base, step: none, noise: new SeededRandom(1), keepFromTime: Number.NaN })).rejects.toThrow(/keepFromTime must be a finite time ≥ 0/);
   });

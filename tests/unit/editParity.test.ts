@@ -7,7 +7,7 @@ import os from 'node:os';
 import path from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import {
-  type EditGenerate, type EditRequest, type TimelineSegment, LOOP_END_FRAMES, OVERLAP_FRAMES, SEAM_BLEND_EXTRA, SEAM_BLEND_TAU, SEAM_EASE_ACCEL,
+  type EditBegin, type EditBeginRequest, type EditGenerate, type EditRequest, type TimelineSegment, LOOP_END_FRAMES, OVERLAP_FRAMES, SEAM_BLEND_EXTRA, SEAM_BLEND_TAU, SEAM_EASE_ACCEL,
   SEAM_EASE_FRAMES, TIMELINE_KEEP_FROM, bodyPartEdit, generateTimeline, inBetween, makeLoop,
 } from '../../src/edit';
 import { type Generator, openModel } from '../../src/generate';
@@ -109,6 +109,35 @@ describe('src/edit.ts = emdm.motion.edit (tiny-edit fixture)', () => {
     // segment 1 untouched, bit for bit
     const n0 = meta.ops.timeline.frames[0];
     expect(maxAbsDiff(rows(r.joints, 0, n0, 66), rows(t.joints, 0, n0, 66))).toBe(0);
+  });
+
+  it('timeline with its windows begun together (begin: one model call per step until each context joins): the same within 1e-4', async () => {
+    const noiseOf = (frames: number, seed: number) => {
+      const run = meta.runs.find((x) => x.frames === frames && x.seed === seed);
+      if (!run) throw new Error(`no fixture run of ${frames} frames, seed ${seed}`);
+      return fixtureNoise({ ...fx, get: (k) => fx.get(run.noise + k) });
+    };
+    const begun: EditBeginRequest[][] = [];
+    const begin: EditBegin = (reqs) => {
+      begun.push(reqs);
+      return model.begin(reqs.map((r) => ({
+        condition: { type: 'action', label: meta.labels.indexOf(String(r.action)) }, frames: r.frames, steps: meta.steps, guidance: meta.guidance,
+        seed: r.seed, noise: noiseOf(r.frames, r.seed), stopAt: r.stopAt, ...(r.keep ? { known: { keep: r.keep, fromTime: r.keepFromTime } } : {}),
+      })));
+    };
+    const resumed: boolean[] = [];
+    const viaResume: EditGenerate = async (r) => {
+      resumed.push(r.resume !== undefined);
+      const label = meta.labels.indexOf(String(r.action));
+      const res = await model.generate({ condition: { type: 'action', label }, frames: r.frames, steps: meta.steps, guidance: meta.guidance, seed: r.seed, noise: noiseOf(r.frames, r.seed), known: r.known, resume: r.resume });
+      return { frames: r.frames, fps: res.motion.fps, features: res.motion.features, joints: res.motion.joints };
+    };
+    const t = await generateTimeline(tlSegs, viaResume, limits, { begin });
+    expect(begun.map((b) => b.map((r) => [r.frames, r.seed, r.stopAt, r.keep ? r.keep.reduce((a, v) => a + v, 0) / D : 0])))
+      .toEqual([meta.runs.filter((r) => r.op === 'timeline').map((r, i) => [r.frames, r.seed, TIMELINE_KEEP_FROM, i === 0 ? 0 : OVERLAP_FRAMES])]);
+    expect(resumed).toEqual([true, true, true]);
+    expect(maxAbsDiff(t.features, fx.get('timeline_features'))).toBeLessThan(1e-4);
+    expect(maxJointDist(t.joints, fx.get('timeline_joints'))).toBeLessThan(1e-4 * Math.max(1, ...Array.from(fx.get('timeline_joints'), Math.abs)));
   });
 
   it('in-between (first and last second kept): within 1e-4; kept frames decode within 1 mm of the known motion', async () => {

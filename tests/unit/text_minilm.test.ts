@@ -103,6 +103,21 @@ describe('all-MiniLM-L6-v2 (transformers.js, Node)', () => {
     expect((await gen.generate({ ...o, condition: { type: 'none' } })).prompt).toBeUndefined();
     await gen.dispose();
   });
+
+  test('a generator encodes a prompt once: the same prompt again (a timeline window, a regenerated segment) reuses its embedding', async () => {
+    const manifest = await loadManifest(MODELS);
+    const name = Object.keys(manifest.models).find((k) => manifest.models[k].condition.type === 'text' && manifest.models[k].condition.encoder === enc.id)!;
+    const texts: string[] = [];
+    const counting = { ...enc, encode: (t: string) => (texts.push(t), enc.encode(t)) } as typeof enc;
+    const gen = await openModel({ manifest, baseUrl: MODELS, model: name, backend: 'wasm', threads: 1, textEncoder: counting });
+    const o = { frames: 4, steps: manifest.models[name].supportedSteps[0], guidance: 1, seed: 1 };
+    const a = await gen.generate({ ...o, condition: { type: 'text', text: 'a person waves' } });
+    await gen.generate({ ...o, condition: { type: 'text', text: 'a person kicks' } });
+    const b = await gen.generate({ ...o, condition: { type: 'text', text: 'a person waves' } });
+    expect(texts).toEqual(['a person waves', 'a person kicks']);
+    expect(Array.from(b.motion.features)).toEqual(Array.from(a.motion.features));
+    await gen.dispose();
+  });
 });
 
 describe('loading', () => {

@@ -57,6 +57,10 @@ async function workerGenerator(manifest: Manifest, baseUrl: string, model: strin
       if (onPreview) throw new Error('harness: step previews are not wired through the worker here (use GenerationClient with previewSteps)');
       return client.generate(model, { ...o, signal, onStep }, variant);
     },
+    begin: (os) => {
+      if (os.some((o) => o.noise)) throw new Error('harness: a custom noise source cannot cross to the worker');
+      return client.begin(model, os.map(({ signal: _s, onStep: _o, noise: _n, ...o }) => o), variant, os[0]?.signal, os[0]?.onStep);
+    },
     dispose: () => client.dispose(),
   };
 }

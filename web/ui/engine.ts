@@ -5,7 +5,7 @@
 // where src/backends.ts decides, in one place for the page and the library (createGenerator). Which file of a
 // model runs (fp32 or a variant such as int8) is the manifest's chooseVariant: the entry's defaultVariant
 // unless the page asks for another (URL `variant=fp32`).
-import { type Manifest, type ModelEntry, GenerationClient, chooseVariant, type ClientEvents, type ModelInfo, type RemoteGenerateOptions, type RemoteResult } from '../../src/index';
+import { type Manifest, type ModelEntry, GenerationClient, chooseVariant, type ClientEvents, type ModelInfo, type RemoteGenerateOptions, type RemoteResult, type SampleState, type WireBeginOptions } from '../../src/index';
 import type { BackendChoice, Mode } from './state';
 
 export interface ModelChoice {
@@ -115,6 +115,11 @@ export class Engine {
    * window, whose stitched result is solved once); WebGPU failures are retried on WASM in the worker. */
   generate(model: string, o: RemoteGenerateOptions): Promise<RemoteResult> {
     return this.client.generate(model, { pose: true, ...o }, this.variantOf(model));
+  }
+
+  /** Start several generations of `model` together in the worker (Generator.begin); finish each with generate({ resume }). */
+  begin(model: string, options: WireBeginOptions[], signal?: AbortSignal, onStep?: (done: number, total: number) => void): Promise<SampleState[]> {
+    return this.client.begin(model, options, this.variantOf(model), signal, onStep);
   }
 
   /** Run `job` as the newest request: the previous one is aborted and awaited first. */

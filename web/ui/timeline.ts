@@ -8,7 +8,7 @@
 import {
   EditError, MAX_TIMELINE_SECONDS, bodyPartEdit, cleanupFootContacts, contactsFromFeatures, generateTimeline, inBetween, makeLoop,
   planTimeline, recoverJoints, smoothJoints,
-  type EditCondition, type EditGenerate, type EditMotion, type GenerateResult, type KeptPart, type RemoteResult, type Timeline, type TimelineSegment,
+  type EditBegin, type EditCondition, type EditGenerate, type EditMotion, type SampleState, type GenerateResult, type KeptPart, type RemoteResult, type Timeline, type TimelineSegment,
 } from '../../src/index';
 import type { PoseTrack } from '../../src/three';
 import { el } from './dom';
@@ -309,7 +309,7 @@ export class TimelinePanel {
    * Run `job` as the page's newest request (cancelling a running one), with progress, the busy button and
    * errors said in the panel; the result is shown on the character.
    */
-  private async request(kind: EditSummary['kind'], job: (gen: EditGenerate, signal: AbortSignal, calls: Calls) => Promise<Shown>): Promise<EditSummary> {
+  private async request(kind: EditSummary['kind'], job: (gen: EditGenerate, signal: AbortSignal, calls: Calls, begin: EditBegin) => Promise<Shown>): Promise<EditSummary> {
     const { session, view, controls } = this.page;
     const state = controls.read();
     const t0 = performance.now();
@@ -323,7 +323,10 @@ export class TimelinePanel {
       let genMs = 0;
       let jobMs = 0;
       const shown = await session.engine.run(async (signal) => {
-        const calls: Calls = { n: 0, results: [], progress: (f) => f, text: (d, t) => `Denoising step ${d} / ${t}` };
+        const calls: Calls = {
+          n: 0, results: [], progress: (f) => f, text: (d, t) => `Denoising step ${d} / ${t}`,
+          beginText: (w, d, t) => `${w} window${w === 1 ? '' : 's'} together: step ${d} / ${t}`,
+        };
         const gen: EditGenerate = async (r) => {
           const g0 = performance.now();
           const model = this.modelFor(r);
@@ -337,6 +340,7 @@ export class TimelinePanel {
             frames: r.frames, steps: state.steps, guidance: state.guidance, seed: r.seed, signal,
             // copies: the client transfers these buffers to the worker, and src/edit.ts reads `keep` again after
             ...(r.known ? { known: { ...r.known, features: r.known.features.slice(), keep: r.known.keep.slice() } } : {}),
+            ...(r.resume ? { resume: r.resume } : {}),
             onStep: (d, t) => {
               session.counters.stepsRun++;
               view.showProgress(calls.progress(d / t), calls.text(d, t));
@@ -348,8 +352,33 @@ export class TimelinePanel {
           genMs += performance.now() - g0;
           return { frames: res.motion.frames, fps: res.motion.fps, features: res.motion.features, joints: res.motion.joints };
         };
+        // a timeline's windows started together, one model call per step, grouped by model (text / action)
+        const begin: EditBegin = async (reqs) => {
+          const g0 = performance.now();
+          const states: SampleState[] = new Array(reqs.length);
+          const byModel = new Map<string, number[]>();
+          reqs.forEach((r, i) => byModel.set(this.modelFor(r), [...(byModel.get(this.modelFor(r)) ?? []), i]));
+          for (const [model, idx] of byModel) {
+            await session.load(model);
+            const got = await session.engine.begin(model, idx.map((i) => {
+              const r = reqs[i];
+              const label = r.action !== undefined ? this.actions.indexOf(String(r.action)) : -1;
+              return {
+                condition: r.action !== undefined ? { type: 'action', label } : { type: 'text', text: r.prompt ?? '' },
+                frames: r.frames, steps: state.steps, guidance: state.guidance, seed: r.seed, stopAt: r.stopAt,
+                ...(r.keep ? { known: { keep: r.keep.slice(), fromTime: r.keepFromTime } } : {}),
+              };
+            }), signal, (d, t) => {
+              view.showProgress(calls.progress(d / t), calls.beginText(idx.length, d, t));
+              this.working(kind, `${calls.beginText(idx.length, d, t)} (${Math.round(100 * calls.progress(d / t))} %)`);
+            });
+            idx.forEach((i, j) => (states[i] = got[j]));
+          }
+          genMs += performance.now() - g0;
+          return states;
+        };
         const j0 = performance.now();
-        const out = await job(gen, signal, calls);
+        const out = await job(gen, signal, calls, begin);
         jobMs = performance.now() - j0;
         return out;
       });
@@ -445,14 +474,14 @@ export class TimelinePanel {
     const st = this.page.controls.read();
     const settings = `${st.steps}|${st.guidance}`;
     const previous = this.timelineSettings === settings ? this.timeline : null;
-    return this.request('timeline', async (gen, signal, calls) => {
+    return this.request('timeline', async (gen, signal, calls, begin) => {
       let seg = 0;
       let doneWindows = 0;
       let todo = 1;
       calls.progress = (f) => (doneWindows + f) / todo;
       calls.text = (d, t) => `Segment ${seg + 1} of ${segs.length}${regenerated !== null ? ` (again from ${regenerated + 1})` : ''}: step ${d} / ${t}`;
       const t = await generateTimeline(segs, gen, this.limits(), {
-        previous, signal,
+        previous, signal, begin,
         onWindow: (s, done, total) => {
           seg = s;
           doneWindows = done;
@@ -611,4 +640,6 @@ interface Calls {
   results: GenerateResult[];
   progress(f: number): number;
   text(done: number, total: number): string;
+  /** while `windows` windows are begun together (a timeline) */
+  beginText(windows: number, done: number, total: number): string;
 }
