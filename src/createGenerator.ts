@@ -15,14 +15,14 @@
  *   GenerationHost, whose backend choice and fallbacks (WebGPU missing or failing → WASM, at load and
  *   while generating) are src/backends.ts's; the results are bit-identical on the same backend.
  */
-import type { GenerateResult } from './generate';
+import type { GenerateResult, SampleState } from './generate';
 import { type Manifest, type ModelEntry, chooseVariant, loadManifest } from './manifest';
 import type { Motion } from './motion/types';
 import type { KnownMotion } from './sampler/mask';
 import type { Backend, BackendRequest } from './runtime/ort';
 import type { Skeleton } from './skeleton';
 import { GenerationClient, type ClientEvents } from './worker/client';
-import type { WireGenerateOptions } from './worker/protocol';
+import type { WireBeginOptions, WireGenerateOptions } from './worker/protocol';
 
 export interface CreateGeneratorOptions {
   /** the models folder holding manifest.json (default `<BASE_URL>models/` in a Vite page; required in Node) */
@@ -80,9 +80,17 @@ export interface MotionRequest {
    * `fromTime`: impose them only at the steps with t ≤ it (and the last; default every step).
    */
   known?: KnownMotion;
+  /** finish a generation `begin` started (its state; the request as it was begun, now with `known.features`) */
+  resume?: SampleState;
   onStep?: (done: number, total: number) => void;
   signal?: AbortSignal;
 }
+
+/**
+ * A request to `MotionGenerator.begin` (src/edit.ts's EditBeginRequest fits it): a generation stopped before its first
+ * denoising step with t ≤ `stopAt`; `keep` (with `keepFromTime`) marks what it will keep once `known` is given.
+ */
+export type BeginRequest = Omit<MotionRequest, 'known' | 'resume' | 'onStep' | 'signal'> & { stopAt: number; keep?: Float32Array; keepFromTime?: number };
 
 /** A motion and, in `features`, its frames × 263 de-normalised features: what `known` takes to continue or edit it. */
 export interface GeneratedMotion extends Motion {
@@ -105,6 +113,12 @@ export interface MotionGenerator {
   /** Load a model ahead of the first request (downloads, verifies, opens it); generate() loads on demand. */
   load(model?: string): Promise<{ model: string; backend: Backend; threads: number }>;
   generate(request: MotionRequest): Promise<GeneratedMotion>;
+  /**
+   * Start several generations together, one model call per step for those of one model (Generator.begin), each
+   * stopped before its first step with t ≤ its stopAt; `generate({ ...request, resume: state })` finishes each. A
+   * timeline passes it as `generateTimeline(..., { begin: (rs) => generator.begin(rs) })`.
+   */
+  begin(requests: readonly BeginRequest[], signal?: AbortSignal): Promise<SampleState[]>;
   dispose(): Promise<void>;
 }
 
@@ -159,8 +173,33 @@ export function resolveRequest(manifest: Manifest, req: MotionRequest): { model:
       ...(req.x0Smoothing !== undefined ? { x0Smoothing: req.x0Smoothing } : {}),
       seed: req.seed ?? randomSeed(), smooth: req.smooth, footCleanup: req.footCleanup,
       ...(req.known ? { known: { ...req.known, features: Float32Array.from(req.known.features), keep: Float32Array.from(req.known.keep) } } : {}),
+      ...(req.resume ? { resume: req.resume } : {}),
     },
   };
+}
+
+/** `begin`'s requests resolved and grouped by the model they run on (one batch per model), with their places. */
+function beginGroups(manifest: Manifest, reqs: readonly BeginRequest[]): Map<string, { at: number[]; options: WireBeginOptions[] }> {
+  const groups = new Map<string, { at: number[]; options: WireBeginOptions[] }>();
+  reqs.forEach((r, i) => {
+    const { stopAt, keep, keepFromTime, ...req } = r;
+    const { model, options } = resolveRequest(manifest, req);
+    const { smooth: _s, footCleanup: _f, ...wire } = options;
+    const g = groups.get(model) ?? { at: [], options: [] };
+    g.at.push(i);
+    g.options.push({ ...wire, stopAt, ...(keep ? { known: { keep: Float32Array.from(keep), fromTime: keepFromTime } } : {}) });
+    groups.set(model, g);
+  });
+  return groups;
+}
+
+async function beginAll(manifest: Manifest, reqs: readonly BeginRequest[], run: (model: string, options: WireBeginOptions[]) => Promise<SampleState[]>): Promise<SampleState[]> {
+  const states: SampleState[] = new Array(reqs.length);
+  for (const [model, g] of beginGroups(manifest, reqs)) {
+    const got = await run(model, g.options);
+    g.at.forEach((i, j) => (states[i] = got[j]));
+  }
+  return states;
 }
 
 /** Text / action / nothing → motion, with the manifest's defaults; see the header. */
@@ -197,6 +236,7 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
         if (!r.pose) throw new Error('generation worker: the result has no pose (IK) although it was asked for');
         return motionOf(model, options, r, r.info.backend, r.pose);
       },
+      begin: (reqs, signal) => beginAll(manifest, reqs, (model, os) => client.begin(model, os, variantOf(model), signal)),
       dispose: () => client.dispose(),
     };
   }
@@ -220,6 +260,7 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
       const ik = solveIK(result.motion.joints, result.motion.frames, manifest.skeleton);
       return motionOf(model, options, result, gen.backend, { rootPos: ik.rootPos, quats: ik.quats });
     },
+    begin: (reqs, signal) => beginAll(manifest, reqs, async (model, os) => (await host.begin(model, os.map((o) => ({ ...o, signal })), variantOf(model))).states),
     dispose: () => host.dispose(),
   };
 }

@@ -12,7 +12,7 @@
  *   { prompt: 'a person walks forward', seconds: 10, seed: 1 },
  *   { prompt: 'a person waves', seconds: 10, seed: 2 },
  *   { prompt: 'a person sits down', seconds: 10, seed: 3 },
- * ], gen, limits);                                                  // t.joints: 600 frames × 22 × 3, one motion
+ * ], gen, limits, { begin: (rs) => generator.begin(rs) });         // t.joints: 600 frames × 22 × 3, one motion
  * const again = await generateTimeline(withNewSeed(t.segments.map((s) => s.segment), 1), gen, limits, { previous: t });
  * // segment 0 is reused as it was; 1 and 2 are generated again (2 continues from the new 1)
  * const loop = await makeLoop(again, { prompt: 'a person waves' }, 7, gen, limits, { inPlace: true });
@@ -28,6 +28,11 @@
  *   recovered, then `appendSegment(prev, window, c)`; features: the first window's, then every later window's
  *   frames [c, …).
  *   Changing segment i regenerates i and every later one (they continue from it); those before are kept.
+ *   With `begin` (the generator's), every window to generate is started at once, one model call per step for all,
+ *   and stopped where its context joins (t ≤ TIMELINE_KEEP_FROM; its context frames sit those steps out, so they
+ *   need nothing from the window before); then each is finished in turn (`resume`). The same motion as without it
+ *   (an int8 model rounds each call's activations together, so within that rounding); faster where the runtime
+ *   has threads or a GPU to spare for the larger calls.
  * - In-between: keep frames [0, a] ∪ [b, N−1] (default a = C−1, b = N−C), all channels; the kept later part
  *   stays where it was in the world (`pinKeptRoot`, generate's default); then `easeSeams` and `pinKeptRoot` again.
  * - Body part: keep the root + legs groups on every frame (new upper body) or the upper group (new legs + root).

@@ -10,7 +10,8 @@ import { type GenerateOptions, type GenerateResult, type Generator, openModel } 
 import { ModelFileError, loadManifest } from '../../src/manifest';
 import { AbortError } from '../../src/sampler/sampler';
 import { poseTrack } from '../../src/three';
-import { tinyModels } from './coreFixtures';
+import { type EditGenerate, generateTimeline } from '../../src/edit';
+import { maxAbsDiff, tinyModels } from './coreFixtures';
 
 const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-create-'));
 afterAll(() => fs.rmSync(tmp, { recursive: true, force: true }));
@@ -51,6 +52,21 @@ describe('createGenerator', () => {
     const solved = poseTrack({ frames: m.frames, fps: m.fps, joints: m.joints, features: m.features }, manifest.skeleton);
     expect(Array.from(solved.quats)).toEqual(Array.from(m.pose.quats));
     await ref.dispose();
+    await g.dispose();
+  });
+
+  it('a timeline through the library with its windows begun together: the motion of the windows run in turn', async () => {
+    const g = await createGenerator({ baseUrl: tinyModels(tmp).dir, threads: 1, worker: false });
+    const gen: EditGenerate = (r) => g.generate(r);
+    const segs = [{ action: 'b', seconds: 3, seed: 1 }, { action: 'e', seconds: 2, seed: 2 }, { action: 'g', seconds: 12, seed: 3 }];
+    const limits = { fps: 20, maxFrames: 196 };
+    const inTurn = await generateTimeline(segs, gen, limits);
+    const begun: number[] = [];
+    const together = await generateTimeline(segs, gen, limits, { begin: (rs) => (begun.push(rs.length), g.begin(rs)) });
+    expect(begun).toEqual([4]); // the 12 s segment is two windows
+    expect(together.frames).toBe(340);
+    expect(maxAbsDiff(together.features, inTurn.features)).toBeLessThan(1e-4);
+    await expect(g.begin([{ action: 'b', frames: 10, seed: 1, stopAt: Number.NaN }])).rejects.toThrow(/stopAt must be a finite time ≥ 0/);
     await g.dispose();
   });
 
