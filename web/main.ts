@@ -10,7 +10,7 @@ import { clearModelCache, loadManifest, ModelFileError, modelCacheUsage, type Ma
 import { compareNote } from './ui/compare';
 import { Controls } from './ui/controls';
 import { byId } from './ui/dom';
-import { isAbort, modelForMode, pageVariant, pickModels } from './ui/engine';
+import { isAbort, modelForMode, pageThreads, pageVariant, pickModels } from './ui/engine';
 import { examplePrompts } from './ui/examples';
 import { CacheControl, FileList } from './ui/files';
 import { ErrorPanel, Notices } from './ui/notices';
@@ -78,6 +78,8 @@ async function main(): Promise<void> {
   for (const n of pageFlagNotices(location.search)) notices.show('warn', n, 14000);
   const variant = pageVariant(manifest, location.search);
   if (variant.notice) notices.show('warn', variant.notice, 14000);
+  const threads = pageThreads(location.search);
+  if (threads.notice) notices.show('warn', threads.notice, 14000);
 
   // ------------------------------------------------------------ session: the models in the worker
   const session = new Session(manifest, limits, MODELS_URL, parsed.state.backend, {
@@ -88,7 +90,7 @@ async function main(): Promise<void> {
       if (e.state === 'done' && api.ready) void cacheControl.refresh(); // a model loaded later (compare view)
     },
     notice: (kind, text) => notices.show(kind, text, 14000),
-  }, api.counters, variant.variant);
+  }, api.counters, variant.variant, threads.threads);
   session.onLoad = (model, e) => {
     if (e.phase === 'start') view.status.begin(model);
     else if (e.phase === 'ready') view.status.end(model, 'ready', view.status.last?.kind === 'ready' ? view.status.last.text : `Ready · ${e.info.backend === 'webgpu' ? 'WebGPU' : 'WASM'}`);

@@ -128,10 +128,31 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
     step's level. That saves the model their rows at the steps they would not shape, and leaves each window's early
     steps independent of the motion it continues. The random draws are the same either way (x_T and every ε are
     drawn for all frames; the rows left out go unused).
+
+    The loop is ``sampling`` (a generator of the step model's inputs); ``sample_together`` runs several such loops
+    with one model call per step, and ``stop_at`` pauses a loop where its kept part is about to be imposed.
     """
+    return drive(sampling(cond, frames, steps, guidance, seed, num, z_dim, feature_dim, objective, known, keep,
+                          guidance_min_time, x0_smoothing, lengths, keep_from_time), step)
+
+
+STOP = "stop"     # what ``sampling`` yields where it stops (``stop_at``): send it the known motion to go on
+
+
+def sampling(cond: np.ndarray, frames: int, steps: int = 10, guidance: float = 1.0, seed: int = 0, num: int = 1,
+             z_dim: int = 64, feature_dim: int = 263, objective: str = "ddgan", known: np.ndarray | None = None,
+             keep: np.ndarray | None = None, guidance_min_time: float = 0.0, x0_smoothing: float = 0.0,
+             lengths: np.ndarray | None = None, keep_from_time: float = 1.0, stop_at: float | None = None):
+    """``sample_features``'s loop as a generator: it yields each step's model inputs (x, z, c, t, mask) and takes
+    the model's x̂_0 back (``drive`` runs it with a step function), and returns the result. With ``stop_at`` (the
+    TypeScript sampler's stopAt) it yields ``STOP`` before the first step with t ≤ stop_at (at the latest before the
+    last) and takes ``known`` back there (None: the one it was given), so ``known`` may be None until then: a
+    timeline window's steps before its context joins need nothing from the window before (``sample_together``).
+    The same arithmetic and random draws as one uninterrupted run."""
     if frames < 1:
         raise SampleError(f"frames must be ≥ 1, got {frames}")
-    keep, known = check_known(known, keep, frames, feature_dim)
+    deferred = stop_at is not None and known is None and keep is not None   # known comes at the stop
+    keep, known = check_known(np.zeros((frames, feature_dim), np.float32) if deferred else known, keep, frames, feature_dim)
     sch = make_schedule(steps)
     rng = np.random.default_rng(seed)
     cond = np.asarray(cond, np.float32)
@@ -147,9 +168,22 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
     imposed = [keep is not None and (sch.time[k] <= keep_from_time or k == 0) for k in range(steps)]
     # a deferred kept part: its leading whole-kept frames sit out the steps before it is imposed (``lead_frames``)
     lead = lead_frames(keep) if keep is not None and not imposed[steps - 1] else 0
-    if keep is not None and imposed[steps - 1]:
-        x = np.where(keep, np.float32(sch.a_cum[steps]) * known + np.float32(sch.s_cum[steps]) * x, x)
+    stop = -1
+    if stop_at is not None:
+        if not (math.isfinite(stop_at) and stop_at >= 0):
+            raise SampleError(f"stop_at must be a finite time ≥ 0, got {stop_at}")
+        stop = max(0, max((k for k in range(steps) if sch.time[k] <= stop_at), default=0))
+        if deferred and any(imposed[k] for k in range(stop + 1, steps)):
+            raise SampleError(f"the kept part is imposed before t ≤ {stop_at}, so known is needed from the start")
     for k in range(steps - 1, -1, -1):
+        if k == stop:
+            given = yield STOP
+            if given is not None:
+                known = check_known(given, keep, frames, feature_dim)[1]
+            elif deferred:
+                raise SampleError("this run stopped for its known motion (stop_at): send it")
+        if keep is not None and imposed[k] and k == steps - 1:    # the kept part enters: x_T's
+            x = np.where(keep, np.float32(sch.a_cum[steps]) * known + np.float32(sch.s_cum[steps]) * x, x)
         if lead and imposed[k] and not imposed[k + 1]:   # they join, drawn from q(x_t | known) with x_T's own draw
             x[:, :lead] = np.float32(sch.a_cum[k + 1]) * known[:lead] + np.float32(sch.s_cum[k + 1]) * x[:, :lead]
         f0 = 0 if imposed[k] else lead   # the frames the model sees at this step: [f0, frames)
@@ -162,7 +196,7 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
         bsz = xin.shape[0]
         t = np.full((bsz,), sch.time[k], np.float32)
         mask = np.ones((bsz, frames - f0), np.float32)
-        x0 = np.asarray(step(xin, zin, c, t, mask), np.float32)
+        x0 = np.asarray((yield xin, zin, c, t, mask), np.float32)
         if guided:
             x0 = x0[num:] + np.float32(guidance) * (x0[:num] - x0[num:])
         if sigma > 0 and k > 0:
@@ -178,6 +212,48 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
                 xn = xn + np.float32(sch.sigma[k]) * rng.standard_normal(x.shape, dtype=np.float32)[:, f0:]
             x[:, f0:] = xn
     return x.astype(np.float32)
+
+
+def drive(run, step: StepFn, known: np.ndarray | None = None, first=None):
+    """Run a ``sampling`` generator to its result with ``step`` (one model call per step); at a ``STOP`` it is sent
+    ``known``. ``first``: what the run last yielded, when it was advanced before (``finish``)."""
+    try:
+        req = next(run) if first is None else first
+        while True:
+            req = run.send(known if isinstance(req, str) else np.asarray(step(*req), np.float32))
+    except StopIteration as done:
+        return done.value
+
+
+def run_together(runs: list, step: StepFn) -> None:
+    """Advance several ``sampling`` generators (each with ``stop_at``) with one model call per step for all of them,
+    until every one has stopped (``STOP``): their inputs are stacked, frames padded to the longest with mask 0 (the
+    model's attention ignores them), and each gets its own rows of x̂_0 back. Then ``finish`` each. The TypeScript
+    twin is src/sampler/lockstep.ts (one call costs less than its parts where ORT has threads to spare)."""
+    reqs = [next(r) for r in runs]
+    while True:
+        live = [i for i, q in enumerate(reqs) if not isinstance(q, str)]
+        if not live:
+            return
+        parts = [reqs[i] for i in live]
+        length = max(p[0].shape[1] for p in parts)
+        pad = lambda a, fill=0: np.pad(a, [(0, 0), (0, length - a.shape[1])] + [(0, 0)] * (a.ndim - 2), constant_values=fill)
+        x0 = np.asarray(step(np.concatenate([pad(p[0]) for p in parts]), np.concatenate([p[1] for p in parts]),
+                             np.concatenate([p[2] for p in parts]), np.concatenate([p[3] for p in parts]),
+                             np.concatenate([pad(p[4]) for p in parts])), np.float32)
+        row = 0
+        for i, p in zip(live, parts):
+            b, n = p[0].shape[:2]
+            try:
+                reqs[i] = runs[i].send(x0[row:row + b, :n])
+            except StopIteration:
+                raise SampleError("run_together: a run ended without stopping; give every run stop_at") from None
+            row += b
+
+
+def finish(run, step: StepFn, known: np.ndarray | None = None) -> np.ndarray:
+    """Go on with a run stopped by ``run_together`` (or ``stop_at``): send it ``known`` and drive it to its result."""
+    return drive(run, step, known, first=STOP)
 
 
 def lead_frames(keep: np.ndarray) -> int:

@@ -353,3 +353,27 @@ def test_the_fixture_holds_what_the_typescript_side_needs():
     assert read_case_array(PARITY, "tiny-edit", "loop_features").shape == (38, 263)
     long_loop = read_case_array(PARITY, "tiny-edit", "loop_long_features")
     assert long_loop.shape == (38, 263) and np.array_equal(long_loop[:14], tl[:14])   # frames before its window stay
+
+
+def test_timeline_together_runs_every_window_s_early_steps_in_one_call_and_gives_the_same_motion():
+    """``together`` (the page's begin): one model call per step for every window until its context joins, then each
+    window in turn; the same timeline and regeneration within float rounding (the tiny model is fp32)."""
+    base = edit_fixture.tiny_editor()
+    calls = []
+
+    def counting(x, z, c, t, mask):
+        calls.append((x.shape[0], x.shape[1], float(mask.min())))
+        return base.step(x, z, c, t, mask)
+
+    model = E.Editor(counting, base.mean, base.std, base.condition, steps=4, guidance=2.5, max_frames=base.max_frames)
+    segs = [E.Segment("b", 1.2, 1), E.Segment("e", 0.7, 2), E.Segment("g", 12.0, 3)]     # windows 24, 34, 20+120, 20+120
+    in_turn = E.timeline(model, segs)
+    calls.clear()
+    tl = E.timeline(model, segs, together=True)
+    # steps t = 1 and 0.75 (above 0.55, guided): 4 windows × 2 rows in one call, padded to the longest free part
+    assert calls[:2] == [(8, 120, 0.0), (8, 120, 0.0)]
+    assert len(calls) == 2 + 4 * 2
+    np.testing.assert_allclose(tl.features, in_turn.features, atol=1e-4)
+    again = E.regenerate(model, tl, 1, together=True)
+    np.testing.assert_allclose(again.features, E.regenerate(model, in_turn, 1).features, atol=1e-4)
+    np.testing.assert_array_equal(again.features[:24], tl.features[:24])

@@ -147,3 +147,12 @@ def test_semantics_and_root_are_judged_on_their_bar_figures():
     assert not ev.bars(r)["semantics"]["met"]
     seams["root_within_bar"] = seams["count"] - 1                      # one seam whose root jumps
     assert not ev.bars(r)["seam_root"]["met"]
+
+
+def test_the_time_bar_is_met_only_when_met_at_every_thread_count_and_names_each():
+    t = {"ratio_of_medians": 3.3, "work_ratio": 3.13, "by_threads": {"1": {"ratio": 3.2}, "2": {"ratio": 2.86}}}
+    met, figure = ev.time_bar(t)
+    assert not met and figure == "3.20× on 1 thread, 2.86× on 2 threads (the model's work 3.13×)"
+    t["by_threads"]["1"]["ratio"] = 2.99
+    assert ev.time_bar(t)[0]
+    assert ev.time_bar({"ratio_of_medians": 2.9}) == (True, "2.90×")          # a result without the thread sweep

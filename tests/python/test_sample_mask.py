@@ -285,3 +285,34 @@ def test_pin_kept_root_finds_the_free_stretch_from_the_mask(real_features):
     assert np.array_equal(pin_kept_root(inb, keep, real_features), pin_root(inb, (30, 70), 70, root_pose(real_features, 70)))
     prefix = keep_mask(len(inb), [parse_keep("frames:0-29")])       # a continuation: nothing kept after the free frames
     assert np.array_equal(pin_kept_root(inb, prefix, real_features), inb)
+
+
+def test_a_run_stopped_where_its_context_joins_and_finished_equals_one_whole_run(tiny_step, real_features):
+    """``sampling(stop_at)`` + ``finish``: bit for bit ``sample_features`` (ddgan, ddim, one step), known given only at
+    the stop; ``run_together`` gives each run its own rows (frames padded) within float rounding."""
+    from emdm.sample import finish, run_together, sampling
+
+    known, keep = _known_keep(real_features)
+    keep = keep_mask(16, [parse_keep("frames:0-5")])
+    cond = np.random.default_rng(0).standard_normal(TINY_COND_DIM).astype(np.float32)
+    for objective, steps in (("ddgan", 10), ("diffusion", 10), ("ddgan", 1)):
+        kw = dict(steps=steps, guidance=2.5, seed=5, objective=objective, keep=keep, keep_from_time=0.55,
+                  guidance_min_time=0.55, x0_smoothing=1.0)
+        whole = sample_features(tiny_step, cond, 16, known=known, **kw)
+        run = sampling(cond, 16, stop_at=0.55, **kw)
+        run_together([run], tiny_step)
+        np.testing.assert_array_equal(finish(run, tiny_step, known), whole)
+    runs = [sampling(cond, n, steps=10, guidance=2.5, seed=s, stop_at=0.55, **({"keep": keep_mask(n, [parse_keep("frames:0-5")]), "keep_from_time": 0.55} if n > 16 else {}))
+            for n, s in ((16, 1), (26, 2), (21, 3))]
+    run_together(runs, tiny_step)
+    for (n, s), run in zip(((16, 1), (26, 2), (21, 3)), runs):
+        kn = np.zeros((n, 263), np.float32) if n > 16 else None
+        alone = sample_features(tiny_step, cond, n, steps=10, guidance=2.5, seed=s, known=kn,
+                                **({"keep": keep_mask(n, [parse_keep("frames:0-5")]), "keep_from_time": 0.55} if n > 16 else {}))
+        np.testing.assert_allclose(finish(run, tiny_step, kn), alone, atol=1e-5)
+    with pytest.raises(SampleError, match="imposed before t ≤ 0.3, so known is needed"):
+        next(sampling(cond, 16, steps=4, keep=keep, keep_from_time=0.6, stop_at=0.3))
+    run = sampling(cond, 16, steps=4, keep=keep, keep_from_time=0.6, stop_at=0.6)
+    run_together([run], tiny_step)
+    with pytest.raises(SampleError, match="stopped for its known motion"):
+        finish(run, tiny_step)

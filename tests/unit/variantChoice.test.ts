@@ -4,7 +4,7 @@ import fs from 'node:fs';
 import path from 'node:path';
 import { describe, expect, test } from 'vitest';
 import { chooseVariant, ModelFileError, stepFileOf, validateManifest, type Manifest } from '../../src/manifest';
-import { pageVariant } from '../../web/ui/engine';
+import { pageThreads, pageVariant } from '../../web/ui/engine';
 
 const MODELS = path.resolve(__dirname, '../../public/models');
 const shipped = JSON.parse(fs.readFileSync(path.join(MODELS, 'manifest.json'), 'utf8')) as Manifest;
@@ -50,5 +50,16 @@ describe('the page URL flag variant', () => {
     expect(pageVariant(shipped, '?variant=fp32')).toEqual({ variant: 'fp32', notice: '' });
     expect(pageVariant(shipped, '?variant=int8')).toEqual({ variant: 'int8', notice: '' });
     expect(pageVariant(shipped, '?variant=fp8')).toEqual({ variant: undefined, notice: "URL variant='fp8' is not a model file every model has (fp32, int8, fp16); each model runs its default file." });
+  });
+});
+
+describe('the page URL flag threads', () => {
+  test('absent: the runtime chooses; a whole number 1…16: that many WASM threads; anything else: a notice', () => {
+    expect(pageThreads('?mode=text')).toEqual({ threads: undefined, notice: '' });
+    expect(pageThreads('?threads=2')).toEqual({ threads: 2, notice: '' });
+    expect(pageThreads('?threads=16')).toEqual({ threads: 16, notice: '' });
+    for (const bad of ['0', '1.5', '17', 'many']) {
+      expect(pageThreads(`?threads=${bad}`)).toEqual({ threads: undefined, notice: `URL threads='${bad}' is not a whole number 1–16; the runtime chooses the WASM thread count.` });
+    }
   });
 });

@@ -100,9 +100,10 @@ export class Session {
     events: LoadEvents,
     readonly counters: Counters = emptyCounters(),
     variant?: string,
+    threads?: number,
   ) {
     this.models = pickModels(manifest);
-    this.engine = new Engine(manifest, baseUrl, backend, events, variant);
+    this.engine = new Engine(manifest, baseUrl, backend, events, variant, threads);
   }
 
   /** Told when a model's load starts and how it ends (the view's status line follows it). */

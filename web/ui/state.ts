@@ -147,9 +147,10 @@ export function parseState(search: string, l: StateLimits, fallbackSeed: number)
 export const STATE_PARAMS = ['mode', 'text', 'action', 'steps', 'seconds', 'guidance', 'seed', 'backend', 'compare'] as const;
 /**
  * Page flags read elsewhere: `noauto` (no first motion on load), `quality=high` (no adaptive resolution), `tl` (a
- * timeline, web/ui/timeline-url.ts), `variant` (the model file: fp32, int8, …; web/ui/engine.ts pageVariant).
+ * timeline, web/ui/timeline-url.ts), `variant` (the model file: fp32, int8, …; web/ui/engine.ts pageVariant), `threads`
+ * (WASM threads, 1…16; web/ui/engine.ts pageThreads).
  */
-export const PAGE_FLAGS = ['noauto', 'quality', 'tl', 'variant'] as const;
+export const PAGE_FLAGS = ['noauto', 'quality', 'tl', 'variant', 'threads'] as const;
 
 /** The notice for URL parameters the page does not know ('' when there are none): it names them and the known ones. */
 export function unknownParamsNotice(search: string): string {

@@ -35,7 +35,7 @@ export interface EditSummary {
   /** where `ms` went, ms: the worker's text encoding, denoising steps and decoding (summed over the windows), the
    * worker round trips beyond them (messages, copies, queueing), this thread's edit work (seam easing, decoding,
    * stitching; nothing else runs meanwhile), the IK solve (worker) and showing the result */
-  parts: { encodeMs: number; stepMs: number; decodeMs: number; roundTripMs: number; mainMs: number; ikMs: number; showMs: number; windowStepMs: number[]; windowFrames: number[] };
+  parts: { encodeMs: number; stepMs: number; decodeMs: number; beginMs: number; roundTripMs: number; mainMs: number; ikMs: number; showMs: number; windowStepMs: number[]; windowFrames: number[] };
 }
 
 /** The panel's hooks for Playwright (window.emdm.edit). */
@@ -322,6 +322,7 @@ export class TimelinePanel {
     try {
       let genMs = 0;
       let jobMs = 0;
+      let beginMs = 0; // the windows' early steps together (a timeline's begin), in the worker
       const shown = await session.engine.run(async (signal) => {
         const calls: Calls = {
           n: 0, results: [], progress: (f) => f, text: (d, t) => `Denoising step ${d} / ${t}`,
@@ -374,7 +375,7 @@ export class TimelinePanel {
             });
             idx.forEach((i, j) => (states[i] = got[j]));
           }
-          genMs += performance.now() - g0;
+          beginMs += performance.now() - g0;
           return states;
         };
         const j0 = performance.now();
@@ -392,7 +393,7 @@ export class TimelinePanel {
       const worker = sum((r) => r.timings.totalMs);
       const parts = {
         encodeMs: sum((r) => r.timings.encodeMs), stepMs: sum((r) => r.timings.stepMs.reduce((a, b) => a + b, 0)), decodeMs: sum((r) => r.timings.decodeMs),
-        roundTripMs: genMs - worker, mainMs: jobMs - genMs, ikMs: s1 - s0, showMs: s2 - s1,
+        beginMs, roundTripMs: genMs - worker, mainMs: jobMs - genMs - beginMs, ikMs: s1 - s0, showMs: s2 - s1,
         windowStepMs: shown.results.map((r) => r.timings.stepMs.reduce((a, b) => a + b, 0)), windowFrames: shown.results.map((r) => r.motion.frames),
       };
       return { kind, frames: shown.motion.frames, fps: shown.motion.fps, starts: shown.starts, ms: performance.now() - t0, windows: shown.windows, parts };

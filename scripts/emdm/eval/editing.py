@@ -197,15 +197,23 @@ def orders(actions, n: int, seed: int) -> list[tuple[str, ...]]:
 
 
 class Recorder:
-    """An Editor whose sample() keeps every window it returns (to check the timeline's overlap) and the seconds it
-    took (sampling's share of a timeline's time)."""
+    """An Editor that keeps every window it returns (to check the timeline's overlap), the seconds its sampling took
+    (sampling's share of a timeline's time) and the frame-rows its model calls held (Σ rows × frames: the model's
+    work, which does not depend on the machine)."""
 
     def __init__(self, editor):
+        from dataclasses import fields, replace
+
         from emdm.motion import edit as E
 
         rec = self
         self.windows: list[np.ndarray] = []
         self.seconds: list[float] = []
+        self.frame_rows = 0
+
+        def counting(x, z, c, t, mask):
+            rec.frame_rows += int(x.shape[0] * x.shape[1])
+            return editor.step(x, z, c, t, mask)
 
         class Recording(E.Editor):
             def sample(self, prompt, frames, seed, known=None, keep=None, keep_from_time=1.0):
@@ -215,9 +223,24 @@ class Recorder:
                 rec.windows.append(x)
                 return x
 
-        from dataclasses import fields
+            def begin(self, runs):
+                t0 = time.perf_counter()
+                super().begin(runs)
+                rec.seconds.append(time.perf_counter() - t0)
 
-        self.editor = Recording(**{f.name: getattr(editor, f.name) for f in fields(editor)})   # every setting
+            def finish(self, run, known=None):
+                t0 = time.perf_counter()
+                x = super().finish(run, known)
+                rec.seconds.append(time.perf_counter() - t0)
+                rec.windows.append(x)
+                return x
+
+        self.editor = replace(Recording(**{f.name: getattr(editor, f.name) for f in fields(editor)}), step=counting)
+
+    def clear(self) -> None:
+        self.windows.clear()
+        self.seconds.clear()
+        self.frame_rows = 0
 
 
 def uneased_joints(model, tl, windows) -> np.ndarray:
@@ -269,13 +292,13 @@ def measure(model, bench, a, log=print) -> dict:
     per_single = max(1, round(3 * a.timelines / len(a.actions)))   # as many single motions per action as segments
     todo_single = [(x, s) for x in a.actions for s in range(per_single)]
     for i, o in enumerate(tl_orders):
-        rec.windows.clear()
-        rec.seconds.clear()
+        rec.clear()
         t0 = time.perf_counter()
-        tl = E.timeline(rec.editor, [E.Segment(prompt[x], a.seconds, a.seed + 10 * i + k) for k, x in enumerate(o)])
+        tl = E.timeline(rec.editor, [E.Segment(prompt[x], a.seconds, a.seed + 10 * i + k) for k, x in enumerate(o)],
+                        together=True)
         t_tl.append(time.perf_counter() - t0)
         t_tl_sampling.append(sum(rec.seconds))
-        tl_sampled_frames = sum(len(w) for w in rec.windows)
+        tl_frame_rows = rec.frame_rows
         overlap_mm = max(overlap_mm, overlap_error_mm(model, tl, rec.windows))
         if raw_segments is not None and len(rec.windows) == len(tl.frames):     # one window per segment (≤ 196 frames)
             raw_segments += [model.denormalise(w)[len(w) - n:] for w, n in zip(rec.windows, tl.frames)]
@@ -284,12 +307,14 @@ def measure(model, bench, a, log=print) -> dict:
         uneased.append(uneased_joints(model, tl, rec.windows))
         timelines.append(tl)
         for x, s in todo_single[i * len(todo_single) // len(tl_orders):(i + 1) * len(todo_single) // len(tl_orders)]:
+            rec.clear()
             t0 = time.perf_counter()
-            x_single = model.sample(prompt[x], frames, a.seed + 1000 + 10 * s + a.actions.index(x))
+            x_single = rec.editor.sample(prompt[x], frames, a.seed + 1000 + 10 * s + a.actions.index(x))
             t_single_sampling.append(time.perf_counter() - t0)
             f = model.denormalise(x_single)
             j = recover_joints(f)
             t_single.append(time.perf_counter() - t0)
+            single_frame_rows = rec.frame_rows
             singles.append((f, j))
             single_action.append(x)
         log(f"timeline {i + 1}/{len(tl_orders)} {' → '.join(o)}: {t_tl[-1]:.1f} s (load {os.getloadavg()[0]:.1f})")
@@ -386,6 +411,8 @@ def measure(model, bench, a, log=print) -> dict:
             float(np.linalg.norm(still.joints[:, 0, [0, 2]] - still.joints[:1, 0, [0, 2]], axis=1).max() * 100))
 
     ratio = float(np.median(t_tl) / np.median(t_single))
+    by_threads = {str(n): time_ratio(a, n, [[prompt[x] for x in o] for o in tl_orders[:a.time_timelines]], frames, log)
+                  for n in a.time_threads}
     return {
         "actions": list(a.actions), "prompts": prompt, "segment_seconds": a.seconds, "timelines": len(timelines),
         "orders": [list(o) for o in tl_orders],
@@ -430,10 +457,41 @@ def measure(model, bench, a, log=print) -> dict:
                  "timeline_frames": int(len(timelines[0].features)), "single_frames": frames,
                  # where the time goes: sampling (the model's steps) against the rest (seam easing, decoding, stitching)
                  "timeline_sampling_s": summary(t_tl_sampling), "single_sampling_s": summary(t_single_sampling),
-                 "timeline_sampled_frames": int(tl_sampled_frames),
-                 "ms_per_sampled_frame": {"timeline": float(np.median(t_tl_sampling)) * 1000 / tl_sampled_frames,
-                                          "single": float(np.median(t_single_sampling)) * 1000 / frames}},
+                 # the model's work: Σ rows × frames over its calls (a timeline's windows begun together, as the page)
+                 "timeline_frame_rows": tl_frame_rows, "single_frame_rows": single_frame_rows,
+                 "work_ratio": tl_frame_rows / single_frame_rows,
+                 "us_per_frame_row": {"timeline": float(np.median(t_tl_sampling)) * 1e6 / tl_frame_rows,
+                                      "single": float(np.median(t_single_sampling)) * 1e6 / single_frame_rows},
+                 "by_threads": by_threads},
     }
+
+
+def time_ratio(a, threads: int, orders: list[list[str]], frames: int, log=print) -> dict:
+    """The time bar on its own, at ``threads`` ONNX Runtime threads: timelines of ``orders``' prompts (windows begun
+    together, as the page) and single motions, interleaved after a warm-up, medians. One call of several windows'
+    rows costs less than its parts only where the runtime has threads to spare."""
+    from emdm.model.open import open_model
+    from emdm.motion import edit as E
+
+    variant = page_variant(a.model, a.models_dir) if a.variant == "page" else a.variant
+    model = E.Editor.open(open_model(a.model, models_dir=a.models_dir, threads=threads, variant=variant), steps=a.steps)
+    for p in {p for o in orders for p in o}:
+        model.condition(p)
+    segs = lambda o, s: [E.Segment(p, a.seconds, s + k) for k, p in enumerate(o)]  # noqa: E731
+    E.timeline(model, segs(orders[0], 7), together=True)
+    model.sample(orders[0][0], frames, 7)
+    t_tl, t_one = [], []
+    for i, o in enumerate(orders):
+        t0 = time.perf_counter()
+        E.timeline(model, segs(o, a.seed + 10 * i), together=True)
+        t_tl.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        model.sample(o[i % 3], frames, a.seed + 1000 + i)
+        t_one.append(time.perf_counter() - t0)
+    r = {"timelines": len(orders), "timeline_s": float(np.median(t_tl)), "single_s": float(np.median(t_one)),
+         "ratio": float(np.median(t_tl) / np.median(t_one)), "load_avg_1min": os.getloadavg()[0]}
+    log(f"time with {threads} thread(s): {r['timeline_s']:.2f} s against {r['single_s']:.2f} s = {r['ratio']:.2f}×")
+    return r
 
 
 def bars(m: dict) -> dict:
@@ -450,9 +508,20 @@ def bars(m: dict) -> dict:
         "kept": (max(m["kept"].values()) <= BARS["kept_mm"], f"worst {max(m['kept'].values()):.3g} mm"),
         "loop_pose": (m["loops"]["pose_cm"]["max"] <= BARS["loop_pose_cm"], f"worst {m['loops']['pose_cm']['max']:.3g} cm"),
         "in_place": (m["loops"]["in_place_travel_cm"]["max"] <= BARS["in_place_cm"], f"worst {m['loops']['in_place_travel_cm']['max']:.3g} cm"),
-        "time": (m["time"]["ratio_of_medians"] <= BARS["time_ratio"], f"{m['time']['ratio_of_medians']:.2f}×"),
+        "time": time_bar(m["time"]),
     }
     return {k: {"met": bool(v[0]), "figure": v[1]} for k, v in out.items()}
+
+
+def time_bar(t: dict) -> tuple[bool, str]:
+    """Met when the ratio is within the bar at every thread count measured (``--time-threads``): batched windows pay
+    off only where a runtime has threads to spare and uses them poorly on small calls, so no one count stands for
+    all. The figure names each, with the model's work ratio (the floor where a frame-row costs the same in any call)."""
+    by = t.get("by_threads") or {}
+    if not by:
+        return t["ratio_of_medians"] <= BARS["time_ratio"], f"{t['ratio_of_medians']:.2f}×"
+    each = ", ".join(f"{by[n]['ratio']:.2f}× on {n} thread{'s' if n != '1' else ''}" for n in sorted(by, key=int))
+    return all(v["ratio"] <= BARS["time_ratio"] for v in by.values()), f"{each} (the model's work {t['work_ratio']:.2f}×)"
 
 
 def page_variant(model: str, models_dir: Path | None) -> str | None:
@@ -540,17 +609,20 @@ def section(r: dict) -> list[str]:
            f"{_f(lp['wrap_acceleration_ratio']['max'])}× the loop's 95th percentile | {yes('loop_pose')} |",
            f"| in-place root travel ≤ 5 cm | worst {lp['in_place_travel_cm']['max']:.3g} cm (without in place: median "
            f"{lp['travel_cm']['median']:.0f} cm) | {yes('in_place')} |",
-           f"| 3 × 5 s timeline ≤ 3× one 5 s motion | {t['timeline_s']['median']:.2f} s vs {t['single_s']['median']:.2f} s "
-           f"(medians of {t['timeline_s']['n']} and {t['single_s']['n']} interleaved runs, {t['timeline_frames']} vs "
-           f"{t['single_frames']} frames){_time_parts(t)}: {_f(t['ratio_of_medians'])}× | {yes('time')} |", "",
+           f"| 3 × 5 s timeline ≤ 3× one 5 s motion | {_time_row(t)} | {yes('time')} |", "",
            "Per action (segment rate / single rate): " + "; ".join(
                f"{x} {_pct(v['segment_rate'])} / {_pct(v['single_rate'])}" for x, v in sem["per_action"].items()) + ".", "",
            "Reading: kept parts, the loop's closing pose and in-place travel hold by construction (kept entries are "
            "replaced exactly at every step; the in-place root velocity is zero), so their rows check the bookkeeping, "
-           "not the model. A 3 × n-frame timeline samples n + 2·(C + n) frames (C = 20: 340 vs 100 for 5 s segments, "
-           "3.4× the frames); a sampled frame costs the same in its 120-frame windows as in a 100-frame motion and "
-           "sampling is nearly all of the time (the time row), so with each segment conditioned on the previous 1 s "
-           "the ratio cannot go below about 3.4× for 5 s segments. "
+           "not the model. Time: a later window's second of context (C = 20 frames) sits out its steps above "
+           "t = 0.55 (the five guided ones) and joins for the five below, so a 3 × 100-frame timeline is "
+           "1500 + 2·1600 = 4700 frame-rows of the model's work against 1500 for one motion (3.13×: the floor where a "
+           "frame-row costs the same in any call, as on one thread). Those early steps need nothing from the window "
+           "before, so every window runs them together, one call per step (the page's `begin`); a call of several "
+           "windows' rows costs less than its parts only where a runtime has threads to spare and uses them poorly "
+           "on small calls, as ORT-web's WASM does (this ONNX Runtime build threads one motion's calls well, so two "
+           "threads help the single motion as much). The page's own figures are in the page benchmark "
+           "(tests/e2e/page-bench.spec.ts, 'timeline against'). "
            "Semantics is read after each motion's first second (segments and single motions alike) because a segment's "
            "first second is its seam: `ease_seams` fades the previous action into the new one there (14 frames or more; "
            "the seam rows need it), and the classifier's bidirectional GRU ends its backward reading on a clip's first "
@@ -588,14 +660,17 @@ def _semantics(sem: dict) -> str:
                f"as the one before" if raw is not None else ""))
 
 
-def _time_parts(t: dict) -> str:
-    if "timeline_sampling_s" not in t:
-        return ""
+def _time_row(t: dict) -> str:
     share = t["timeline_sampling_s"]["median"] / t["timeline_s"]["median"]
-    ms = t["ms_per_sampled_frame"]
-    return (f"; sampling is {share:.1%} of a timeline's time ({t['timeline_sampled_frames']} frames sampled, "
-            f"{ms['timeline']:.2f} ms per sampled frame vs {ms['single']:.2f} in one motion): the sampled frames alone "
-            f"make {t['timeline_sampled_frames'] / t['single_frames']:.2f}×")
+    us = t["us_per_frame_row"]
+    by = t.get("by_threads") or {}
+    each = "; ".join(f"**{v['ratio']:.2f}×** on {n} thread{'s' if n != '1' else ''} ({v['timeline_s']:.2f} s vs "
+                     f"{v['single_s']:.2f} s, medians of {v['timelines']} interleaved, windows begun together)"
+                     for n, v in sorted(by.items(), key=lambda kv: int(kv[0])))
+    return (f"{each}. The model's work: {t['timeline_frame_rows']} vs {t['single_frame_rows']} frame-rows "
+            f"({t['work_ratio']:.2f}×); in the quality run above ({t['timeline_s']['n']} timelines, 1 thread): "
+            f"{t['timeline_s']['median']:.2f} s vs {t['single_s']['median']:.2f} s = {_f(t['ratio_of_medians'])}×, sampling "
+            f"{share:.1%} of a timeline's time, {us['timeline']:.1f} vs {us['single']:.1f} µs per frame-row")
 
 
 def _flips(s: dict) -> str:
@@ -642,6 +717,9 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--variant", default="page", help="the ONNX file: fp32, int8, fp16, or page (default: the entry's "
                     "defaultVariant, the file the page runs)")
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--time-threads", type=lambda v: [int(x) for x in v.split(",")], default=[1, 2],
+                    help="thread counts the time bar is measured at, comma-separated (met when met at each)")
+    ap.add_argument("--time-timelines", type=int, default=12, help="timelines (and single motions) timed per thread count")
     ap.add_argument("--out", type=Path, default=None, help="default docs/results/json/editing-<model>.json")
     return ap
 

@@ -133,6 +133,28 @@ class Editor:
                                guidance_min_time=self.guidance_min_time, x0_smoothing=self.x0_smoothing,
                                keep_from_time=keep_from_time)[0]
 
+    def sampling(self, prompt: str, frames: int, seed: int, keep: np.ndarray | None = None,
+                 keep_from_time: float = 1.0, stop_at: float | None = None):
+        """``sample``'s loop as a generator (``emdm.sample.sampling``) that stops before t ≤ ``stop_at`` for its
+        known motion: ``begin`` runs several together, ``finish`` each."""
+        from emdm.sample import sampling
+
+        return sampling(self.condition(prompt), frames, self.steps, self.guidance, seed, 1, self.z_dim,
+                        objective=self.objective, keep=keep, guidance_min_time=self.guidance_min_time,
+                        x0_smoothing=self.x0_smoothing, keep_from_time=keep_from_time, stop_at=stop_at)
+
+    def begin(self, runs: list) -> None:
+        """Advance ``sampling`` runs together, one model call per step, until each stops (``run_together``)."""
+        from emdm.sample import run_together
+
+        run_together(runs, self.step)
+
+    def finish(self, run, known: np.ndarray | None = None) -> np.ndarray:
+        """(frames, 263) normalised x̂_0 of a stopped run, given its known motion (normalised; None: nothing kept)."""
+        from emdm.sample import finish
+
+        return finish(run, self.step, known)[0]
+
     def normalise(self, features: np.ndarray) -> np.ndarray:
         return ((np.asarray(features, np.float32) - self.mean) / self.std).astype(np.float32)
 
@@ -362,10 +384,13 @@ def ease_seams(features: np.ndarray, keep: np.ndarray, ease: int = SEAM_EASE, ac
 # ----------------------------------------------------------------------------------------------- timeline
 
 def timeline(model: Editor, segments: Sequence[Segment], overlap: int = OVERLAP, previous: Timeline | None = None,
-             start: int = 0) -> Timeline:
+             start: int = 0, together: bool = False) -> Timeline:
     """Generate ``segments`` one after the other, each continuing the last ``overlap`` frames of the sequence so far.
     With ``previous`` (a timeline of the same first ``start`` segments) its frames before segment ``start`` are
-    kept as they are and only segments ``start``.. are generated."""
+    kept as they are and only segments ``start``.. are generated. ``together`` (the page's way, src/edit.ts with
+    ``begin``): every window's steps above ``TIMELINE_KEEP_FROM`` run first, all windows in one model call per step
+    (its context frames sit those steps out, so it needs nothing from the window before), then each window is
+    finished in turn; the same motion (within the rounding of an int8 model's batched calls)."""
     segments = tuple(segments)
     frames = check_timeline(segments, model.max_frames, overlap)
     if not 0 <= start < len(segments):
@@ -383,25 +408,35 @@ def timeline(model: Editor, segments: Sequence[Segment], overlap: int = OVERLAP,
             model.condition(segments[k].prompt)
         except ValueError as e:
             raise EditError(f"{_name(k, segments[k])}: {e}") from None
-    for k in range(start, len(segments)):
-        seg = segments[k]
-        for j, n in enumerate(window_sizes(frames[k], k == 0, model.max_frames, overlap)):
-            seed = (seg.seed + j) % (MAX_SEED + 1)
-            if k == 0 and j == 0:
-                feats = model.denormalise(model.sample(seg.prompt, n, seed))
-                joints = recover_joints(feats).astype(np.float32)
-                continue
-            c = min(overlap, len(feats))
-            known = np.zeros((c + n, feats.shape[1]), np.float32)
-            known[:c] = model.normalise(feats[-c:])
-            keep = keep_mask(c + n, [KeepRect(frames=((0, c - 1),))])
-            w = ease_seams(model.denormalise(model.sample(seg.prompt, c + n, seed, known, keep, TIMELINE_KEEP_FROM)), keep)
-            joints = append_segment(joints, recover_joints(w), c)
-            feats = np.concatenate([feats, w[c:]])
+    plan = [(k, (segments[k].seed + j) % (MAX_SEED + 1), n) for k in range(start, len(segments))
+            for j, n in enumerate(window_sizes(frames[k], k == 0, model.max_frames, overlap))]
+    runs = []
+    if together:     # every window's early steps at once: its overlap c follows from the frames before it
+        at = sum(frames[:start])
+        for k, seed, n in plan:
+            c = min(overlap, at)
+            keep = keep_mask(c + n, [KeepRect(frames=((0, c - 1),))]) if c else None
+            runs.append(model.sampling(segments[k].prompt, c + n, seed, keep, TIMELINE_KEEP_FROM, TIMELINE_KEEP_FROM))
+            at += n
+        model.begin(runs)
+    for i, (k, seed, n) in enumerate(plan):
+        prompt = segments[k].prompt
+        if start == 0 and i == 0:
+            feats = model.denormalise(model.finish(runs[0]) if runs else model.sample(prompt, n, seed))
+            joints = recover_joints(feats).astype(np.float32)
+            continue
+        c = min(overlap, len(feats))
+        known = np.zeros((c + n, feats.shape[1]), np.float32)
+        known[:c] = model.normalise(feats[-c:])
+        keep = keep_mask(c + n, [KeepRect(frames=((0, c - 1),))])
+        x = model.finish(runs[i], known) if runs else model.sample(prompt, c + n, seed, known, keep, TIMELINE_KEEP_FROM)
+        w = ease_seams(model.denormalise(x), keep)
+        joints = append_segment(joints, recover_joints(w), c)
+        feats = np.concatenate([feats, w[c:]])
     return Timeline(feats, np.asarray(joints, np.float32), segments, tuple(frames), model.normalise(feats), overlap)
 
 
-def regenerate(model: Editor, tl: Timeline, i: int, segment: Segment | None = None) -> Timeline:
+def regenerate(model: Editor, tl: Timeline, i: int, segment: Segment | None = None, together: bool = False) -> Timeline:
     """``tl`` with segment ``i`` (0-based) replaced by ``segment`` (default: the same with seed + 1) and every later
     segment generated again (they continue it); segments before ``i`` are untouched."""
     if not 0 <= i < len(tl.segments):
@@ -409,7 +444,7 @@ def regenerate(model: Editor, tl: Timeline, i: int, segment: Segment | None = No
     old = tl.segments[i]
     segs = list(tl.segments)
     segs[i] = segment if segment is not None else Segment(old.prompt, old.seconds, (old.seed + 1) % (MAX_SEED + 1))
-    return timeline(model, segs, tl.overlap, previous=tl, start=i)
+    return timeline(model, segs, tl.overlap, previous=tl, start=i, together=together)
 
 
 # ----------------------------------------------------------------------------------------------- edits
