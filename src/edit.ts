@@ -30,9 +30,9 @@
  *   Changing segment i regenerates i and every later one (they continue from it); those before are kept.
  *   With `begin` (the generator's), every window to generate is started at once, one model call per step for all,
  *   and stopped where its context joins (t ≤ TIMELINE_KEEP_FROM; its context frames sit those steps out, so they
- *   need nothing from the window before); then each is finished in turn (`resume`). The same motion as without it
- *   (an int8 model rounds each call's activations together, so within that rounding); faster where the runtime
- *   has threads or a GPU to spare for the larger calls.
+ *   need nothing from the window before); then each is finished in turn (`resume`). The same motion as without it;
+ *   faster where the runtime has threads or a GPU to spare for the larger calls. (A generator whose file quantises
+ *   per call, the int8 files, begins them one by one: see Generator.batchesExactly.)
  * - In-between: keep frames [0, a] ∪ [b, N−1] (default a = C−1, b = N−C), all channels; the kept later part
  *   stays where it was in the world (`pinKeptRoot`, generate's default); then `easeSeams` and `pinKeptRoot` again.
  * - Body part: keep the root + legs groups on every frame (new upper body) or the upper group (new legs + root).

@@ -141,8 +141,17 @@ export interface Generator {
    * Start several generations together, one model call per step for all of them, and stop each before its first
    * step whose time is ≤ its `stopAt`; `generate({ ...o, resume: state })` finishes each. A timeline's windows
    * (src/edit.ts) are begun together: their steps before their context joins need nothing from one another.
+   * On a step model that is not `batchesExactly` the requests run one by one instead (each as generate would).
    */
   begin(os: readonly BeginOptions[]): Promise<SampleState[]>;
+  /**
+   * Whether a row's result is the same in any batch (fp32, fp16). A model that quantises its activations per call
+   * (DynamicQuantizeLinear: the int8 files) rounds each row by a scale shared with the batch, so the same request
+   * gives another motion in another batch (a timeline regenerated from segment 2 differed from the same timeline
+   * loaded from its URL by up to 22 cm): `begin` then runs its requests alone, and every result depends only on its
+   * own request.
+   */
+  readonly batchesExactly: boolean;
   dispose(): Promise<void>;
 }
 
@@ -185,6 +194,18 @@ function modelEntry(manifest: Manifest, name: string): ModelEntry {
     throw new ModelFileError('manifest.json', 'incompatible', `field 'models.${name}.condition.dim' must be an integer`);
   }
   return entry;
+}
+
+/** Whether an ONNX file quantises activations at run time (a DynamicQuantizeLinear node: the op's name is in the bytes). */
+export function quantisesPerCall(onnx: ArrayBuffer | Uint8Array): boolean {
+  const b = onnx instanceof Uint8Array ? onnx : new Uint8Array(onnx);
+  const op = 'DynamicQuantizeLinear';
+  const first = op.charCodeAt(0);
+  outer: for (let i = b.indexOf(first); i >= 0 && i + op.length <= b.length; i = b.indexOf(first, i + 1)) {
+    for (let k = 1; k < op.length; k++) if (b[i + k] !== op.charCodeAt(k)) continue outer;
+    return true;
+  }
+  return false;
 }
 
 /**
@@ -244,6 +265,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     }
   }
 
+  const batchesExactly = !quantisesPerCall(bytes);
   const backend: Backend = opts.backend ?? 'wasm';
   if (backend !== 'wasm' && backend !== 'webgpu') throw new RangeError(`openModel: backend must be 'wasm' or 'webgpu', got ${JSON.stringify(backend)} (choosing one: loadModel in src/backends.ts)`);
   const { session, step } = await open(backend);
@@ -357,7 +379,9 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
       if (typeof o.stopAt !== 'number') throw new RangeError(`begin: request ${i + 1} needs stopAt, the time before which it stops (got ${o.stopAt})`);
       runs.push({ ...options, stopAt: o.stopAt });
     }
-    const done = await together(step, runs.map((r) => (st: StepFn) => sample({ ...r, step: st })));
+    const done: Awaited<ReturnType<typeof sample>>[] = [];
+    if (batchesExactly) done.push(...(await together(step, runs.map((r) => (st: StepFn) => sample({ ...r, step: st })))));
+    else for (const r of runs) done.push(await sample({ ...r, step }));
     return done.map((r, i) => ({ x: r.x, frames: os[i].frames, steps: os[i].steps, next: r.next!, ...(rngs[i] ? { rng: rngs[i]!.state() } : {}) }));
   }
 
@@ -393,6 +417,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     threads: session.threads,
     entry,
     sampler: samplerName,
+    batchesExactly,
     generate(o) {
       // one generation at a time per generator: ORT sessions are not re-entrant
       const p = queue.then(() => run(o));

@@ -7,8 +7,9 @@
  *
  * One batched call costs less than its parts where the runtime has threads to spare (ORT-web WASM, 2 threads: a
  * 6 × 100-frame call about 90 ms against 3 × 41 ms for three 2 × 100 calls) or a GPU; on one WASM thread it costs
- * the same as the calls one by one. The rows' results are the model's own either way, but an int8 model quantises
- * each call's activations with one scale, so a run's rounding depends on the batch it ran in.
+ * the same as the calls one by one. On fp32/fp16 files each run's rows come out as they would alone; a file that
+ * quantises activations per call (int8) shares one scale across the batch, so a run's rounding would depend on what
+ * it ran with: Generator.begin runs alone there (`batchesExactly`).
  */
 import type { StepFn, StepInputs } from './sampler';
 

@@ -46,8 +46,8 @@ function needHost(): GenerationHost {
   return host;
 }
 
-function infoOf(model: string, g: { backend: 'webgpu' | 'wasm'; threads: number; sampler: 'ddgan' | 'ddim' }): ModelInfo {
-  return { model, backend: g.backend, threads: g.threads, sampler: g.sampler };
+function infoOf(model: string, g: { backend: 'webgpu' | 'wasm'; threads: number; sampler: 'ddgan' | 'ddim'; batchesExactly?: boolean }): ModelInfo {
+  return { model, backend: g.backend, threads: g.threads, sampler: g.sampler, ...(g.batchesExactly !== undefined ? { batchesExactly: g.batchesExactly } : {}) };
 }
 
 /** Every distinct buffer behind the arrays (a buffer listed twice makes postMessage throw). */

@@ -99,6 +99,8 @@ export interface ModelInfo {
   backend: 'webgpu' | 'wasm';
   threads: number;
   sampler: 'ddgan' | 'ddim';
+  /** Generator.batchesExactly (absent in the answer to dispose) */
+  batchesExactly?: boolean;
 }
 
 /** An error as it crosses the boundary; the client rebuilds ModelFileError / AbortError from it. */

@@ -3,6 +3,7 @@ model — their frame bookkeeping, every bad input, and the tiny-edit parity fix
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -377,3 +378,24 @@ def test_timeline_together_runs_every_window_s_early_steps_in_one_call_and_gives
     again = E.regenerate(model, tl, 1, together=True)
     np.testing.assert_allclose(again.features, E.regenerate(model, in_turn, 1).features, atol=1e-4)
     np.testing.assert_array_equal(again.features[:24], tl.features[:24])
+
+
+def test_an_int8_step_file_begins_its_windows_alone_so_together_is_the_timeline_in_turn_exactly():
+    """The shipped int8 file quantises activations per call (a scale shared by the batch): ``begin`` runs each window
+    alone there, and the timeline is the same bit for bit; the fp32/fp16 files batch."""
+    from emdm.model.open import open_model, quantises_per_call
+    from emdm.paths import MODELS_DIR
+
+    manifest = json.loads((MODELS_DIR / "manifest.json").read_text())
+    if "emdm-t2m-web" not in manifest.get("models", {}):
+        pytest.skip("no shipped text model")
+    entry = manifest["models"]["emdm-t2m-web"]
+    files = {"fp32": entry["onnx"], **entry.get("variants", {})}
+    assert {v: quantises_per_call(MODELS_DIR / f) for v, f in files.items()} == {v: v == "int8" for v in files}
+    opened = open_model("emdm-t2m-web", variant="int8")
+    eye = np.eye(384, dtype=np.float32)
+    model = dataclasses.replace(E.Editor.open(opened, steps=4), condition=lambda p: eye[int(p)] * 3)
+    assert not model.batches_exactly
+    segs = [E.Segment(str(k), 1.5, k) for k in (1, 2, 3)]
+    np.testing.assert_array_equal(E.timeline(model, segs, together=True).features, E.timeline(model, segs).features)
+    assert E.Editor.open(open_model("emdm-t2m-web", variant="fp16"), steps=4).batches_exactly

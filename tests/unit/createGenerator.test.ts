@@ -77,7 +77,7 @@ describe('createGenerator', () => {
 
 /** A generator stand-in whose generate() runs `run`. */
 function fake(backend: 'webgpu' | 'wasm', run: (o: GenerateOptions) => Promise<GenerateResult>): Generator {
-  return { modelName: 'm', backend, threads: 1, entry: {} as Generator['entry'], sampler: 'ddgan', generate: run, begin: async () => { throw new Error('fake generator: no begin'); }, dispose: async () => undefined };
+  return { modelName: 'm', backend, threads: 1, entry: {} as Generator['entry'], sampler: 'ddgan', batchesExactly: true, generate: run, begin: async () => { throw new Error('fake generator: no begin'); }, dispose: async () => undefined };
 }
 const OK = { steps: 1 } as GenerateResult;
 const O: GenerateOptions = { condition: { type: 'none' }, frames: 2, steps: 1, guidance: 1, seed: 1 };

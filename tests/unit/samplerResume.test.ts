@@ -10,7 +10,10 @@ import { keepMask } from '../../src/sampler/mask';
 import { SeededRandom } from '../../src/sampler/rng';
 import { sample, type SampleOptions, type StepFn, type StepInputs } from '../../src/sampler/sampler';
 import { computeSchedule } from '../../src/sampler/schedule';
-import { PARITY_DIR, loadCase, maxAbsDiff } from './coreFixtures';
+import { type EditBegin, type EditGenerate, generateTimeline } from '../../src/edit';
+import { openModel, quantisesPerCall } from '../../src/generate';
+import { loadManifest } from '../../src/manifest';
+import { MODELS_DIR, PARITY_DIR, loadCase, maxAbsDiff } from './coreFixtures';
 
 const D = 263;
 const fx = loadCase('tiny-mask');
@@ -106,5 +109,30 @@ describe('lockstep', () => {
     h.leave(2, new Error('window 3 broke'));
     await expect(a).rejects.toThrow('window 3 broke');
     await expect(h.steps[1](inputs(2))).rejects.toThrow('window 3 broke');
+  });
+});
+
+describe('begin on a model that quantises its activations per call (the shipped int8 files)', () => {
+  it('runs the requests alone, so a timeline begun together is the timeline in turn, bit for bit; fp32/fp16 files batch', async () => {
+    const manifest = await loadManifest(MODELS_DIR);
+    const entry = manifest.models['emdm-t2m-web'];
+    for (const [v, file] of Object.entries({ fp32: entry.onnx, ...entry.variants })) {
+      expect(quantisesPerCall(fs.readFileSync(path.join(MODELS_DIR, file))), v).toBe(v === 'int8');
+    }
+    expect(quantisesPerCall(fs.readFileSync(path.join(PARITY_DIR, 'tiny-step.onnx')))).toBe(false);
+    const g = await openModel({ manifest, baseUrl: MODELS_DIR, model: 'emdm-t2m-web', variant: 'int8', backend: 'wasm', threads: 1 });
+    expect(g.batchesExactly).toBe(false);
+    const calls: number[] = [];
+    const vec = (seed: number) => new SeededRandom(seed).normals(384).map((v) => v * 0.05);
+    const o = { steps: 4, guidance: 2.5 };
+    const gen: EditGenerate = async (r) => (await g.generate({ ...o, condition: { type: 'vector', vector: vec(r.seed) }, frames: r.frames, seed: r.seed, known: r.known, resume: r.resume })).motion;
+    const begin: EditBegin = (rs) => (calls.push(rs.length), g.begin(rs.map((r) => ({ ...o, condition: { type: 'vector', vector: vec(r.seed) }, frames: r.frames, seed: r.seed, stopAt: r.stopAt, ...(r.keep ? { known: { keep: r.keep, fromTime: r.keepFromTime } } : {}) }))));
+    const segs = [1, 2, 3].map((seed) => ({ prompt: 'x', seconds: 1.5, seed }));
+    const limits = { fps: 20, maxFrames: 196 };
+    const together = await generateTimeline(segs, gen, limits, { begin });
+    const inTurn = await generateTimeline(segs, gen, limits);
+    expect(calls).toEqual([3]);
+    expect(maxAbsDiff(together.features, inTurn.features)).toBe(0);
+    await g.dispose();
   });
 });

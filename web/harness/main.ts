@@ -51,7 +51,7 @@ async function workerGenerator(manifest: Manifest, baseUrl: string, model: strin
   const client = new GenerationClient({ manifest, baseUrl, backend, threads, cache: false });
   const info = await client.load(model, variant);
   return {
-    modelName: model, backend: info.backend, threads: info.threads, entry: manifest.models[model], sampler: info.sampler,
+    modelName: model, backend: info.backend, threads: info.threads, entry: manifest.models[model], sampler: info.sampler, batchesExactly: info.batchesExactly ?? true,
     generate: ({ signal, onStep, noise, onPreview, ...o }) => {
       if (noise) throw new Error('harness: a custom noise source cannot cross to the worker');
       if (onPreview) throw new Error('harness: step previews are not wired through the worker here (use GenerationClient with previewSteps)');

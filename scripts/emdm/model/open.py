@@ -283,6 +283,13 @@ def open_shipped(name: str, *, models_dir: Path | str | None = None, variant: st
                        kind="shipped", variant=variant or "fp32", flags=dict(tr.get("flags", {})))
 
 
+def quantises_per_call(onnx: Path | str) -> bool:
+    """Whether an ONNX file quantises activations at run time (a DynamicQuantizeLinear node: the int8 variants). Its
+    rows then round by a scale shared with the whole batch, so a request's result depends on what it is batched with
+    (the TypeScript ``quantisesPerCall``)."""
+    return b"DynamicQuantizeLinear" in Path(onnx).read_bytes()
+
+
 def open_model(name_or_path: str | Path, *, models_dir: Path | str | None = None, variant: str | None = None,
                device: str = "cpu", threads: int = 1, weights: str = "G_ema") -> OpenedModel:
     """A model ready to sample. A ``Path`` is a checkpoint (PyTorch on ``device``); a ``str`` is a model of

@@ -39,6 +39,7 @@ Frame bookkeeping (the contract with ``src/edit.ts``; FPS 20, C = ``OVERLAP`` = 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Callable, Sequence
@@ -94,12 +95,19 @@ class Editor:
     max_frames: int = 196
     guidance_min_time: float = 0.0       # guidance only at steps above it (the manifest's guidanceMinTime)
     x0_smoothing: float = 0.0            # σ (frames) of x̂_0's smoothing along time (the manifest's x0Smoothing)
+    # a row's result is the same in any batch; False for a step file that quantises activations per call (int8):
+    # ``begin`` then runs its loops alone (the TypeScript Generator.batchesExactly)
+    batches_exactly: bool = True
 
     @classmethod
     def open(cls, opened, steps: int | None = None, guidance: float | None = None) -> "Editor":
         """From ``emdm.model.open.open_model(...)``: its step, mean/std and manifest entry (text prompts are encoded
         once each, an action model takes label names or indices)."""
-        return cls.from_entry(opened.step, opened.meta, opened.mean, opened.std, steps, guidance)
+        from emdm.model.open import quantises_per_call
+
+        ed = cls.from_entry(opened.step, opened.meta, opened.mean, opened.std, steps, guidance)
+        exact = opened.kind != "shipped" or not quantises_per_call(opened.path)
+        return ed if exact else dataclasses.replace(ed, batches_exactly=False)
 
     @classmethod
     def from_entry(cls, step: Callable, meta: dict, mean: np.ndarray, std: np.ndarray, steps: int | None = None,
@@ -144,10 +152,12 @@ class Editor:
                         x0_smoothing=self.x0_smoothing, keep_from_time=keep_from_time, stop_at=stop_at)
 
     def begin(self, runs: list) -> None:
-        """Advance ``sampling`` runs together, one model call per step, until each stops (``run_together``)."""
+        """Advance ``sampling`` runs together, one model call per step, until each stops (``run_together``); one by
+        one where the step file does not batch exactly (``batches_exactly``)."""
         from emdm.sample import run_together
 
-        run_together(runs, self.step)
+        for group in ([runs] if self.batches_exactly else [[r] for r in runs]):
+            run_together(group, self.step)
 
     def finish(self, run, known: np.ndarray | None = None) -> np.ndarray:
         """(frames, 263) normalised x̂_0 of a stopped run, given its known motion (normalised; None: nothing kept)."""
@@ -390,7 +400,7 @@ def timeline(model: Editor, segments: Sequence[Segment], overlap: int = OVERLAP,
     kept as they are and only segments ``start``.. are generated. ``together`` (the page's way, src/edit.ts with
     ``begin``): every window's steps above ``TIMELINE_KEEP_FROM`` run first, all windows in one model call per step
     (its context frames sit those steps out, so it needs nothing from the window before), then each window is
-    finished in turn; the same motion (within the rounding of an int8 model's batched calls)."""
+    finished in turn; the same motion (an int8 step file begins them one by one: ``Editor.batches_exactly``)."""
     segments = tuple(segments)
     frames = check_timeline(segments, model.max_frames, overlap)
     if not 0 <= start < len(segments):
