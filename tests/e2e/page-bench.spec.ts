@@ -268,17 +268,20 @@ test('benchmark: speed levers for 10 steps × 196 frames (threads, int8/fp16 fil
 //   EMDM_BENCH=1 npx playwright test tests/e2e/page-bench.spec.ts -g "timeline against"
 // Measured 2026-11-25 on the 2-core AMD EPYC (headless Chromium, WASM, int8, 10 steps): 3.43×, 4.01×, 4.07× in three
 // runs (about 2.3–2.5 s against 0.6 s; the windows' steps alone 1.8–2.1 s against 0.53–0.55 s); not within the bar.
-// 2026-11-26, context frames sitting out the early steps, windows begun together, prompts encoded once: 2.90× and
-// 3.20× on the page's 1 thread, 2.89× and 3.11× with threads=2 (EMDM_BENCH_THREADS=2), medians of 7 each: about
-// 2.0 s against 0.65 s, of which the windows' early steps together 0.85–1.3 s. Software-rendered Chromium shares
-// the 2 cores with the worker, so runs differ by ±0.15×; the model's work is 3.13× (docs/RESULTS.md).
+// 2026-11-26, context frames sitting out the early steps, prompts encoded once (medians of 7 each): int8 (the
+// default; its windows begun one by one) 2.90×, 3.20×, 2.97× on the page's 1 thread, 3.55× with threads=2
+// (EMDM_BENCH_THREADS=2: the worker's 2 threads and software-rendered Chromium share 2 cores); fp32 with threads=2
+// (EMDM_BENCH_VARIANT=fp32: windows begun together) 3.04×. About 1.8–2.1 s against 0.6–0.7 s; runs differ by
+// ±0.2× here. The model's work is 3.13× (docs/RESULTS.md); scripts/bench/timeline-bench.mjs measures it without a page.
 test('benchmark: a 3 × 5 s timeline against one 5 s motion through the page (issue 14 time)', async ({ page }) => {
   test.skip(process.env.EMDM_BENCH !== '1', 'benchmark: set EMDM_BENCH=1 to run it');
   test.setTimeout(1_800_000);
   await page.setViewportSize({ width: 1280, height: 720 });
   // EMDM_BENCH_THREADS: the page's `threads` flag (default: the runtime's choice, 1 on a 2-core machine)
   const threadsFlag = process.env.EMDM_BENCH_THREADS ? `&threads=${process.env.EMDM_BENCH_THREADS}` : '';
-  await ready(page, `noauto=1&backend=wasm${threadsFlag}`);
+  // EMDM_BENCH_VARIANT: the page's `variant` flag (fp32 / fp16 files batch the windows' early steps; int8 does not)
+  const variantFlag = process.env.EMDM_BENCH_VARIANT ? `&variant=${process.env.EMDM_BENCH_VARIANT}` : '';
+  await ready(page, `noauto=1&backend=wasm${threadsFlag}${variantFlag}`);
   const reps = Number(process.env.EMDM_BENCH_REPS ?? 7);
   const prompts = ['a person walks', 'a person raises both hands', 'a person climbs'];
   const single = (seed: number) =>
@@ -312,6 +315,7 @@ test('benchmark: a 3 × 5 s timeline against one 5 s motion through the page (is
     timelineBeginMs: median(timelines.map((x) => x.parts.beginMs)),
     timelineWindowStepMs: timelines.map((x) => x.parts.windowStepMs), timelineParts: timelines.map((x) => x.parts),
     cpus: os.cpus().length, load: os.loadavg()[0], environment: await page.evaluate(() => window.emdm.environment),
+    variant: process.env.EMDM_BENCH_VARIANT ?? 'default',
   };
   fs.writeFileSync(test.info().outputPath('timeline-time.json'), JSON.stringify(out, null, 1));
   // EMDM_BENCH_JSON_TIMELINE (a path): also write it there (docs/results/json/timeline-page-*.json, which

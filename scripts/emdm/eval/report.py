@@ -583,6 +583,8 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
             "python -m emdm.eval.coverage --model emdm-t2m-web   # coverage per action, 1/2/4/10 steps (--seeds, default 8)",
             "python -m emdm.eval.coverage --model emdm-a2m-web",
             "python -m emdm.eval.editing --model emdm-t2m-web   # timelines, in-betweens, body-part edits, loops (issue 14)",
+            "node scripts/bench/timeline-bench.mjs              # issue 14's time bar on the library's WASM runtime (printed)",
+            "EMDM_BENCH=1 npx playwright test tests/e2e/page-bench.spec.ts -g \"timeline against\"   # ... and in the page",
             "node scripts/bench/core-bench.mjs --json bench.json && python -m emdm.eval.evaluate import-bench bench.json",
             "# browser-wasm, issue 7: EMDM at 1/2/4/5/8/10 and diffusion + DDIM at 10/50/100 steps in one run of the demo",
             "# page (window.emdm.generate, needs diffusion-t2m-web in public/models); replaces the browser-wasm rows above",
