@@ -1,6 +1,7 @@
 // A run stopped (stopAt) and resumed gives the whole run bit for bit; several runs in lockstep (one model call per
 // step, src/sampler/lockstep.ts) give each run's own result; a timeline window's early steps need no known motion.
 import fs from 'node:fs';
+import os from 'node:os';
 import path from 'node:path';
 import { describe, expect, it } from 'vitest';
 import { getSession } from '../../src/runtime/ort';
@@ -13,7 +14,7 @@ import { computeSchedule } from '../../src/sampler/schedule';
 import { type EditBegin, type EditGenerate, generateTimeline } from '../../src/edit';
 import { openModel, quantisesPerCall } from '../../src/generate';
 import { loadManifest } from '../../src/manifest';
-import { MODELS_DIR, PARITY_DIR, loadCase, maxAbsDiff } from './coreFixtures';
+import { MODELS_DIR, PARITY_DIR, loadCase, maxAbsDiff, tinyModels } from './coreFixtures';
 
 const D = 263;
 const fx = loadCase('tiny-mask');
@@ -134,5 +135,25 @@ describe('begin on a model that quantises its activations per call (the shipped 
     expect(calls).toEqual([3]);
     expect(maxAbsDiff(together.features, inTurn.features)).toBe(0);
     await g.dispose();
+  });
+});
+
+describe('begin and cancelling', () => {
+  it('a begin cancelled at a step rejects with an AbortError for every request (batched or one by one)', async () => {
+    const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-begin-'));
+    try {
+      const dir = tinyModels(tmp).dir;
+      const g = await openModel({ manifest: await loadManifest(dir), baseUrl: dir, model: 'tiny', backend: 'wasm', threads: 1 });
+      expect(g.batchesExactly).toBe(true);
+      const ctrl = new AbortController();
+      const o = { condition: { type: 'action' as const, label: 1 }, steps: 4, guidance: 2.5, signal: ctrl.signal, stopAt: 0.3 };
+      const asked = g.begin([{ ...o, frames: 20, seed: 1, onStep: (d: number) => d === 1 && ctrl.abort() }, { ...o, frames: 30, seed: 2 }]);
+      await expect(asked).rejects.toMatchObject({ name: 'AbortError' });
+      const states = await g.begin([{ ...o, signal: undefined, frames: 20, seed: 1 }]);
+      expect([states[0].next, states[0].frames, states[0].steps]).toEqual([0, 20, 4]); // t = 0.25 is the first step ≤ 0.3
+      await g.dispose();
+    } finally {
+      fs.rmSync(tmp, { recursive: true, force: true });
+    }
   });
 });
