@@ -84,15 +84,15 @@ export type SampleOptions = SamplerChoice & {
   keepFromTime?: number;
   /**
    * Stop before the first step whose time is ≤ stopAt (at the latest before the last step; with one step, before
-   * it) and return the state there (`SampleResult.next`): the first
-   * part of a run that `resume` finishes — a timeline window's steps before its context joins, sampled together with
-   * the other windows' (src/edit.ts, src/sampler/lockstep.ts). A run that stops before any step imposes the kept
-   * part may give `keep` without `known` (the lead frames sit out all the same).
+   * it) and return the state there (`SampleResult.next`): the first part of a run that `resume` finishes — a
+   * timeline window's steps before its context joins, sampled together with the other windows' (src/edit.ts,
+   * src/sampler/lockstep.ts). A run that stops before any step imposes the kept part may give `keep` without
+   * `known` (the lead frames sit out all the same).
    */
   stopAt?: number;
   /**
    * Go on from a stopped run: its `x` (all L frames) before step `next`. x_T is not drawn; the noise source must go
-   * on where the stopped run's left off (the same object, or a SeededRandom restored from its state). The two parts
+   * on where the stopped run left off (the same object, or a SeededRandom restored from its state). The two parts
    * give the result of one whole run, bit for bit.
    */
   resume?: { x: Float32Array; next: number };
