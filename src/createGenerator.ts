@@ -178,28 +178,29 @@ export function resolveRequest(manifest: Manifest, req: MotionRequest): { model:
   };
 }
 
-/** `begin`'s requests resolved and grouped by the model they run on (one batch per model), with their places. */
-function beginGroups(manifest: Manifest, reqs: readonly BeginRequest[]): Map<string, { at: number[]; options: WireBeginOptions[] }> {
-  const groups = new Map<string, { at: number[]; options: WireBeginOptions[] }>();
+/**
+ * `begin` for requests of several models: one `run` per model (its requests in their order, one batch), the states
+ * back in the requests' order. createGenerator's begin and the demo page's timeline both group this way.
+ */
+export async function beginByModel<R>(reqs: readonly R[], modelOf: (r: R) => string, run: (model: string, reqs: R[]) => Promise<SampleState[]>): Promise<SampleState[]> {
+  const groups = new Map<string, number[]>();
   reqs.forEach((r, i) => {
-    const { stopAt, keep, keepFromTime, ...req } = r;
-    const { model, options } = resolveRequest(manifest, req);
-    const { smooth: _s, footCleanup: _f, ...wire } = options;
-    const g = groups.get(model) ?? { at: [], options: [] };
-    g.at.push(i);
-    g.options.push({ ...wire, stopAt, ...(keep ? { known: { keep: Float32Array.from(keep), fromTime: keepFromTime } } : {}) });
-    groups.set(model, g);
+    const m = modelOf(r);
+    groups.set(m, [...(groups.get(m) ?? []), i]);
   });
-  return groups;
-}
-
-async function beginAll(manifest: Manifest, reqs: readonly BeginRequest[], run: (model: string, options: WireBeginOptions[]) => Promise<SampleState[]>): Promise<SampleState[]> {
   const states: SampleState[] = new Array(reqs.length);
-  for (const [model, g] of beginGroups(manifest, reqs)) {
-    const got = await run(model, g.options);
-    g.at.forEach((i, j) => (states[i] = got[j]));
+  for (const [model, at] of groups) {
+    const got = await run(model, at.map((i) => reqs[i]));
+    at.forEach((i, j) => (states[i] = got[j]));
   }
   return states;
+}
+
+/** A begin request as the generation host takes it (resolveRequest's options, stopped at stopAt, keeping `keep`). */
+function wireBegin(manifest: Manifest, r: BeginRequest): WireBeginOptions {
+  const { stopAt, keep, keepFromTime, ...req } = r;
+  const { smooth: _s, footCleanup: _f, ...wire } = resolveRequest(manifest, req).options;
+  return { ...wire, stopAt, ...(keep ? { known: { keep: Float32Array.from(keep), fromTime: keepFromTime } } : {}) };
 }
 
 /** Text / action / nothing → motion, with the manifest's defaults; see the header. */
@@ -236,7 +237,7 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
         if (!r.pose) throw new Error('generation worker: the result has no pose (IK) although it was asked for');
         return motionOf(model, options, r, r.info.backend, r.pose);
       },
-      begin: (reqs, signal) => beginAll(manifest, reqs, (model, os) => client.begin(model, os, variantOf(model), signal)),
+      begin: (reqs, signal) => beginByModel(reqs, (r) => modelFor(manifest, r), (model, rs) => client.begin(model, rs.map((r) => wireBegin(manifest, r)), variantOf(model), signal)),
       dispose: () => client.dispose(),
     };
   }
@@ -260,7 +261,7 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
       const ik = solveIK(result.motion.joints, result.motion.frames, manifest.skeleton);
       return motionOf(model, options, result, gen.backend, { rootPos: ik.rootPos, quats: ik.quats });
     },
-    begin: (reqs, signal) => beginAll(manifest, reqs, async (model, os) => (await host.begin(model, os.map((o) => ({ ...o, signal })), variantOf(model))).states),
+    begin: (reqs, signal) => beginByModel(reqs, (r) => modelFor(manifest, r), async (model, rs) => (await host.begin(model, rs.map((r) => ({ ...wireBegin(manifest, r), signal })), variantOf(model))).states),
     dispose: () => host.dispose(),
   };
 }

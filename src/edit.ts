@@ -389,6 +389,24 @@ export function stitchTimeline(segments: SegmentResult[], fps: number): Timeline
   return { frames, fps, features, joints: Float32Array.from(joints), segments, starts };
 }
 
+/** A window to generate: its segment i, new frames m, seed, and c frames kept from the sequence before it. */
+interface PlannedWindow { i: number; m: number; seed: number; c: number }
+
+/** The windows of segments `from`… in order, `sofar` frames of the sequence made before them. */
+function windowsToGenerate(segments: readonly TimelineSegment[], plan: TimelinePlan, from: number, sofar: number): PlannedWindow[] {
+  const wins: PlannedWindow[] = [];
+  for (let i = from; i < segments.length; i++) {
+    plan.windows[i].forEach((m, j) => {
+      wins.push({ i, m, seed: (segments[i].seed + j) >>> 0, c: Math.min(OVERLAP_FRAMES, sofar) });
+      sofar += m;
+    });
+  }
+  return wins;
+}
+
+/** A window's keep mask: its first c frames (the sequence's last c) on every channel, then m free frames. */
+const contextKeep = (c: number, m: number): Float32Array => keepMask(c + m, [{ frames: [[0, c - 1]] }]);
+
 /**
  * Generate a timeline window by window (see the header); segments before the first change from
  * `opts.previous` are reused untouched. Bad input throws EditError before anything is generated.
@@ -397,22 +415,16 @@ export async function generateTimeline(segments: readonly TimelineSegment[], gen
   const plan = planTimeline(segments, limits);
   const keep = keptSegments(opts.previous, segments);
   const out: SegmentResult[] = opts.previous ? opts.previous.segments.slice(0, keep) : [];
-  const todo = plan.windows.slice(keep).reduce((a, w) => a + w.length, 0);
-  let sofar = out.reduce((a, s) => a + s.frames, 0);
+  const wins = windowsToGenerate(segments, plan, keep, out.reduce((a, s) => a + s.frames, 0));
+  const todo = wins.length;
   let done = 0;
   // every window's steps before its context joins, together: known from the plan alone (frames, seed, overlap)
   let states: SampleState[] | null = null;
   if (opts.begin && todo > 0) {
-    const reqs: EditBeginRequest[] = [];
-    let at = sofar;
-    for (let i = keep; i < segments.length; i++) {
-      plan.windows[i].forEach((m, j) => {
-        const c = at > 0 ? Math.min(OVERLAP_FRAMES, at) : 0;
-        const cond = conditionOf(segments[i], i);
-        reqs.push({ ...cond, frames: c + m, seed: (segments[i].seed + j) >>> 0, stopAt: TIMELINE_KEEP_FROM, ...(c ? { keep: keepMask(c + m, [{ frames: [[0, c - 1]] }]), keepFromTime: TIMELINE_KEEP_FROM } : {}) });
-        at += m;
-      });
-    }
+    const reqs = wins.map(({ i, m, seed, c }): EditBeginRequest => ({
+      ...conditionOf(segments[i], i), frames: c + m, seed, stopAt: TIMELINE_KEEP_FROM,
+      ...(c ? { keep: contextKeep(c, m), keepFromTime: TIMELINE_KEEP_FROM } : {}),
+    }));
     throwIfAborted(opts.signal);
     opts.onWindow?.(keep, 0, todo);
     states = await opts.begin(reqs);
@@ -425,19 +437,17 @@ export async function generateTimeline(segments: readonly TimelineSegment[], gen
     for (let j = 0; j < plan.windows[i].length; j++) {
       throwIfAborted(opts.signal);
       opts.onWindow?.(i, done, todo);
-      const m = plan.windows[i][j];
-      const seed = (seg.seed + j) >>> 0;
-      // the sequence so far ends with this window's predecessor: its last c frames are the sequence's last c
-      const prev = result.windows.at(-1) ?? out.at(-1)?.windows.at(-1) ?? null;
-      const c = prev ? Math.min(OVERLAP_FRAMES, sofar) : 0;
+      const { m, seed, c } = wins[done];
       const resume = states ? { resume: states[done] } : {};
       let w: EditMotion;
-      if (!prev) {
+      if (c === 0) {
         w = await gen({ ...cond, frames: m, seed, ...resume });
       } else {
+        // the sequence so far ends with this window's predecessor: its last c frames are the sequence's last c
+        const prev = (result.windows.at(-1) ?? out.at(-1)?.windows.at(-1))!;
         const known = new Float32Array((c + m) * D);
         known.set(prev.features.subarray((prev.frames - c) * D), 0);
-        const keep = keepMask(c + m, [{ frames: [[0, c - 1]] }]);
+        const keep = contextKeep(c, m);
         const raw = await gen({ ...cond, frames: c + m, seed, known: { features: known, keep, fromTime: TIMELINE_KEEP_FROM }, ...resume });
         checkMotion(raw, c + m, label(i));
         const features = easeSeams(raw.features, c + m, keep); // the seam eased before the next window continues it
@@ -446,7 +456,6 @@ export async function generateTimeline(segments: readonly TimelineSegment[], gen
       checkMotion(w, c + m, label(i));
       result.windows.push(w);
       result.overlaps.push(c);
-      sofar += m;
       done++;
     }
     out.push(result);

@@ -370,6 +370,13 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     };
   }
 
+  /** One generation (or begin) at a time per generator: ORT sessions are not re-entrant. */
+  function inTurn<T>(job: () => Promise<T>): Promise<T> {
+    const p = queue.then(job);
+    queue = p.catch(() => undefined);
+    return p;
+  }
+
   async function begin(os: readonly BeginOptions[]): Promise<SampleState[]> {
     if (!Array.isArray(os) || os.length === 0) throw new RangeError('begin: give at least one request');
     const rngs = os.map((o) => (o.noise ? null : new SeededRandom(o.seed)));
@@ -418,17 +425,8 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     entry,
     sampler: samplerName,
     batchesExactly,
-    generate(o) {
-      // one generation at a time per generator: ORT sessions are not re-entrant
-      const p = queue.then(() => run(o));
-      queue = p.catch(() => undefined);
-      return p;
-    },
-    begin(os) {
-      const p = queue.then(() => begin(os));
-      queue = p.catch(() => undefined);
-      return p;
-    },
+    generate: (o) => inTurn(() => run(o)),
+    begin: (os) => inTurn(() => begin(os)),
     async dispose() {
       if (disposed) return;
       disposed = true;

@@ -1,5 +1,5 @@
 // Public surface of the EMDM-in-the-browser library (docs/ARCHITECTURE.md "TypeScript library").
-export { createGenerator, modelFor, resolveRequest } from './createGenerator';
+export { beginByModel, createGenerator, modelFor, resolveRequest } from './createGenerator';
 export type { BeginRequest, CreateGeneratorOptions, GeneratedMotion, MotionGenerator, MotionRequest } from './createGenerator';
 // one model on one backend, and the backend choice / fallback (used by createGenerator's host)
 export { openModel } from './generate';

@@ -17,15 +17,9 @@ import { spawn } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { ROOT, cli, withLibrary } from './common.mjs';
 
-const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
-const args = process.argv.slice(2);
-const opt = (name, dflt) => {
-  const i = args.indexOf(`--${name}`);
-  return i >= 0 ? args[i + 1] : dflt;
-};
-const flag = (name) => args.includes(`--${name}`);
-const list = (s) => s.split(',').filter(Boolean);
+const { args, opt, flag, list } = cli();
 
 // --models-dir: another models folder (served to the browser harness at /bench-models/)
 const MODELS_DIR = path.resolve(opt('models-dir', path.join(ROOT, 'public', 'models')));
@@ -50,12 +44,10 @@ function conditionFor(entry) {
 // worker: one Node process, one thread count
 async function nodeWorker() {
   const threads = Number(opt('threads', '1'));
-  const { createServer } = await import('vite');
-  const server = await createServer({ configFile: path.join(ROOT, 'vite.config.ts'), server: { middlewareMode: true, hmr: false, ws: false }, appType: 'custom', logLevel: 'error' });
-  try {
-    const { openModel } = await server.ssrLoadModule(path.join(ROOT, 'src/generate.ts'));
-    const { loadManifest } = await server.ssrLoadModule(path.join(ROOT, 'src/manifest.ts'));
-    const { computeSchedule } = await server.ssrLoadModule(path.join(ROOT, 'src/sampler/schedule.ts'));
+  await withLibrary(async (load) => {
+    const { openModel } = await load('src/generate.ts');
+    const { loadManifest } = await load('src/manifest.ts');
+    const { computeSchedule } = await load('src/sampler/schedule.ts');
     const out = [];
     for (const model of models) {
       let manifest = await loadManifest(MODELS_DIR + '/');
@@ -84,9 +76,7 @@ async function nodeWorker() {
       await gen.dispose();
     }
     process.stdout.write('BENCH ' + JSON.stringify(out) + '\n');
-  } finally {
-    await server.close();
-  }
+  });
 }
 
 async function tinyManifest(real, computeSchedule) {

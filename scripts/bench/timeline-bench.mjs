@@ -12,24 +12,18 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { ROOT, cli, withLibrary } from './common.mjs';
 
-const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
-const args = process.argv.slice(2);
-const opt = (name, dflt) => {
-  const i = args.indexOf(`--${name}`);
-  return i >= 0 ? args[i + 1] : dflt;
-};
+const { args, opt } = cli();
 const MODEL = opt('model', 'emdm-t2m-web');
 const reps = Number(opt('reps', '7'));
 
 async function one(threads, variant) {
-  const { createServer } = await import('vite');
-  const server = await createServer({ configFile: path.join(ROOT, 'vite.config.ts'), root: ROOT, server: { middlewareMode: true, hmr: false, ws: false }, appType: 'custom', logLevel: 'error' });
-  try {
-    const { openModel } = await server.ssrLoadModule(path.join(ROOT, 'src/generate.ts'));
-    const { loadManifest } = await server.ssrLoadModule(path.join(ROOT, 'src/manifest.ts'));
-    const { generateTimeline } = await server.ssrLoadModule(path.join(ROOT, 'src/edit.ts'));
-    const { SeededRandom } = await server.ssrLoadModule(path.join(ROOT, 'src/sampler/rng.ts'));
+  return withLibrary(async (load) => {
+    const { openModel } = await load('src/generate.ts');
+    const { loadManifest } = await load('src/manifest.ts');
+    const { generateTimeline } = await load('src/edit.ts');
+    const { SeededRandom } = await load('src/sampler/rng.ts');
     const dir = path.join(ROOT, 'public', 'models') + '/';
     const manifest = await loadManifest(dir);
     const entry = manifest.models[MODEL];
@@ -60,9 +54,7 @@ async function one(threads, variant) {
     const out = { threads, variant, batchesExactly: g.batchesExactly, singleMs: med(r.single), timelineMs: med(r.begun), inTurnMs: med(r.inTurn) };
     await g.dispose();
     return { ...out, ratio: out.timelineMs / out.singleMs, inTurnRatio: out.inTurnMs / out.singleMs };
-  } finally {
-    await server.close();
-  }
+  });
 }
 
 if (args[0] === '--one') {

@@ -180,14 +180,19 @@ export class GenerationClient {
    */
   async generate(model: string, o: RemoteGenerateOptions, variant?: string): Promise<RemoteResult> {
     const { signal, onStep, onPreview, ...options } = o;
+    const m = await this.cancellable(signal, (id) => this.request({ type: 'generate', id, model, variant, options }, onStep, onPreview));
+    if (m.type !== 'result') throw new Error(`generation worker answered '${m.type}' to generate`);
+    return { ...m.result, info: m.info, pose: m.pose };
+  }
+
+  /** A request `signal` cancels in the worker (at its next denoising step); refused at once when already aborted. */
+  private async cancellable(signal: AbortSignal | undefined, send: (id: number) => Promise<FromWorker>): Promise<FromWorker> {
     if (signal?.aborted) throw new AbortError('generation cancelled before it started');
     const id = this.nextId++;
     const cancel = () => this.send({ type: 'cancel', id });
     signal?.addEventListener('abort', cancel, { once: true });
     try {
-      const m = await this.request({ type: 'generate', id, model, variant, options }, onStep, onPreview);
-      if (m.type !== 'result') throw new Error(`generation worker answered '${m.type}' to generate`);
-      return { ...m.result, info: m.info, pose: m.pose };
+      return await send(id);
     } finally {
       signal?.removeEventListener('abort', cancel);
     }
@@ -199,17 +204,9 @@ export class GenerationClient {
    * them; `onStep` counts the first one's steps.
    */
   async begin(model: string, options: WireBeginOptions[], variant?: string, signal?: AbortSignal, onStep?: (done: number, total: number) => void): Promise<SampleState[]> {
-    if (signal?.aborted) throw new AbortError('generation cancelled before it started');
-    const id = this.nextId++;
-    const cancel = () => this.send({ type: 'cancel', id });
-    signal?.addEventListener('abort', cancel, { once: true });
-    try {
-      const m = await this.request({ type: 'begin', id, model, variant, options }, onStep);
-      if (m.type !== 'begun') throw new Error(`generation worker answered '${m.type}' to begin`);
-      return m.states;
-    } finally {
-      signal?.removeEventListener('abort', cancel);
-    }
+    const m = await this.cancellable(signal, (id) => this.request({ type: 'begin', id, model, variant, options }, onStep));
+    if (m.type !== 'begun') throw new Error(`generation worker answered '${m.type}' to begin`);
+    return m.states;
   }
 
   /** Bone rotations (IK, the worker's solveIK) for frames × 22 × 3 joints made here, e.g. a stitched timeline; `joints` is copied. */

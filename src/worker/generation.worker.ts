@@ -57,6 +57,19 @@ function buffersOf(...arrays: Array<Float32Array | undefined>): ArrayBuffer[] {
   return [...set];
 }
 
+/** Run request `id`'s job with a signal a `cancel` message aborts; a failure is answered as its `error`. */
+async function cancellable(id: number, job: (signal: AbortSignal) => Promise<void>): Promise<void> {
+  const ctrl = new AbortController();
+  running.set(id, ctrl);
+  try {
+    await job(ctrl.signal);
+  } catch (e) {
+    post({ type: 'error', id, error: wireError(e) });
+  } finally {
+    running.delete(id);
+  }
+}
+
 async function handle(msg: ToWorker): Promise<void> {
   switch (msg.type) {
     case 'init': {
@@ -81,10 +94,8 @@ async function handle(msg: ToWorker): Promise<void> {
       }
       return;
     }
-    case 'generate': {
-      const ctrl = new AbortController();
-      running.set(msg.id, ctrl);
-      try {
+    case 'generate':
+      return cancellable(msg.id, async (signal) => {
         const h = needHost();
         const { pose: wantPose, previewSteps, ...wire } = msg.options;
         const solve = (m: Motion): WirePose => {
@@ -92,7 +103,7 @@ async function handle(msg: ToWorker): Promise<void> {
           const ik = solveIK(m.joints, m.frames, h.manifest.skeleton);
           return { rootPos: ik.rootPos, quats: ik.quats, ikMs: performance.now() - t0 };
         };
-        const o: GenerateOptions = { ...wire, signal: ctrl.signal, onStep: (done, total) => post({ type: 'step', id: msg.id, done, total }) };
+        const o: GenerateOptions = { ...wire, signal, onStep: (done, total) => post({ type: 'step', id: msg.id, done, total }) };
         if (previewSteps) {
           // each step's x̂0, decoded by generate() like the result and solved here like the result
           o.onPreview = (p) => {
@@ -109,28 +120,14 @@ async function handle(msg: ToWorker): Promise<void> {
         const pose = wantPose ? solve(result.motion) : undefined;
         const transfer = buffersOf(result.motion.joints, result.motion.features, pose?.rootPos, pose?.quats);
         post({ type: 'result', id: msg.id, info: infoOf(msg.model, gen), result, pose }, transfer);
-      } catch (e) {
-        post({ type: 'error', id: msg.id, error: wireError(e) });
-      } finally {
-        running.delete(msg.id);
-      }
-      return;
-    }
-    case 'begin': {
-      const ctrl = new AbortController();
-      running.set(msg.id, ctrl);
-      try {
+      });
+    case 'begin':
+      return cancellable(msg.id, async (signal) => {
         // progress: the first request's steps (they all run together)
-        const os = msg.options.map((w, i) => ({ ...w, signal: ctrl.signal, ...(i === 0 ? { onStep: (done: number, total: number) => post({ type: 'step', id: msg.id, done, total }) } : {}) }));
+        const os = msg.options.map((w, i) => ({ ...w, signal, ...(i === 0 ? { onStep: (done: number, total: number) => post({ type: 'step', id: msg.id, done, total }) } : {}) }));
         const { gen, states } = await needHost().begin(msg.model, os, msg.variant);
         post({ type: 'begun', id: msg.id, info: infoOf(msg.model, gen), states }, states.map((s) => s.x.buffer as ArrayBuffer));
-      } catch (e) {
-        post({ type: 'error', id: msg.id, error: wireError(e) });
-      } finally {
-        running.delete(msg.id);
-      }
-      return;
-    }
+      });
     case 'solve': {
       try {
         const t0 = performance.now();

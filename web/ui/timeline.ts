@@ -6,9 +6,9 @@
 // session (progress, and the newest request wins: a new one cancels the running one at its next step).
 // The panel builds its DOM inside one container (#edit-panel in index.html) and styles it in timeline.css.
 import {
-  EditError, MAX_TIMELINE_SECONDS, bodyPartEdit, cleanupFootContacts, contactsFromFeatures, generateTimeline, inBetween, makeLoop,
+  EditError, MAX_TIMELINE_SECONDS, beginByModel, bodyPartEdit, cleanupFootContacts, contactsFromFeatures, generateTimeline, inBetween, makeLoop,
   planTimeline, recoverJoints, smoothJoints,
-  type EditBegin, type EditCondition, type EditGenerate, type EditMotion, type SampleState, type GenerateResult, type KeptPart, type RemoteResult, type Timeline, type TimelineSegment,
+  type EditBegin, type EditCondition, type EditGenerate, type EditMotion, type GenerateResult, type KeptPart, type RemoteResult, type Timeline, type TimelineSegment, type WireBeginOptions,
 } from '../../src/index';
 import type { PoseTrack } from '../../src/three';
 import { el } from './dom';
@@ -298,6 +298,15 @@ export class TimelinePanel {
     return { fps: this.page.session.limits.fps, maxFrames: this.page.session.limits.maxFrames };
   }
 
+  /** A window's condition, frames and seed with the page's steps and guidance, as the worker takes them. */
+  private wire(r: EditCondition & { frames: number; seed: number }, state: PageState): Pick<WireBeginOptions, 'condition' | 'frames' | 'steps' | 'guidance' | 'seed'> {
+    const label = r.action !== undefined ? this.actions.indexOf(String(r.action)) : -1;
+    return {
+      condition: r.action !== undefined ? { type: 'action', label } : { type: 'text', text: r.prompt ?? '' },
+      frames: r.frames, steps: state.steps, guidance: state.guidance, seed: r.seed,
+    };
+  }
+
   /** The page's model for a condition (text → the text model, action → the action model). */
   private modelFor(c: EditCondition): string {
     const m = c.action !== undefined ? this.page.session.models.action : this.page.session.models.text;
@@ -332,13 +341,10 @@ export class TimelinePanel {
           const g0 = performance.now();
           const model = this.modelFor(r);
           await session.load(model);
-          const label = r.action !== undefined ? this.actions.indexOf(String(r.action)) : -1;
           // through the engine: the file the page's own generations run (the manifest's default variant, e.g. int8);
           // no pose track per window (the stitched motion is solved once, below)
           const res: RemoteResult = await session.engine.generate(model, {
-            pose: false,
-            condition: r.action !== undefined ? { type: 'action', label } : { type: 'text', text: r.prompt ?? '' },
-            frames: r.frames, steps: state.steps, guidance: state.guidance, seed: r.seed, signal,
+            pose: false, ...this.wire(r, state), signal,
             // copies: the client transfers these buffers to the worker, and src/edit.ts reads `keep` again after
             ...(r.known ? { known: { ...r.known, features: r.known.features.slice(), keep: r.known.keep.slice() } } : {}),
             ...(r.resume ? { resume: r.resume } : {}),
@@ -356,25 +362,15 @@ export class TimelinePanel {
         // a timeline's windows started together, one model call per step, grouped by model (text / action)
         const begin: EditBegin = async (reqs) => {
           const g0 = performance.now();
-          const states: SampleState[] = new Array(reqs.length);
-          const byModel = new Map<string, number[]>();
-          reqs.forEach((r, i) => byModel.set(this.modelFor(r), [...(byModel.get(this.modelFor(r)) ?? []), i]));
-          for (const [model, idx] of byModel) {
+          const states = await beginByModel(reqs, (r) => this.modelFor(r), async (model, rs) => {
             await session.load(model);
-            const got = await session.engine.begin(model, idx.map((i) => {
-              const r = reqs[i];
-              const label = r.action !== undefined ? this.actions.indexOf(String(r.action)) : -1;
-              return {
-                condition: r.action !== undefined ? { type: 'action', label } : { type: 'text', text: r.prompt ?? '' },
-                frames: r.frames, steps: state.steps, guidance: state.guidance, seed: r.seed, stopAt: r.stopAt,
-                ...(r.keep ? { known: { keep: r.keep.slice(), fromTime: r.keepFromTime } } : {}),
-              };
-            }), signal, (d, t) => {
-              view.showProgress(calls.progress(d / t), calls.beginText(idx.length, d, t));
-              this.working(kind, `${calls.beginText(idx.length, d, t)} (${Math.round(100 * calls.progress(d / t))} %)`);
+            return session.engine.begin(model, rs.map((r) => ({
+              ...this.wire(r, state), stopAt: r.stopAt, ...(r.keep ? { known: { keep: r.keep.slice(), fromTime: r.keepFromTime } } : {}),
+            })), signal, (d, t) => {
+              view.showProgress(calls.progress(d / t), calls.beginText(rs.length, d, t));
+              this.working(kind, `${calls.beginText(rs.length, d, t)} (${Math.round(100 * calls.progress(d / t))} %)`);
             });
-            idx.forEach((i, j) => (states[i] = got[j]));
-          }
+          });
           beginMs += performance.now() - g0;
           return states;
         };

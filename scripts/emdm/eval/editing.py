@@ -215,25 +215,23 @@ class Recorder:
             rec.frame_rows += int(x.shape[0] * x.shape[1])
             return editor.step(x, z, c, t, mask)
 
+        def timed(sampling, *args, window: bool = True):
+            t0 = time.perf_counter()
+            x = sampling(*args)
+            rec.seconds.append(time.perf_counter() - t0)
+            if window:
+                rec.windows.append(x)
+            return x
+
         class Recording(E.Editor):
             def sample(self, prompt, frames, seed, known=None, keep=None, keep_from_time=1.0):
-                t0 = time.perf_counter()
-                x = super().sample(prompt, frames, seed, known, keep, keep_from_time)
-                rec.seconds.append(time.perf_counter() - t0)
-                rec.windows.append(x)
-                return x
+                return timed(super().sample, prompt, frames, seed, known, keep, keep_from_time)
 
             def begin(self, runs):
-                t0 = time.perf_counter()
-                super().begin(runs)
-                rec.seconds.append(time.perf_counter() - t0)
+                timed(super().begin, runs, window=False)
 
             def finish(self, run, known=None):
-                t0 = time.perf_counter()
-                x = super().finish(run, known)
-                rec.seconds.append(time.perf_counter() - t0)
-                rec.windows.append(x)
-                return x
+                return timed(super().finish, run, known)
 
         self.editor = replace(Recording(**{f.name: getattr(editor, f.name) for f in fields(editor)}), step=counting)
 

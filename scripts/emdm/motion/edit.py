@@ -418,32 +418,37 @@ def timeline(model: Editor, segments: Sequence[Segment], overlap: int = OVERLAP,
             model.condition(segments[k].prompt)
         except ValueError as e:
             raise EditError(f"{_name(k, segments[k])}: {e}") from None
-    plan = [(k, (segments[k].seed + j) % (MAX_SEED + 1), n) for k in range(start, len(segments))
-            for j, n in enumerate(window_sizes(frames[k], k == 0, model.max_frames, overlap))]
-    runs = []
-    if together:     # every window's early steps at once: its overlap c follows from the frames before it
-        at = sum(frames[:start])
-        for k, seed, n in plan:
-            c = min(overlap, at)
-            keep = keep_mask(c + n, [KeepRect(frames=((0, c - 1),))]) if c else None
-            runs.append(model.sampling(segments[k].prompt, c + n, seed, keep, TIMELINE_KEEP_FROM, TIMELINE_KEEP_FROM))
+    # (segment, seed, new frames n, frames c kept from the sequence before): every window's overlap follows from
+    # the frames before it, so the plan holds it before anything is sampled
+    plan, at = [], sum(frames[:start])
+    for k in range(start, len(segments)):
+        for j, n in enumerate(window_sizes(frames[k], k == 0, model.max_frames, overlap)):
+            plan.append((k, (segments[k].seed + j) % (MAX_SEED + 1), n, min(overlap, at)))
             at += n
+    runs = []
+    if together:     # every window's early steps at once
+        runs = [model.sampling(segments[k].prompt, c + n, seed, context_keep(c, n) if c else None, TIMELINE_KEEP_FROM,
+                               TIMELINE_KEEP_FROM) for k, seed, n, c in plan]
         model.begin(runs)
-    for i, (k, seed, n) in enumerate(plan):
+    for i, (k, seed, n, c) in enumerate(plan):
         prompt = segments[k].prompt
-        if start == 0 and i == 0:
+        if c == 0:
             feats = model.denormalise(model.finish(runs[0]) if runs else model.sample(prompt, n, seed))
             joints = recover_joints(feats).astype(np.float32)
             continue
-        c = min(overlap, len(feats))
         known = np.zeros((c + n, feats.shape[1]), np.float32)
         known[:c] = model.normalise(feats[-c:])
-        keep = keep_mask(c + n, [KeepRect(frames=((0, c - 1),))])
+        keep = context_keep(c, n)
         x = model.finish(runs[i], known) if runs else model.sample(prompt, c + n, seed, known, keep, TIMELINE_KEEP_FROM)
         w = ease_seams(model.denormalise(x), keep)
         joints = append_segment(joints, recover_joints(w), c)
         feats = np.concatenate([feats, w[c:]])
     return Timeline(feats, np.asarray(joints, np.float32), segments, tuple(frames), model.normalise(feats), overlap)
+
+
+def context_keep(c: int, n: int) -> np.ndarray:
+    """A window's keep mask: its first c frames (the sequence's last c) on every channel, then n free frames."""
+    return keep_mask(c + n, [KeepRect(frames=((0, c - 1),))])
 
 
 def regenerate(model: Editor, tl: Timeline, i: int, segment: Segment | None = None, together: bool = False) -> Timeline:
