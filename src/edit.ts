@@ -24,7 +24,8 @@
  *   frames kept (all channels) from the sequence's last c frames, generated with its segment's condition. A segment
  *   of n ≤ cap = maxFrames − C frames is one window (the first segment: up to maxFrames); a longer one is split
  *   into ⌈n/cap⌉ near-equal windows (the first ones one frame longer), window j seeded seed + j. Each later
- *   window's features are eased at the seam (`easeSeams`) before anything else reads them. Joints: each window
+ *   window's features are eased at the seam (`easeSeams`, at the `seamAccel` of the window before it) before
+ *   anything else reads them. Joints: each window
  *   recovered, then `appendSegment(prev, window, c)`; features: the first window's, then every later window's
  *   frames [c, …).
  *   Changing segment i regenerates i and every later one (they continue from it); those before are kept.
@@ -71,6 +72,8 @@ export const SEAM_EASE_FRAMES = 10;
 export const SEAM_EASE_ACCEL = 20; // the median real test clip's 95th percentile of joint acceleration
 /** The cross-fade into the generated frames lasts this many frames longer than the offset's fade (`easeSeams`). */
 export const SEAM_BLEND_EXTRA = 4;
+/** The lower bound of a timeline seam's easing acceleration, m/s² (`seamAccel`). */
+export const SEAM_EASE_ACCEL_MIN = 5;
 /** Frames: the kept side's velocity, continued into the cross-fade, decays with this time constant. */
 export const SEAM_BLEND_TAU = 3;
 
@@ -81,14 +84,55 @@ export const SEAM_BLEND_TAU = 3;
  * a root-relative joint [4:67], metres): m = max(ease, ⌈π·√(jump·fps²/(2·accel))⌉). 1.5 m (standing → lying): 13.
  */
 export function seamEaseFrames(o: ArrayLike<number>, ease = SEAM_EASE_FRAMES, accel = SEAM_EASE_ACCEL, fps = 20): number {
-  let jump = Math.abs(o[3]);
+  return Math.max(ease, Math.ceil(Math.PI * Math.sqrt((reach(o) * fps * fps) / (2 * accel)) - 1e-9));
+}
+
+/** The largest joint-position distance in a feature difference `d` (root height [3], root-relative joints [4:67], metres). */
+function reach(d: ArrayLike<number>, at = 0): number {
+  let r = Math.abs(d[at + 3]);
   for (let j = 0; j < 21; j++) {
-    const x = o[4 + 3 * j];
-    const y = o[5 + 3 * j];
-    const z = o[6 + 3 * j];
-    jump = Math.max(jump, Math.sqrt(x * x + y * y + z * z));
+    const x = d[at + 4 + 3 * j];
+    const y = d[at + 5 + 3 * j];
+    const z = d[at + 6 + 3 * j];
+    r = Math.max(r, Math.sqrt(x * x + y * y + z * z));
   }
-  return Math.max(ease, Math.ceil(Math.PI * Math.sqrt((jump * fps * fps) / (2 * accel)) - 1e-9));
+  return r;
+}
+
+/**
+ * The peak joint acceleration (m/s²) a timeline seam's easing keeps to (Python `emdm.motion.edit.seam_accel`):
+ * the 95th percentile (linear interpolation, as numpy) over frames 1..F−2 of the largest joint's |J[t+1] − 2J[t] +
+ * J[t−1]|·fps² in the window before the seam (de-normalised features, joints by recoverJoints), within
+ * [SEAM_EASE_ACCEL_MIN, SEAM_EASE_ACCEL]: the seam is measured against its own timeline, and a calm one's 95th
+ * percentile is a third of a real clip's (climb → walk backward → lie down: 6.6 m/s²; its lie-down, eased to 20,
+ * reached 1.77× that at the seam).
+ */
+export function seamAccel(features: ArrayLike<number>, frames: number, fps = 20, dim = D): number {
+  if (frames < 3) return SEAM_EASE_ACCEL;
+  const j = recoverJoints(Float32Array.from(features), frames, dim);
+  const acc: number[] = [];
+  for (let t = 1; t < frames - 1; t++) {
+    let a = 0;
+    for (let k = 0; k < 22; k++) {
+      let q = 0;
+      for (let x = 0; x < 3; x++) {
+        const v = j[((t + 1) * 22 + k) * 3 + x] - 2 * j[(t * 22 + k) * 3 + x] + j[((t - 1) * 22 + k) * 3 + x];
+        q += v * v;
+      }
+      a = Math.max(a, Math.sqrt(q) * fps * fps);
+    }
+    acc.push(a);
+  }
+  acc.sort((x, y) => x - y);
+  const pos = 0.95 * (acc.length - 1);
+  const lo = Math.floor(pos);
+  const p95 = acc[lo] + (acc[Math.min(lo + 1, acc.length - 1)] - acc[lo]) * (pos - lo);
+  return Math.min(SEAM_EASE_ACCEL, Math.max(SEAM_EASE_ACCEL_MIN, p95));
+}
+
+/** Frames b of a cross-fade over `r` metres whose peak acceleration r·(π/(b+1))²/2·fps² stays within `accel`. */
+export function seamBlendFrames(r: number, accel = SEAM_EASE_ACCEL, fps = 20): number {
+  return Math.ceil(Math.PI * Math.sqrt((r * fps * fps) / (2 * accel)) - 1e-9) - 1;
 }
 
 /**
@@ -104,7 +148,8 @@ export function seamEaseFrames(o: ArrayLike<number>, ease = SEAM_EASE_FRAMES, ac
  * made the 1.5 m one a 0.5 s fall, 2× the timeline's 95th percentile at the seam; a long fade is a blend the action
  * classifier reads as another action: the trade-off is measured in the Python twin's doc). Then each seam is
  * cross-faded from the kept side's motion continued, c_i = k + v·τ·(1 − exp(−(i+1)/τ)) (k the kept frame at the
- * seam, v = k − the kept frame beyond it, or 0; τ = SEAM_BLEND_TAU), into the eased frames: f[s+i] ← (1 − β_i)·c_i +
+ * seam, v = k − the kept frame beyond it, or 0; τ = max(SEAM_BLEND_TAU, r(v)·fps²/accel), r the largest joint
+ * distance: stopping a fast kept side stays within accel), into the eased frames: f[s+i] ← (1 − β_i)·c_i +
  * β_i·f[s+i], β_i = (1 − cos(π(i+1)/(b+1)))/2, b = min(m + SEAM_BLEND_EXTRA, e − s), left seam then right (mirrored):
  * the offset fixes where the first generated frame is, the cross-fade damps the model's own fast first frames
  * (raised hands dropped in two frames: 13× the 95th percentile). Foot contacts [259:263] stay; frames kept in part
@@ -129,8 +174,9 @@ export function easeSeams(features: ArrayLike<number>, frames: number, keep: Arr
   }
   const row = (t: number) => f.subarray(t * dim, (t + 1) * dim);
   const adds: { t: number; w: number; o: Float64Array }[] = [];
-  /** cross-fades, in order: kept frame k0 at the seam, k1 beyond it (or −1), the generated rows from the seam out */
-  const blends: { k0: number; k1: number; rows: number[] }[] = [];
+  /** cross-fades, in order: kept frame k0 at the seam, k1 beyond it (or −1), the first generated row `at` and the
+   * direction `step` from the seam out, the fade's frames b and the most the run allows */
+  const blends: { k0: number; k1: number; at: number; step: number; b: number; most: number }[] = [];
   const offset = (base: Float64Array, sign: number, terms: [Float64Array, Float64Array][], to: Float64Array) => {
     const o = new Float64Array(dim);
     for (let c = 0; c < dim; c++) {
@@ -161,7 +207,7 @@ export function easeSeams(features: ArrayLike<number>, frames: number, keep: Arr
       const o = offset(row(s - 1), 1, terms, row(s));
       const { w, b } = fade(o);
       w.forEach((wi, i) => adds.push({ t: s + i, w: wi, o }));
-      blends.push({ k0: s - 1, k1: beyond, rows: Array.from({ length: b }, (_, i) => s + i) });
+      blends.push({ k0: s - 1, k1: beyond, at: s, step: 1, b, most: e - s });
     }
     if (e < frames && kept[e]) {
       const beyond = e + 1 < frames && kept[e + 1] ? e + 1 : -1;
@@ -171,23 +217,36 @@ export function easeSeams(features: ArrayLike<number>, frames: number, keep: Arr
       const o = offset(row(e), -1, terms, row(e - 1));
       const { w, b } = fade(o);
       w.forEach((wi, i) => adds.push({ t: e - 1 - i, w: wi, o }));
-      blends.push({ k0: e, k1: beyond, rows: Array.from({ length: b }, (_, i) => e - 1 - i) });
+      blends.push({ k0: e, k1: beyond, at: e - 1, step: -1, b, most: e - s });
     }
   }
   for (const { t, w, o } of adds) {
     for (let c = 0; c < dim; c++) f[t * dim + c] += w * o[c];
   }
-  for (const { k0, k1, rows } of blends) {
-    const b = rows.length;
-    rows.forEach((t, i) => {
-      const reach = SEAM_BLEND_TAU * (1 - Math.exp(-(i + 1) / SEAM_BLEND_TAU));
+  for (const { k0, k1, at, step, b: fadeB, most } of blends) {
+    // the kept side's motion continued, row i from the seam out: its velocity v decays at a rate (peak |v|/τ·fps²)
+    // within accel
+    const vel = new Float64Array(dim);
+    if (k1 >= 0) for (let c = 0; c < dim; c++) vel[c] = f[k0 * dim + c] - f[k1 * dim + c];
+    const tau = Math.max(SEAM_BLEND_TAU, (reach(vel) * 20 * 20) / accel); // fps 20, as seamBlendFrames
+    const cont = (i: number, c: number) => f[k0 * dim + c] + vel[c] * tau * (1 - Math.exp(-(i + 1) / tau));
+    // longer where the model's first frames leave the continued motion further than the fade's b can take
+    let far = 0;
+    const d = new Float64Array(67);
+    for (let i = 0; i < fadeB; i++) {
+      const t = at + step * i;
+      for (let c = 3; c < 67; c++) d[c] = f[t * dim + c] - cont(i, c);
+      far = Math.max(far, reach(d));
+    }
+    const b = Math.min(Math.max(fadeB, seamBlendFrames(far, accel)), most);
+    for (let i = 0; i < b; i++) {
+      const t = at + step * i;
       const beta = 0.5 * (1 - Math.cos((Math.PI * (i + 1)) / (b + 1)));
       for (let c = 0; c < dim; c++) {
         if (c >= 259 && c < 263) continue; // foot contacts stay
-        const v = k1 >= 0 ? f[k0 * dim + c] - f[k1 * dim + c] : 0;
-        f[t * dim + c] = (1 - beta) * (f[k0 * dim + c] + v * reach) + beta * f[t * dim + c];
+        f[t * dim + c] = (1 - beta) * cont(i, c) + beta * f[t * dim + c];
       }
-    });
+    }
   }
   return Float32Array.from(f);
 }
@@ -450,7 +509,8 @@ export async function generateTimeline(segments: readonly TimelineSegment[], gen
         const keep = contextKeep(c, m);
         const raw = await gen({ ...cond, frames: c + m, seed, known: { features: known, keep, fromTime: TIMELINE_KEEP_FROM }, ...resume });
         checkMotion(raw, c + m, label(i));
-        const features = easeSeams(raw.features, c + m, keep); // the seam eased before the next window continues it
+        // the seam eased before the next window continues it, no faster than the window before it moves
+        const features = easeSeams(raw.features, c + m, keep, SEAM_EASE_FRAMES, D, seamAccel(prev.features, prev.frames));
         w = { ...raw, features, joints: recoverJoints(features, c + m) };
       }
       checkMotion(w, c + m, label(i));

@@ -73,12 +73,17 @@ def test_a_timeline_continues_each_segment_from_the_last_second_of_the_sequence(
         assert np.array_equal(c["known"][:20], ed.normalise(so_far[-20:]))         # the last second
         assert np.array_equal(c["keep"][:20], np.ones((20, 263))) and not c["keep"][20:].any()
         assert np.array_equal(c["x"][:20], c["known"][:20])                        # kept exactly
-        eased = E.ease_seams(ed.denormalise(c["x"]), c["keep"])
+        before = spy.calls[k - 1]["frames"]                                        # the window before: its c + n
+        accel = E.seam_accel(so_far[-before:])
+        assert E.SEAM_ACCEL_MIN <= accel <= E.SEAM_ACCEL
+        eased = E.ease_seams(ed.denormalise(c["x"]), c["keep"], accel=accel)
         assert np.array_equal(tl.features[tl.starts[k]:tl.starts[k] + tl.frames[k]], eased[20:])   # then its new frames
         raw = ed.denormalise(c["x"])
         o = raw[19] + (raw[19] - raw[18] + raw[21] - raw[20]) / 2 - raw[20]      # the seam's offset
-        b = min(E.seam_ease_frames(o) + E.SEAM_BLEND_EXTRA, len(raw) - 20)      # its fade, then the cross-fade
-        assert np.array_equal(eased[20 + b:], raw[20 + b:]) and not np.array_equal(eased[19 + b], raw[19 + b])
+        b = min(E.seam_ease_frames(o, accel=accel) + E.SEAM_BLEND_EXTRA, len(raw) - 20)   # its fade, the cross-fade
+        changed = np.nonzero((eased != raw).any(1))[0]
+        assert changed.min() == 20 and changed.max() >= 19 + b                 # the cross-fade: b frames or more
+        assert np.array_equal(eased[changed.max() + 1:], raw[changed.max() + 1:])
     assert np.array_equal(tl.features[:30], ed.denormalise(spy.calls[0]["x"]))
     assert np.array_equal(tl.x, ed.normalise(tl.features))
 
@@ -161,6 +166,69 @@ def test_a_large_jump_at_a_seam_is_eased_over_more_frames_so_the_fade_stays_with
     small = f.copy()
     small[20:] = f[:20].mean(0) + 0.02                                  # a 2 cm step: the 10 frames of SEAM_EASE
     assert E.seam_ease_frames(E.ease_seams(small, keep)[20] - small[20]) == E.SEAM_EASE
+
+
+def test_the_cross_fade_is_longer_where_the_model_leaves_the_kept_motion_in_its_first_frames():
+    """A lie-down whose model frames stay at the seam for two frames and then drop 0.9 m at once (emdm-t2m-web:
+    1.77× its calm timeline's 95th percentile at the seam): the offset is nil, so the fade keeps its 10 frames, and
+    at a calm timeline's accel the cross-fade grows to ``seam_blend_frames`` of the drop. The drop is a step, so the
+    blend scales it by the β of its row rather than bounding it: 34 → 24 m/s² here."""
+    n = 80
+    f = np.zeros((n, 263), np.float32)
+    f[:, 3] = 1.0
+    f[22:, 3] = 0.1                                                     # frames 20, 21 continue; 22.. 0.9 m lower
+    keep = np.zeros((n, 263), np.float32)
+    keep[:20] = 1
+    assert E.seam_ease_frames(np.zeros(263)) == E.SEAM_EASE
+    peak = lambda x: np.abs(np.diff(x[:, 3].astype(np.float64), 2)).max() * E.FPS**2   # noqa: E731  m/s²
+    last = lambda g: int(np.nonzero(np.abs(g[:, 3] - f[:, 3]) > 1e-6)[0].max())      # noqa: E731  the last eased frame
+    b0 = E.SEAM_EASE + E.SEAM_BLEND_EXTRA
+    assert E.seam_blend_frames(0.9, E.SEAM_ACCEL) < b0 < E.seam_blend_frames(0.9, 6.0) == 17
+    g = E.ease_seams(f, keep)                                           # 20 m/s²: the fade's 14 frames
+    assert last(g) == 20 + b0 - 1
+    calm = E.ease_seams(f, keep, accel=6.0)
+    assert last(calm) == 20 + 17 - 1 and np.array_equal(calm[:20], f[:20]) and np.array_equal(calm[37:], f[37:])
+    assert peak(calm) < 0.75 * peak(g)
+    smooth = f.copy()
+    smooth[20:, 3] = 1.0                                                # the model continues: nothing to ease
+    assert np.array_equal(E.ease_seams(smooth, keep, accel=6.0), smooth)
+
+
+def test_a_fast_kept_side_is_stopped_no_faster_than_accel():
+    """Raised hands dropping fast at the end of the kept second (0.15 m a frame, 3 m/s) and a model that holds still
+    after the seam: the continued motion stopped within τ = 3 frames whatever the accel (16.5 m/s² at the seam's
+    frames; climb → raise both hands → lie down, seed 1000: 1.97× its timeline's 95th percentile). τ now grows to
+    |v|·fps²/accel (10 frames at 6 m/s²), so the stop is spread: 8.2 m/s² at the seam. Not within 6: the model ends
+    the joint 7.5 cm past the kept side, so it has to stop within a few centimetres of where it would have gone."""
+    n = 60
+    f = np.zeros((n, 263), np.float32)
+    f[:, 3] = 0.9
+    f[:20, 4] = 0.15 * np.arange(20) - 2.0                              # a joint moving 0.15 m a frame, kept
+    f[20:, 4] = f[19, 4]                                                # the model: still, where the kept side ended
+    keep = np.zeros((n, 263), np.float32)
+    keep[:20] = 1
+    acc = lambda g: np.abs(np.diff(g[:, 4].astype(np.float64), 2)) * E.FPS**2   # noqa: E731  acc[t − 1]: frame t's
+    fast, calm = E.ease_seams(f, keep), E.ease_seams(f, keep, accel=6.0)
+    assert np.array_equal(calm[:20], f[:20]) and np.array_equal(fast[:20], f[:20])
+    assert acc(fast)[18:21].max() <= E.SEAM_ACCEL                      # the seam's frames 19–21
+    assert acc(calm)[18:21].max() <= 1.5 * 6.0 and acc(calm)[18:21].max() < 0.6 * acc(fast)[18:21].max()
+    assert acc(calm).max() < 1.7 * 6.0
+
+
+def test_a_timeline_seam_is_eased_to_the_95th_percentile_of_the_window_before_it():
+    t = np.arange(60, dtype=np.float64)
+    calm = np.zeros((60, 263), np.float32)
+    calm[:, 3] = 0.9
+    calm[:, 4:67] = np.tile([0.1, 0.3, 0.0], 21)
+    assert E.seam_accel(calm) == E.SEAM_ACCEL_MIN                      # still: the floor, not a fade of seconds
+    fast = calm.copy()
+    fast[:, 4] += (0.3 * np.sin(t * 1.3)).astype(np.float32)             # a wrist shaking: past SEAM_ACCEL
+    assert E.seam_accel(fast) == E.SEAM_ACCEL
+    mid = calm.copy()
+    mid[:, 4] += (0.12 * np.sin(t / 2)).astype(np.float32)             # 12 m/s² at most
+    a = E.joint_acceleration(recover_joints(mid).astype(np.float32))[1:-1]
+    assert E.SEAM_ACCEL_MIN < E.seam_accel(mid) < E.SEAM_ACCEL and E.seam_accel(mid) == pytest.approx(np.percentile(a, 95))
+    assert E.seam_accel(calm[:2]) == E.SEAM_ACCEL
 
 
 def test_a_first_segment_shorter_than_the_overlap_is_continued_from_all_its_frames(model):

@@ -121,15 +121,18 @@ def test_bad_arguments_are_one_line(capsys, args, says):
     assert len(err) == 1 and says in err[0]
 
 
-def test_the_committed_result_claims_only_what_its_figures_say(tmp_path):
-    path = RESULTS_DIR / "json" / "editing-emdm-t2m-web.json"
+@pytest.mark.parametrize("name", ["editing-emdm-t2m-web.json", "editing-emdm-t2m-web-seed1000.json"])
+def test_the_committed_result_claims_only_what_its_figures_say(tmp_path, name):
+    path = RESULTS_DIR / "json" / name
     if not path.is_file():
         pytest.skip(f"{path} not measured yet (python -m emdm.eval.editing)")
     r = json.loads(path.read_text())
     assert r["bars"] == ev.bars(r)                                # every met/not met follows from the figures
     (tmp_path / path.name).write_text(path.read_text())
-    assert [x["task"] for x in load_results(tmp_path)] == ["editing"]      # emdm.eval.report reads it
-    text = "\n".join(ev.section(r))
+    loaded = load_results(tmp_path)
+    assert [x["task"] for x in loaded] == ["editing"]             # emdm.eval.report reads it
+    text = "\n".join(ev.section(loaded[0]))
+    assert f"`docs/results/json/{name}`" in text and (f"seed {r['seed']})" in text) == bool(r["seed"])
     assert text.count("**met**") == sum(b["met"] for b in r["bars"].values())
     assert text.count("**not met**") == sum(not b["met"] for b in r["bars"].values())
     assert r["bars"]["seam_acceleration"]["figure"] in text

@@ -7,8 +7,8 @@ import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
 import { createGenerator } from '../../src/createGenerator';
 import {
-  EditError, LOOP_END_FRAMES, OVERLAP_FRAMES, SEAM_BLEND_EXTRA, SEAM_EASE_ACCEL, SEAM_EASE_FRAMES, bodyPartEdit, easeSeams, generateTimeline, inBetween,
-  keptSegments, makeLoop, planTimeline, seamEaseFrames, type EditGenerate, type EditMotion, type EditRequest, type TimelineSegment, withNewSeed,
+  EditError, LOOP_END_FRAMES, OVERLAP_FRAMES, SEAM_BLEND_EXTRA, SEAM_EASE_ACCEL, SEAM_EASE_ACCEL_MIN, SEAM_EASE_FRAMES, bodyPartEdit, easeSeams, generateTimeline, inBetween,
+  keptSegments, makeLoop, planTimeline, seamAccel, seamBlendFrames, seamEaseFrames, type EditGenerate, type EditMotion, type EditRequest, type TimelineSegment, withNewSeed,
 } from '../../src/edit';
 import { recoverJoints } from '../../src/motion/recover';
 import { groupChannels } from '../../src/sampler/mask';
@@ -254,5 +254,42 @@ describe('easeSeams', () => {
     const small = new Float64Array(D);
     small[5] = 0.02;
     expect(seamEaseFrames(small)).toBe(SEAM_EASE_FRAMES);
+  });
+
+  it('a timeline eases each seam at the seamAccel of the window before it: after a calm window, a drop in the first frames gets a longer cross-fade', async () => {
+    // window 1: standing, one joint swaying (≈ 6 m/s²); window 2: its model frames hold two frames past the seam, then drop 0.9 m
+    const calls: EditRequest[] = [];
+    const gen: EditGenerate = async (r) => {
+      calls.push(r);
+      const f = new Float32Array(r.frames * D);
+      for (let t = 0; t < r.frames; t++) {
+        f[t * D + 3] = r.known && t >= C + 2 ? 0.1 : 1;
+        f[t * D + 4] = 0.2 + 0.06 * Math.sin(t / 2);
+        f[t * D + 5] = 0.3;
+      }
+      if (r.known) for (let i = 0; i < f.length; i++) if (r.known.keep[i]) f[i] = r.known.features[i];
+      return { frames: r.frames, fps: 20, features: f, joints: recoverJoints(f, r.frames) };
+    };
+    const tl = await generateTimeline([{ prompt: 'stand', seconds: 2, seed: 1 }, { prompt: 'lie down', seconds: 2, seed: 2 }], gen, limits);
+    const first = tl.features.subarray(0, 40 * D);
+    const accel = seamAccel(first, 40);
+    expect(accel).toBeGreaterThan(SEAM_EASE_ACCEL_MIN);
+    expect(accel).toBeLessThan(8);
+    const raw = await gen(calls[1]);
+    const keep = calls[1].known!.keep;
+    const eased = easeSeams(raw.features, C + 40, keep, SEAM_EASE_FRAMES, D, accel);
+    expect(Array.from(tl.features.subarray(40 * D))).toEqual(Array.from(eased.subarray(C * D)));
+    const b = seamBlendFrames(0.9, accel);
+    expect(b).toBeGreaterThan(SEAM_EASE_FRAMES + SEAM_BLEND_EXTRA);
+    expect(eased[(C + b - 1) * D + 3]).not.toBe(raw.features[(C + b - 1) * D + 3]); // the cross-fade's last frame
+    expect(Array.from(eased.subarray((C + b) * D))).toEqual(Array.from(raw.features.subarray((C + b) * D)));
+    // at the default 20 m/s² the fade's frames take the drop, and the seam is steeper
+    const fast = easeSeams(raw.features, C + 40, keep);
+    const peak = (g: Float32Array) => {
+      let p = 0;
+      for (let t = C - 1; t < C + 30; t++) p = Math.max(p, Math.abs(g[(t + 1) * D + 3] - 2 * g[t * D + 3] + g[(t - 1) * D + 3]) * 400);
+      return p;
+    };
+    expect(peak(eased)).toBeLessThan(0.75 * peak(fast));
   });
 });

@@ -8,7 +8,7 @@ import path from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import {
   type EditBegin, type EditBeginRequest, type EditGenerate, type EditRequest, type TimelineSegment, LOOP_END_FRAMES, OVERLAP_FRAMES, SEAM_BLEND_EXTRA, SEAM_BLEND_TAU, SEAM_EASE_ACCEL,
-  SEAM_EASE_FRAMES, TIMELINE_KEEP_FROM, bodyPartEdit, generateTimeline, inBetween, makeLoop,
+  SEAM_EASE_ACCEL_MIN, SEAM_EASE_FRAMES, TIMELINE_KEEP_FROM, bodyPartEdit, easeSeams, generateTimeline, inBetween, makeLoop, seamAccel,
 } from '../../src/edit';
 import { type Generator, openModel } from '../../src/generate';
 import { type Manifest, loadManifest } from '../../src/manifest';
@@ -27,6 +27,7 @@ const meta = fx.meta as unknown as {
     body: { seed: number; label: string; keep: 'lower' | 'upper' };
     loop: { seed: number; label: string; ends: number; clipFrames: number };
     loopLong: { seed: number; label: string; maxFrames: number; clipFrames: number };
+    ease: { before: string; in: string; out: string; keptFrames: number; accel: number; blendFrames: number };
   };
   runs: { op: string; frames: number; label: string; seed: number; noise: string }[];
 };
@@ -75,7 +76,7 @@ describe('src/edit.ts = emdm.motion.edit (tiny-edit fixture)', () => {
   it('uses the same constants: overlap, loop ends, seam fade and cross-fade, the timeline windows\' keepFromTime', () => {
     expect(fx.meta).toMatchObject({
       overlap: OVERLAP_FRAMES, loopEnds: LOOP_END_FRAMES, seamEase: SEAM_EASE_FRAMES, seamAccel: SEAM_EASE_ACCEL,
-      seamBlendExtra: SEAM_BLEND_EXTRA, seamBlendTau: SEAM_BLEND_TAU, timelineKeepFrom: TIMELINE_KEEP_FROM,
+      seamBlendExtra: SEAM_BLEND_EXTRA, seamBlendTau: SEAM_BLEND_TAU, seamAccelMin: SEAM_EASE_ACCEL_MIN, timelineKeepFrom: TIMELINE_KEEP_FROM,
     });
   });
 
@@ -179,5 +180,23 @@ describe('src/edit.ts = emdm.motion.edit (tiny-edit fixture)', () => {
     expect(maxJointDist(r.clip.joints, fx.get('loop_long_joints'))).toBeLessThan(1e-4 * Math.max(1, ...Array.from(fx.get('loop_long_joints'), Math.abs)));
     const n = meta.ops.timeline.total - o.maxFrames;
     expect(maxAbsDiff(rows(r.full.features, 0, n, D), rows(base().features, 0, n, D))).toBe(0); // before the window: as it was
+  });
+
+  it('a seam eased at a calm window\'s accel (seamAccel): the same accel, a cross-fade grown past the fade\'s, the same frames within 1e-4', () => {
+    const e = meta.ops.ease;
+    const before = fx.get(e.before);
+    const accel = seamAccel(before, before.length / D);
+    expect(Math.abs(accel - e.accel)).toBeLessThan(1e-4);
+    expect(accel).toBeGreaterThan(SEAM_EASE_ACCEL_MIN);
+    expect(accel).toBeLessThan(SEAM_EASE_ACCEL);
+    const input = fx.get(e.in);
+    const n = input.length / D;
+    const keep = new Float32Array(n * D).fill(1, 0, e.keptFrames * D);
+    const out = easeSeams(input, n, keep, SEAM_EASE_FRAMES, D, accel);
+    expect(maxAbsDiff(out, fx.get(e.out))).toBeLessThan(1e-4);
+    let last = -1;
+    for (let t = 0; t < n; t++) if (out.subarray(t * D, (t + 1) * D).some((v, c) => v !== input[t * D + c])) last = t;
+    expect(last + 1 - e.keptFrames).toBe(e.blendFrames);
+    expect(e.blendFrames).toBeGreaterThan(SEAM_EASE_FRAMES + SEAM_BLEND_EXTRA);
   });
 });

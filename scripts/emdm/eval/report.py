@@ -530,7 +530,7 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
                 "`python -m emdm.eval.editing` makes 3-segment timelines, in-betweens, body-part edits and loops with "
                 "`emdm.motion.edit` (the algorithms the page runs, parity-tested against `src/edit.ts`) and measures "
                 "them against the issue's bars.", ""]
-        for r in sorted(edits, key=lambda r: r["name"]):
+        for r in sorted(edits, key=lambda r: (r["name"], r.get("seed", 0))):
             out += editing_section(r)
     grids = sorted((r for r in results if r["task"] == "poses"), key=lambda r: r["name"])
     if grids:

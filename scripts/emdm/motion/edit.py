@@ -64,6 +64,10 @@ SEAM_EASE = 10             # M: the fewest generated frames over which a seam's 
 SEAM_ACCEL = 20.0          # A: the easing's peak joint acceleration, m/s² (a larger jump is eased over more frames)
 SEAM_BLEND_EXTRA = 4       # the cross-fade into the generated frames lasts this many frames longer than the offset's fade
 SEAM_BLEND_TAU = 3.0       # frames: the kept side's velocity, continued into the cross-fade, decays with this time constant
+#                            (or a longer one, where a fast kept side would stop faster than the seam's accel)
+# A timeline seam's easing keeps its peak joint acceleration within the 95th percentile of the window before it
+# (``seam_accel``), between these bounds, m/s²: a calm motion is not ended by a fade faster than anything in it.
+SEAM_ACCEL_MIN = 5.0
 CONTACTS = slice(259, 263)  # foot contact channels: not eased
 MAX_SEED = 2**32 - 1
 
@@ -309,9 +313,42 @@ def seam_ease_frames(offset: np.ndarray, ease: int = SEAM_EASE, accel: float = S
     enough that the fade's peak joint acceleration, jump·(π/m)²/2·fps², stays within ``accel`` m/s², where jump is
     the largest offset of a joint position (root height [3], a root-relative joint [4:67], metres):
     m = max(ease, ⌈π·√(jump·fps²/(2·accel))⌉). A 1.5 m jump (standing → lying) takes 13 frames, up to 1 m 10."""
-    o = np.asarray(offset, np.float64)
-    jump = max(abs(float(o[3])), float(np.linalg.norm(o[4:67].reshape(21, 3), axis=1).max()))
+    jump = _reach(offset)
     return max(ease, math.ceil(math.pi * math.sqrt(jump * fps * fps / (2 * accel)) - 1e-9))
+
+
+def _reach(d: np.ndarray) -> float:
+    """The largest joint-position distance in a feature difference d (..., ≥ 67): root height [3], root-relative
+    joints [4:67], metres."""
+    d = np.asarray(d, np.float64)
+    return float(max(np.abs(d[..., 3]).max(), np.linalg.norm(d[..., 4:67].reshape(*d.shape[:-1], 21, 3), axis=-1).max()))
+
+
+def joint_acceleration(joints: np.ndarray, fps: int = FPS) -> np.ndarray:
+    """(F,) per frame t = 1..F−2 (0 at the ends): max over joints of |J[t+1] − 2J[t] + J[t−1]|·fps², m/s²."""
+    j = np.asarray(joints, np.float64)
+    a = np.zeros(len(j))
+    a[1:-1] = np.linalg.norm(j[2:] - 2 * j[1:-1] + j[:-2], axis=2).max(axis=1) * fps**2
+    return a
+
+
+def seam_accel(features_before: np.ndarray) -> float:
+    """The peak joint acceleration (m/s²) a timeline seam's easing keeps to: the 95th percentile of
+    ``joint_acceleration`` over the window before it (de-normalised features, its joints by ``recover_joints``),
+    within [``SEAM_ACCEL_MIN``, ``SEAM_ACCEL``]. The seam is measured against its timeline (issue 14: ≤ 1.5× the
+    95th percentile within), and a calm motion's is a third of a real clip's: climb → walk backward → lie down
+    (emdm-t2m-web, int8, 10 steps) had 6.6 m/s², and its lie-down, eased to 20, reached 1.77× at the seam."""
+    f = np.asarray(features_before)
+    if len(f) < 3:
+        return SEAM_ACCEL
+    p95 = float(np.percentile(joint_acceleration(recover_joints(f).astype(np.float32))[1:-1], 95))
+    return min(SEAM_ACCEL, max(SEAM_ACCEL_MIN, p95))
+
+
+def seam_blend_frames(reach: float, accel: float = SEAM_ACCEL, fps: int = FPS) -> int:
+    """Frames b of a cross-fade over a distance ``reach`` (m) whose peak acceleration, reach·(π/(b+1))²/2·fps²,
+    stays within ``accel``: b = ⌈π·√(reach·fps²/(2·accel))⌉ − 1."""
+    return math.ceil(math.pi * math.sqrt(reach * fps * fps / (2 * accel)) - 1e-9) - 1
 
 
 def ease_seams(features: np.ndarray, keep: np.ndarray, ease: int = SEAM_EASE, accel: float = SEAM_ACCEL) -> np.ndarray:
@@ -336,7 +373,8 @@ def ease_seams(features: np.ndarray, keep: np.ndarray, ease: int = SEAM_EASE, ac
     and its first frames can swing a limb through a metre in two frames (a timeline's raised hands dropped to the
     sides: 216 m/s² at the frame after the seam, 13× the timeline's 95th percentile, with x̂0 smoothed). The kept side's
     motion continued, c_i = k + v·τ·(1 − exp(−(i+1)/τ)) (k the kept frame next to the seam, v its velocity from the
-    kept frame before it, 0 without one; τ = ``SEAM_BLEND_TAU`` frames), is blended into the eased frames:
+    kept frame before it, 0 without one; τ = max(``SEAM_BLEND_TAU``, ``_reach``(v)·fps²/``accel``) frames, so that
+    stopping the kept side's motion, peak |v|/τ·fps², stays within accel), is blended into the eased frames:
     f[s+i] ← (1 − β_i)·c_i + β_i·f[s+i], β_i = (1 − cos(π(i+1)/(b+1)))/2, over b = min(m + ``SEAM_BLEND_EXTRA``, e − s)
     frames (mirrored on the right, after the left). A jump in the generated frames is scaled down by the β of where
     it falls, so an early one hardly shows; where the model continues smoothly, c and f agree and little changes.
@@ -370,21 +408,26 @@ def ease_seams(features: np.ndarray, keep: np.ndarray, ease: int = SEAM_EASE, ac
             v += [f[s + 1] - f[s]] if s + 1 < e else []
             o, w, b = fade(f[s - 1] + (np.mean(v, 0) if v else 0) - f[s])
             offsets += [(s + i, w[i] * o) for i in range(len(w))]
-            blends.append((s - 1, beyond, s + np.arange(b)))
+            blends.append((s - 1, beyond, s, 1, b, e - s))
         if e < n and kept[e]:
             beyond = e + 1 if e + 1 < n and kept[e + 1] else None
             v = [f[beyond] - f[e]] if beyond is not None else []
             v += [f[e - 1] - f[e - 2]] if e - 2 >= s else []
             o, w, b = fade(f[e] - (np.mean(v, 0) if v else 0) - f[e - 1])
             offsets += [(e - 1 - i, w[i] * o) for i in range(len(w))]
-            blends.append((e, beyond, e - 1 - np.arange(b)))
+            blends.append((e, beyond, e - 1, -1, b, e - s))
     for row, o in offsets:
         f[row] += o
-    for k0, k1, rows in blends:                    # in order: a run's left seam, then its right one
-        i = np.arange(len(rows), dtype=np.float64)[:, None]
+    for k0, k1, at, step, b, most in blends:     # in order: a run's left seam, then its right one
         v = f[k0] - f[k1] if k1 is not None else np.zeros(f.shape[1])
-        c = f[k0] + v * (SEAM_BLEND_TAU * (1 - np.exp(-(i + 1) / SEAM_BLEND_TAU)))
-        beta = 0.5 * (1 - np.cos(np.pi * (i + 1) / (len(rows) + 1)))
+        i = np.arange(most, dtype=np.float64)[:, None]
+        # the kept side continued, its velocity v decaying at a rate (peak |v|/τ·fps²) within accel
+        tau = max(SEAM_BLEND_TAU, _reach(v) * FPS**2 / accel)
+        c = f[k0] + v * (tau * (1 - np.exp(-(i + 1) / tau)))
+        # longer where the model's first frames leave the continued motion further than the fade's b can take
+        b = min(max(b, seam_blend_frames(_reach(f[at + step * np.arange(b)] - c[:b]), accel)), most)
+        rows, i, c = at + step * np.arange(b), i[:b], c[:b]
+        beta = 0.5 * (1 - np.cos(np.pi * (i + 1) / (b + 1)))
         blended = (1 - beta) * c + beta * f[rows]
         blended[:, CONTACTS] = f[rows][:, CONTACTS]
         f[rows] = blended
@@ -413,6 +456,8 @@ def timeline(model: Editor, segments: Sequence[Segment], overlap: int = OVERLAP,
                             f"timeline (and its overlap {previous.overlap})")
         kept = sum(frames[:start])
         feats, joints = previous.features[:kept], previous.joints[:kept]
+        last = window_sizes(frames[start - 1], start == 1, model.max_frames, overlap)[-1]
+        before = last + min(overlap, kept - last)      # frames of the window before segment ``start`` (its c + n)
     for k in range(start, len(segments)):          # every condition first: a bad prompt stops before any sampling
         try:
             model.condition(segments[k].prompt)
@@ -435,12 +480,14 @@ def timeline(model: Editor, segments: Sequence[Segment], overlap: int = OVERLAP,
         if c == 0:
             feats = model.denormalise(model.finish(runs[0]) if runs else model.sample(prompt, n, seed))
             joints = recover_joints(feats).astype(np.float32)
+            before = n
             continue
         known = np.zeros((c + n, feats.shape[1]), np.float32)
         known[:c] = model.normalise(feats[-c:])
         keep = context_keep(c, n)
         x = model.finish(runs[i], known) if runs else model.sample(prompt, c + n, seed, known, keep, TIMELINE_KEEP_FROM)
-        w = ease_seams(model.denormalise(x), keep)
+        w = ease_seams(model.denormalise(x), keep, accel=seam_accel(feats[-before:]))
+        before = c + n
         joints = append_segment(joints, recover_joints(w), c)
         feats = np.concatenate([feats, w[c:]])
     return Timeline(feats, np.asarray(joints, np.float32), segments, tuple(frames), model.normalise(feats), overlap)

@@ -18,6 +18,8 @@ constants (C = 20, K = 10, seam easing M ≥ 10 frames at ≤ 5 m/s², 20 fps, m
    [:, 1:3] = 0).
 6. ``loop`` of ``timeline_features`` by a model whose window is 34 frames (``loopLong``): only the last 34 frames are
    sampled (their first 20 and last 10 kept; the noise of the timeline's 34-frame window) → ``loop_long_*``.
+7. ``ease``: ``seam_accel`` of a calm window (``ease_calm``) and ``ease_seams`` at it of a window whose model frames
+   drop 0.9 m two frames after the seam (``ease_in`` → ``ease_out``; the cross-fade grows past the fade's frames).
 
 Every sampling call is a ``run`` (JSON ``runs``, in call order) with its frames, label, seed and the key prefix of
 its noise arrays: ``<prefix>x_T``, then for k = steps−1..0 ``<prefix>z_<k>`` and ``<prefix>eps_<k>`` when drawn
@@ -108,13 +110,17 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
         arrays[f"{name}_features"] = m.features
         arrays[f"{name}_joints"] = m.joints
     arrays["loop_in_place_joints"] = lp_in_place.joints
+    # 7. a seam eased at a calm window's accel: the timeline's frames 0..19 kept, then a 0.9 m drop two frames in
+    calm, steep = ease_case(tl.features)
+    accel = E.seam_accel(calm)
+    arrays.update(ease_calm=calm, ease_in=steep, ease_out=E.ease_seams(steep, _first_kept(len(steep)), accel=accel))
     seg = lambda s: {"label": s.prompt, "cond": LABELS.index(s.prompt), "seconds": s.seconds, "seed": s.seed}  # noqa: E731
     meta = {
         "model": "tiny-step.onnx", "meanStd": "tiny.meanstd.f32", "labels": list(LABELS), "condition": "one-hot e_label",
         "objective": "ddgan", "steps": STEPS, "guidance": GUIDANCE, "zDim": 64, "featureDim": 263, "fps": E.FPS,
         "maxFrames": 196, "overlap": E.OVERLAP, "loopEnds": E.LOOP_ENDS,
         "seamEase": E.SEAM_EASE, "seamAccel": E.SEAM_ACCEL, "seamBlendExtra": E.SEAM_BLEND_EXTRA,
-        "seamBlendTau": E.SEAM_BLEND_TAU, "timelineKeepFrom": E.TIMELINE_KEEP_FROM,
+        "seamBlendTau": E.SEAM_BLEND_TAU, "seamAccelMin": E.SEAM_ACCEL_MIN, "timelineKeepFrom": E.TIMELINE_KEEP_FROM,
         "ops": {
             "timeline": {"segments": [seg(s) for s in SEGMENTS], "frames": list(tl.frames), "starts": tl.starts,
                          "total": n},
@@ -127,10 +133,31 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
                      "ends": E.LOOP_ENDS, "clipFrames": len(lp.features), "inPlace": "loop_in_place_joints"},
             "loopLong": {"of": "timeline_features", "label": LOOP_LONG[0], "cond": LABELS.index(LOOP_LONG[0]),
                          "seed": LOOP_LONG[1], "maxFrames": LOOP_LONG[2], "clipFrames": len(lp_long.features)},
+            "ease": {"before": "ease_calm", "in": "ease_in", "out": "ease_out", "keptFrames": E.OVERLAP, "accel": accel,
+                     "blendFrames": int(np.nonzero((arrays["ease_out"] != steep).any(1))[0].max()) + 1 - E.OVERLAP},
         },
         "runs": runs,
     }
     return write_case(out_dir, NAME, meta, arrays)
+
+
+def ease_case(features: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A calm window (40 frames, the first frame of ``features`` with a slow sway: its ``seam_accel`` is between the
+    bounds) and a window to ease (48 frames: the first 20 kept, then the model's frames, which hold two frames and drop
+    0.9 m in root height), for ``ease_seams`` at that accel."""
+    t = np.arange(48, dtype=np.float64)[:, None]
+    calm = np.repeat(features[:1].astype(np.float64), 48, 0)
+    calm[:, 4:5] += 0.06 * np.sin(t / 2)                 # one joint sways: at most 6 m/s²
+    calm[:, 0:3] = 0                                   # no turning, no travel
+    steep = calm.copy()
+    steep[22:, 3] -= 0.9
+    return calm[:40].astype(np.float32), steep.astype(np.float32)
+
+
+def _first_kept(n: int, c: int = E.OVERLAP) -> np.ndarray:
+    keep = np.zeros((n, 263), np.float32)
+    keep[:c] = 1
+    return keep
 
 
 def main(argv: list[str] | None = None) -> int:
