@@ -83,6 +83,30 @@ def test_foot_skate_near_seams_against_the_rest():
     assert s["seam_pairs"] == 2 * 7 and s["within_pairs"] == 2 * (f - 1 - 7)
     assert s["seam_cm_s"] > 4 and s["ratio"] > 1.2
     assert ev.seam_skate([(joints, [5])])["ratio"] < 1.0
+    assert s["matched_ratio"] > 1.2 and s["before_ratio"] < s["matched_ratio"]
+
+
+def test_seam_skate_matched_weighs_each_seam_against_the_segments_it_joins():
+    """Two timelines without any seam effect: one skates 10 cm/s everywhere, the other 2 cm/s, but the first has its
+    seam near more contact frames. Pooled, the seams read above the rest (the fast timeline fills them); matched,
+    each seam against its own segments, 1. A seam that adds skate reads above 1 either way."""
+    def timeline(speed, seam, contact):
+        f = 60
+        j = np.zeros((f, 22, 3))
+        j[:, :, 1] = 0.5
+        j[:, 10:12, 1] = 0.5
+        j[contact, 10:12, 1] = 0.02                                # toes down on these frames only
+        j[:, 10:12, 0] = np.arange(f)[:, None] * speed / 20
+        return j, [seam]
+    down_at_seam = np.r_[20:40]                                     # the fast one is in contact around its seam
+    down_all = np.r_[0:60]
+    runs = [timeline(0.10, 30, down_at_seam), timeline(0.02, 30, down_all)]
+    s = ev.seam_skate(runs)
+    assert s["ratio"] > 1.5 and s["matched_ratio"] == pytest.approx(1.0)
+    j, seams = timeline(0.02, 30, down_all)
+    j[30:, 10:12, 0] += np.minimum(np.arange(30), 3)[:, None] * 0.01    # 1 cm a frame more for 3 frames past the seam
+    worse = ev.seam_skate([runs[0], (j, seams)])
+    assert worse["matched_ratio"] > 1.2 and worse["before_ratio"] == pytest.approx(1.0)
 
 
 def test_a_one_frame_flip_is_found_and_a_step_is_not():
