@@ -74,7 +74,8 @@ export const SEAM_EASE_ACCEL = 20; // the median real test clip's 95th percentil
 export const SEAM_BLEND_EXTRA = 4;
 /** The lower bound of a timeline seam's easing acceleration, m/s² (`seamAccel`). */
 export const SEAM_EASE_ACCEL_MIN = 5;
-/** Frames: the kept side's velocity, continued into the cross-fade, decays with this time constant. */
+/** Frames: the kept side's velocity, continued into the cross-fade, decays with this time constant (or a longer one
+ * where a fast kept side would stop faster than the seam's accel: `easeSeams`). */
 export const SEAM_BLEND_TAU = 3;
 
 /**
@@ -88,12 +89,12 @@ export function seamEaseFrames(o: ArrayLike<number>, ease = SEAM_EASE_FRAMES, ac
 }
 
 /** The largest joint-position distance in a feature difference `d` (root height [3], root-relative joints [4:67], metres). */
-function reach(d: ArrayLike<number>, at = 0): number {
-  let r = Math.abs(d[at + 3]);
+function reach(d: ArrayLike<number>): number {
+  let r = Math.abs(d[3]);
   for (let j = 0; j < 21; j++) {
-    const x = d[at + 4 + 3 * j];
-    const y = d[at + 5 + 3 * j];
-    const z = d[at + 6 + 3 * j];
+    const x = d[4 + 3 * j];
+    const y = d[5 + 3 * j];
+    const z = d[6 + 3 * j];
     r = Math.max(r, Math.sqrt(x * x + y * y + z * z));
   }
   return r;
