@@ -27,7 +27,7 @@ const meta = fx.meta as unknown as {
     body: { seed: number; label: string; keep: 'lower' | 'upper' };
     loop: { seed: number; label: string; ends: number; clipFrames: number };
     loopLong: { seed: number; label: string; maxFrames: number; clipFrames: number };
-    ease: { before: string; in: string; out: string; keptFrames: number; accel: number; blendFrames: number };
+    ease: { calmFrames: number; frames: number; sway: number; dropAt: number; drop: number; keptFrames: number; accel: number; blendFrames: number; out: string };
   };
   runs: { op: string; frames: number; label: string; seed: number; noise: string }[];
 };
@@ -183,19 +183,31 @@ describe('src/edit.ts = emdm.motion.edit (tiny-edit fixture)', () => {
   });
 
   it('a seam eased at a calm window\'s accel (seamAccel): the same accel, a cross-fade grown past the fade\'s, the same frames within 1e-4', () => {
+    // the fixture's ease_case, from the timeline's frame 0: a calm window and one whose model frames drop 0.9 m two frames past the seam
     const e = meta.ops.ease;
-    const before = fx.get(e.before);
-    const accel = seamAccel(before, before.length / D);
+    const f0 = fx.get('timeline_features').subarray(0, D);
+    const build = (frames: number, drop: boolean) => {
+      const f = new Float32Array(frames * D);
+      for (let t = 0; t < frames; t++) {
+        for (let c = 0; c < D; c++) {
+          let v = c < 3 ? 0 : f0[c];
+          if (c === 4) v += e.sway * Math.sin(t / 2);
+          if (c === 3 && drop && t >= e.dropAt) v -= e.drop;
+          f[t * D + c] = v;
+        }
+      }
+      return f;
+    };
+    const accel = seamAccel(build(e.calmFrames, false), e.calmFrames);
     expect(Math.abs(accel - e.accel)).toBeLessThan(1e-4);
     expect(accel).toBeGreaterThan(SEAM_EASE_ACCEL_MIN);
     expect(accel).toBeLessThan(SEAM_EASE_ACCEL);
-    const input = fx.get(e.in);
-    const n = input.length / D;
-    const keep = new Float32Array(n * D).fill(1, 0, e.keptFrames * D);
-    const out = easeSeams(input, n, keep, SEAM_EASE_FRAMES, D, accel);
-    expect(maxAbsDiff(out, fx.get(e.out))).toBeLessThan(1e-4);
+    const input = build(e.frames, true);
+    const keep = new Float32Array(e.frames * D).fill(1, 0, e.keptFrames * D);
+    const out = easeSeams(input, e.frames, keep, SEAM_EASE_FRAMES, D, accel);
+    expect(maxAbsDiff(out.subarray(e.keptFrames * D, (e.keptFrames + e.blendFrames) * D), fx.get(e.out))).toBeLessThan(1e-4);
     let last = -1;
-    for (let t = 0; t < n; t++) if (out.subarray(t * D, (t + 1) * D).some((v, c) => v !== input[t * D + c])) last = t;
+    for (let t = 0; t < e.frames; t++) if (out.subarray(t * D, (t + 1) * D).some((v, c) => v !== input[t * D + c])) last = t;
     expect(last + 1 - e.keptFrames).toBe(e.blendFrames);
     expect(e.blendFrames).toBeGreaterThan(SEAM_EASE_FRAMES + SEAM_BLEND_EXTRA);
   });

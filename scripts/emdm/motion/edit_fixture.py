@@ -18,8 +18,9 @@ constants (C = 20, K = 10, seam easing M ≥ 10 frames at ≤ 5 m/s², 20 fps, m
    [:, 1:3] = 0).
 6. ``loop`` of ``timeline_features`` by a model whose window is 34 frames (``loopLong``): only the last 34 frames are
    sampled (their first 20 and last 10 kept; the noise of the timeline's 34-frame window) → ``loop_long_*``.
-7. ``ease``: ``seam_accel`` of a calm window (``ease_calm``) and ``ease_seams`` at it of a window whose model frames
-   drop 0.9 m two frames after the seam (``ease_in`` → ``ease_out``; the cross-fade grows past the fade's frames).
+7. ``ease``: ``seam_accel`` of a calm window and ``ease_seams`` at it of a window whose model frames drop 0.9 m two
+   frames after the seam, both built from ``timeline_features`` frame 0 (``ease_case``); ``ease_out`` holds the rows
+   it changed (the cross-fade grows past the fade's frames).
 
 Every sampling call is a ``run`` (JSON ``runs``, in call order) with its frames, label, seed and the key prefix of
 its noise arrays: ``<prefix>x_T``, then for k = steps−1..0 ``<prefix>z_<k>`` and ``<prefix>eps_<k>`` when drawn
@@ -50,6 +51,7 @@ REGEN = (1, E.Segment("c", 0.7, 202))                   # (0-based segment, its 
 INBETWEEN = ("d", 301)
 BODY = ("f", 401, "lower")
 LOOP = ("b", 501)
+EASE = {"calmFrames": 40, "frames": 48, "sway": 0.06, "dropAt": 22, "drop": 0.9}   # ease_case
 LOOP_LONG = ("h", 102, 34)      # label, seed, the model's window (the 48-frame timeline is longer); the noise of run r1_
 
 
@@ -111,9 +113,11 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
         arrays[f"{name}_joints"] = m.joints
     arrays["loop_in_place_joints"] = lp_in_place.joints
     # 7. a seam eased at a calm window's accel: the timeline's frames 0..19 kept, then a 0.9 m drop two frames in
-    calm, steep = ease_case(tl.features)
+    calm, steep = ease_case(tl.features[0])
     accel = E.seam_accel(calm)
-    arrays.update(ease_calm=calm, ease_in=steep, ease_out=E.ease_seams(steep, _first_kept(len(steep)), accel=accel))
+    eased = E.ease_seams(steep, _first_kept(len(steep)), accel=accel)
+    blend = int(np.nonzero((eased != steep).any(1))[0].max()) + 1 - E.OVERLAP
+    arrays["ease_out"] = eased[E.OVERLAP:E.OVERLAP + blend]          # the rows it changed (the rest equal ``steep``)
     seg = lambda s: {"label": s.prompt, "cond": LABELS.index(s.prompt), "seconds": s.seconds, "seed": s.seed}  # noqa: E731
     meta = {
         "model": "tiny-step.onnx", "meanStd": "tiny.meanstd.f32", "labels": list(LABELS), "condition": "one-hot e_label",
@@ -133,25 +137,26 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
                      "ends": E.LOOP_ENDS, "clipFrames": len(lp.features), "inPlace": "loop_in_place_joints"},
             "loopLong": {"of": "timeline_features", "label": LOOP_LONG[0], "cond": LABELS.index(LOOP_LONG[0]),
                          "seed": LOOP_LONG[1], "maxFrames": LOOP_LONG[2], "clipFrames": len(lp_long.features)},
-            "ease": {"before": "ease_calm", "in": "ease_in", "out": "ease_out", "keptFrames": E.OVERLAP, "accel": accel,
-                     "blendFrames": int(np.nonzero((arrays["ease_out"] != steep).any(1))[0].max()) + 1 - E.OVERLAP},
+            "ease": {"of": "timeline_features frame 0", **EASE, "keptFrames": E.OVERLAP, "accel": accel,
+                     "blendFrames": blend, "out": "ease_out"},
         },
         "runs": runs,
     }
     return write_case(out_dir, NAME, meta, arrays)
 
 
-def ease_case(features: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A calm window (40 frames, the first frame of ``features`` with a slow sway: its ``seam_accel`` is between the
-    bounds) and a window to ease (48 frames: the first 20 kept, then the model's frames, which hold two frames and drop
-    0.9 m in root height), for ``ease_seams`` at that accel."""
-    t = np.arange(48, dtype=np.float64)[:, None]
-    calm = np.repeat(features[:1].astype(np.float64), 48, 0)
-    calm[:, 4:5] += 0.06 * np.sin(t / 2)                 # one joint sways: at most 6 m/s²
-    calm[:, 0:3] = 0                                   # no turning, no travel
+def ease_case(frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """From one frame of features (the TS test builds the same): a calm window (``EASE["calmFrames"]`` frames: that
+    pose, not turning or travelling, one joint swaying at most 6 m/s², so its ``seam_accel`` is between the bounds)
+    and a window to ease (``EASE["frames"]``: the same, its first 20 frames kept, then model frames that hold two
+    frames and drop 0.9 m in root height), for ``ease_seams`` at that accel. Computed in float64, stored float32."""
+    t = np.arange(EASE["frames"], dtype=np.float64)
+    calm = np.repeat(np.asarray(frame, np.float64)[None], EASE["frames"], 0)
+    calm[:, 0:3] = 0                                     # no turning, no travel
+    calm[:, 4] += EASE["sway"] * np.sin(t / 2)
     steep = calm.copy()
-    steep[22:, 3] -= 0.9
-    return calm[:40].astype(np.float32), steep.astype(np.float32)
+    steep[EASE["dropAt"]:, 3] -= EASE["drop"]
+    return calm[:EASE["calmFrames"]].astype(np.float32), steep.astype(np.float32)
 
 
 def _first_kept(n: int, c: int = E.OVERLAP) -> np.ndarray:
