@@ -230,22 +230,24 @@ export function easeSeams(features: ArrayLike<number>, frames: number, keep: Arr
     const vel = new Float64Array(dim);
     if (k1 >= 0) for (let c = 0; c < dim; c++) vel[c] = f[k0 * dim + c] - f[k1 * dim + c];
     const tau = Math.max(SEAM_BLEND_TAU, (reach(vel) * 20 * 20) / accel); // fps 20, as seamBlendFrames
-    const cont = (i: number, c: number) => f[k0 * dim + c] + vel[c] * tau * (1 - Math.exp(-(i + 1) / tau));
+    const gone = (i: number) => tau * (1 - Math.exp(-(i + 1) / tau)); // row i: k0 + v·gone(i)
     // longer where the model's first frames leave the continued motion further than the fade's b can take
     let far = 0;
     const d = new Float64Array(67);
     for (let i = 0; i < fadeB; i++) {
       const t = at + step * i;
-      for (let c = 3; c < 67; c++) d[c] = f[t * dim + c] - cont(i, c);
+      const g = gone(i);
+      for (let c = 3; c < 67; c++) d[c] = f[t * dim + c] - (f[k0 * dim + c] + vel[c] * g);
       far = Math.max(far, reach(d));
     }
     const b = Math.min(Math.max(fadeB, seamBlendFrames(far, accel)), most);
     for (let i = 0; i < b; i++) {
       const t = at + step * i;
+      const g = gone(i);
       const beta = 0.5 * (1 - Math.cos((Math.PI * (i + 1)) / (b + 1)));
       for (let c = 0; c < dim; c++) {
         if (c >= 259 && c < 263) continue; // foot contacts stay
-        f[t * dim + c] = (1 - beta) * cont(i, c) + beta * f[t * dim + c];
+        f[t * dim + c] = (1 - beta) * (f[k0 * dim + c] + vel[c] * g) + beta * f[t * dim + c];
       }
     }
   }

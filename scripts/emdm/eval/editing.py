@@ -124,7 +124,10 @@ def seam_skate(motions_and_seams) -> dict:
             b_at.append(speed[before]), b_exp.append(np.full(int(before.sum()), mean))
     at, rest = np.concatenate(at), np.concatenate(rest)
     a, r = (float(at.mean() * 100) if len(at) else 0.0), (float(rest.mean() * 100) if len(rest) else 0.0)
-    ratio = lambda x, e: float(np.concatenate(x).sum() / np.concatenate(e).sum()) if x and np.concatenate(e).sum() > 0 else None  # noqa: E731
+    def ratio(speeds, means):
+        total = float(np.concatenate(means).sum()) if means else 0.0
+        return float(np.concatenate(speeds).sum()) / total if total > 0 else None
+
     return {"seam_cm_s": a, "within_cm_s": r, "ratio": a / r if r else None, "seam_pairs": int(len(at)),
             "within_pairs": int(len(rest)), "matched_ratio": ratio(m_at, m_exp), "before_ratio": ratio(b_at, b_exp)}
 

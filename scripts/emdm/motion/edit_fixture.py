@@ -115,7 +115,7 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
     # 7. a seam eased at a calm window's accel: the timeline's frames 0..19 kept, then a 0.9 m drop two frames in
     calm, steep = ease_case(tl.features[0])
     accel = E.seam_accel(calm)
-    eased = E.ease_seams(steep, _first_kept(len(steep)), accel=accel)
+    eased = E.ease_seams(steep, E.context_keep(E.OVERLAP, len(steep) - E.OVERLAP), accel=accel)
     blend = int(np.nonzero((eased != steep).any(1))[0].max()) + 1 - E.OVERLAP
     arrays["ease_out"] = eased[E.OVERLAP:E.OVERLAP + blend]          # the rows it changed (the rest equal ``steep``)
     seg = lambda s: {"label": s.prompt, "cond": LABELS.index(s.prompt), "seconds": s.seconds, "seed": s.seed}  # noqa: E731
@@ -157,12 +157,6 @@ def ease_case(frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     steep = calm.copy()
     steep[EASE["dropAt"]:, 3] -= EASE["drop"]
     return calm[:EASE["calmFrames"]].astype(np.float32), steep.astype(np.float32)
-
-
-def _first_kept(n: int, c: int = E.OVERLAP) -> np.ndarray:
-    keep = np.zeros((n, 263), np.float32)
-    keep[:c] = 1
-    return keep
 
 
 def main(argv: list[str] | None = None) -> int:
