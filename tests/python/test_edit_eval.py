@@ -183,3 +183,52 @@ def test_the_time_bar_is_met_only_when_met_at_every_thread_count_and_names_each(
     t["by_threads"]["1"]["ratio"] = 2.99
     assert ev.time_bar(t)[0]
     assert ev.time_bar({"ratio_of_medians": 2.9}) == (True, "2.90×")          # a result without the thread sweep
+
+
+def test_time_only_times_pytorch_weights_with_the_shipped_settings_and_the_report_shows_it(tmp_path, capsys):
+    """``--time-only --ckpt``: the time bar alone on the model's PyTorch weights (what scripts/gpu/editing-time.sh
+    runs on a GPU), with the manifest entry's sampling settings; its JSON renders as a row of RESULTS.md."""
+    from emdm import manifest as mf
+    from emdm.paths import MODELS_DIR
+
+    entry = mf.load(MODELS_DIR)["models"].get("emdm-t2m-web")
+    if entry is None or "trainingWeights" not in entry:
+        pytest.skip("no shipped text model with training weights")
+    weights = MODELS_DIR / entry["trainingWeights"]
+    out = tmp_path / "editing-time-emdm-t2m-web-pytorch-cpu.json"
+    assert ev.main(["--time-only", "--ckpt", str(weights), "--steps", "2", "--seconds", "2", "--time-timelines", "1",
+                    "--time-threads", "1", "--out", str(out)]) == 0
+    r = json.loads(out.read_text())
+    run = r["time"]["by_threads"]["1"]
+    assert r["task"] == "editing-time" and r["runtime"] == "pytorch-cpu" and r["steps"] == 2
+    assert run["timelines"] == 1 and run["timeline_s"] > run["single_s"] > 0
+    assert run["ratio"] == pytest.approx(run["timeline_s"] / run["single_s"])
+    assert r["bars"]["time"] == {"met": run["ratio"] <= ev.BARS["time_ratio"], "figure": f"{run['ratio']:.2f}× on 1 thread"}
+    loaded = load_results(tmp_path)
+    assert [x["task"] for x in loaded] == ["editing-time"]
+    rows = "\n".join(ev.time_section(loaded))
+    assert f"**{run['ratio']:.2f}×** on 1 torch CPU thread" in rows and f"`{out.name}`" in rows
+    assert rows.count("**met**") + rows.count("**not met**") == 1
+
+    # the editor the time bar runs samples as the manifest says, not with a checkpoint's defaults
+    import argparse
+    ed = ev.timed_editor(argparse.Namespace(ckpt=weights, device="cpu", model="emdm-t2m-web", models_dir=None, steps=2), 1)
+    assert (ed.guidance, ed.guidance_min_time, ed.x0_smoothing, ed.steps) == (
+        entry["guidance"], entry["guidanceMinTime"], entry["x0Smoothing"], 2)
+
+
+@pytest.mark.parametrize("args, says", [
+    (["--ckpt", "x.pt"], "give --time-only too"),
+    (["--time-only", "--device", "cuda:0"], "the shipped ONNX file runs on the CPU; give --ckpt"),
+    (["--time-only", "--time-timelines", "0"], "--time-only needs --time-timelines ≥ 1"),
+    (["--time-only", "--ckpt", "public/models/emdm-a2m-web.weights.f16.pt"], "is not that of --model emdm-t2m-web"),
+    (["--time-only", "--ckpt", "no/such.pt"], "no/such.pt: checkpoint not found"),
+])
+def test_time_only_bad_arguments_are_one_line(capsys, args, says, tmp_path):
+    from emdm.paths import REPO_ROOT
+
+    args = [str(REPO_ROOT / a) if a.endswith("emdm-a2m-web.weights.f16.pt") else a for a in args]
+    assert ev.main([*args, "--out", str(tmp_path / "t.json")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and says in err[0]
+    assert not (tmp_path / "t.json").exists()

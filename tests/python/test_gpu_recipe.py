@@ -58,3 +58,22 @@ def test_train_balanced_runs_text_action_and_ddim_one_after_another(tmp_path):
         assert args["batch"] == 2 and args["amp"] == "off" and not args["compile"], name   # EMDM_TRAIN_EXTRA wins
         assert f"{name}: " in out.stdout and "-> --steps" in out.stdout
     assert "train-balanced: done" in out.stdout
+
+
+def test_editing_time_times_the_weights_and_the_int8_file_in_one_call(tmp_path):
+    """scripts/gpu/editing-time.sh (issue 14's time bar in one device call), on the CPU with tiny flags: the shipped
+    model's PyTorch weights (cuda there, cpu here) and its int8 file on 1, 2, 4 and 8 ORT threads, each a JSON that
+    emdm.eval.report reads."""
+    from emdm.eval.report import load_results
+
+    env = {**os.environ, "PYTHON": sys.executable, "EMDM_TIME_TIMELINES": "1", "EMDM_TIME_EXTRA": "--steps 1 --seconds 1"}
+    out = subprocess.run(["bash", str(paths.REPO_ROOT / "scripts/gpu/editing-time.sh"), str(tmp_path)],
+                         env=env, capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-3000:]
+    device = "cuda" if torch.cuda.is_available() else "cpu"
+    got = {r["runtime"]: r for r in load_results(tmp_path)}
+    assert set(got) == {f"pytorch-{device}", "onnxruntime-cpu-int8"}
+    assert list(got[f"pytorch-{device}"]["time"]["by_threads"]) == ["1"]
+    assert list(got["onnxruntime-cpu-int8"]["time"]["by_threads"]) == ["1", "2", "4", "8"]
+    assert all(r["steps"] == 1 and r["segment_seconds"] == 1 for r in got.values())
+    assert "editing-time: done" in out.stdout

@@ -3,6 +3,8 @@ on a shipped model, against the issue's bars.
 
     nice -n 10 python -m emdm.eval.editing --model emdm-t2m-web        # 10 steps, CPU; a few minutes on 2 cores
     python -m emdm.eval.report                                          # RESULTS.md's "Beyond one prompt" section
+    python -m emdm.eval.editing --time-only --ckpt public/models/emdm-t2m-web.weights.f16.pt [--device cuda]
+                                        # the time bar alone, on PyTorch (scripts/gpu/editing-time.sh on a GPU)
 
 What is measured (joints from ``recover_joints`` / the timeline's stitched joints, 20 fps):
 
@@ -485,15 +487,40 @@ def measure(model, bench, a, log=print) -> dict:
     }
 
 
-def time_ratio(a, threads: int, orders: list[list[str]], frames: int, log=print) -> dict:
-    """The time bar on its own, at ``threads`` ONNX Runtime threads: timelines of ``orders``' prompts (windows begun
-    together, as the page) and single motions, interleaved after a warm-up, medians. One call of several windows'
-    rows costs less than its parts only where the runtime has threads to spare."""
+def timed_editor(a, threads: int):
+    """The Editor the time bar runs: the shipped file of ``a.variant`` through ONNX Runtime on ``threads`` threads, or
+    (``a.ckpt``) those PyTorch weights on ``a.device`` with the shipped entry's sampling settings (guidance, where
+    it stops, x̂0 smoothing), so the same steps run on either."""
     from emdm.model.open import open_model
     from emdm.motion import edit as E
 
-    variant = page_variant(a.model, a.models_dir) if a.variant == "page" else a.variant
-    model = E.Editor.open(open_model(a.model, models_dir=a.models_dir, threads=threads, variant=variant), steps=a.steps)
+    if a.ckpt is None:
+        variant = page_variant(a.model, a.models_dir) if a.variant == "page" else a.variant
+        return E.Editor.open(open_model(a.model, models_dir=a.models_dir, threads=threads, variant=variant), steps=a.steps)
+    import torch
+
+    from emdm import manifest as mf
+    from emdm.paths import MODELS_DIR
+
+    torch.set_num_threads(threads)
+    entry = mf.load(Path(a.models_dir or MODELS_DIR))["models"].get(a.model)
+    if entry is None:
+        raise EditingError(f"--model {a.model}: no such entry in the manifest (its sampling settings time --ckpt)")
+    opened = open_model(Path(a.ckpt), device=a.device)
+    if opened.meta["condition"] != entry["condition"]:
+        raise EditingError(f"--ckpt {display_path(Path(a.ckpt))}: its condition ({opened.meta['condition'].get('type')}, "
+                           f"dim {opened.meta['condition'].get('dim')}) is not that of --model {a.model}")
+    return E.Editor.from_entry(opened.step, entry, opened.mean, opened.std, steps=a.steps)
+
+
+def time_ratio(a, threads: int, orders: list[list[str]], frames: int, log=print) -> dict:
+    """The time bar on its own, at ``threads`` threads (ONNX Runtime's, or PyTorch's CPU threads with ``--ckpt``):
+    timelines of ``orders``' prompts (windows begun together, as the page) and single motions, interleaved after a
+    warm-up, medians. One call of several windows' rows costs less than its parts only where the runtime has threads
+    to spare (or a GPU)."""
+    from emdm.motion import edit as E
+
+    model = timed_editor(a, threads)
     for p in {p for o in orders for p in o}:
         model.condition(p)
     segs = lambda o, s: [E.Segment(p, a.seconds, s + k) for k, p in enumerate(o)]  # noqa: E731
@@ -511,6 +538,14 @@ def time_ratio(a, threads: int, orders: list[list[str]], frames: int, log=print)
          "ratio": float(np.median(t_tl) / np.median(t_one)), "load_avg_1min": os.getloadavg()[0]}
     log(f"time with {threads} thread(s): {r['timeline_s']:.2f} s against {r['single_s']:.2f} s = {r['ratio']:.2f}×")
     return r
+
+
+def time_orders(a) -> list[list[str]]:
+    """``--time-only``'s timelines: the prompts of ``a.actions`` in ``a.time_timelines`` random orders (``orders``)."""
+    from emdm.eval.coverage import load_prompts
+
+    plain = {x: p[0] for x, p in load_prompts(a.prompts, list(a.actions)).items()}
+    return [[plain[x] for x in o] for o in orders(list(a.actions), a.time_timelines, a.seed)]
 
 
 def bars(m: dict) -> dict:
@@ -541,7 +576,8 @@ def time_bar(t: dict) -> tuple[bool, str]:
     if not by:
         return t["ratio_of_medians"] <= BARS["time_ratio"], f"{t['ratio_of_medians']:.2f}×"
     each = ", ".join(f"{by[n]['ratio']:.2f}× on {n} thread{'s' if n != '1' else ''}" for n in sorted(by, key=int))
-    return all(v["ratio"] <= BARS["time_ratio"] for v in by.values()), f"{each} (the model's work {t['work_ratio']:.2f}×)"
+    work = f" (the model's work {t['work_ratio']:.2f}×)" if "work_ratio" in t else ""
+    return all(v["ratio"] <= BARS["time_ratio"] for v in by.values()), each + work
 
 
 def page_variant(model: str, models_dir: Path | None) -> str | None:
@@ -581,6 +617,37 @@ def run(a) -> Path:
               "seconds": round(time.time() - t0, 1), "load_avg_1min_start": load0, "load_avg_1min_end": os.getloadavg()[0],
               "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     return write_result(result, out)
+
+
+def run_time_only(a) -> Path:
+    """``--time-only``: the time bar alone (no dataset, classifier or quality measures), at each of ``--time-threads``;
+    with ``--ckpt`` the PyTorch weights on ``--device`` (a GPU), the runtime the issue's bar is out of reach without
+    on these CPUs. Writes ``editing-time-<model>-<runtime>.json`` (task ``editing-time``)."""
+    from emdm.eval.evaluate import hardware, write_result
+    from emdm.eval.report import RESULTS_DIR, SCHEMA
+    from emdm.outdir import check_writable
+
+    runtime = (f"pytorch-{a.device.split(':')[0]}" if a.ckpt is not None
+               else f"onnxruntime-cpu-{page_variant(a.model, a.models_dir) if a.variant == 'page' else a.variant}")
+    out = check_writable(a.out or (RESULTS_DIR / "json" / f"editing-time-{a.model}-{runtime}.json"))
+    t0, load0, machine = time.time(), os.getloadavg()[0], hardware().split(" (")[0]
+    tl_orders = time_orders(a)
+    by = {str(n): time_ratio(a, n, tl_orders, segment_frames_of(a.seconds)) for n in a.time_threads}
+    t = {"by_threads": by, "threads_are": "torch CPU" if a.ckpt is not None else "ONNX Runtime"}
+    met, figure = time_bar(t)
+    result = {"schema": SCHEMA, "task": "editing-time", "name": a.model, "runtime": runtime, "steps": a.steps,
+              "segment_seconds": a.seconds, "actions": list(a.actions), "seed": a.seed,
+              "weights": display_path(Path(a.ckpt)) if a.ckpt is not None else None, "device": a.device,
+              "time": t, "bars": {"time": {"met": met, "figure": figure}}, "hardware": machine,
+              "seconds": round(time.time() - t0, 1), "load_avg_1min_start": load0, "load_avg_1min_end": os.getloadavg()[0],
+              "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
+    return write_result(result, out)
+
+
+def segment_frames_of(seconds: float) -> int:
+    from emdm.motion.edit import segment_frames
+
+    return segment_frames(seconds)
 
 
 # ----------------------------------------------------------------------------------------------- RESULTS.md
@@ -635,6 +702,27 @@ def section(r: dict) -> list[str]:
     return out
 
 
+def time_section(rs: list[dict]) -> list[str]:
+    """RESULTS.md's rows for ``--time-only`` results (task ``editing-time``): the time bar on other runtimes."""
+    if not rs:
+        return []
+    out = ["### The time bar on other runtimes (`--time-only`)", "",
+           "The same 3 × 5 s timelines against one 5 s motion (windows begun together, medians of interleaved runs), "
+           "with nothing else measured: `python -m emdm.eval.editing --time-only [--ckpt WEIGHTS --device DEVICE]` "
+           "(scripts/gpu/editing-time.sh on a GPU machine). PyTorch runs the model's float weights, so every window's "
+           "early steps go in one call per step, as the page's fp32/fp16 files do.", "",
+           "| runtime | weights | machine | steps | timeline vs one motion | ≤ 3× | file |", "|---|---|---|---|---|---|---|"]
+    for r in sorted(rs, key=lambda r: (r["name"], r["runtime"])):
+        by = r["time"]["by_threads"]
+        each = "; ".join(f"**{v['ratio']:.2f}×** on {n} {r['time']['threads_are']} thread{'s' if n != '1' else ''} "
+                         f"({v['timeline_s']:.2f} s vs {v['single_s']:.2f} s, {v['timelines']} each, load "
+                         f"{v['load_avg_1min']:.1f})" for n, v in sorted(by.items(), key=lambda kv: int(kv[0])))
+        out.append(f"| {r['runtime']} | {r.get('weights') or r['name'] + ' (shipped file)'} | {r['hardware']} | "
+                   f"{r['steps']} | {each} | {'**met**' if r['bars']['time']['met'] else '**not met**'} | "
+                   f"`{r.get('_file', '')}` |")
+    return out + [""]
+
+
 def _another_seed(r: dict) -> list[str]:
     return [f"The same benchmark from seed {r['seed']} (other orders, other noise), for how far its figures move with "
             "the draw; the reading of the run above holds. The bars nearest their limits move most: seam foot skate is "
@@ -655,7 +743,10 @@ def _reading(sem: dict) -> list[str]:
            "The page's own figures are in the page benchmark (tests/e2e/page-bench.spec.ts, 'timeline against'). "
            "Under 3× needs the windows' rows run side by side, as one call: on a GPU (WebGPU, fp16: not measured, no "
            "GPU on the machines these runs had) or with threads to spare; an int8 graph quantising each row on its own "
-           "batches exactly but ran slower than these calls (docs/ARCHITECTURE.md). "
+           "batches exactly but ran slower than these calls (docs/ARCHITECTURE.md). Where a call's fixed cost is a "
+           "large part of it, the one call per step for every window's early steps pays even on one thread: PyTorch's "
+           "eager calls of the same weights (the `--time-only` rows at the end of this section; a GPU's calls are of "
+           "that kind, `scripts/gpu/editing-time.sh` measures one in a single device call). "
            "Semantics is read after each motion's first second (segments and single motions alike) because a segment's "
            "first second is its seam: `ease_seams` fades the previous action into the new one there (14 frames or more; "
            "the seam rows need it), and the classifier's bidirectional GRU ends its backward reading on a clip's first "
@@ -764,6 +855,13 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--time-threads", type=lambda v: [int(x) for x in v.split(",")], default=[1, 2],
                     help="thread counts the time bar is measured at, comma-separated (met when met at each)")
     ap.add_argument("--time-timelines", type=int, default=12, help="timelines (and single motions) timed per thread count")
+    ap.add_argument("--time-only", action="store_true",
+                    help="only the time bar, at each of --time-threads (no dataset or classifier needed): writes "
+                         "editing-time-<model>-<runtime>.json")
+    ap.add_argument("--ckpt", type=Path, default=None,
+                    help="with --time-only: time these PyTorch weights (e.g. public/models/<model>.weights.f16.pt) on "
+                         "--device, with --model's sampling settings, instead of its ONNX file")
+    ap.add_argument("--device", default="cpu", help="with --ckpt: cpu, cuda or cuda:N")
     ap.add_argument("--out", type=Path, default=None,
                     help="default docs/results/json/editing-<model>.json (editing-<model>-seed<N>.json with --seed N ≠ 0)")
     return ap
@@ -775,6 +873,7 @@ def main(argv: list[str] | None = None) -> int:
     from emdm.eval.coverage import CoverageError
     from emdm.model.open import ModelError
     from emdm.motion.edit import EditError
+    from emdm.manifest import ManifestError
     from emdm.outdir import OutputRefused
 
     a = build_parser().parse_args(argv)
@@ -784,8 +883,18 @@ def main(argv: list[str] | None = None) -> int:
             raise EditingError(f"--actions: a 3-segment timeline needs at least 3 actions, got {len(a.actions)}")
         if sum(x not in LAST_ONLY for x in a.actions) < 2:
             raise EditingError(f"--actions: at least 2 of them must be able to come first ({', '.join(LAST_ONLY)} only ends a timeline)")
-        print(f"wrote {display_path(run(a))}")
-    except (EditingError, EditError, CoverageError, FileNotFoundError, ModelError, OutputRefused) as e:
+        if (a.ckpt is not None or a.device != "cpu") and not a.time_only:
+            raise EditingError("--ckpt and --device time PyTorch weights: give --time-only too (the quality measures run "
+                               "the shipped ONNX file, as the page does)")
+        if a.device != "cpu" and a.ckpt is None:
+            raise EditingError(f"--device {a.device}: the shipped ONNX file runs on the CPU; give --ckpt to time PyTorch "
+                               "weights there")
+        if a.device.startswith("cuda") and not torch.cuda.is_available():
+            raise EditingError(f"--device {a.device}: PyTorch sees no CUDA GPU here")
+        if a.time_only and (a.time_timelines < 1 or not a.time_threads or min(a.time_threads) < 1):
+            raise EditingError("--time-only needs --time-timelines ≥ 1 and --time-threads of counts ≥ 1")
+        print(f"wrote {display_path(run_time_only(a) if a.time_only else run(a))}")
+    except (EditingError, EditError, CoverageError, FileNotFoundError, ModelError, OutputRefused, ManifestError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     return 0

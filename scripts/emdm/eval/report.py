@@ -21,7 +21,9 @@ Coverage JSON (``python -m emdm.eval.coverage``), one file per model:
 Poses JSON (``python -m emdm.eval.poses``), one file per model: {"schema": 1, "task": "poses", "name": ...,
      "rows": [{"steps", "guidance", "seconds", "failed_motions", "motions", "impossible_share", ..., "ok"}]}
 Editing JSON (``python -m emdm.eval.editing``), one file per model: {"schema": 1, "task": "editing", "name": ...,
-     "seams", "semantics", "kept", "loops", "time", "bars": {bar: {"met", "figure"}}, ...}
+     "seams", "semantics", "kept", "loops", "time", "bars": {bar: {"met", "figure"}}, ...}; its time bar alone on
+     another runtime (``--time-only``): {"schema": 1, "task": "editing-time", "name": ..., "runtime", "hardware",
+     "steps", "time": {"by_threads": {n: {"ratio", "timeline_s", "single_s", ...}}, "threads_are"}, "bars": {"time"}}
 """
 
 from __future__ import annotations
@@ -86,11 +88,12 @@ def load_results(json_dir: Path | str) -> list[dict]:
         if r.get("schema") != SCHEMA:
             raise ReportError(f"{path}: field 'schema' is {r.get('schema')!r}, expected {SCHEMA}")
         task = r.get("task")
-        if task not in ("text", "action", "timing", "coverage", "editing", "poses"):
+        if task not in ("text", "action", "timing", "coverage", "editing", "editing-time", "poses"):
             raise ReportError(f"{path}: field 'task' is {task!r}, expected 'text', 'action', 'timing', 'coverage', "
-                              f"'editing' or 'poses'")
+                              f"'editing', 'editing-time' or 'poses'")
         need = {"timing": ("rows", "runtime"), "coverage": ("name", "labels", "real", "runs"), "poses": ("name", "rows"),
-                "editing": ("name", "seams", "semantics", "kept", "loops", "time", "bars")}.get(
+                "editing": ("name", "seams", "semantics", "kept", "loops", "time", "bars"),
+                "editing-time": ("name", "runtime", "hardware", "steps", "time", "bars")}.get(
             task, ("name", "kind", "info", "metrics"))
         for k in need:
             if k not in r:
@@ -524,7 +527,7 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
             out += coverage_section(r, plots.get("coverage:" + r["_file"]))
     edits = [r for r in results if r["task"] == "editing"]
     if edits:
-        from emdm.eval.editing import section as editing_section
+        from emdm.eval.editing import section as editing_section, time_section
 
         out += ["## Beyond one prompt: timelines, in-betweening, body-part edits, loops (issue 14)", "",
                 "`python -m emdm.eval.editing` makes 3-segment timelines, in-betweens, body-part edits and loops with "
@@ -532,6 +535,7 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
                 "them against the issue's bars.", ""]
         for r in sorted(edits, key=lambda r: (r["name"], r.get("seed", 0))):
             out += editing_section(r)
+        out += time_section([r for r in results if r["task"] == "editing-time"])
     grids = sorted((r for r in results if r["task"] == "poses"), key=lambda r: r["name"])
     if grids:
         from emdm.eval.poses import BONE_TOL, FLOOR_TOL, LEG_TOL, section as poses_section
@@ -583,6 +587,8 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
             "python -m emdm.eval.coverage --model emdm-t2m-web   # coverage per action, 1/2/4/10 steps (--seeds, default 8)",
             "python -m emdm.eval.coverage --model emdm-a2m-web",
             "python -m emdm.eval.editing --model emdm-t2m-web   # timelines, in-betweens, body-part edits, loops (issue 14)",
+            "python -m emdm.eval.editing --time-only --ckpt public/models/emdm-t2m-web.weights.f16.pt   # its time bar on PyTorch",
+            "scripts/gpu/editing-time.sh runs/editing-time       # ... on a GPU machine (PyTorch CUDA, and ORT on its cores)",
             "node scripts/bench/timeline-bench.mjs              # issue 14's time bar on the library's WASM runtime (printed)",
             "EMDM_BENCH=1 npx playwright test tests/e2e/page-bench.spec.ts -g \"timeline against\"   # ... and in the page",
             "node scripts/bench/core-bench.mjs --json bench.json && python -m emdm.eval.evaluate import-bench bench.json",
