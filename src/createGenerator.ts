@@ -15,14 +15,19 @@
  *   GenerationHost, whose backend choice and fallbacks (WebGPU missing or failing → WASM, at load and
  *   while generating) are src/backends.ts's; the results are bit-identical on the same backend.
  */
+import type { Timeline, TimelineSegment } from './edit';
 import type { GenerateResult, SampleState } from './generate';
-import { type Manifest, type ModelEntry, chooseVariant, loadManifest } from './manifest';
+import { type Manifest, chooseVariant, loadManifest } from './manifest';
 import type { Motion } from './motion/types';
-import type { KnownMotion } from './sampler/mask';
+import { type BeginRequest, type MotionRequest, beginByModel, modelFor, resolveRequest, wireBegin } from './requests';
 import type { Backend, BackendRequest } from './runtime/ort';
 import type { Skeleton } from './skeleton';
 import { GenerationClient, type ClientEvents } from './worker/client';
-import type { WireBeginOptions, WireGenerateOptions } from './worker/protocol';
+import type { TimelineRequest, TimelineResult, WindowRun } from './worker/host';
+import type { WireGenerateOptions } from './worker/protocol';
+
+export { beginByModel, modelFor, resolveRequest } from './requests';
+export type { BeginRequest, MotionRequest } from './requests';
 
 export interface CreateGeneratorOptions {
   /** the models folder holding manifest.json (default `<BASE_URL>models/` in a Vite page; required in Node) */
@@ -50,48 +55,6 @@ export interface CreateGeneratorOptions {
   onFallback?: (model: string, reason: string) => void;
 }
 
-export interface MotionRequest {
-  /** text prompt (text model) */
-  prompt?: string;
-  /** action label: its index or its name in the action model's labels */
-  action?: number | string;
-  /** a model of the manifest (default: chosen by prompt / action, see above) */
-  model?: string;
-  /** length in seconds (default: the model's longest, maxFrames / fps); `frames` wins when given */
-  seconds?: number;
-  frames?: number;
-  /** denoising steps (default: the model's defaultSteps) */
-  steps?: number;
-  /** classifier-free guidance scale (default: the model's guidance) */
-  guidance?: number;
-  /** guide only the denoising steps whose time is above this, one batch row below (default: the model's guidanceMinTime, else every step) */
-  guidanceMinTime?: number;
-  /** smooth x̂0 along time (σ frames) at every denoising step but the last (default: the model's x0Smoothing, else off) */
-  x0Smoothing?: number;
-  /** uint32 seed: the same seed gives the same motion on the same backend (default: random) */
-  seed?: number;
-  smooth?: boolean;
-  footCleanup?: boolean;
-  /**
-   * Inpainting (docs/ARCHITECTURE.md "Sampling with constraints"; src/edit.ts builds these for timelines,
-   * in-betweening, body-part edits and loops): keep the entries of `features` (frames × 263, de-normalised: an
-   * earlier result's `features`) where `keep` (`keepMask(frames, …)`) is 1 and generate the rest. The arrays are
-   * copied, not taken. Kept frames after free ones decode where the known motion has them (`pinKeptRoot`).
-   * `fromTime`: impose them only at the steps with t ≤ it (and the last; default every step).
-   */
-  known?: KnownMotion;
-  /** finish a generation `begin` started (its state; the request as it was begun, now with `known.features`) */
-  resume?: SampleState;
-  onStep?: (done: number, total: number) => void;
-  signal?: AbortSignal;
-}
-
-/**
- * A request to `MotionGenerator.begin` (src/edit.ts's EditBeginRequest fits it): a generation stopped before its first
- * denoising step with t ≤ `stopAt`; `keep` (with `keepFromTime`) marks what it will keep once `known` is given.
- */
-export type BeginRequest = Omit<MotionRequest, 'known' | 'resume' | 'onStep' | 'signal'> & { stopAt: number; keep?: Float32Array; keepFromTime?: number };
-
 /** A motion and, in `features`, its frames × 263 de-normalised features: what `known` takes to continue or edit it. */
 export interface GeneratedMotion extends Motion {
   model: string;
@@ -103,6 +66,32 @@ export interface GeneratedMotion extends Motion {
   pose: { rootPos: Float32Array /* frames × 3 */; quats: Float32Array /* frames × 22 × 4, xyzw */ };
   timings: GenerateResult['timings'];
   prompt?: GenerateResult['prompt'];
+}
+
+/** Options of MotionGenerator.timeline. */
+export interface TimelineCallOptions {
+  /** an earlier result: its segments equal to the new list's first ones are reused as they were (the rest continue from them) */
+  previous?: GeneratedTimeline | null;
+  /** denoising steps and guidance of every window (default: the models' manifest defaults) */
+  steps?: number;
+  guidance?: number;
+  signal?: AbortSignal;
+  /** before each window: its segment, windows done and to do */
+  onWindow?: (segment: number, done: number, total: number) => void;
+  /** a denoising step: of `together` windows begun at once, or (together = 0) of the window being finished */
+  onStep?: (done: number, total: number, together: number) => void;
+}
+
+/** A timeline's motion: joints as shown (smoothed, feet cleaned up) with their pose, and src/edit.ts's Timeline. */
+export interface GeneratedTimeline extends Motion {
+  features: Float32Array;
+  pose: GeneratedMotion['pose'];
+  /** the first frame of each segment */
+  starts: number[];
+  /** the segments, their windows and the raw decoded joints (what later edits start from) */
+  timeline: Timeline;
+  /** what each window generated by this call took (none when every segment was reused) */
+  windows: WindowRun[];
 }
 
 export interface MotionGenerator {
@@ -119,6 +108,11 @@ export interface MotionGenerator {
    * timeline passes it as `generateTimeline(..., { begin: (rs) => generator.begin(rs) })`.
    */
   begin(requests: readonly BeginRequest[], signal?: AbortSignal): Promise<SampleState[]>;
+  /**
+   * A timeline of prompts and actions, up to 60 s (src/edit.ts's generateTimeline, run where the models are: in the
+   * worker, one request for the whole timeline). Bad input rejects with an EditError naming the segment.
+   */
+  timeline(segments: readonly TimelineSegment[], options?: TimelineCallOptions): Promise<GeneratedTimeline>;
   dispose(): Promise<void>;
 }
 
@@ -128,79 +122,6 @@ function defaultModelsUrl(): string {
     throw new Error('createGenerator: no baseUrl given; pass the models folder (the one holding manifest.json), e.g. {baseUrl: "/models/"}');
   }
   return new URL(`${base.endsWith('/') ? base : base + '/'}models/`, location.href).href;
-}
-
-/** The model a request runs on: `model`, else the manifest's EMDM model for the task (text for a prompt or nothing). */
-export function modelFor(manifest: Manifest, req: Pick<MotionRequest, 'model' | 'action'>): string {
-  if (req.model !== undefined) {
-    if (!manifest.models[req.model]) throw new Error(`createGenerator: model '${req.model}' is not in the manifest (models: ${Object.keys(manifest.models).join(', ')})`);
-    return req.model;
-  }
-  const task: ModelEntry['task'] = req.action !== undefined ? 'action' : 'text';
-  const hits = Object.entries(manifest.models).filter(([, e]) => e.task === task);
-  const hit = hits.find(([, e]) => (e.objective ?? 'ddgan') === 'ddgan') ?? hits[0];
-  if (!hit) throw new Error(`createGenerator: the manifest has no ${task} model (models: ${Object.keys(manifest.models).join(', ') || 'none'})`);
-  return hit[0];
-}
-
-function randomSeed(): number {
-  return crypto.getRandomValues(new Uint32Array(1))[0];
-}
-
-/** The request as the generation host takes it (condition, frames, steps, guidance and seed filled in from the manifest). */
-export function resolveRequest(manifest: Manifest, req: MotionRequest): { model: string; options: WireGenerateOptions } {
-  if (req.prompt !== undefined && req.action !== undefined) throw new Error('generate: give a prompt or an action, not both');
-  const model = modelFor(manifest, req);
-  const entry = manifest.models[model];
-  let condition: WireGenerateOptions['condition'];
-  if (req.prompt !== undefined) condition = { type: 'text', text: req.prompt };
-  else if (req.action !== undefined) {
-    const labels = entry.condition.type === 'action' ? entry.condition.labels : [];
-    const label = typeof req.action === 'number' ? req.action : labels.indexOf(req.action);
-    if (label < 0) throw new RangeError(`generate: action '${req.action}' is not a label of ${model} (${labels.join(', ')})`);
-    condition = { type: 'action', label };
-  } else condition = { type: 'none' };
-  let frames = req.frames;
-  if (frames === undefined) {
-    if (req.seconds !== undefined && !(req.seconds > 0)) throw new RangeError(`generate: seconds must be > 0, got ${req.seconds}`);
-    frames = req.seconds === undefined ? entry.maxFrames : Math.min(entry.maxFrames, Math.max(1, Math.round(req.seconds * entry.fps)));
-  }
-  return {
-    model,
-    options: {
-      condition, frames, steps: req.steps ?? entry.defaultSteps, guidance: req.guidance ?? entry.guidance,
-      ...(req.guidanceMinTime !== undefined ? { guidanceMinTime: req.guidanceMinTime } : {}),
-      ...(req.x0Smoothing !== undefined ? { x0Smoothing: req.x0Smoothing } : {}),
-      seed: req.seed ?? randomSeed(), smooth: req.smooth, footCleanup: req.footCleanup,
-      ...(req.known ? { known: { ...req.known, features: Float32Array.from(req.known.features), keep: Float32Array.from(req.known.keep) } } : {}),
-      ...(req.resume ? { resume: req.resume } : {}),
-    },
-  };
-}
-
-/**
- * `begin` for requests of several models: one `run` per model (its requests in their order, one batch), the states
- * back in the requests' order. createGenerator's begin and the demo page's timeline both group this way.
- */
-export async function beginByModel<R>(reqs: readonly R[], modelOf: (r: R) => string, run: (model: string, reqs: R[]) => Promise<SampleState[]>): Promise<SampleState[]> {
-  const groups = new Map<string, number[]>();
-  reqs.forEach((r, i) => {
-    const m = modelOf(r);
-    groups.set(m, [...(groups.get(m) ?? []), i]);
-  });
-  const states: SampleState[] = new Array(reqs.length);
-  for (const [model, at] of groups) {
-    const got = await run(model, at.map((i) => reqs[i]));
-    at.forEach((i, j) => (states[i] = got[j]));
-  }
-  return states;
-}
-
-/** A begin request as the generation host takes it (resolveRequest's options, stopped at stopAt, keeping `keep`). */
-function wireBegin(manifest: Manifest, r: BeginRequest): WireBeginOptions {
-  const { stopAt, keep, keepFromTime, ...req } = r;
-  const { smooth: _s, footCleanup: _f, ...wire } = resolveRequest(manifest, req).options;
-  return { ...wire, stopAt, ...(keep ? { known: { keep: Float32Array.from(keep), fromTime: keepFromTime } } : {}) };
 }
 
 /** Text / action / nothing → motion, with the manifest's defaults; see the header. */
@@ -222,6 +143,22 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
     }
   };
 
+  const timelineRequest = (segments: readonly TimelineSegment[], o: TimelineCallOptions): TimelineRequest => {
+    // each segment's model (one that has none is left to GenerationHost.timeline's EditError, which names the segment)
+    const used = new Set(segments.flatMap((seg) => {
+      try {
+        return [seg.action !== undefined ? modelFor(manifest, { action: seg.action }) : modelFor(manifest, {})];
+      } catch {
+        return [];
+      }
+    }));
+    return {
+      segments: segments.map((seg) => ({ ...seg })), previous: o.previous?.timeline ?? null,
+      ...(o.steps !== undefined ? { steps: o.steps } : {}), ...(o.guidance !== undefined ? { guidance: o.guidance } : {}),
+      variants: Object.fromEntries([...used].map((m) => [m, variantOf(m)])),
+    };
+  };
+
   if (inWorker) {
     const client = new GenerationClient({ manifest, baseUrl, backend, threads: opts.threads, cache: opts.cache, events });
     return {
@@ -238,6 +175,11 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
         return motionOf(model, options, r, r.info.backend, r.pose);
       },
       begin: (reqs, signal) => beginByModel(reqs, (r) => modelFor(manifest, r), (model, rs) => client.begin(model, rs.map((r) => wireBegin(manifest, r)), variantOf(model), signal)),
+      async timeline(segments, o = {}) {
+        const r = await client.timeline(timelineRequest(segments, o), { pose: true, signal: o.signal, onWindow: o.onWindow, onStep: o.onStep });
+        if (!r.pose) throw new Error('generation worker: the timeline has no pose (IK) although it was asked for');
+        return timelineOf(r, r.pose);
+      },
       dispose: () => client.dispose(),
     };
   }
@@ -262,7 +204,20 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
       return motionOf(model, options, result, gen.backend, { rootPos: ik.rootPos, quats: ik.quats });
     },
     begin: (reqs, signal) => beginByModel(reqs, (r) => modelFor(manifest, r), async (model, rs) => (await host.begin(model, rs.map((r) => ({ ...wireBegin(manifest, r), signal })), variantOf(model))).states),
+    async timeline(segments, o = {}) {
+      const r = await host.timeline(timelineRequest(segments, o), { signal: o.signal, onWindow: o.onWindow, onStep: o.onStep });
+      const ik = solveIK(r.display, r.timeline.frames, manifest.skeleton);
+      return timelineOf(r, { rootPos: ik.rootPos, quats: ik.quats });
+    },
     dispose: () => host.dispose(),
+  };
+}
+
+function timelineOf(r: TimelineResult, pose: GeneratedMotion['pose']): GeneratedTimeline {
+  const t = r.timeline;
+  return {
+    frames: t.frames, fps: t.fps, joints: r.display, features: t.features, pose: { rootPos: pose.rootPos, quats: pose.quats },
+    starts: t.starts, timeline: t, windows: r.windows,
   };
 }
 

@@ -7,9 +7,8 @@
  */
 import { assertFinite } from './errors';
 import { type Manifest, type ModelEntry, ModelFileError, fetchVerified } from './manifest';
-import { cleanupFootContacts, contactsFromFeatures } from './motion/footContact';
-import { denormalize, parseMeanStd, recoverJoints } from './motion/recover';
-import { smoothJoints } from './motion/smooth';
+import { decodeJoints } from './motion/decode';
+import { denormalize, parseMeanStd } from './motion/recover';
 import { pinKeptRoot } from './motion/stitch';
 import type { Motion } from './motion/types';
 import { type Backend, type OrtSession, getSession } from './runtime/ort';
@@ -330,14 +329,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     // kept frames after free ones: their root is pinned where the known motion has it (src/motion/stitch.ts)
     const features = o.known ? pinKeptRoot(denormalize(x, mean, std), o.frames, o.known.keep, o.known.features, D) : denormalize(x, mean, std);
     assertFinite(features, `model ${model} (${onnxPath}) output features`);
-    let joints = recoverJoints(features, o.frames, D);
-    if (o.smooth) joints = smoothJoints(joints, o.frames, 1);
-    if (o.footCleanup) {
-      joints = cleanupFootContacts(joints, o.frames, contactsFromFeatures(features, o.frames, D), {
-        parents: manifest.skeleton.parents,
-        footJoints: manifest.skeleton.footJoints,
-      });
-    }
+    const joints = decodeJoints(features, o.frames, manifest.skeleton, o, D);
     assertFinite(joints, `joints decoded from model ${model}'s output`);
     return { features, joints };
   }

@@ -1,6 +1,6 @@
 // Public surface of the EMDM-in-the-browser library (docs/ARCHITECTURE.md "TypeScript library").
 export { beginByModel, createGenerator, modelFor, resolveRequest } from './createGenerator';
-export type { BeginRequest, CreateGeneratorOptions, GeneratedMotion, MotionGenerator, MotionRequest } from './createGenerator';
+export type { BeginRequest, CreateGeneratorOptions, GeneratedMotion, GeneratedTimeline, MotionGenerator, MotionRequest, TimelineCallOptions } from './createGenerator';
 // one model on one backend, and the backend choice / fallback (used by createGenerator's host)
 export { openModel } from './generate';
 export type { BeginOptions, Condition, GenerateOptions, GenerateResult, Generator, GeneratorOptions, Motion, SampleState, StepPreview } from './generate';
@@ -8,7 +8,8 @@ export { loadModel, runWithFallback, withFallback } from './backends';
 export type { LoadModelOptions } from './backends';
 // the generation worker's page side (createGenerator uses it; the demo page drives it directly)
 export { GenerationClient } from './worker/client';
-export type { ClientEvents, FileEvent, GenerationClientOptions, ModelInfo, RemoteGenerateOptions, RemoteResult, WirePose, WireStepPreview, WorkerEnvironment } from './worker/client';
+export type { ClientEvents, FileEvent, GenerationClientOptions, ModelInfo, RemoteGenerateOptions, RemoteResult, RemoteTimelineOptions, RemoteTimelineResult, WirePose, WireStepPreview, WorkerEnvironment } from './worker/client';
+export type { TimelineHooks, TimelineRequest, TimelineResult, WindowRun } from './worker/host';
 export type { WireBeginOptions } from './worker/protocol';
 export { clearModelCache, modelCacheUsage } from './cache/modelCache';
 export { loadManifest, fetchVerified, ModelFileError, sha256Hex, chooseVariant, stepFileOf } from './manifest';
@@ -22,6 +23,7 @@ export { solveIK, forwardKinematics } from './motion/ik';
 export type { IKResult } from './motion/ik';
 export { recoverJoints, denormalize } from './motion/recover';
 export { smoothJoints } from './motion/smooth';
+export { decodeJoints, type DecodeOptions } from './motion/decode';
 export { alignSegment, appendSegment, headingAt, pinKeptRoot, pinRoot, rootPose } from './motion/stitch';
 export { cleanupFootContacts, contactsFromFeatures, footSkate } from './motion/footContact';
 export { type BvhUnits, bvhFileName, writeBVH } from './export/bvh';

@@ -13,11 +13,13 @@
  * each step; with `previewSteps: true`, `onPreview` gets each step's x̂0 as joints (and pose); errors come back as the same classes (ModelFileError, NonFiniteMotionError, AbortError).
  */
 import type { FileEvent } from '../cache/modelCache';
+import { EditError } from '../edit';
 import { NonFiniteMotionError } from '../errors';
 import type { GenerateResult, SampleState } from '../generate';
 import { ModelFileError, type Manifest, type ModelFileErrorReason } from '../manifest';
 import type { BackendRequest } from '../runtime/ort';
 import { AbortError } from '../sampler/sampler';
+import type { TimelineRequest, TimelineResult } from './host';
 import type { FromWorker, ModelInfo, ToWorker, WireError, WireBeginOptions, WireGenerateOptions, WirePose, WireStepPreview } from './protocol';
 
 export type { FileEvent, ModelInfo, WireGenerateOptions, WirePose, WireStepPreview };
@@ -75,6 +77,8 @@ function rebuild(w: WireError): Error {
   } else if (w.name === 'NonFiniteMotionError' && w.source !== undefined) {
     e = new NonFiniteMotionError(w.source, w.index ?? -1, w.count ?? 0, w.value ?? NaN);
     e.message = w.message;
+  } else if (w.name === 'EditError' && w.segment !== undefined) {
+    e = new EditError(w.message, w.segment);
   } else if (w.name === 'AbortError') {
     e = new AbortError(w.message);
   } else {
@@ -88,8 +92,24 @@ function rebuild(w: WireError): Error {
 interface Pending {
   resolve(m: FromWorker): void;
   reject(e: Error): void;
-  onStep?: (done: number, total: number) => void;
+  onStep?: (done: number, total: number, together?: number) => void;
   onPreview?: (p: WireStepPreview) => void;
+  onWindow?: (segment: number, done: number, total: number) => void;
+}
+
+/** How `GenerationClient.timeline` reports and stops. */
+export interface RemoteTimelineOptions {
+  /** also solve the shown joints into bone rotations (IK) in the worker */
+  pose?: boolean;
+  signal?: AbortSignal;
+  onWindow?: (segment: number, done: number, total: number) => void;
+  /** a denoising step: of `together` windows begun at once, or (together = 0) of the window being finished */
+  onStep?: (done: number, total: number, together: number) => void;
+}
+
+export interface RemoteTimelineResult extends TimelineResult {
+  /** bone rotations of `display` (when `pose: true` was asked) */
+  pose?: WirePose;
 }
 
 export class GenerationClient {
@@ -125,7 +145,10 @@ export class GenerationClient {
           this.events.notice?.(m.kind, m.text);
           return;
         case 'step':
-          this.pending.get(m.id)?.onStep?.(m.done, m.total);
+          this.pending.get(m.id)?.onStep?.(m.done, m.total, m.together);
+          return;
+        case 'timeline-window':
+          this.pending.get(m.id)?.onWindow?.(m.segment, m.done, m.total);
           return;
         case 'step-preview':
           this.pending.get(m.id)?.onPreview?.(m.preview);
@@ -158,10 +181,10 @@ export class GenerationClient {
     this.worker.postMessage(msg, transfer);
   }
 
-  private request(msg: ToWorker & { id: number }, onStep?: Pending['onStep'], onPreview?: Pending['onPreview'], transfer: Transferable[] = []): Promise<FromWorker> {
+  private request(msg: ToWorker & { id: number }, onStep?: Pending['onStep'], onPreview?: Pending['onPreview'], transfer: Transferable[] = [], onWindow?: Pending['onWindow']): Promise<FromWorker> {
     if (this.broken) return Promise.reject(this.broken);
     return new Promise((resolve, reject) => {
-      this.pending.set(msg.id, { resolve, reject, onStep, onPreview });
+      this.pending.set(msg.id, { resolve, reject, onStep, onPreview, onWindow });
       this.send(msg, transfer);
     });
   }
@@ -207,6 +230,18 @@ export class GenerationClient {
     const m = await this.cancellable(signal, (id) => this.request({ type: 'begin', id, model, variant, options }, onStep));
     if (m.type !== 'begun') throw new Error(`generation worker answered '${m.type}' to begin`);
     return m.states;
+  }
+
+  /**
+   * A whole timeline in the worker (GenerationHost.timeline: every window, its seam easing and the stitching there),
+   * one request and one answer; `request.previous` is copied over. The signal cancels it at the next denoising step;
+   * a bad segment rejects with the EditError naming it.
+   */
+  async timeline(request: TimelineRequest, o: RemoteTimelineOptions = {}): Promise<RemoteTimelineResult> {
+    const { signal, onWindow, onStep, pose } = o;
+    const m = await this.cancellable(signal, (id) => this.request({ type: 'timeline', id, request, pose }, onStep && ((d, t, w) => onStep(d, t, w ?? 0)), undefined, [], onWindow));
+    if (m.type !== 'timeline-result') throw new Error(`generation worker answered '${m.type}' to timeline`);
+    return { ...m.result, pose: m.pose };
   }
 
   /** Bone rotations (IK, the worker's solveIK) for frames × 22 × 3 joints made here, e.g. a stitched timeline; `joints` is copied. */

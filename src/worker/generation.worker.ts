@@ -7,6 +7,7 @@
  * stops at the next step boundary (the runtime yields to the event loop before every model call, so the
  * message is handled between steps, not after the loop).
  */
+import { EditError } from '../edit';
 import { NonFiniteMotionError } from '../errors';
 import type { GenerateOptions, Motion } from '../generate';
 import { ModelFileError } from '../manifest';
@@ -31,6 +32,7 @@ function wireError(e: unknown): WireError {
   if (e instanceof ModelFileError) {
     return { name: e.name, message: e.message, stack: e.stack, path: e.path, reason: e.reason };
   }
+  if (e instanceof EditError) return { name: e.name, message: e.message, stack: e.stack, segment: e.segment };
   if (e instanceof NonFiniteMotionError) {
     return { name: e.name, message: e.message, stack: e.stack, source: e.source, index: e.index, count: e.count, value: e.value };
   }
@@ -127,6 +129,24 @@ async function handle(msg: ToWorker): Promise<void> {
         const os = msg.options.map((w, i) => ({ ...w, signal, ...(i === 0 ? { onStep: (done: number, total: number) => post({ type: 'step', id: msg.id, done, total }) } : {}) }));
         const { gen, states } = await needHost().begin(msg.model, os, msg.variant);
         post({ type: 'begun', id: msg.id, info: infoOf(msg.model, gen), states }, states.map((s) => s.x.buffer as ArrayBuffer));
+      });
+    case 'timeline':
+      return cancellable(msg.id, async (signal) => {
+        const h = needHost();
+        const result = await h.timeline(msg.request, {
+          signal,
+          onWindow: (segment, done, total) => post({ type: 'timeline-window', id: msg.id, segment, done, total }),
+          onStep: (done, total, together) => post({ type: 'step', id: msg.id, done, total, together }),
+        });
+        let pose: WirePose | undefined;
+        if (msg.pose) {
+          const t0 = performance.now();
+          const ik = solveIK(result.display, result.timeline.frames, h.manifest.skeleton);
+          pose = { rootPos: ik.rootPos, quats: ik.quats, ikMs: performance.now() - t0 };
+        }
+        const t = result.timeline;
+        const windows = t.segments.flatMap((s) => s.windows.flatMap((w) => [w.features, w.joints]));
+        post({ type: 'timeline-result', id: msg.id, result, pose }, buffersOf(t.features, t.joints, result.display, ...windows, pose?.rootPos, pose?.quats));
       });
     case 'solve': {
       try {

@@ -7,8 +7,11 @@
  * in-process (Node, `{worker: false}`).
  */
 import { loadModel, runWithFallback, withFallback } from '../backends';
+import { type EditBegin, type EditCondition, EditError, type EditGenerate, type EditLimits, type Timeline, type TimelineSegment, generateTimeline } from '../edit';
 import type { BeginOptions, GenerateOptions, GenerateResult, Generator, SampleState } from '../generate';
 import type { Manifest } from '../manifest';
+import { decodeJoints } from '../motion/decode';
+import { beginByModel, modelFor, resolveRequest, wireBegin } from '../requests';
 import { type BackendRequest, loadMark, preloadWasmRuntime } from '../runtime/ort';
 import { createTextEncoder, type TextEncoder } from '../text';
 
@@ -22,6 +25,44 @@ export interface HostOptions {
   baseUrl: string;
   backend: BackendRequest;
   threads?: number;
+}
+
+/** A timeline to generate where the models are (GenerationHost.timeline; the worker's `timeline` message). */
+export interface TimelineRequest {
+  segments: TimelineSegment[];
+  /** denoising steps and guidance of every window (default: each model's manifest defaults) */
+  steps?: number;
+  guidance?: number;
+  /** the model of the prompt segments and of the action segments (default: the manifest's EMDM text / action model) */
+  models?: { text?: string; action?: string };
+  /** an earlier result's `timeline`: its segments equal to the new list's first ones are reused as they were */
+  previous?: Timeline | null;
+  /** the file each model runs ('fp32' or a variant; absent: its fp32 file): chooseVariant's choice, per model */
+  variants?: Record<string, string | undefined>;
+}
+
+/** What one window's generation took: its GenerateResult without the motion, and its model. */
+export type WindowRun = Omit<GenerateResult, 'motion'> & { model: string; frames: number };
+
+export interface TimelineResult {
+  /** src/edit.ts's Timeline (raw decoded joints, segments and their windows): give it back as `previous` */
+  timeline: Timeline;
+  /** the joints as a motion is shown: smoothed, feet cleaned up (decodeJoints, generate()'s decoding) */
+  display: Float32Array;
+  /** the windows this call generated, in order (none when every segment was reused) */
+  windows: WindowRun[];
+  /** ms the windows' early steps took, begun together */
+  beginMs: number;
+  /** ms of the whole call */
+  totalMs: number;
+}
+
+export interface TimelineHooks {
+  signal?: AbortSignal;
+  /** before each window (src/edit.ts's onWindow): its segment, windows done and to do */
+  onWindow?: (segment: number, done: number, total: number) => void;
+  /** a denoising step: of `together` windows begun at once, or (together = 0) of the window being finished */
+  onStep?: (done: number, total: number, together: number) => void;
 }
 
 export class GenerationHost {
@@ -74,6 +115,68 @@ export class GenerationHost {
     const gen = await this.load(model, variant);
     const r = await withFallback(gen, os[0]?.signal, (g) => g.begin(os), () => this.reloadOnWasm(model, variant), (reason) => this.events.fallback(model, reason));
     return { gen: r.gen, states: r.result };
+  }
+
+  /**
+   * A whole timeline (src/edit.ts's generateTimeline with this host's generate and begin): every window, its seam
+   * easing and the stitching run here, so a page's worker answers one request per timeline. Each window is the
+   * request createGenerator would make of it (resolveRequest): the same motion as generateTimeline elsewhere.
+   */
+  async timeline(req: TimelineRequest, hooks: TimelineHooks = {}): Promise<TimelineResult> {
+    const t0 = performance.now();
+    const manifest = this.opts.manifest;
+    const { signal } = hooks;
+    const modelOf = (c: EditCondition, i: number | null = null): string => {
+      try {
+        return c.action !== undefined ? (req.models?.action ?? modelFor(manifest, { action: c.action })) : (req.models?.text ?? modelFor(manifest, {}));
+      } catch (e) {
+        throw new EditError(`${i === null ? '' : `segment ${i + 1}: `}${(e as Error).message}`, i);
+      }
+    };
+    const common = { ...(req.steps !== undefined ? { steps: req.steps } : {}), ...(req.guidance !== undefined ? { guidance: req.guidance } : {}) };
+    const cond = (c: EditCondition) => (c.action !== undefined ? { action: c.action } : { prompt: c.prompt ?? '' });
+    // every segment's request resolved first (its model, its action label): a bad one stops before any sampling
+    req.segments.forEach((seg, i) => {
+      const model = modelOf(seg, i);
+      try {
+        resolveRequest(manifest, { ...cond(seg), ...common, model, frames: 1, seed: 0 });
+      } catch (e) {
+        throw new EditError(`segment ${i + 1}: ${(e as Error).message}`, i);
+      }
+    });
+    const used = [...new Set(req.segments.map((s, i) => modelOf(s, i)))];
+    for (const m of used) if (!manifest.models[m]) throw new EditError(`timeline: model '${m}' is not in the manifest`);
+    const entries = used.map((m) => manifest.models[m]);
+    if (entries.some((e) => e.fps !== entries[0].fps)) throw new EditError(`timeline: the models ${used.join(', ')} run at different frame rates`);
+    const limits: EditLimits = { fps: entries[0]?.fps ?? manifest.skeleton.fps, maxFrames: Math.min(...entries.map((e) => e.maxFrames)) };
+    const variantOf = (model: string) => req.variants?.[model];
+    const windows: WindowRun[] = [];
+    let beginMs = 0;
+    const gen: EditGenerate = async (r) => {
+      const { model, options } = resolveRequest(manifest, {
+        ...cond(r), ...common, model: modelOf(r), frames: r.frames, seed: r.seed,
+        ...(r.known ? { known: r.known } : {}), ...(r.resume ? { resume: r.resume } : {}),
+      });
+      const { result } = await this.generate(model, { ...options, signal, onStep: (d, t) => hooks.onStep?.(d, t, 0) }, variantOf(model));
+      const { motion, ...run } = result;
+      windows.push({ ...run, model, frames: motion.frames });
+      return { frames: motion.frames, fps: motion.fps, features: motion.features, joints: motion.joints };
+    };
+    const begin: EditBegin = async (reqs) => {
+      const b0 = performance.now();
+      const states = await beginByModel(reqs, (r) => modelOf(r), async (model, rs) => {
+        const os = rs.map((r, i): BeginOptions => ({
+          ...wireBegin(manifest, { ...cond(r), ...common, model, frames: r.frames, seed: r.seed, stopAt: r.stopAt, keep: r.keep, keepFromTime: r.keepFromTime }),
+          signal, ...(i === 0 ? { onStep: (d: number, t: number) => hooks.onStep?.(d, t, rs.length) } : {}),
+        }));
+        return (await this.begin(model, os, variantOf(model))).states;
+      });
+      beginMs += performance.now() - b0;
+      return states;
+    };
+    const timeline = await generateTimeline(req.segments, gen, limits, { previous: req.previous, signal, begin, onWindow: hooks.onWindow });
+    const display = decodeJoints(timeline.features, timeline.frames, manifest.skeleton, { smooth: true, footCleanup: true });
+    return { timeline, display, windows, beginMs, totalMs: performance.now() - t0 };
   }
 
   private reloadOnWasm(model: string, variant: string | undefined): Promise<Generator> {

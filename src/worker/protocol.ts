@@ -7,6 +7,7 @@
  */
 import type { FileEvent } from '../cache/modelCache';
 import type { Condition, GenerateResult, SampleState } from '../generate';
+import type { TimelineRequest, TimelineResult } from './host';
 import type { Manifest } from '../manifest';
 import type { BackendRequest } from '../runtime/ort';
 import type { KnownMotion } from '../sampler/mask';
@@ -69,6 +70,12 @@ export type ToWorker =
   /** Start several generations together (Generator.begin): answered by `begun` with their states; `step` events count the first one's steps */
   | { type: 'begin'; id: number; model: string; variant?: string; options: WireBeginOptions[] }
   /** Solve bone rotations (IK) for joints made on the page's side (a stitched timeline, a loop in place); answered by `solved` */
+  /**
+   * A whole timeline in the worker (GenerationHost.timeline): answered by `timeline-result`, with `timeline-window`
+   * before each window and `step` events (`together`: windows begun at once); `pose`: also solve the shown joints
+   * (IK). `request.previous` is copied to the worker (the sender keeps it).
+   */
+  | { type: 'timeline'; id: number; request: TimelineRequest; pose?: boolean }
   | { type: 'solve'; id: number; joints: Float32Array; frames: number }
   | { type: 'cancel'; id: number }
   | { type: 'dispose'; id: number };
@@ -116,6 +123,8 @@ export interface WireError {
   index?: number;
   count?: number;
   value?: number;
+  /** EditError: the timeline segment it names (0-based), or null */
+  segment?: number | null;
 }
 
 export type FromWorker =
@@ -124,7 +133,9 @@ export type FromWorker =
   | { type: 'begun'; id: number; info: ModelInfo; states: SampleState[] }
   | { type: 'solved'; id: number; pose: WirePose }
   | { type: 'error'; id: number; error: WireError }
-  | { type: 'step'; id: number; done: number; total: number }
+  | { type: 'step'; id: number; done: number; total: number; together?: number }
+  | { type: 'timeline-window'; id: number; segment: number; done: number; total: number }
+  | { type: 'timeline-result'; id: number; result: TimelineResult; pose?: WirePose }
   | { type: 'step-preview'; id: number; preview: WireStepPreview }
   | { type: 'download'; model: string; loaded: number; total: number }
   | { type: 'file'; file: FileEvent }

@@ -10,6 +10,7 @@ declare global {
       character: { player: { time: number }; bones: Array<{ name: string; matrixWorld: { elements: number[] } }>; object: { parent: unknown; updateMatrixWorld(force?: boolean): void } };
       motion: { frames: number; fps: number; joints: Float32Array; backend: string; pose: { rootPos: Float32Array } };
       camera: { position: { clone(): { set(x: number, y: number, z: number): { project(c: unknown): { x: number; y: number; z: number } } } } };
+      generator: import('../../src/index').MotionGenerator;
     };
   }
 }
@@ -78,5 +79,29 @@ test('minimal example: prompt → motion in the worker → the character moves',
   expect(moved).toBeGreaterThan(0.05);
 
   expect(external).toEqual([]);
+  watch.assertClean();
+});
+
+test('the library\'s timeline: one request to the worker, regenerated from a changed segment, bad input named', async ({ page }) => {
+  const watch = watchPage(page);
+  await page.goto('/examples/minimal.html');
+  await page.waitForFunction(() => window.example?.motion !== undefined, null, { timeout: 150_000 });
+  const r = await page.evaluate(async () => {
+    const g = window.example!.generator;
+    const segs = [{ prompt: 'a person walks forward', seconds: 2, seed: 1 }, { prompt: 'a person waves', seconds: 3, seed: 2 }];
+    const windows: number[][] = [];
+    const t = await g.timeline(segs, { steps: 2, onWindow: (s, d, n) => windows.push([s, d, n]) });
+    const again = await g.timeline(segs.map((s, i) => (i === 1 ? { ...s, prompt: 'a person jumps' } : s)), { steps: 2, previous: t });
+    const bad = await g.timeline([segs[0], { prompt: ' ', seconds: 1, seed: 3 }], { steps: 2 })
+      .then(() => null, (e: Error & { segment?: number }) => ({ name: e.name, segment: e.segment, message: e.message }));
+    return {
+      frames: t.frames, starts: t.starts, joints: t.joints.length, quats: t.pose.quats.length, windows, made: t.windows.map((w) => w.frames),
+      kept: again.features.subarray(0, 40 * 263).every((v, i) => v === t.features[i]),
+      changed: again.features.subarray(40 * 263).some((v, i) => v !== t.features[40 * 263 + i]), remade: again.windows.length, bad,
+    };
+  });
+  expect(r).toMatchObject({ frames: 100, starts: [0, 40], joints: 100 * 22 * 3, quats: 100 * 22 * 4, made: [40, 80], kept: true, changed: true, remade: 1 });
+  expect(r.windows).toEqual([[0, 0, 2], [0, 0, 2], [1, 1, 2], [1, 2, 2]]);
+  expect(r.bad).toMatchObject({ name: 'EditError', segment: 1, message: expect.stringMatching(/segment 2: the prompt is empty/) });
   watch.assertClean();
 });

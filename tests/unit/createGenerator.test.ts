@@ -10,7 +10,8 @@ import { type GenerateOptions, type GenerateResult, type Generator, openModel } 
 import { ModelFileError, loadManifest } from '../../src/manifest';
 import { AbortError } from '../../src/sampler/sampler';
 import { poseTrack } from '../../src/three';
-import { type EditGenerate, generateTimeline } from '../../src/edit';
+import { EditError, type EditGenerate, generateTimeline, withNewSeed } from '../../src/edit';
+import { decodeJoints } from '../../src/motion/decode';
 import { maxAbsDiff, tinyModels } from './coreFixtures';
 
 const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-create-'));
@@ -67,6 +68,35 @@ describe('createGenerator', () => {
     expect(together.frames).toBe(340);
     expect(maxAbsDiff(together.features, inTurn.features)).toBeLessThan(1e-4);
     await expect(g.begin([{ action: 'b', frames: 10, seed: 1, stopAt: Number.NaN }])).rejects.toThrow(/stopAt must be a finite time ≥ 0/);
+    await g.dispose();
+  });
+
+  it('generator.timeline: the whole timeline where the models are, the motion generateTimeline makes, shown and posed', async () => {
+    const g = await createGenerator({ baseUrl: tinyModels(tmp).dir, threads: 1, worker: false });
+    const segs = [{ action: 'b', seconds: 3, seed: 1 }, { action: 'e', seconds: 2, seed: 2 }, { action: 'g', seconds: 12, seed: 3 }];
+    const want = await generateTimeline(segs, (r) => g.generate(r), { fps: 20, maxFrames: 196 }, { begin: (rs) => g.begin(rs) });
+    const windows: number[][] = [];
+    const together = new Set<number>();
+    const t = await g.timeline(segs, { onWindow: (s, d, n) => windows.push([s, d, n]), onStep: (_d, _n, w) => together.add(w) });
+    const same = (a: Float32Array, b: Float32Array) => Buffer.from(a.buffer, a.byteOffset, a.byteLength).equals(Buffer.from(b.buffer, b.byteOffset, b.byteLength));
+    expect(same(t.features, want.features) && same(t.timeline.joints, want.joints)).toBe(true);
+    expect([t.frames, t.fps, t.starts]).toEqual([340, 20, [0, 60, 100]]);
+    // the joints shown: decoded as generate() decodes one motion (smoothed, feet on the floor), with their pose
+    expect(same(t.joints, decodeJoints(want.features, 340, g.skeleton, { smooth: true, footCleanup: true }))).toBe(true);
+    expect([t.pose.rootPos.length, t.pose.quats.length]).toEqual([340 * 3, 340 * 22 * 4]);
+    expect(t.windows.map((w) => [w.model, w.frames])).toEqual([['tiny', 60], ['tiny', 60], ['tiny', 140], ['tiny', 140]]);
+    expect(windows).toEqual([[0, 0, 4], [0, 0, 4], [1, 1, 4], [2, 2, 4], [2, 3, 4], [2, 4, 4]]);
+    expect([...together].sort()).toEqual([0, 4]); // the 4 windows' early steps together, then each finished alone
+    // regenerating from segment 2: segment 1 is reused as it was, the later ones continue from it
+    const again = await g.timeline(withNewSeed(segs, 1), { previous: t });
+    expect(again.windows.length).toBe(3);
+    expect(same(again.features.subarray(0, 60 * 263), t.features.subarray(0, 60 * 263))).toBe(true);
+    expect(same(again.features, t.features)).toBe(false);
+    // bad input: an EditError naming the segment, before anything is generated
+    const bad = g.timeline([{ action: 'b', seconds: 3, seed: 1 }, { action: 'zz', seconds: 2, seed: 2 }]);
+    await expect(bad).rejects.toThrow(EditError);
+    await expect(bad).rejects.toMatchObject({ segment: 1, message: expect.stringMatching(/action 'zz' is not a label of tiny/) });
+    await expect(g.timeline([{ action: 'b', seconds: 0, seed: 1 }])).rejects.toMatchObject({ segment: 0 });
     await g.dispose();
   });
 

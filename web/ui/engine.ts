@@ -5,7 +5,7 @@
 // where src/backends.ts decides, in one place for the page and the library (createGenerator). Which file of a
 // model runs (fp32 or a variant such as int8) is the manifest's chooseVariant: the entry's defaultVariant
 // unless the page asks for another (URL `variant=fp32`).
-import { type Manifest, type ModelEntry, GenerationClient, chooseVariant, type ClientEvents, type ModelInfo, type RemoteGenerateOptions, type RemoteResult, type SampleState, type WireBeginOptions } from '../../src/index';
+import { type Manifest, type ModelEntry, GenerationClient, chooseVariant, type ClientEvents, type ModelInfo, type RemoteGenerateOptions, type RemoteResult, type RemoteTimelineOptions, type RemoteTimelineResult, type TimelineRequest } from '../../src/index';
 import type { BackendChoice, Mode } from './state';
 
 export interface ModelChoice {
@@ -133,9 +133,10 @@ export class Engine {
     return this.client.generate(model, { pose: true, ...o }, this.variantOf(model));
   }
 
-  /** Start several generations of `model` together in the worker (Generator.begin); finish each with generate({ resume }). */
-  begin(model: string, options: WireBeginOptions[], signal?: AbortSignal, onStep?: (done: number, total: number) => void): Promise<SampleState[]> {
-    return this.client.begin(model, options, this.variantOf(model), signal, onStep);
+  /** A whole timeline in the worker (GenerationClient.timeline), each of its models on the page's file (variantOf). */
+  timeline(request: Omit<TimelineRequest, 'variants'>, o: RemoteTimelineOptions): Promise<RemoteTimelineResult> {
+    const models = [request.models?.text, request.models?.action].filter((m): m is string => !!m);
+    return this.client.timeline({ ...request, variants: Object.fromEntries(models.map((m) => [m, this.variantOf(m)])) }, o);
   }
 
   /** Run `job` as the newest request: the previous one is aborted and awaited first. */

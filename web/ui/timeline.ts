@@ -3,12 +3,13 @@
 // ones before it, kept in the URL), and edits of the motion on screen: in-betweening (keep the first and
 // last second, a new middle), body-part edits (keep the lower or upper body) and seamless loops (+ in place).
 // The bookkeeping is src/edit.ts's; every generation runs in the generation worker through the page's
-// session (progress, and the newest request wins: a new one cancels the running one at its next step).
+// session (progress, and the newest request wins: a new one cancels the running one at its next step). A
+// timeline is one request: its windows, seam easing, stitching, decoding and IK all run in the worker
+// (GenerationHost.timeline); the edits send their one window and decode here.
 // The panel builds its DOM inside one container (#edit-panel in index.html) and styles it in timeline.css.
 import {
-  EditError, MAX_TIMELINE_SECONDS, beginByModel, bodyPartEdit, cleanupFootContacts, contactsFromFeatures, generateTimeline, inBetween, makeLoop,
-  planTimeline, recoverJoints, smoothJoints,
-  type EditBegin, type EditCondition, type EditGenerate, type EditMotion, type GenerateResult, type KeptPart, type RemoteResult, type Timeline, type TimelineSegment, type WireBeginOptions,
+  EditError, MAX_TIMELINE_SECONDS, bodyPartEdit, decodeJoints, inBetween, makeLoop, planTimeline, recoverJoints,
+  type EditCondition, type EditGenerate, type EditMotion, type GenerateResult, type KeptPart, type RemoteResult, type Timeline, type TimelineSegment, type WirePose, type WireBeginOptions,
 } from '../../src/index';
 import type { PoseTrack } from '../../src/three';
 import { el } from './dom';
@@ -33,9 +34,10 @@ export interface EditSummary {
   /** model calls (one per denoising step and window) */
   windows: number;
   /** where `ms` went, ms: the worker's text encoding, denoising steps and decoding (summed over the windows), the
-   * worker round trips beyond them (messages, copies, queueing), this thread's edit work (seam easing, decoding,
-   * stitching; nothing else runs meanwhile), the IK solve (worker) and showing the result */
-  parts: { encodeMs: number; stepMs: number; decodeMs: number; beginMs: number; roundTripMs: number; mainMs: number; ikMs: number; showMs: number; windowStepMs: number[]; windowFrames: number[] };
+   * windows' early steps begun together (a timeline), the worker's own edit work (a timeline: seam easing,
+   * stitching, decoding), the round trips beyond them (messages, copies, queueing), this thread's edit work (an
+   * edit's easing and decoding; nothing else runs meanwhile), the IK solve (worker) and showing the result */
+  parts: { encodeMs: number; stepMs: number; decodeMs: number; beginMs: number; workerEditMs: number; roundTripMs: number; mainMs: number; ikMs: number; showMs: number; windowStepMs: number[]; windowFrames: number[] };
 }
 
 /** The panel's hooks for Playwright (window.emdm.edit). */
@@ -318,7 +320,7 @@ export class TimelinePanel {
    * Run `job` as the page's newest request (cancelling a running one), with progress, the busy button and
    * errors said in the panel; the result is shown on the character.
    */
-  private async request(kind: EditSummary['kind'], job: (gen: EditGenerate, signal: AbortSignal, calls: Calls, begin: EditBegin) => Promise<Shown>): Promise<EditSummary> {
+  private async request(kind: EditSummary['kind'], job: (gen: EditGenerate, signal: AbortSignal, calls: Calls) => Promise<Shown>): Promise<EditSummary> {
     const { session, view, controls } = this.page;
     const state = controls.read();
     const t0 = performance.now();
@@ -331,12 +333,18 @@ export class TimelinePanel {
     try {
       let genMs = 0;
       let jobMs = 0;
-      let beginMs = 0; // the windows' early steps together (a timeline's begin), in the worker
+      const calls: Calls = {
+        n: 0, results: [], progress: (f) => f, text: (d, t) => `Denoising step ${d} / ${t}`,
+        beginText: (w, d, t) => `${w} window${w === 1 ? '' : 's'} together: step ${d} / ${t}`,
+        step: (d, t, together) => {
+          if (!together) session.counters.stepsRun++;
+          const text = together ? calls.beginText(together, d, t) : calls.text(d, t);
+          view.showProgress(calls.progress(d / t), text);
+          this.working(kind, `${text} (${Math.round(100 * calls.progress(d / t))} %)`);
+        },
+        worker: null,
+      };
       const shown = await session.engine.run(async (signal) => {
-        const calls: Calls = {
-          n: 0, results: [], progress: (f) => f, text: (d, t) => `Denoising step ${d} / ${t}`,
-          beginText: (w, d, t) => `${w} window${w === 1 ? '' : 's'} together: step ${d} / ${t}`,
-        };
         const gen: EditGenerate = async (r) => {
           const g0 = performance.now();
           const model = this.modelFor(r);
@@ -348,49 +356,34 @@ export class TimelinePanel {
             // copies: the client transfers these buffers to the worker, and src/edit.ts reads `keep` again after
             ...(r.known ? { known: { ...r.known, features: r.known.features.slice(), keep: r.known.keep.slice() } } : {}),
             ...(r.resume ? { resume: r.resume } : {}),
-            onStep: (d, t) => {
-              session.counters.stepsRun++;
-              view.showProgress(calls.progress(d / t), calls.text(d, t));
-              this.working(kind, `${calls.text(d, t)} (${Math.round(100 * calls.progress(d / t))} %)`);
-            },
+            onStep: (d, t) => calls.step(d, t, 0),
           });
           calls.n++;
-          calls.results.push(res);
+          calls.results.push({ ...res, frames: res.motion.frames });
           genMs += performance.now() - g0;
           return { frames: res.motion.frames, fps: res.motion.fps, features: res.motion.features, joints: res.motion.joints };
         };
-        // a timeline's windows started together, one model call per step, grouped by model (text / action)
-        const begin: EditBegin = async (reqs) => {
-          const g0 = performance.now();
-          const states = await beginByModel(reqs, (r) => this.modelFor(r), async (model, rs) => {
-            await session.load(model);
-            return session.engine.begin(model, rs.map((r) => ({
-              ...this.wire(r, state), stopAt: r.stopAt, ...(r.keep ? { known: { keep: r.keep.slice(), fromTime: r.keepFromTime } } : {}),
-            })), signal, (d, t) => {
-              view.showProgress(calls.progress(d / t), calls.beginText(rs.length, d, t));
-              this.working(kind, `${calls.beginText(rs.length, d, t)} (${Math.round(100 * calls.progress(d / t))} %)`);
-            });
-          });
-          beginMs += performance.now() - g0;
-          return states;
-        };
         const j0 = performance.now();
-        const out = await job(gen, signal, calls, begin);
+        const out = await job(gen, signal, calls);
         jobMs = performance.now() - j0;
         return out;
       });
       const s0 = performance.now();
-      const track = await this.solve(shown.display, shown.motion);
+      const track = shown.pose ? this.track(shown.pose, shown.motion) : await this.solve(shown.display, shown.motion);
       const s1 = performance.now();
       this.show(state, shown, track, s1 - t0);
       const s2 = performance.now();
       session.counters.generations++;
-      const sum = (f: (r: GenerateResult) => number) => shown.results.reduce((a, r) => a + f(r), 0);
-      const worker = sum((r) => r.timings.totalMs);
+      const sum = (f: (r: Run) => number) => shown.results.reduce((a, r) => a + f(r), 0);
+      const windowsMs = sum((r) => r.timings.totalMs);
+      // a timeline ran whole in the worker (calls.worker); an edit's window came back here to be eased and decoded
+      const w = calls.worker;
       const parts = {
         encodeMs: sum((r) => r.timings.encodeMs), stepMs: sum((r) => r.timings.stepMs.reduce((a, b) => a + b, 0)), decodeMs: sum((r) => r.timings.decodeMs),
-        beginMs, roundTripMs: genMs - worker, mainMs: jobMs - genMs - beginMs, ikMs: s1 - s0, showMs: s2 - s1,
-        windowStepMs: shown.results.map((r) => r.timings.stepMs.reduce((a, b) => a + b, 0)), windowFrames: shown.results.map((r) => r.motion.frames),
+        beginMs: w?.beginMs ?? 0, workerEditMs: w ? w.totalMs - w.beginMs - windowsMs : 0,
+        roundTripMs: w ? w.requestMs - w.totalMs : genMs - windowsMs, mainMs: jobMs - (w ? w.requestMs : genMs),
+        ikMs: shown.pose ? shown.pose.ikMs : s1 - s0, showMs: s2 - s1,
+        windowStepMs: shown.results.map((r) => r.timings.stepMs.reduce((a, b) => a + b, 0)), windowFrames: shown.results.map((r) => r.frames),
       };
       return { kind, frames: shown.motion.frames, fps: shown.motion.fps, starts: shown.starts, ms: performance.now() - t0, windows: shown.windows, parts };
     } catch (e) {
@@ -409,6 +402,11 @@ export class TimelinePanel {
     }
   }
 
+  /** The pose track of bone rotations the worker solved with the motion. */
+  private track(p: WirePose, m: EditMotion): PoseTrack {
+    return { frames: m.frames, fps: m.fps, joints: this.page.session.manifest.skeleton.joints.length, rootPos: p.rootPos, quats: p.quats };
+  }
+
   /** Bone rotations (the worker's IK) for the joints shown. */
   private async solve(joints: Float32Array, m: EditMotion): Promise<PoseTrack> {
     const p = await this.page.session.engine.client.solve(joints, m.frames);
@@ -417,16 +415,14 @@ export class TimelinePanel {
 
   /** The page's decoding of joints made here (as generate() does for one motion: σ = 1 frame smoothing, feet on the floor). */
   private decode(features: Float32Array, frames: number): Float32Array {
-    const sk = this.page.session.manifest.skeleton;
-    const joints = smoothJoints(recoverJoints(features, frames), frames, 1);
-    return cleanupFootContacts(joints, frames, contactsFromFeatures(features, frames), { parents: sk.parents, footJoints: sk.footJoints });
+    return decodeJoints(features, frames, this.page.session.manifest.skeleton, { smooth: true, footCleanup: true });
   }
 
   private show(state: PageState, s: Shown, track: PoseTrack, ms: number): void {
     // the timings of everything this request generated (nothing, when an unchanged timeline is shown again)
     const results = s.results;
     const first = results[0];
-    const sum = (f: (r: GenerateResult) => number) => results.reduce((a, r) => a + f(r), 0);
+    const sum = (f: (r: Run) => number) => results.reduce((a, r) => a + f(r), 0);
     const result: GenerateResult = {
       motion: { frames: s.motion.frames, fps: s.motion.fps, joints: s.display, features: s.motion.features },
       timings: {
@@ -471,26 +467,38 @@ export class TimelinePanel {
     const st = this.page.controls.read();
     const settings = `${st.steps}|${st.guidance}`;
     const previous = this.timelineSettings === settings ? this.timeline : null;
-    return this.request('timeline', async (gen, signal, calls, begin) => {
+    return this.request('timeline', async (_gen, signal, calls) => {
+      const { session } = this.page;
       let seg = 0;
       let doneWindows = 0;
       let todo = 1;
       calls.progress = (f) => (doneWindows + f) / todo;
       calls.text = (d, t) => `Segment ${seg + 1} of ${segs.length}${regenerated !== null ? ` (again from ${regenerated + 1})` : ''}: step ${d} / ${t}`;
-      const t = await generateTimeline(segs, gen, this.limits(), {
-        previous, signal, begin,
+      // every segment's model (an EditError naming the segment when the demo has none), loaded with the page's progress
+      const models = [...new Set(segs.map((s) => this.modelFor(s)))];
+      for (const m of models) await session.load(m);
+      const r0 = performance.now();
+      const r = await session.engine.timeline({
+        segments: segs, steps: st.steps, guidance: st.guidance, previous,
+        models: { text: session.models.text?.name, action: session.models.action?.name },
+      }, {
+        pose: true, signal, onStep: calls.step,
         onWindow: (s, done, total) => {
           seg = s;
           doneWindows = done;
           todo = Math.max(1, total);
         },
       });
+      calls.worker = { requestMs: performance.now() - r0, totalMs: r.totalMs, beginMs: r.beginMs };
+      calls.n = r.windows.length;
+      calls.results.push(...r.windows);
+      const t = r.timeline;
       this.timeline = t;
       this.timelineSettings = settings;
       const label = segs.map((s) => s.action ?? (s.prompt ?? '').trim()).join(' → ');
       const one = segs.every((s) => s.action === segs[0].action && (s.prompt ?? '').trim() === (segs[0].prompt ?? '').trim());
       return {
-        motion: t, display: this.decode(t.features, t.frames), starts: t.starts, windows: calls.n, results: calls.results,
+        motion: t, display: r.display, pose: r.pose, starts: t.starts, windows: calls.n, results: calls.results,
         label: label.length > 120 ? `${label.slice(0, 117)}…` : label, model: this.modelFor(segs[0]), seed: segs[0].seed,
         condition: one ? (segs[0].action !== undefined ? { action: segs[0].action } : { prompt: segs[0].prompt }) : null,
       };
@@ -624,7 +632,9 @@ interface Shown {
   display: Float32Array;
   starts?: number[];
   windows: number;
-  results: GenerateResult[];
+  results: Run[];
+  /** bone rotations of `display`, when the worker solved them with the motion (a timeline) */
+  pose?: WirePose;
   label: string;
   model: string;
   seed: number;
@@ -632,11 +642,18 @@ interface Shown {
 }
 
 /** The generations of one request, and how its progress and label read (a timeline sets them per window). */
+/** What one window's generation took (a GenerateResult without its motion). */
+type Run = Pick<GenerateResult, 'timings' | 'modelCalls' | 'sampler' | 'steps'> & { frames: number };
+
 interface Calls {
   n: number;
-  results: GenerateResult[];
+  results: Run[];
   progress(f: number): number;
   text(done: number, total: number): string;
   /** while `windows` windows are begun together (a timeline) */
   beginText(windows: number, done: number, total: number): string;
+  /** a denoising step: progress bar and line (`together` windows begun at once, or 0: one window) */
+  step(done: number, total: number, together: number): void;
+  /** a timeline run whole in the worker: the request's time here, the worker's, and its windows begun together */
+  worker: { requestMs: number; totalMs: number; beginMs: number } | null;
 }

@@ -1,0 +1,126 @@
+/**
+ * A generation request as the library takes it (`MotionRequest`, `BeginRequest`) and its resolution against the
+ * manifest: which model runs it (`modelFor`) and the options the generation host takes (`resolveRequest`,
+ * `wireBegin`), with the manifest's defaults filled in. createGenerator, the generation worker's timeline
+ * (GenerationHost.timeline) and the demo page share them, so a request means the same wherever it runs.
+ */
+import type { SampleState } from './generate';
+import type { Manifest, ModelEntry } from './manifest';
+import type { KnownMotion } from './sampler/mask';
+import type { WireBeginOptions, WireGenerateOptions } from './worker/protocol';
+
+export interface MotionRequest {
+  /** text prompt (text model) */
+  prompt?: string;
+  /** action label: its index or its name in the action model's labels */
+  action?: number | string;
+  /** a model of the manifest (default: chosen by prompt / action, see above) */
+  model?: string;
+  /** length in seconds (default: the model's longest, maxFrames / fps); `frames` wins when given */
+  seconds?: number;
+  frames?: number;
+  /** denoising steps (default: the model's defaultSteps) */
+  steps?: number;
+  /** classifier-free guidance scale (default: the model's guidance) */
+  guidance?: number;
+  /** guide only the denoising steps whose time is above this, one batch row below (default: the model's guidanceMinTime, else every step) */
+  guidanceMinTime?: number;
+  /** smooth x̂0 along time (σ frames) at every denoising step but the last (default: the model's x0Smoothing, else off) */
+  x0Smoothing?: number;
+  /** uint32 seed: the same seed gives the same motion on the same backend (default: random) */
+  seed?: number;
+  smooth?: boolean;
+  footCleanup?: boolean;
+  /**
+   * Inpainting (docs/ARCHITECTURE.md "Sampling with constraints"; src/edit.ts builds these for timelines,
+   * in-betweening, body-part edits and loops): keep the entries of `features` (frames × 263, de-normalised: an
+   * earlier result's `features`) where `keep` (`keepMask(frames, …)`) is 1 and generate the rest. The arrays are
+   * copied, not taken. Kept frames after free ones decode where the known motion has them (`pinKeptRoot`).
+   * `fromTime`: impose them only at the steps with t ≤ it (and the last; default every step).
+   */
+  known?: KnownMotion;
+  /** finish a generation `begin` started (its state; the request as it was begun, now with `known.features`) */
+  resume?: SampleState;
+  onStep?: (done: number, total: number) => void;
+  signal?: AbortSignal;
+}
+
+/**
+ * A request to `MotionGenerator.begin` (src/edit.ts's EditBeginRequest fits it): a generation stopped before its first
+ * denoising step with t ≤ `stopAt`; `keep` (with `keepFromTime`) marks what it will keep once `known` is given.
+ */
+export type BeginRequest = Omit<MotionRequest, 'known' | 'resume' | 'onStep' | 'signal'> & { stopAt: number; keep?: Float32Array; keepFromTime?: number };
+
+/** The model a request runs on: `model`, else the manifest's EMDM model for the task (text for a prompt or nothing). */
+export function modelFor(manifest: Manifest, req: Pick<MotionRequest, 'model' | 'action'>): string {
+  if (req.model !== undefined) {
+    if (!manifest.models[req.model]) throw new Error(`createGenerator: model '${req.model}' is not in the manifest (models: ${Object.keys(manifest.models).join(', ')})`);
+    return req.model;
+  }
+  const task: ModelEntry['task'] = req.action !== undefined ? 'action' : 'text';
+  const hits = Object.entries(manifest.models).filter(([, e]) => e.task === task);
+  const hit = hits.find(([, e]) => (e.objective ?? 'ddgan') === 'ddgan') ?? hits[0];
+  if (!hit) throw new Error(`createGenerator: the manifest has no ${task} model (models: ${Object.keys(manifest.models).join(', ') || 'none'})`);
+  return hit[0];
+}
+
+function randomSeed(): number {
+  return crypto.getRandomValues(new Uint32Array(1))[0];
+}
+
+/** The request as the generation host takes it (condition, frames, steps, guidance and seed filled in from the manifest). */
+export function resolveRequest(manifest: Manifest, req: MotionRequest): { model: string; options: WireGenerateOptions } {
+  if (req.prompt !== undefined && req.action !== undefined) throw new Error('generate: give a prompt or an action, not both');
+  const model = modelFor(manifest, req);
+  const entry = manifest.models[model];
+  let condition: WireGenerateOptions['condition'];
+  if (req.prompt !== undefined) condition = { type: 'text', text: req.prompt };
+  else if (req.action !== undefined) {
+    const labels = entry.condition.type === 'action' ? entry.condition.labels : [];
+    const label = typeof req.action === 'number' ? req.action : labels.indexOf(req.action);
+    if (label < 0) throw new RangeError(`generate: action '${req.action}' is not a label of ${model} (${labels.join(', ')})`);
+    condition = { type: 'action', label };
+  } else condition = { type: 'none' };
+  let frames = req.frames;
+  if (frames === undefined) {
+    if (req.seconds !== undefined && !(req.seconds > 0)) throw new RangeError(`generate: seconds must be > 0, got ${req.seconds}`);
+    frames = req.seconds === undefined ? entry.maxFrames : Math.min(entry.maxFrames, Math.max(1, Math.round(req.seconds * entry.fps)));
+  }
+  return {
+    model,
+    options: {
+      condition, frames, steps: req.steps ?? entry.defaultSteps, guidance: req.guidance ?? entry.guidance,
+      ...(req.guidanceMinTime !== undefined ? { guidanceMinTime: req.guidanceMinTime } : {}),
+      ...(req.x0Smoothing !== undefined ? { x0Smoothing: req.x0Smoothing } : {}),
+      seed: req.seed ?? randomSeed(), smooth: req.smooth, footCleanup: req.footCleanup,
+      ...(req.known ? { known: { ...req.known, features: Float32Array.from(req.known.features), keep: Float32Array.from(req.known.keep) } } : {}),
+      ...(req.resume ? { resume: req.resume } : {}),
+    },
+  };
+}
+
+/**
+ * `begin` for requests of several models: one `run` per model (its requests in their order, one batch), the states
+ * back in the requests' order. createGenerator's begin and the demo page's timeline both group this way.
+ */
+export async function beginByModel<R>(reqs: readonly R[], modelOf: (r: R) => string, run: (model: string, reqs: R[]) => Promise<SampleState[]>): Promise<SampleState[]> {
+  const groups = new Map<string, number[]>();
+  reqs.forEach((r, i) => {
+    const m = modelOf(r);
+    groups.set(m, [...(groups.get(m) ?? []), i]);
+  });
+  const states: SampleState[] = new Array(reqs.length);
+  for (const [model, at] of groups) {
+    const got = await run(model, at.map((i) => reqs[i]));
+    at.forEach((i, j) => (states[i] = got[j]));
+  }
+  return states;
+}
+
+/** A begin request as the generation host takes it (resolveRequest's options, stopped at stopAt, keeping `keep`). */
+export function wireBegin(manifest: Manifest, r: BeginRequest): WireBeginOptions {
+  const { stopAt, keep, keepFromTime, ...req } = r;
+  const { smooth: _s, footCleanup: _f, ...wire } = resolveRequest(manifest, req).options;
+  return { ...wire, stopAt, ...(keep ? { known: { keep: Float32Array.from(keep), fromTime: keepFromTime } } : {}) };
+}
+
