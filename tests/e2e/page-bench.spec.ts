@@ -310,6 +310,7 @@ test('benchmark: a 3 × 5 s timeline against one 5 s motion through the page (is
   const t = median(timelines.map((x) => x.ms));
   const out = {
     reps, singleMs: s, timelineMs: t, ratio: t / s, bar: 3, steps: singles[0].steps, singleModelCalls: singles[0].calls,
+    singlesMs: singles.map((x) => x.ms), timelinesMs: timelines.map((x) => x.ms),
     singleStepMs: median(singles.map((x) => x.stepMs)), timelineWindows: timelines[0].windows,
     timelineWindowFrames: timelines[0].parts.windowFrames, timelineStepMs: median(timelines.map((x) => x.parts.stepMs)),
     timelineBeginMs: median(timelines.map((x) => x.parts.beginMs)),

@@ -232,3 +232,35 @@ def test_time_only_bad_arguments_are_one_line(capsys, args, says, tmp_path):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and says in err[0]
     assert not (tmp_path / "t.json").exists()
+
+
+def test_the_page_benchmark_imports_as_a_time_row(tmp_path, capsys):
+    """``--import-page``: tests/e2e/page-bench.spec.ts's timeline-time.json as an editing-time result (the page's
+    own figure of the time bar in RESULTS.md); a file that is not one is refused, naming what it lacks."""
+    page = {"reps": 7, "singleMs": 600.0, "timelineMs": 1680.0, "ratio": 2.8, "bar": 3, "steps": 10, "load": 3.5,
+            "timelineWindowFrames": [100, 120, 120], "timelineBeginMs": 1000.0, "variant": "default",
+            "environment": {"crossOriginIsolated": True, "threads": 1, "hardwareConcurrency": 2}}
+    src = tmp_path / "timeline-time.json"
+    src.write_text(json.dumps(page))
+    out = tmp_path / "json" / "editing-time-emdm-t2m-web-page.json"
+    assert ev.main(["--import-page", str(src), "--out", str(out)]) == 0
+    r = json.loads(out.read_text())
+    run = r["time"]["by_threads"]["1"]
+    assert r["task"] == "editing-time" and r["runtime"].startswith("page-wasm-") and r["steps"] == 10
+    assert (run["timelines"], run["timeline_s"], run["single_s"], run["ratio"]) == (7, 1.68, 0.6, pytest.approx(2.8))
+    assert r["bars"]["time"] == {"met": True, "figure": "2.80× on 1 thread"}
+    rows = "\n".join(ev.time_section(load_results(out.parent)))
+    assert "**2.80×** on 1 WASM thread (1.68 s vs 0.60 s, 7 each, load 3.5)" in rows and "**met**" in rows
+
+    page["timelineMs"] = 1860.0
+    src.write_text(json.dumps(page))
+    assert ev.main(["--import-page", str(src), "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["bars"]["time"]["met"] is False        # 3.10×
+
+    del page["timelineMs"]
+    src.write_text(json.dumps(page))
+    capsys.readouterr()
+    assert ev.main(["--import-page", str(src), "--out", str(tmp_path / "x.json")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not the page benchmark's timeline-time.json (missing timelineMs)" in err[0]
+    assert not (tmp_path / "x.json").exists()

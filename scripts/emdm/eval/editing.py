@@ -644,6 +644,50 @@ def run_time_only(a) -> Path:
     return write_result(result, out)
 
 
+PAGE_KEYS = ("reps", "singleMs", "timelineMs", "steps", "environment", "load", "timelineWindowFrames")
+
+
+def import_page(a) -> Path:
+    """``--import-page FILE``: the page benchmark's figures (tests/e2e/page-bench.spec.ts "timeline against" writes
+    timeline-time.json) as an ``editing-time`` result (runtime ``page-wasm-<variant>``) for RESULTS.md. Import it on
+    the machine that measured it (its hardware is read here)."""
+    import json
+
+    from emdm.eval.evaluate import hardware, write_result
+    from emdm.eval.report import RESULTS_DIR, SCHEMA
+    from emdm.outdir import check_writable
+
+    path = Path(a.import_page)
+    try:
+        d = json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError) as e:
+        raise EditingError(f"--import-page {path}: not a readable JSON file ({e})") from None
+    missing = [k for k in PAGE_KEYS if k not in d] if isinstance(d, dict) else list(PAGE_KEYS)
+    if missing:
+        raise EditingError(f"--import-page {path}: not the page benchmark's timeline-time.json (missing {', '.join(missing)})")
+    if not (d["singleMs"] > 0 and d["timelineMs"] > 0 and d["reps"] >= 1):
+        raise EditingError(f"--import-page {path}: singleMs, timelineMs and reps must be positive "
+                           f"(got {d['singleMs']}, {d['timelineMs']}, {d['reps']})")
+    variant = d.get("variant", "default")
+    if variant == "default":
+        variant = page_variant(a.model, a.models_dir) or "fp32"
+    threads = str(int(d["environment"].get("threads", 1)))
+    by = {threads: {"timelines": int(d["reps"]), "timeline_s": d["timelineMs"] / 1000, "single_s": d["singleMs"] / 1000,
+                    "ratio": d["timelineMs"] / d["singleMs"], "load_avg_1min": float(d["load"])}}
+    t = {"by_threads": by, "threads_are": "WASM", "window_frames": d["timelineWindowFrames"],
+         "begin_ms": d.get("timelineBeginMs"), "cross_origin_isolated": d["environment"].get("crossOriginIsolated")}
+    met, figure = time_bar(t)
+    runtime = f"page-wasm-{variant}"
+    out = check_writable(a.out or (RESULTS_DIR / "json" / f"editing-time-{a.model}-{runtime}.json"))
+    result = {"schema": SCHEMA, "task": "editing-time", "name": a.model, "runtime": runtime, "steps": int(d["steps"]),
+              "segment_seconds": 5.0, "seed": None, "weights": None, "device": "browser", "time": t,
+              "bars": {"time": {"met": met, "figure": figure}},
+              "hardware": f"{hardware().split(' (')[0]}, Chromium (the demo page through its generation worker)",
+              "source": "EMDM_BENCH=1 npx playwright test tests/e2e/page-bench.spec.ts -g 'timeline against'",
+              "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
+    return write_result(result, out)
+
+
 def segment_frames_of(seconds: float) -> int:
     from emdm.motion.edit import segment_frames
 
@@ -862,6 +906,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="with --time-only: time these PyTorch weights (e.g. public/models/<model>.weights.f16.pt) on "
                          "--device, with --model's sampling settings, instead of its ONNX file")
     ap.add_argument("--device", default="cpu", help="with --ckpt: cpu, cuda or cuda:N")
+    ap.add_argument("--import-page", type=Path, default=None, metavar="FILE",
+                    help="write the page benchmark's timeline-time.json (tests/e2e/page-bench.spec.ts) as an editing-time "
+                         "result of --model (on the machine that measured it)")
     ap.add_argument("--out", type=Path, default=None,
                     help="default docs/results/json/editing-<model>.json (editing-<model>-seed<N>.json with --seed N ≠ 0)")
     return ap
@@ -893,6 +940,9 @@ def main(argv: list[str] | None = None) -> int:
             raise EditingError(f"--device {a.device}: PyTorch sees no CUDA GPU here")
         if a.time_only and (a.time_timelines < 1 or not a.time_threads or min(a.time_threads) < 1):
             raise EditingError("--time-only needs --time-timelines ≥ 1 and --time-threads of counts ≥ 1")
+        if a.import_page is not None:
+            print(f"wrote {display_path(import_page(a))}")
+            return 0
         print(f"wrote {display_path(run_time_only(a) if a.time_only else run(a))}")
     except (EditingError, EditError, CoverageError, FileNotFoundError, ModelError, OutputRefused, ManifestError) as e:
         print(f"error: {e}", file=sys.stderr)
