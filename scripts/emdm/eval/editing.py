@@ -750,11 +750,13 @@ def time_section(rs: list[dict]) -> list[str]:
     """RESULTS.md's rows for ``--time-only`` results (task ``editing-time``): the time bar on other runtimes."""
     if not rs:
         return []
-    out = ["### The time bar on other runtimes (`--time-only`)", "",
+    out = ["### The time bar on other runtimes (`--time-only`, the page)", "",
            "The same 3 × 5 s timelines against one 5 s motion (windows begun together, medians of interleaved runs), "
            "with nothing else measured: `python -m emdm.eval.editing --time-only [--ckpt WEIGHTS --device DEVICE]` "
            "(scripts/gpu/editing-time.sh on a GPU machine). PyTorch runs the model's float weights, so every window's "
-           "early steps go in one call per step, as the page's fp32/fp16 files do.", "",
+           "early steps go in one call per step, as the page's fp32/fp16 files do. The page row is the demo page "
+           "itself (tests/e2e/page-bench.spec.ts 'timeline against', imported with `--import-page`): a timeline there "
+           "is one request to the generation worker, against one motion's one request.", "",
            "| runtime | weights | machine | steps | timeline vs one motion | ≤ 3× | file |", "|---|---|---|---|---|---|---|"]
     for r in sorted(rs, key=lambda r: (r["name"], r["runtime"])):
         by = r["time"]["by_threads"]
