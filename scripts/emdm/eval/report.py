@@ -591,6 +591,7 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
             "scripts/gpu/editing-time.sh runs/editing-time       # ... on a GPU machine (PyTorch CUDA, and ORT on its cores)",
             "node scripts/bench/timeline-bench.mjs              # issue 14's time bar on the library's WASM runtime (printed)",
             "EMDM_BENCH=1 npx playwright test tests/e2e/page-bench.spec.ts -g \"timeline against\"   # ... and in the page",
+            "python -m emdm.eval.editing --import-page test-results/<that test>/timeline-time.json   # ... as a RESULTS row",
             "node scripts/bench/core-bench.mjs --json bench.json && python -m emdm.eval.evaluate import-bench bench.json",
             "# browser-wasm, issue 7: EMDM at 1/2/4/5/8/10 and diffusion + DDIM at 10/50/100 steps in one run of the demo",
             "# page (window.emdm.generate, needs diffusion-t2m-web in public/models); replaces the browser-wasm rows above",
