@@ -14,6 +14,11 @@ const ROOT = path.dirname(fileURLToPath(import.meta.url));
 const PATH_PORT = 4200 + (createHash('sha256').update(ROOT).digest().readUInt16BE(0) % 800);
 export const E2E_PORT = Number(process.env.E2E_PORT ?? PATH_PORT);
 const CHROMIUM = process.env.CHROMIUM_PATH ?? '/usr/bin/chromium';
+// EMDM_WEBGPU=1: Chromium with the GPU and WebGPU on (for the benchmarks' `backend=webgpu` runs on a machine with a
+// GPU); EMDM_WEBGPU=swiftshader: WebGPU on Chromium's CPU adapter (checks that the WebGPU path runs; its times are
+// the CPU's, not a GPU's). Default: no GPU, the page falls back to WASM as on a machine without one.
+const WEBGPU = process.env.EMDM_WEBGPU ?? '';
+const GPU_ARGS = WEBGPU ? ['--enable-unsafe-webgpu', ...(WEBGPU === 'swiftshader' ? ['--use-webgpu-adapter=swiftshader'] : ['--enable-features=Vulkan', '--ignore-gpu-blocklist'])] : ['--disable-gpu'];
 
 export default defineConfig({
   testDir: 'tests/e2e',
@@ -33,7 +38,7 @@ export default defineConfig({
       executablePath: CHROMIUM,
       args: [
         '--no-sandbox',
-        '--disable-gpu',
+        ...GPU_ARGS,
         '--disable-quic',
         '--no-first-run',
         '--disable-background-networking',

@@ -281,14 +281,16 @@ test('benchmark: a 3 × 5 s timeline against one 5 s motion through the page (is
   const threadsFlag = process.env.EMDM_BENCH_THREADS ? `&threads=${process.env.EMDM_BENCH_THREADS}` : '';
   // EMDM_BENCH_VARIANT: the page's `variant` flag (fp32 / fp16 files batch the windows' early steps; int8 does not)
   const variantFlag = process.env.EMDM_BENCH_VARIANT ? `&variant=${process.env.EMDM_BENCH_VARIANT}` : '';
-  await ready(page, `noauto=1&backend=wasm${threadsFlag}${variantFlag}`);
+  // EMDM_BENCH_BACKEND: the page's `backend` flag (default wasm; webgpu needs EMDM_WEBGPU, playwright.config.ts)
+  const backend = process.env.EMDM_BENCH_BACKEND ?? 'wasm';
+  await ready(page, `noauto=1&backend=${backend}${threadsFlag}${variantFlag}`);
   const reps = Number(process.env.EMDM_BENCH_REPS ?? 7);
   const prompts = ['a person walks', 'a person raises both hands', 'a person climbs'];
   const single = (seed: number) =>
     page.evaluate(async ([t, sd]) => {
       const t0 = performance.now();
       const r = await window.emdm.generate({ mode: 'text', text: t, seconds: 5, seed: sd });
-      return { ms: performance.now() - t0, stepMs: r.timings.stepMs.reduce((a, b) => a + b, 0), steps: r.steps, calls: r.modelCalls };
+      return { ms: performance.now() - t0, stepMs: r.timings.stepMs.reduce((a, b) => a + b, 0), steps: r.steps, calls: r.modelCalls, backend: r.timings.backend };
     }, [prompts[0], seed] as const);
   const timeline = (seed: number) =>
     page.evaluate(async ([ps, sd]) => {
@@ -316,7 +318,7 @@ test('benchmark: a 3 × 5 s timeline against one 5 s motion through the page (is
     timelineBeginMs: median(timelines.map((x) => x.parts.beginMs)),
     timelineWindowStepMs: timelines.map((x) => x.parts.windowStepMs), timelineParts: timelines.map((x) => x.parts),
     cpus: os.cpus().length, load: os.loadavg()[0], environment: await page.evaluate(() => window.emdm.environment),
-    variant: process.env.EMDM_BENCH_VARIANT ?? 'default',
+    variant: process.env.EMDM_BENCH_VARIANT ?? 'default', backend: singles[0].backend,
   };
   fs.writeFileSync(test.info().outputPath('timeline-time.json'), JSON.stringify(out, null, 1));
   // EMDM_BENCH_JSON_TIMELINE (a path): also write it there (docs/results/json/timeline-page-*.json, which
@@ -325,6 +327,7 @@ test('benchmark: a 3 × 5 s timeline against one 5 s motion through the page (is
     const { timelineParts: _p, timelineWindowStepMs: _w, ...figures } = out;
     fs.writeFileSync(process.env.EMDM_BENCH_JSON_TIMELINE, JSON.stringify({ source: 'tests/e2e/page-bench.spec.ts (timeline against)', runtime: 'page (Chromium, WASM)', ...figures }, null, 1));
   }
-  console.log(`timeline vs one motion (page, WASM): ${t.toFixed(0)} ms vs ${s.toFixed(0)} ms = ${(t / s).toFixed(2)}× ` +
-    `(bar ≤ 3×; medians of ${reps}; windows of ${out.timelineWindowFrames.join(', ')} frames; ${out.environment?.threads ?? '?'} WASM thread(s); load ${out.load.toFixed(1)})`);
+  const on = out.backend === 'webgpu' ? 'WebGPU' : `WASM, ${out.environment?.threads ?? '?'} thread(s)`;
+  console.log(`timeline vs one motion (page, ${on}, ${out.variant} file): ${t.toFixed(0)} ms vs ${s.toFixed(0)} ms = ${(t / s).toFixed(2)}× ` +
+    `(bar ≤ 3×; medians of ${reps}; windows of ${out.timelineWindowFrames.join(', ')} frames; load ${out.load.toFixed(1)})`);
 });

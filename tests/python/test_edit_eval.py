@@ -257,6 +257,14 @@ def test_the_page_benchmark_imports_as_a_time_row(tmp_path, capsys):
     assert ev.main(["--import-page", str(src), "--out", str(out)]) == 0
     assert json.loads(out.read_text())["bars"]["time"]["met"] is False        # 3.10×
 
+    page.update(timelineMs=1200.0, backend="webgpu")              # a GPU run: no WASM threads to name
+    src.write_text(json.dumps(page))
+    gpu = tmp_path / "gpu" / "editing-time-gpu.json"
+    assert ev.main(["--import-page", str(src), "--out", str(gpu)]) == 0
+    g = json.loads(gpu.read_text())
+    assert g["runtime"].startswith("page-webgpu-") and g["bars"]["time"] == {"met": True, "figure": "2.00× on webgpu"}
+    assert "| **2.00×** (1.20 s vs 0.60 s, 7 each, load 3.5) |" in "\n".join(ev.time_section(load_results(gpu.parent)))
+
     del page["timelineMs"]
     src.write_text(json.dumps(page))
     capsys.readouterr()

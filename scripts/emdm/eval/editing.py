@@ -671,13 +671,16 @@ def import_page(a) -> Path:
     variant = d.get("variant", "default")
     if variant == "default":
         variant = page_variant(a.model, a.models_dir) or "fp32"
-    threads = str(int(d["environment"].get("threads", 1)))
+    backend = d.get("backend", "wasm")
+    threads = str(int(d["environment"].get("threads", 1))) if backend == "wasm" else "1"
     by = {threads: {"timelines": int(d["reps"]), "timeline_s": d["timelineMs"] / 1000, "single_s": d["singleMs"] / 1000,
                     "ratio": d["timelineMs"] / d["singleMs"], "load_avg_1min": float(d["load"])}}
-    t = {"by_threads": by, "threads_are": "WASM", "window_frames": d["timelineWindowFrames"],
+    t = {"by_threads": by, "threads_are": "WASM" if backend == "wasm" else None, "window_frames": d["timelineWindowFrames"],
          "begin_ms": d.get("timelineBeginMs"), "cross_origin_isolated": d["environment"].get("crossOriginIsolated")}
     met, figure = time_bar(t)
-    runtime = f"page-wasm-{variant}"
+    if backend != "wasm":
+        figure = f"{by[threads]['ratio']:.2f}× on {backend}"
+    runtime = f"page-{backend}-{variant}"
     out = check_writable(a.out or (RESULTS_DIR / "json" / f"editing-time-{a.model}-{runtime}.json"))
     result = {"schema": SCHEMA, "task": "editing-time", "name": a.model, "runtime": runtime, "steps": int(d["steps"]),
               "segment_seconds": 5.0, "seed": None, "weights": None, "device": "browser", "time": t,
@@ -760,7 +763,8 @@ def time_section(rs: list[dict]) -> list[str]:
            "| runtime | weights | machine | steps | timeline vs one motion | ≤ 3× | file |", "|---|---|---|---|---|---|---|"]
     for r in sorted(rs, key=lambda r: (r["name"], r["runtime"])):
         by = r["time"]["by_threads"]
-        each = "; ".join(f"**{v['ratio']:.2f}×** on {n} {r['time']['threads_are']} thread{'s' if n != '1' else ''} "
+        are = r["time"]["threads_are"]
+        each = "; ".join(f"**{v['ratio']:.2f}×**{f' on {n} {are} thread' + ('s' if n != '1' else '') if are else ''} "
                          f"({v['timeline_s']:.2f} s vs {v['single_s']:.2f} s, {v['timelines']} each, load "
                          f"{v['load_avg_1min']:.1f})" for n, v in sorted(by.items(), key=lambda kv: int(kv[0])))
         out.append(f"| {r['runtime']} | {r.get('weights') or r['name'] + ' (shipped file)'} | {r['hardware']} | "
