@@ -623,14 +623,14 @@ def run_time_only(a) -> Path:
     """``--time-only``: the time bar alone (no dataset, classifier or quality measures), at each of ``--time-threads``;
     with ``--ckpt`` the PyTorch weights on ``--device`` (a GPU), the runtime the issue's bar is out of reach without
     on these CPUs. Writes ``editing-time-<model>-<runtime>.json`` (task ``editing-time``)."""
-    from emdm.eval.evaluate import hardware, write_result
+    from emdm.eval.evaluate import write_result
     from emdm.eval.report import RESULTS_DIR, SCHEMA
     from emdm.outdir import check_writable
 
     runtime = (f"pytorch-{a.device.split(':')[0]}" if a.ckpt is not None
                else f"onnxruntime-cpu-{page_variant(a.model, a.models_dir) if a.variant == 'page' else a.variant}")
     out = check_writable(a.out or (RESULTS_DIR / "json" / f"editing-time-{a.model}-{runtime}.json"))
-    t0, load0, machine = time.time(), os.getloadavg()[0], hardware().split(" (")[0]
+    t0, load0, machine = time.time(), os.getloadavg()[0], machine_name()
     tl_orders = time_orders(a)
     by = {str(n): time_ratio(a, n, tl_orders, segment_frames_of(a.seconds)) for n in a.time_threads}
     t = {"by_threads": by, "threads_are": "torch CPU" if a.ckpt is not None else "ONNX Runtime"}
@@ -644,6 +644,16 @@ def run_time_only(a) -> Path:
     return write_result(result, out)
 
 
+def machine_name() -> str:
+    """``emdm.eval.evaluate.hardware()`` without its torch thread count (a time row names its own threads); the GPU,
+    when there is one, stays."""
+    import re
+
+    from emdm.eval.evaluate import hardware
+
+    return re.sub(r" \(\d+ torch thread\(s\)\)", "", hardware())
+
+
 PAGE_KEYS = ("reps", "singleMs", "timelineMs", "steps", "environment", "load", "timelineWindowFrames")
 
 
@@ -653,7 +663,7 @@ def import_page(a) -> Path:
     the machine that measured it (its hardware is read here)."""
     import json
 
-    from emdm.eval.evaluate import hardware, write_result
+    from emdm.eval.evaluate import write_result
     from emdm.eval.report import RESULTS_DIR, SCHEMA
     from emdm.outdir import check_writable
 
@@ -685,7 +695,7 @@ def import_page(a) -> Path:
     result = {"schema": SCHEMA, "task": "editing-time", "name": a.model, "runtime": runtime, "steps": int(d["steps"]),
               "segment_seconds": 5.0, "seed": None, "weights": None, "device": "browser", "time": t,
               "bars": {"time": {"met": met, "figure": figure}},
-              "hardware": f"{hardware().split(' (')[0]}, Chromium (the demo page through its generation worker)",
+              "hardware": f"{machine_name()}, Chromium (the demo page through its generation worker)",
               "source": "EMDM_BENCH=1 npx playwright test tests/e2e/page-bench.spec.ts -g 'timeline against'",
               "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     return write_result(result, out)
