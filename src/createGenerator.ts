@@ -143,21 +143,11 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
     }
   };
 
-  const timelineRequest = (segments: readonly TimelineSegment[], o: TimelineCallOptions): TimelineRequest => {
-    // each segment's model (one that has none is left to GenerationHost.timeline's EditError, which names the segment)
-    const used = new Set(segments.flatMap((seg) => {
-      try {
-        return [seg.action !== undefined ? modelFor(manifest, { action: seg.action }) : modelFor(manifest, {})];
-      } catch {
-        return [];
-      }
-    }));
-    return {
-      segments: segments.map((seg) => ({ ...seg })), previous: o.previous?.timeline ?? null,
-      ...(o.steps !== undefined ? { steps: o.steps } : {}), ...(o.guidance !== undefined ? { guidance: o.guidance } : {}),
-      variants: Object.fromEntries([...used].map((m) => [m, variantOf(m)])),
-    };
-  };
+  const timelineRequest = (segments: readonly TimelineSegment[], o: TimelineCallOptions): TimelineRequest => ({
+    segments: segments.map((seg) => ({ ...seg })), previous: o.previous?.timeline ?? null,
+    ...(o.steps !== undefined ? { steps: o.steps } : {}), ...(o.guidance !== undefined ? { guidance: o.guidance } : {}),
+    ...(opts.variant !== undefined ? { variant: opts.variant } : {}),
+  });
 
   if (inWorker) {
     const client = new GenerationClient({ manifest, baseUrl, backend, threads: opts.threads, cache: opts.cache, events });

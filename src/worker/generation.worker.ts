@@ -59,6 +59,13 @@ function buffersOf(...arrays: Array<Float32Array | undefined>): ArrayBuffer[] {
   return [...set];
 }
 
+/** Bone rotations (IK) of frames × 22 × 3 joints, with the time the solve took. */
+function poseOf(joints: Float32Array, frames: number): WirePose {
+  const t0 = performance.now();
+  const ik = solveIK(joints, frames, needHost().manifest.skeleton);
+  return { rootPos: ik.rootPos, quats: ik.quats, ikMs: performance.now() - t0 };
+}
+
 /** Run request `id`'s job with a signal a `cancel` message aborts; a failure is answered as its `error`. */
 async function cancellable(id: number, job: (signal: AbortSignal) => Promise<void>): Promise<void> {
   const ctrl = new AbortController();
@@ -100,11 +107,7 @@ async function handle(msg: ToWorker): Promise<void> {
       return cancellable(msg.id, async (signal) => {
         const h = needHost();
         const { pose: wantPose, previewSteps, ...wire } = msg.options;
-        const solve = (m: Motion): WirePose => {
-          const t0 = performance.now();
-          const ik = solveIK(m.joints, m.frames, h.manifest.skeleton);
-          return { rootPos: ik.rootPos, quats: ik.quats, ikMs: performance.now() - t0 };
-        };
+        const solve = (m: Motion): WirePose => poseOf(m.joints, m.frames);
         const o: GenerateOptions = { ...wire, signal, onStep: (done, total) => post({ type: 'step', id: msg.id, done, total }) };
         if (previewSteps) {
           // each step's x̂0, decoded by generate() like the result and solved here like the result
@@ -132,27 +135,19 @@ async function handle(msg: ToWorker): Promise<void> {
       });
     case 'timeline':
       return cancellable(msg.id, async (signal) => {
-        const h = needHost();
-        const result = await h.timeline(msg.request, {
+        const result = await needHost().timeline(msg.request, {
           signal,
           onWindow: (segment, done, total) => post({ type: 'timeline-window', id: msg.id, segment, done, total }),
           onStep: (done, total, together) => post({ type: 'step', id: msg.id, done, total, together }),
         });
-        let pose: WirePose | undefined;
-        if (msg.pose) {
-          const t0 = performance.now();
-          const ik = solveIK(result.display, result.timeline.frames, h.manifest.skeleton);
-          pose = { rootPos: ik.rootPos, quats: ik.quats, ikMs: performance.now() - t0 };
-        }
+        const pose = msg.pose ? poseOf(result.display, result.timeline.frames) : undefined;
         const t = result.timeline;
         const windows = t.segments.flatMap((s) => s.windows.flatMap((w) => [w.features, w.joints]));
         post({ type: 'timeline-result', id: msg.id, result, pose }, buffersOf(t.features, t.joints, result.display, ...windows, pose?.rootPos, pose?.quats));
       });
     case 'solve': {
       try {
-        const t0 = performance.now();
-        const ik = solveIK(msg.joints, msg.frames, needHost().manifest.skeleton);
-        const pose: WirePose = { rootPos: ik.rootPos, quats: ik.quats, ikMs: performance.now() - t0 };
+        const pose = poseOf(msg.joints, msg.frames);
         post({ type: 'solved', id: msg.id, pose }, buffersOf(pose.rootPos, pose.quats));
       } catch (e) {
         post({ type: 'error', id: msg.id, error: wireError(e) });

@@ -9,7 +9,7 @@
 import { loadModel, runWithFallback, withFallback } from '../backends';
 import { type EditBegin, type EditCondition, EditError, type EditGenerate, type EditLimits, type Timeline, type TimelineSegment, generateTimeline } from '../edit';
 import type { BeginOptions, GenerateOptions, GenerateResult, Generator, SampleState } from '../generate';
-import type { Manifest } from '../manifest';
+import { type Manifest, chooseVariant } from '../manifest';
 import { decodeJoints } from '../motion/decode';
 import { beginByModel, modelFor, resolveRequest, wireBegin } from '../requests';
 import { type BackendRequest, loadMark, preloadWasmRuntime } from '../runtime/ort';
@@ -37,8 +37,8 @@ export interface TimelineRequest {
   models?: { text?: string; action?: string };
   /** an earlier result's `timeline`: its segments equal to the new list's first ones are reused as they were */
   previous?: Timeline | null;
-  /** the file each model runs ('fp32' or a variant; absent: its fp32 file): chooseVariant's choice, per model */
-  variants?: Record<string, string | undefined>;
+  /** the file asked for ('fp32' or a variant; absent: each model's manifest default): chooseVariant's choice, per model */
+  variant?: string;
 }
 
 /** What one window's generation took: its GenerateResult without the motion, and its model. */
@@ -126,30 +126,22 @@ export class GenerationHost {
     const t0 = performance.now();
     const manifest = this.opts.manifest;
     const { signal } = hooks;
-    const modelOf = (c: EditCondition, i: number | null = null): string => {
-      try {
-        return c.action !== undefined ? (req.models?.action ?? modelFor(manifest, { action: c.action })) : (req.models?.text ?? modelFor(manifest, {}));
-      } catch (e) {
-        throw new EditError(`${i === null ? '' : `segment ${i + 1}: `}${(e as Error).message}`, i);
-      }
-    };
+    const modelOf = (c: EditCondition): string =>
+      c.action !== undefined ? (req.models?.action ?? modelFor(manifest, { action: c.action })) : (req.models?.text ?? modelFor(manifest, {}));
     const common = { ...(req.steps !== undefined ? { steps: req.steps } : {}), ...(req.guidance !== undefined ? { guidance: req.guidance } : {}) };
     const cond = (c: EditCondition) => (c.action !== undefined ? { action: c.action } : { prompt: c.prompt ?? '' });
-    // every segment's request resolved first (its model, its action label): a bad one stops before any sampling
-    req.segments.forEach((seg, i) => {
-      const model = modelOf(seg, i);
+    // every segment's request resolved first (its model, in the manifest; its action label): a bad one stops before any sampling
+    const used = [...new Set(req.segments.map((seg, i) => {
       try {
-        resolveRequest(manifest, { ...cond(seg), ...common, model, frames: 1, seed: 0 });
+        return resolveRequest(manifest, { ...cond(seg), ...common, model: modelOf(seg), frames: 1, seed: 0 }).model;
       } catch (e) {
         throw new EditError(`segment ${i + 1}: ${(e as Error).message}`, i);
       }
-    });
-    const used = [...new Set(req.segments.map((s, i) => modelOf(s, i)))];
-    for (const m of used) if (!manifest.models[m]) throw new EditError(`timeline: model '${m}' is not in the manifest`);
+    }))];
     const entries = used.map((m) => manifest.models[m]);
     if (entries.some((e) => e.fps !== entries[0].fps)) throw new EditError(`timeline: the models ${used.join(', ')} run at different frame rates`);
     const limits: EditLimits = { fps: entries[0]?.fps ?? manifest.skeleton.fps, maxFrames: Math.min(...entries.map((e) => e.maxFrames)) };
-    const variantOf = (model: string) => req.variants?.[model];
+    const variantOf = (model: string) => chooseVariant(manifest, model, req.variant);
     const windows: WindowRun[] = [];
     let beginMs = 0;
     const gen: EditGenerate = async (r) => {
@@ -164,7 +156,7 @@ export class GenerationHost {
     };
     const begin: EditBegin = async (reqs) => {
       const b0 = performance.now();
-      const states = await beginByModel(reqs, (r) => modelOf(r), async (model, rs) => {
+      const states = await beginByModel(reqs, modelOf, async (model, rs) => {
         const os = rs.map((r, i): BeginOptions => ({
           ...wireBegin(manifest, { ...cond(r), ...common, model, frames: r.frames, seed: r.seed, stopAt: r.stopAt, keep: r.keep, keepFromTime: r.keepFromTime }),
           signal, ...(i === 0 ? { onStep: (d: number, t: number) => hooks.onStep?.(d, t, rs.length) } : {}),

@@ -69,13 +69,13 @@ export type ToWorker =
   | { type: 'generate'; id: number; model: string; variant?: string; options: WireGenerateOptions }
   /** Start several generations together (Generator.begin): answered by `begun` with their states; `step` events count the first one's steps */
   | { type: 'begin'; id: number; model: string; variant?: string; options: WireBeginOptions[] }
-  /** Solve bone rotations (IK) for joints made on the page's side (a stitched timeline, a loop in place); answered by `solved` */
   /**
    * A whole timeline in the worker (GenerationHost.timeline): answered by `timeline-result`, with `timeline-window`
    * before each window and `step` events (`together`: windows begun at once); `pose`: also solve the shown joints
    * (IK). `request.previous` is copied to the worker (the sender keeps it).
    */
   | { type: 'timeline'; id: number; request: TimelineRequest; pose?: boolean }
+  /** Solve bone rotations (IK) for joints made on the page's side (a loop in place, an edit); answered by `solved` */
   | { type: 'solve'; id: number; joints: Float32Array; frames: number }
   | { type: 'cancel'; id: number }
   | { type: 'dispose'; id: number };

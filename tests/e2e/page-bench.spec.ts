@@ -321,12 +321,7 @@ test('benchmark: a 3 × 5 s timeline against one 5 s motion through the page (is
     variant: process.env.EMDM_BENCH_VARIANT ?? 'default', backend: singles[0].backend,
   };
   fs.writeFileSync(test.info().outputPath('timeline-time.json'), JSON.stringify(out, null, 1));
-  // EMDM_BENCH_JSON_TIMELINE (a path): also write it there (docs/results/json/timeline-page-*.json, which
-  // python -m emdm.eval.editing reads into its time row)
-  if (process.env.EMDM_BENCH_JSON_TIMELINE) {
-    const { timelineParts: _p, timelineWindowStepMs: _w, ...figures } = out;
-    fs.writeFileSync(process.env.EMDM_BENCH_JSON_TIMELINE, JSON.stringify({ source: 'tests/e2e/page-bench.spec.ts (timeline against)', runtime: 'page (Chromium, WASM)', ...figures }, null, 1));
-  }
+  // python -m emdm.eval.editing --import-page <that file> makes it RESULTS.md's page row
   const on = out.backend === 'webgpu' ? 'WebGPU' : `WASM, ${out.environment?.threads ?? '?'} thread(s)`;
   console.log(`timeline vs one motion (page, ${on}, ${out.variant} file): ${t.toFixed(0)} ms vs ${s.toFixed(0)} ms = ${(t / s).toFixed(2)}× ` +
     `(bar ≤ 3×; medians of ${reps}; windows of ${out.timelineWindowFrames.join(', ')} frames; load ${out.load.toFixed(1)})`);

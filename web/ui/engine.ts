@@ -134,9 +134,8 @@ export class Engine {
   }
 
   /** A whole timeline in the worker (GenerationClient.timeline), each of its models on the page's file (variantOf). */
-  timeline(request: Omit<TimelineRequest, 'variants'>, o: RemoteTimelineOptions): Promise<RemoteTimelineResult> {
-    const models = [request.models?.text, request.models?.action].filter((m): m is string => !!m);
-    return this.client.timeline({ ...request, variants: Object.fromEntries(models.map((m) => [m, this.variantOf(m)])) }, o);
+  timeline(request: Omit<TimelineRequest, 'variant'>, o: RemoteTimelineOptions): Promise<RemoteTimelineResult> {
+    return this.client.timeline({ ...request, ...(this.variant !== undefined ? { variant: this.variant } : {}) }, o);
   }
 
   /** Run `job` as the newest request: the previous one is aborted and awaited first. */

@@ -641,10 +641,10 @@ interface Shown {
   condition: EditCondition | null;
 }
 
-/** The generations of one request, and how its progress and label read (a timeline sets them per window). */
 /** What one window's generation took (a GenerateResult without its motion). */
 type Run = Pick<GenerateResult, 'timings' | 'modelCalls' | 'sampler' | 'steps'> & { frames: number };
 
+/** The generations of one request, and how its progress and label read (a timeline sets them per window). */
 interface Calls {
   n: number;
   results: Run[];

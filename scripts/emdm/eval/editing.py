@@ -625,6 +625,7 @@ def run_time_only(a) -> Path:
     on these CPUs. Writes ``editing-time-<model>-<runtime>.json`` (task ``editing-time``)."""
     from emdm.eval.evaluate import write_result
     from emdm.eval.report import RESULTS_DIR, SCHEMA
+    from emdm.motion.edit import segment_frames
     from emdm.outdir import check_writable
 
     runtime = (f"pytorch-{a.device.split(':')[0]}" if a.ckpt is not None
@@ -632,7 +633,7 @@ def run_time_only(a) -> Path:
     out = check_writable(a.out or (RESULTS_DIR / "json" / f"editing-time-{a.model}-{runtime}.json"))
     t0, load0, machine = time.time(), os.getloadavg()[0], machine_name()
     tl_orders = time_orders(a)
-    by = {str(n): time_ratio(a, n, tl_orders, segment_frames_of(a.seconds)) for n in a.time_threads}
+    by = {str(n): time_ratio(a, n, tl_orders, segment_frames(a.seconds)) for n in a.time_threads}
     t = {"by_threads": by, "threads_are": "torch CPU" if a.ckpt is not None else "ONNX Runtime"}
     met, figure = time_bar(t)
     result = {"schema": SCHEMA, "task": "editing-time", "name": a.model, "runtime": runtime, "steps": a.steps,
@@ -659,7 +660,7 @@ PAGE_KEYS = ("reps", "singleMs", "timelineMs", "steps", "environment", "load", "
 
 def import_page(a) -> Path:
     """``--import-page FILE``: the page benchmark's figures (tests/e2e/page-bench.spec.ts "timeline against" writes
-    timeline-time.json) as an ``editing-time`` result (runtime ``page-wasm-<variant>``) for RESULTS.md. Import it on
+    timeline-time.json) as an ``editing-time`` result (runtime ``page-<backend>-<file>``) for RESULTS.md. Import it on
     the machine that measured it (its hardware is read here)."""
     import json
 
@@ -699,12 +700,6 @@ def import_page(a) -> Path:
               "source": "EMDM_BENCH=1 npx playwright test tests/e2e/page-bench.spec.ts -g 'timeline against'",
               "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     return write_result(result, out)
-
-
-def segment_frames_of(seconds: float) -> int:
-    from emdm.motion.edit import segment_frames
-
-    return segment_frames(seconds)
 
 
 # ----------------------------------------------------------------------------------------------- RESULTS.md
