@@ -118,6 +118,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--weights-out", type=Path, default=None,
                    help="at the end also write the EMA generator alone (+ meta) to this file: what export, sample "
                         "and the evaluation read, ~1/50 of ckpt.pt (D and the optimisers stay out)")
+    p.add_argument("--weights-minutes", type=float, default=None, metavar="M",
+                   help="also write --weights-out every M minutes of wall time while training (a run cut short, "
+                        "e.g. at the end of a GPU lease, still leaves its latest weights; 0 = at every log step)")
     p.add_argument("--weights-dtype", choices=["float32", "float16"], default="float32",
                    help="storage type of --weights-out (float16 halves it again; loaded back as float32)")
     return p
@@ -513,6 +516,7 @@ class Trainer:
             bar = tqdm(total=a.steps, initial=self.step, mininterval=5.0, dynamic_ncols=True, file=sys.stderr)
         stop_at = min(a.steps, a.stop_at) if a.stop_at is not None else a.steps
         t_start, t_ckpt = time.time(), time.time()
+        t_weights = t_start
         wall0 = self.wall
         self.steplog = StepLog(self.device)
         n_log, lr_sum, t_log = 0, np.zeros(2), time.time()
@@ -539,6 +543,12 @@ class Trainer:
                     if bar:
                         bar.set_postfix({k: f"{means[k]:.3g}" for k in ("loss_d", "g_adv", "recon") if k in means})
                     self.check_finite()
+                    if a.weights_out is not None and a.weights_minutes is not None \
+                            and time.time() - t_weights >= a.weights_minutes * 60:
+                        self.save_weights(a.weights_out, a.weights_dtype)
+                        t_weights = time.time()
+                        if self.dist.main:
+                            print(f"weights at step {self.step} -> {a.weights_out}", file=sys.stderr)
                 timed_out, due = False, bool(a.ckpt_every and self.step % a.ckpt_every == 0)
                 if self.dist.world == 1 or self.step % a.log_every == 0:     # DDP: the clocks agreed on at log steps
                     timed_out = a.time_limit_min is not None and (time.time() - t_start) > a.time_limit_min * 60
@@ -574,7 +584,10 @@ class Trainer:
 
 def main(argv: list[str] | None = None) -> int:
     """Train; 0 on success, 2 (one line on stderr) for an unusable checkpoint or a non-finite loss."""
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.weights_minutes is not None and (args.weights_out is None or not args.weights_minutes >= 0):
+        parser.error("--weights-minutes needs --weights-out and a number of minutes ≥ 0")
     trainer = None
     try:
         trainer = Trainer(args)

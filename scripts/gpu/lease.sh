@@ -1,0 +1,123 @@
+#!/usr/bin/env bash
+# A GPU lease from this checkout. A device call copies the working tree (tracked files, untracked files git
+# does not ignore, and the folders named in its `carry`), at most 64 MiB in all; the tracked tree alone is
+# ~130 MB, almost all of it public/models. A training run needs none of the ONNX files or the text encoder: it
+# reads the packed dataset, the caption-embedding cache and the weights it continues from.
+#
+#   scripts/gpu/lease.sh prepare [DATASET]  on the CPU: .lease/dataset.emdmpack (emdm.data.pack of DATASET,
+#                                           default data/dataset, prepared first if missing) and .lease/cache/
+#                                           (the text runs' caption embeddings, computed by emdm.train itself)
+#   scripts/gpu/lease.sh shrink             take what a run does not need out of what travels (out of git's
+#                                           index, ignored in .git/info/exclude; nothing on disk is touched);
+#                                           commits are refused until `restore`
+#   scripts/gpu/lease.sh size               what would travel now, in MiB; exit 1 over 64 MiB
+#   scripts/gpu/lease.sh files              the paths that would travel, one a line (what `size` adds up)
+#   scripts/gpu/lease.sh stage DIR          copy exactly those paths into DIR (the CPU rehearsal runs there)
+#   scripts/gpu/lease.sh restore            undo `shrink` (index from HEAD, exclude and hook removed); idempotent
+#
+# A slice, in order: prepare (once per machine), shrink, size, then the device call
+#   run(command="bash scripts/gpu/lease-train.sh t2m", carry=[".lease"], timeout_s=560)
+# then restore, give_back. tests/python/test_gpu_lease.py rehearses all of it on the CPU in CI.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/../.." && pwd)"
+cd "$root"
+py="${PYTHON:-$root/.venv/bin/python}"
+[[ -x "$py" ]] || py=python3
+export PYTHONPATH="$root/scripts${PYTHONPATH:+:$PYTHONPATH}"
+lease=".lease"
+limit=$((64 * 1024 * 1024))
+marker="$(git rev-parse --git-path emdm-lease)"
+exclude="$(git rev-parse --git-path info/exclude)"
+hook="$(git rev-parse --git-path hooks)/pre-commit"
+# What a training run needs from public/models: the manifest (the caption cache's key names the encoder's sha256
+# there), the normalisation files and the weights a run continues from. Everything else stays behind.
+keep_re='^public/models/(manifest\.json|[^/]+\.meanstd\.f32|[^/]+\.weights\.f16\.pt)$'
+drop_dirs=(public/models tests/fixtures)
+
+die() { echo "lease.sh: $*" >&2; exit 2; }
+
+dropped() {  # tracked paths that do not travel
+  git ls-files -- "${drop_dirs[@]}" | grep -Ev "$keep_re" || true
+}
+
+travelling() {  # tracked + untracked-not-ignored files, then the carried .lease folder
+  git ls-files -z -c -o --exclude-standard | tr '\0' '\n' | while IFS= read -r f; do [[ -f "$f" ]] && echo "$f"; done
+  [[ -d "$lease" ]] && find "$lease" -type f | sort
+  return 0
+}
+
+cmd_prepare() {
+  local ds="${1:-data/dataset}"
+  if [[ ! -f "$ds/train.txt" ]]; then
+    [[ "$ds" == data/dataset ]] || die "$ds: not a prepared dataset (no train.txt); run python -m emdm.data.prepare --out $ds"
+    echo "lease.sh: preparing $ds from the shared data first"
+    "$py" -m emdm.data.prepare --out "$ds"
+  fi
+  mkdir -p "$lease/cache"
+  "$py" -m emdm.data.pack "$ds" "$lease/dataset.emdmpack"
+  # the cache exactly as the run will look it up: the trainer's own data loading with the lease's data flags
+  local tmp; tmp="$(mktemp -d)"
+  "$py" -m emdm.train --data "$ds" --task text --min-frames 16 --preset tiny --d-width 32 --batch 1 --device cpu --threads 1 \
+    --out "$tmp" --stop-at 0 --no-progress >/dev/null 2>"$tmp/err" || { cat "$tmp/err" >&2; rm -rf "$tmp"; die "caption cache failed"; }
+  rm -f "$lease"/cache/text-*.npy
+  cp "$tmp"/text-*.npy "$lease/cache/"
+  rm -rf "$tmp"
+  echo "lease.sh: $lease ready: $(du -sh "$lease" | cut -f1) ($(ls "$lease/cache" | wc -l) caption cache file)"
+}
+
+cmd_shrink() {
+  [[ -f "$marker" ]] && { echo "lease.sh: already shrunk ($(wc -l <"$marker") paths out); restore first to redo"; return; }
+  git diff --cached --quiet || die "the index has staged changes; commit or unstage them first (shrink stages deletions)"
+  local list; list="$(dropped)"
+  [[ -n "$list" ]] || die "nothing to take out"
+  printf '%s\n' "$list" >"$marker"
+  xargs -d '\n' git rm -r -q --cached -- <"$marker"
+  { echo "# emdm-lease begin"; sed 's|^|/|' "$marker"; echo "# emdm-lease end"; } >>"$exclude"
+  if [[ ! -e "$hook" ]]; then
+    mkdir -p "$(dirname "$hook")"
+    printf '#!/bin/sh\n# emdm-lease guard\necho "a GPU lease has public/models out of the index: run scripts/gpu/lease.sh restore first" >&2\nexit 1\n' >"$hook"
+    chmod +x "$hook"
+  fi
+  echo "lease.sh: $(wc -l <"$marker") paths out of what travels until restore"
+}
+
+cmd_restore() {
+  if [[ -f "$marker" ]]; then
+    xargs -d '\n' git reset -q -- <"$marker" || true
+    rm -f "$marker"
+  fi
+  if [[ -f "$exclude" ]]; then
+    sed -i '/^# emdm-lease begin$/,/^# emdm-lease end$/d' "$exclude"
+  fi
+  if [[ -f "$hook" ]] && grep -q "emdm-lease guard" "$hook"; then rm -f "$hook"; fi
+  echo "lease.sh: restored"
+}
+
+cmd_size() {
+  local bytes
+  bytes=$(travelling | tr '\n' '\0' | xargs -0 -r stat -c %s | awk '{s += $1} END {print s + 0}')
+  local lease_bytes=0
+  [[ -d "$lease" ]] && lease_bytes=$(find "$lease" -type f -printf '%s\n' | awk '{s += $1} END {print s + 0}')
+  awk -v b="$bytes" -v l="$lease_bytes" -v lim="$limit" 'BEGIN {
+    printf "lease.sh: %.1f MiB would travel (%.1f MiB carried in .lease), limit %.0f MiB\n", b / 1048576, l / 1048576, lim / 1048576 }'
+  if (( bytes > limit )); then
+    echo "lease.sh: over the limit; run scripts/gpu/lease.sh shrink (or carry less)" >&2
+    exit 1
+  fi
+}
+
+cmd_stage() {
+  local dst="${1:?stage DIR}"
+  mkdir -p "$dst"
+  travelling | tr '\n' '\0' | xargs -0 -r cp --parents -t "$dst"
+}
+
+case "${1:-}" in
+  prepare) shift; cmd_prepare "$@" ;;
+  shrink) cmd_shrink ;;
+  restore) cmd_restore ;;
+  size) cmd_size ;;
+  files) travelling ;;
+  stage) shift; cmd_stage "$@" ;;
+  *) echo "usage: $0 prepare [DATASET] | shrink | size | files | stage DIR | restore" >&2; exit 2 ;;
+esac

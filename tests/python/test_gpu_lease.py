@@ -1,0 +1,142 @@
+"""A GPU slice rehearsed on the CPU (issue 27, steps 0 and 1): scripts/gpu/lease.sh makes what a device call copies
+fit its 64 MiB and puts the checkout back as it was; scripts/gpu/lease-train.sh, run from exactly the files that
+would travel (no text encoder, no ONNX files), continues the shipped text model and writes its weights where the
+device call returns them. A slice is then lost neither to a tree over the limit nor to a missing file or a typo."""
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import torch
+
+from emdm import paths
+from emdm.checkpoints import load_weights_file
+from test_data_prepare import _run, _user_folder
+
+LIMIT = 64 * 1024 * 1024
+# the real packed dataset (emdm.data.pack of the full dataset) is 31.9 MB and the caption cache 4.1 MB: the
+# shrunk tree must leave room for both
+CARRIED = 37 * 1024 * 1024
+
+
+def git(repo: Path, *args: str) -> str:
+    return subprocess.run(["git", "-C", str(repo), *args], check=True, capture_output=True, text=True).stdout
+
+
+def lease(repo: Path, *args: str, env=None) -> subprocess.CompletedProcess:
+    return subprocess.run(["bash", str(repo / "scripts/gpu/lease.sh"), *args], cwd=repo, capture_output=True, text=True,
+                          env={**os.environ, "PYTHON": sys.executable, **(env or {})}, timeout=900)
+
+
+@pytest.fixture(scope="module")
+def repo(tmp_path_factory) -> Path:
+    """A git repository holding this checkout's working tree as it is now (tracked and untracked-not-ignored
+    files, committed), so the rehearsal sees uncommitted changes too."""
+    dst = tmp_path_factory.mktemp("lease") / "repo"
+    files = subprocess.run(["git", "-C", str(paths.REPO_ROOT), "ls-files", "-z", "-c", "-o", "--exclude-standard"],
+                           check=True, capture_output=True).stdout.decode().split("\0")
+    for f in filter(None, files):
+        src = paths.REPO_ROOT / f
+        if src.is_file():
+            (dst / f).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(src, dst / f)
+    git(dst, "init", "-q")
+    git(dst, "-c", "user.email=t@t", "-c", "user.name=t", "add", "-A")
+    git(dst, "-c", "user.email=t@t", "-c", "user.name=t", "commit", "-q", "-m", "snapshot")
+    return dst
+
+
+def travel_bytes(repo: Path) -> int:
+    out = lease(repo, "files")
+    assert out.returncode == 0, out.stderr
+    return sum((repo / f).stat().st_size for f in out.stdout.splitlines())
+
+
+def test_shrink_fits_the_lease_and_restore_puts_everything_back(repo):
+    before = git(repo, "ls-files")
+    assert travel_bytes(repo) > LIMIT                         # today's tree would be refused
+    assert lease(repo, "size").returncode == 1
+    out = lease(repo, "shrink")
+    assert out.returncode == 0, out.stderr
+    try:
+        small = travel_bytes(repo)
+        assert small + CARRIED <= LIMIT, f"{small / 2**20:.1f} MiB travel before the carried dataset and cache"
+        size = lease(repo, "size")
+        assert size.returncode == 0 and "would travel" in size.stdout
+        travelling = set(lease(repo, "files").stdout.splitlines())
+        # what a run reads stays; what it does not read stays behind
+        assert {"public/models/manifest.json", "public/models/emdm-t2m-web.weights.f16.pt",
+                "public/models/emdm-t2m-web.meanstd.f32", "scripts/gpu/lease-train.sh"} <= travelling
+        assert not any(f.endswith(".onnx") or f.startswith("public/models/text/") for f in travelling)
+        # nothing on disk was touched, and a commit in the meantime is refused (it would delete the models)
+        assert (repo / "public/models/emdm-t2m-web.onnx").is_file()
+        (repo / "note.txt").write_text("x")
+        git(repo, "add", "note.txt")
+        commit = subprocess.run(["git", "-C", str(repo), "-c", "user.email=t@t", "-c", "user.name=t", "commit", "-q",
+                                 "-m", "during a lease"], capture_output=True, text=True)
+        assert commit.returncode != 0 and "lease.sh restore" in commit.stderr
+        git(repo, "reset", "-q", "--", "note.txt")
+        (repo / "note.txt").unlink()
+    finally:
+        assert lease(repo, "restore").returncode == 0
+    assert git(repo, "ls-files") == before
+    assert git(repo, "status", "--porcelain") == ""
+    assert not (repo / ".git/hooks/pre-commit").exists()
+    assert lease(repo, "restore").returncode == 0            # idempotent
+
+
+def test_shrink_refuses_a_staged_change(repo):
+    (repo / "README.md").write_text((repo / "README.md").read_text() + "\nstaged\n")
+    git(repo, "add", "README.md")
+    try:
+        out = lease(repo, "shrink")
+        assert out.returncode == 2 and "staged changes" in out.stderr
+    finally:
+        git(repo, "checkout", "-q", "HEAD", "--", "README.md")
+
+
+def test_the_slice_runs_from_exactly_what_travels(repo, tmp_path):
+    """prepare (pack + caption cache through the trainer's own loading), shrink, copy what would travel, and
+    run the device command there on the CPU: the weights come back in $OUT, continued from the shipped model,
+    written during the run (--weights-minutes) and loadable by export."""
+    data = _run(tmp_path, *_user_folder(tmp_path))             # a small dataset through emdm.data.prepare
+    prep = lease(repo, "prepare", str(data))
+    assert prep.returncode == 0, prep.stdout[-2000:] + prep.stderr[-2000:]
+    assert (repo / ".lease/dataset.emdmpack").is_file() and list((repo / ".lease/cache").glob("text-*.npy"))
+    assert lease(repo, "shrink").returncode == 0
+    try:
+        travel = tmp_path / "travel"
+        assert lease(repo, "stage", str(travel)).returncode == 0
+    finally:
+        assert lease(repo, "restore").returncode == 0
+    assert not (travel / "public/models/text").exists() and (travel / ".lease/dataset.emdmpack").is_file()
+    out_dir = tmp_path / "OUT"
+    env = {**os.environ, "PYTHON": sys.executable, "OUT": str(out_dir), "AMP": "off", "BATCH": "2", "PROBE_STEPS": "2",
+           "MAX_STEPS": "4", "WEIGHTS_MINUTES": "0", "LEASE_SECONDS": "300", "LEASE_WORK": str(tmp_path / "work"),
+           "EMDM_TRAIN_EXTRA": "--device cpu --d-width 32 --threads 1 --log-every 1"}
+    env.pop("PYTHONPATH", None)
+    run = subprocess.run(["bash", "scripts/gpu/lease-train.sh", "t2m"], cwd=travel, env=env, capture_output=True,
+                         text=True, timeout=900)
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    assert "lease-train: done" in run.stdout
+    st = load_weights_file(out_dir / "emdm-t2m-web.pt")
+    assert st["step"] == 4 and st["meta"]["task"] == "text"
+    assert st["meta"]["init"]["runs"], "the run must record the shipped weights it continued from"
+    assert st["meta"]["args"]["balance_alpha"] == 0.5 and st["meta"]["args"]["batch"] == 2
+    assert all(torch.isfinite(v).all() for v in st["G_ema"].values())
+    assert (out_dir / "emdm-t2m-web.pt").stat().st_size <= 16 * 2**20      # what a device call returns per file
+    for f in ("log.csv", "train.out", "env.txt"):
+        assert (out_dir / f).is_file(), f
+    # written during the run, not only at its end: train.out names every write
+    log = (out_dir / "train.out").read_text()
+    assert "weights at step 3 -> " in log and "weights at step 4 -> " in log
+
+
+def test_the_slice_says_what_is_missing(tmp_path):
+    env = {**os.environ, "PYTHON": sys.executable, "OUT": str(tmp_path / "OUT")}
+    bad = subprocess.run(["bash", str(paths.REPO_ROOT / "scripts/gpu/lease-train.sh"), "t2x"], env=env,
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "unknown run 't2x'" in bad.stderr
