@@ -2,14 +2,14 @@
 
 The committed fixtures were made on one CPU. onnxruntime's kernels follow the CPU's instruction set (AVX2,
 AVX-512, …; no switch turns that off), so on another CPU every model output differs in its last bits, and a
-sampling chain amplifies that: guidance multiplies it by 2.5 per step, later windows of a timeline start from
+sampling chain amplifies that: guidance multiplies a conditional output's error by 2.5 at each step, later windows of a timeline start from
 earlier ones, and recovering joints integrates heading and root velocity over the frames. A fixed tolerance is
 either too tight for another CPU or too loose to see a change in our code, so each array gets its own:
 
     tolerance = max(ARRAY_RTOL, MARGIN × AMPLIFICATION[case][array]) × the array's largest value (at least 1)
 
 ``AMPLIFICATION`` is measured: every model output of a regeneration multiplied by (1 + 1e-6 N(0, 1)) (``step_noise``,
-about 8 float32 ulps, more than AVX2 and AVX-512 kernels differ by), the largest relative difference each array
+4 to 8 float32 ulps, more than AVX2 and AVX-512 kernels differ by), the largest relative difference each array
 shows against the clean regeneration, worst of ``SEEDS`` seeds. Arrays a model output never reaches (inputs, noise,
 metadata-like arrays) keep ``ARRAY_RTOL``. Re-measure after a change to a fixture writer or the sampler:
 
@@ -38,7 +38,6 @@ import numpy as np
 from emdm import fixtures as fx
 from emdm import manifest as mf
 from emdm import paths
-from emdm import sample as _sample  # noqa: F401  (imported before moved_schedule patches its make_schedule)
 from emdm.model import schedule as schedule_mod
 from emdm.motion import edit_fixture, mask_fixture
 
@@ -55,9 +54,12 @@ MARGIN = 2                 # tolerance ÷ the measured amplification of NOISE (s
 # steps (DDIM's the most); 2.3e-4 for tiny-edit's joints (three timeline windows, each continuing the one before,
 # then recover_joints integrating 48 frames' heading and root velocity at up to 17 m from the origin).
 # How big is a real CPU's difference? tiny-edit, committed from an AVX2 machine and regenerated on the AVX-512 one,
-# differs by 0.04–0.21 of these (its joints by 3.4e-5 of their largest value, 0.15 of 2.3e-4); the
-# committed diffusion-t2m-web run differed from an AVX-512 one by 1.3e-5 of its largest value (0.09 of 1.5e-4):
-# another CPU is about 2e-7 relative per model output. MARGIN 2 leaves about 10× that.
+# differs by 0.04–0.21 of these (its joints by up to 3.4e-5 of their largest value); the diffusion-t2m-web case,
+# once committed from another CPU, differed from the AVX-512 run by 1.3e-5 (0.09 of 1.5e-4): another CPU is about
+# 2e-7 relative per model output, and MARGIN 2 leaves about 10× that. On the AMD EPYC ATEN_CPU_CAPABILITY
+# (avx2, default), OPENBLAS_CORETYPE (Haswell, Sandybridge), NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL", 1 or 2
+# OMP/OpenBLAS threads and 2 onnxruntime threads leave every array bit for bit the same: only onnxruntime's
+# kernels, which follow the instruction set, move them.
 AMPLIFICATION: dict[str, dict[str, float]] = {
     "tiny": {"final_x": 4.8e-6, "final_x_smooth": 3.8e-6, "step_x0": 2.6e-6, "final_x_interval": 2.3e-6,
              "final_x_uncond": 2.0e-6},
@@ -299,8 +301,8 @@ def main(argv: list[str] | None = None) -> int:
     names = args.cases or list(regenerators())
     unknown = [n for n in names if n not in regenerators()]
     if unknown:
-        print(f"fixture_drift: --cases: no parity case {', '.join(map(repr, unknown))}; cases: {', '.join(regenerators())}",
-              file=sys.stderr)
+        print(f"fixture_drift: --cases: no parity case {', '.join(map(repr, unknown))}; "
+              f"cases: {', '.join(regenerators())}", file=sys.stderr)
         return 2
     with tempfile.TemporaryDirectory() as tmp:
         if args.check:

@@ -30,9 +30,9 @@ from emdm.model import schedule as schedule_mod
 
 COMMITTED = fd.COMMITTED
 REGENERATE = "regenerate them with `.venv/bin/python -m emdm.fixtures` and commit tests/fixtures/parity/"
-WRITERS = {"tiny": REGENERATE + " --only tiny", "tiny-ddim": REGENERATE + " --only tiny tiny-ddim",
-           "tiny-mask": "regenerate it with `.venv/bin/python -m emdm.motion.mask_fixture` and commit tests/fixtures/parity/tiny-mask.*",
-           "tiny-edit": "regenerate it with `.venv/bin/python -m emdm.motion.edit_fixture` and commit tests/fixtures/parity/tiny-edit.*"}
+WRITER = "regenerate it with `.venv/bin/python -m emdm.motion.{}_fixture` and commit tests/fixtures/parity/tiny-{}.*"
+WRITERS = {"tiny": REGENERATE, "tiny-ddim": REGENERATE, "tiny-mask": WRITER.format("mask", "mask"),
+           "tiny-edit": WRITER.format("edit", "edit")}
 CASES = ["tiny", "tiny-ddim", "tiny-mask", "tiny-edit"] + [f"model-{n}" for n in fd.shipped_models()]
 NOISE_SEED = 7              # not one of fd.SEEDS, which measured the table
 read_case, compare_case = fd.read_case, fd.compare_case
@@ -114,16 +114,17 @@ def test_model_case_is_current(regenerated, name):
 @pytest.mark.parametrize("name", CASES)
 def test_noise_like_another_cpu_s_is_not_drift_and_the_table_covers_it(regenerated, name):
     """A regeneration with 1e-6 relative noise in every model output (about 5× what AVX2 and AVX-512 kernels differ
-    by) still matches the committed case; and it moves no array more than 1.5× its AMPLIFICATION (measured with other
-    noise seeds): an array missing there, or a chain that now amplifies more, needs `python -m emdm.fixture_drift`
-    re-run and its table copied into emdm/fixture_drift.py."""
+    by) still matches the committed case; and it moves no array more than MARGIN × its AMPLIFICATION (measured with
+    other noise seeds; seed 7 moves tiny-edit's loop_in_place_joints 1.42× as far): an array missing there, or a
+    chain that now amplifies more, needs `python -m emdm.fixture_drift` re-run and its table copied into
+    emdm/fixture_drift.py."""
     noisy = regenerated(name, NOISE_SEED)
     assert not compare_case(COMMITTED, noisy, name)
     _, clean = read_case(regenerated(name), name)
     _, moved = read_case(noisy, name)
     table = fd.AMPLIFICATION.get(name, {})
     over = {k: (fd.rel_diff(clean[k], moved[k]), table.get(k, 0.0)) for k in clean
-            if fd.rel_diff(clean[k], moved[k]) > 1.5 * table.get(k, 0.0)}
+            if fd.rel_diff(clean[k], moved[k]) > fd.MARGIN * table.get(k, 0.0)}
     assert not over, (f"{name}: noise of {fd.NOISE:g} moves these arrays more than emdm.fixture_drift.AMPLIFICATION "
                       f"says (measured, table): {over}; re-measure with `.venv/bin/python -m emdm.fixture_drift`")
 
