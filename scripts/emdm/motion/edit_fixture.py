@@ -26,7 +26,7 @@ Every sampling call is a ``run`` (JSON ``runs``, in call order) with its frames,
 its noise arrays: ``<prefix>x_T``, then for k = steps−1..0 ``<prefix>z_<k>`` and ``<prefix>eps_<k>`` when drawn
 (the order emdm.sample draws them; ``emdm.fixtures.draw_noise``). Features are de-normalised throughout. Operations 3–5 start from the stored
 ``timeline_features`` (not a re-computed timeline), so their errors do not compound.
-tests/python/test_edit.py regenerates the fixture and compares (the fixture must be current).
+tests/python/test_fixtures_current.py regenerates the fixture and compares (``emdm.fixture_drift``: it must be current).
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ which ``src/sampler/mask.ts`` must compute alike:
 Arrays: ``known`` (16, 263) normalised (the first 16 frames of the recover fixture's real clip through
 tiny.meanstd.f32), ``keep`` (16, 263) 0/1, ``cond``; the DDGAN run (4 steps, guidance 2.5): ``x_T``, ``z_k``,
 ``eps_k``, ``final_x``; the DDIM run (5 steps, guidance 2.5): the same keys prefixed ``ddim_``.
-tests/python/test_sample_mask.py regenerates it and compares (the fixture must be current).
+tests/python/test_fixtures_current.py regenerates it and compares (``emdm.fixture_drift``: the fixture must be current).
 """
 
 from __future__ import annotations
