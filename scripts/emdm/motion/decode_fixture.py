@@ -1,0 +1,62 @@
+"""The decoding parity fixture: de-normalised features → the joints a motion is shown with, by
+``emdm.motion.decode.decode_joints``, which the page's ``decodeJoints`` (src/motion/decode.ts) must reproduce
+(tests/unit/decodeParity.test.ts) and Python's must still give (tests/python/test_motion_decode.py):
+
+    .venv/bin/python -m emdm.motion.decode_fixture        # writes tests/fixtures/parity/decode.{json,bin}
+
+Cases (each: ``<case>_features`` (F, 263) input, then ``<case>_smooth`` (recovered and smoothed),
+``<case>_cleanup`` (recovered, feet cleaned up) and ``<case>_both`` (both: the page's default)):
+
+* ``real``: the recover fixture's features (a real retargeted clip from the prepared dataset);
+* ``generated``: the emdm-t2m-web parity run's features (a generated motion: jittery, not a rigid skeleton);
+* ``contacts``: the generated features with their contact channels replaced by long runs on both feet and a
+  body sunk 10 cm, so pinning, the knee IK and the floor lift all act on every frame.
+
+The input features are copied into the fixture, so it does not go stale when the other fixtures change.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from emdm import paths
+from emdm.fixtures import write_case
+from emdm.motion.decode import decode_joints
+from emdm.motion.ik_fixture import read_case_array
+
+PARITY_DIR = paths.FIXTURES_DIR / "parity"
+NAME = "decode"
+MODES = {"smooth": (True, False), "cleanup": (False, True), "both": (True, True)}
+
+
+def case_features() -> dict[str, np.ndarray]:
+    real = read_case_array(PARITY_DIR, "recover", "features")
+    gen = read_case_array(PARITY_DIR, "model-emdm-t2m-web", "features")
+    contacts = gen.copy()
+    f = np.arange(len(contacts))
+    contacts[:, -4:] = 0.0
+    contacts[:, -4] = contacts[:, -3] = (f % 16 < 9)        # left foot down, then up
+    contacts[:, -2] = contacts[:, -1] = (f % 16 >= 7)       # right foot, overlapping
+    contacts[:, 3] -= 0.1                                     # root height and every joint's (ric y): under the floor
+    contacts[:, 5:67:3] -= 0.1
+    return {"real": real, "generated": gen, "contacts": contacts}
+
+
+def build() -> tuple[dict, dict[str, np.ndarray]]:
+    arrays, cases = {}, {}
+    for name, feats in case_features().items():
+        arrays[f"{name}_features"] = feats
+        for mode, (smooth, cleanup) in MODES.items():
+            arrays[f"{name}_{mode}"] = decode_joints(feats, smooth=smooth, foot_cleanup=cleanup)
+        cases[name] = {"frames": int(feats.shape[0])}
+    return {"cases": cases, "modes": {m: {"smooth": s, "footCleanup": c} for m, (s, c) in MODES.items()}}, arrays
+
+
+def main() -> int:
+    meta, arrays = build()
+    print(write_case(PARITY_DIR, NAME, meta, arrays))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

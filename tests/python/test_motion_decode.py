@@ -1,0 +1,55 @@
+"""emdm.motion.decode: the joints a motion is shown with, as the page decodes them (src/motion/decode.ts; the
+parity fixture tests/fixtures/parity/decode.* is checked from the TypeScript side by tests/unit/decodeParity.test.ts)."""
+
+import numpy as np
+
+from emdm import skeleton as sk
+from emdm.motion import decode_fixture
+from emdm.motion.decode import decode_joints
+from emdm.motion.features import recover_joints
+from emdm.motion.foot_contact import cleanup_foot_contacts
+from emdm.motion.ik_fixture import read_case_array
+
+REGENERATE = "regenerate with `.venv/bin/python -m emdm.motion.decode_fixture` and commit tests/fixtures/parity/decode.*"
+
+
+def test_fixture_is_current():
+    meta, arrays = decode_fixture.build()
+    for key, want in arrays.items():
+        got = read_case_array(decode_fixture.PARITY_DIR, decode_fixture.NAME, key)
+        # numpy float64 arithmetic on float32 inputs read from files: no kernel varies with the CPU here
+        np.testing.assert_allclose(got, want, atol=1e-6, err_msg=f"{key}: {REGENERATE}")
+
+
+def test_off_is_recover_joints_and_smoothing_keeps_the_path():
+    feats = decode_fixture.case_features()["generated"]       # a generated walk: 1.9 m in 2 s
+    np.testing.assert_array_equal(decode_joints(feats, smooth=False, foot_cleanup=False), recover_joints(feats).astype(np.float32))
+    raw, smooth = recover_joints(feats), decode_joints(feats, smooth=True, foot_cleanup=False)
+    # a low-pass filter: the root gets from A to B as it did (sway and jitter go, the way stays)
+    way = lambda j: np.linalg.norm(j[-5, 0, [0, 2]] - j[5, 0, [0, 2]])   # noqa: E731
+    assert way(raw) > 1.5 and abs(way(smooth) - way(raw)) < 0.01 * way(raw)
+
+
+def test_contact_runs_pin_the_feet_on_the_floor_and_keep_the_legs():
+    feats = decode_fixture.case_features()["contacts"]
+    before = decode_joints(feats, smooth=True, foot_cleanup=False)
+    after = decode_joints(feats, smooth=True, foot_cleanup=True)
+    assert before[:, sk.FOOT_JOINTS, 1].min() < -0.01              # the case sinks the body below the floor
+    assert after[:, sk.FOOT_JOINTS, 1].min() >= -1e-6              # lifted
+    left = feats[:, -4] > 0.5
+    for s in range(len(left) - 1):                                   # inside a left-foot run: the ankle stays put
+        if left[s] and left[s + 1] and (s < 1 or left[s - 1]) and (s + 2 >= len(left) or left[s + 2]):
+            step = np.linalg.norm(after[s + 1, 7, [0, 2]] - after[s, 7, [0, 2]])
+            assert step < 2e-3, f"frame {s}: the pinned ankle slides {step:.4f} m"
+    thigh = lambda j: np.linalg.norm(j[:, 4] - j[:, 1], axis=1)     # noqa: E731 - l_knee - l_hip
+    np.testing.assert_allclose(thigh(after), thigh(before), atol=1e-5)   # IK keeps the bone lengths
+
+
+def test_wrong_contacts_shape_is_refused():
+    j = np.zeros((5, 22, 3), np.float32)
+    try:
+        cleanup_foot_contacts(j, np.zeros((4, 4)), sk.PARENTS, sk.FOOT_JOINTS)
+    except ValueError as e:
+        assert "contacts has shape (4, 4)" in str(e)
+    else:
+        raise AssertionError("accepted contacts of the wrong length")
