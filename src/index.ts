@@ -25,7 +25,7 @@ export { recoverJoints, denormalize } from './motion/recover';
 export { smoothJoints } from './motion/smooth';
 export { decodeJoints, type DecodeOptions } from './motion/decode';
 export { alignSegment, appendSegment, headingAt, pinKeptRoot, pinRoot, rootPose } from './motion/stitch';
-export { cleanupFootContacts, contactsFromFeatures, footSkate } from './motion/footContact';
+export { cleanupFootContacts, contactsFromFeatures, footSkate, plantContacts } from './motion/footContact';
 export { type BvhUnits, bvhFileName, writeBVH } from './export/bvh';
 export { characterToBVH, characterToGLB } from './export/characterGlb';
 export { CharacterLoadError, MAX_CHARACTER_BYTES, loadCharacter } from './character/retarget/load';

@@ -3,9 +3,12 @@
  * (features [259:263]); where a joint is in contact it should neither skate nor sink.
  *
  *  1. Floor: each frame whose lowest foot joint is below y = 0 is lifted as a whole by that depth.
- *  2. Pinning: every contact run (≥ 2 frames with contact > 0.5) of a foot joint is held at the
- *     run's mean position (y clamped to ≥ 0); the correction fades in/out linearly over `blend`
- *     frames on both sides, so there are no pops.
+ *  2. Pinning: every contact run (≥ 2 frames with contact > 0.5, gaps of up to `gap` frames closed:
+ *     the model's contacts flicker) of a foot joint is held at the run's mean position (y clamped to
+ *     ≥ 0); the correction fades in/out linearly over `blend` frames on both sides, so there are no
+ *     pops. A run whose joint strays more than `maxDrift` m (horizontally) from that mean is no plant
+ *     but a contact the model got wrong (a foot sliding at walking speed): pinning it would hold the
+ *     foot and then throw it up to a metre in one frame, so it is left as it is.
  *  3. Legs follow: a moved ankle re-solves its knee with two-bone IK (hip fixed, thigh and shin
  *     lengths of that frame kept, bending in the original knee's plane); the ball-of-foot joint is
  *     then placed at its original distance from the ankle, towards its pinned target; step 1 is
@@ -20,7 +23,14 @@ export type FootRig = Pick<Skeleton, 'parents' | 'footJoints'>;
 export interface FootCleanupOptions {
   threshold?: number;
   blend?: number;
+  /** contact gaps of up to this many frames are closed (flicker) */
+  gap?: number;
+  /** a run whose joint strays farther than this (m, horizontally) from its mean is not pinned */
+  maxDrift?: number;
 }
+
+/** Defaults of the clean-up (emdm.motion.foot_contact has the same). */
+export const FOOT_CLEANUP = { threshold: 0.5, blend: 3, gap: 2, maxDrift: 0.1 } as const;
 
 /** The 4 contact channels of de-normalised features (frames × dim) → frames × 4. */
 export function contactsFromFeatures(features: Float32Array, frames: number, dim = 263): Float32Array {
@@ -30,29 +40,69 @@ export function contactsFromFeatures(features: Float32Array, frames: number, dim
   return out;
 }
 
-function runs(contact: (f: number) => boolean, frames: number): [number, number][] {
-  const out: [number, number][] = [];
+/** [first, last] of each run of contact frames, gaps of up to `gap` frames closed, runs of ≥ 2 frames. */
+function runs(contact: (f: number) => boolean, frames: number, gap: number): [number, number][] {
+  const raw: [number, number][] = [];
   let s = -1;
   for (let f = 0; f <= frames; f++) {
     const on = f < frames && contact(f);
     if (on && s < 0) s = f;
     if (!on && s >= 0) {
-      if (f - s >= 2) out.push([s, f - 1]);
+      const last = raw[raw.length - 1];
+      if (last && s - last[1] - 1 <= gap) last[1] = f - 1;
+      else raw.push([s, f - 1]);
       s = -1;
     }
   }
-  return out;
+  return raw.filter(([a, b]) => b - a + 1 >= 2);
 }
 
 /** Two-bone IK (hip, target ankle, pole knee, thigh and shin lengths) → knee and reached ankle. */
 export const solveKnee = twoBoneIK;
+
+/** Per foot joint (l_ankle, l_foot, r_ankle, r_foot), the contact runs the clean-up pins: [first, last] and the
+ *  joint's mean position over the run. */
+export function plantRuns(
+  joints: Float32Array,
+  frames: number,
+  contacts: Float32Array,
+  rig: FootRig,
+  { threshold = FOOT_CLEANUP.threshold, gap = FOOT_CLEANUP.gap, maxDrift = FOOT_CLEANUP.maxDrift }: FootCleanupOptions = {},
+): { first: number; last: number; mean: V3 }[][] {
+  const J = rig.parents.length;
+  return rig.footJoints.map((j, c) => {
+    const out: { first: number; last: number; mean: V3 }[] = [];
+    for (const [s, e] of runs((f) => contacts[f * 4 + c] > threshold, frames, gap)) {
+      let m: V3 = [0, 0, 0];
+      for (let f = s; f <= e; f++) m = add(m, [joints[(f * J + j) * 3], joints[(f * J + j) * 3 + 1], joints[(f * J + j) * 3 + 2]]);
+      m = scale(m, 1 / (e - s + 1));
+      let drift = 0;
+      for (let f = s; f <= e; f++) drift = Math.max(drift, Math.hypot(joints[(f * J + j) * 3] - m[0], joints[(f * J + j) * 3 + 2] - m[2]));
+      if (drift <= maxDrift) out.push({ first: s, last: e, mean: m });
+    }
+    return out;
+  });
+}
+
+/**
+ * The contacts (frames × 4, 0/1) of the runs the clean-up pins: what a character's retargeting holds still, so it
+ * pins the same frames as our skeleton (contacts the model got wrong, on a sliding foot, are not pinned there either).
+ */
+export function plantContacts(joints: Float32Array, frames: number, contacts: Float32Array, rig: FootRig, o: FootCleanupOptions = {}): Float32Array {
+  if (contacts.length !== frames * 4) throw new RangeError(`plantContacts: contacts has ${contacts.length} values, expected ${frames} × 4`);
+  const out = new Float32Array(frames * 4);
+  plantRuns(joints, frames, contacts, rig, o).forEach((rs, c) => {
+    for (const { first, last } of rs) for (let f = first; f <= last; f++) out[f * 4 + c] = 1;
+  });
+  return out;
+}
 
 export function cleanupFootContacts(
   joints: Float32Array,
   frames: number,
   contacts: Float32Array,
   rig: FootRig,
-  { threshold = 0.5, blend = 3 }: FootCleanupOptions = {},
+  { threshold = FOOT_CLEANUP.threshold, blend = FOOT_CLEANUP.blend, gap = FOOT_CLEANUP.gap, maxDrift = FOOT_CLEANUP.maxDrift }: FootCleanupOptions = {},
 ): Float32Array {
   const J = rig.parents.length;
   if (joints.length !== frames * J * 3) throw new RangeError(`cleanupFootContacts: joints has ${joints.length} values, expected ${frames} × ${J} × 3`);
@@ -73,14 +123,12 @@ export function cleanupFootContacts(
   floor();
 
   // 2. pinned targets per foot joint: target[f] and weight[f] in [0, 1]
+  const planted = plantRuns(out, frames, contacts, rig, { threshold, gap, maxDrift });
   const targets = rig.footJoints.map((j, c) => {
     const tgt: (V3 | null)[] = new Array(frames).fill(null);
     const wgt = new Float64Array(frames);
-    for (const [s, e] of runs((f) => contacts[f * 4 + c] > threshold, frames)) {
-      let m: V3 = [0, 0, 0];
-      for (let f = s; f <= e; f++) m = add(m, at(f, j));
-      m = scale(m, 1 / (e - s + 1));
-      m[1] = Math.max(0, m[1]);
+    for (const { first: s, last: e, mean } of planted[c]) {
+      const m: V3 = [mean[0], Math.max(0, mean[1]), mean[2]];
       for (let f = Math.max(0, s - blend); f <= Math.min(frames - 1, e + blend); f++) {
         const w = f < s ? 1 - (s - f) / (blend + 1) : f > e ? 1 - (f - e) / (blend + 1) : 1;
         if (w > wgt[f]) {

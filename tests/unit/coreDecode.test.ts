@@ -1,7 +1,7 @@
 import fs from 'node:fs';
 import path from 'node:path';
 import { describe, expect, it } from 'vitest';
-import { cleanupFootContacts, contactsFromFeatures, footSkate } from '../../src/motion/footContact';
+import { cleanupFootContacts, contactsFromFeatures, footSkate, plantContacts } from '../../src/motion/footContact';
 import { forwardKinematics } from '../../src/motion/ik';
 import { denormalize, parseMeanStd, recoverJoints } from '../../src/motion/recover';
 import { smoothJoints } from '../../src/motion/smooth';
@@ -109,6 +109,29 @@ describe('smoothing and foot-contact clean-up', () => {
     const contacts = contactsFromFeatures(fx.get('features'), frames);
     const rig = { parents: sk.parents, footJoints: sk.footJoints };
     const out = cleanupFootContacts(joints, frames, contacts, rig);
-    expect(footSkate(out, frames, contacts, rig)).toBeLessThanOrEqual(footSkate(joints, frames, contacts, rig) * 0.5 + 1e-6);
+    // on the runs that are plants (the foot strays ≤ 10 cm): held still; the rest is the model's own
+    const planted = plantContacts(joints, frames, contacts, rig);
+    expect(footSkate(out, frames, planted, rig)).toBeLessThan(1e-3);
+    expect(footSkate(out, frames, planted, rig)).toBeLessThanOrEqual(footSkate(joints, frames, planted, rig) * 0.5 + 1e-6);
+  });
+
+  it('leaves a sliding "contact" alone instead of holding the foot and throwing it a metre (flickering runs joined)', () => {
+    const frames = 30;
+    const { joints } = skatingWalk(frames);
+    const rig = { parents: sk.parents, footJoints: sk.footJoints };
+    // the left foot slides 8 cm a frame (a walk) while the model says "contact", with a one-frame flicker
+    for (let f = 0; f < frames; f++) for (const j of [7, 10]) joints[(f * J + j) * 3 + 2] += 0.08 * f;
+    const contacts = new Float32Array(frames * 4);
+    for (let f = 5; f < 25; f++) if (f !== 14) contacts[f * 4] = contacts[f * 4 + 1] = 1;
+    const out = cleanupFootContacts(joints, frames, contacts, rig);
+    let worst = 0;
+    for (let f = 1; f < frames; f++) worst = Math.max(worst, Math.abs(out[(f * J + 7) * 3 + 2] - out[((f - 1) * J + 7) * 3 + 2]));
+    expect(worst).toBeLessThan(0.1); // the foot keeps its own 8 cm steps (pinned: held, then 0.7 m in one frame)
+    expect(Array.from(plantContacts(joints, frames, contacts, rig)).every((v) => v === 0)).toBe(true);
+    // a real plant with the same flicker is one run, pinned through the flicker
+    const still = skatingWalk(frames);
+    const out2 = cleanupFootContacts(still.joints, frames, contacts, rig);
+    expect(footSkate(out2, frames, plantContacts(still.joints, frames, contacts, rig), rig)).toBeLessThan(1e-4);
+    expect(Math.abs(out2[(14 * J + 7) * 3 + 2] - out2[(13 * J + 7) * 3 + 2])).toBeLessThan(1e-6);
   });
 });

@@ -10,7 +10,7 @@ import { type GltfJson, loadCharacter, readGlb, withoutTextures, writeGlb } from
 import type { BoneMapping } from '../../src/character/retarget/mapping';
 import { type RetargetMotion, type RetargetResult, retargetMotion } from '../../src/character/retarget/retarget';
 import { characterToBVH, characterToGLB } from '../../src/export/characterGlb';
-import { cleanupFootContacts, contactsFromFeatures } from '../../src/motion/footContact';
+import { cleanupFootContacts, contactsFromFeatures, plantContacts } from '../../src/motion/footContact';
 import { restPositions } from '../../src/character/rig';
 import { JOINT_NAMES, type JointName } from '../../src/skeleton';
 import fs from 'node:fs';
@@ -24,10 +24,11 @@ const J = sk.joints.length;
 function motionOf(name: string): RetargetMotion & { label: string } {
   const fx = loadCase(name);
   const frames = fx.meta.frames;
-  const contacts = contactsFromFeatures(fx.get('features'), frames);
-  // as the page generates them (generate({ footCleanup: true })): contact joints pinned on our skeleton
-  const joints = cleanupFootContacts(fx.get('joints'), frames, contacts, sk);
-  return { label: name, joints, frames, fps: sk.fps, contacts };
+  const raw = contactsFromFeatures(fx.get('features'), frames);
+  // as the page generates them (generate({ footCleanup: true })): contact joints pinned on our skeleton, and the
+  // character told the runs that were pinned (plantContacts), as the page's character picker does
+  const joints = cleanupFootContacts(fx.get('joints'), frames, raw, sk);
+  return { label: name, joints, frames, fps: sk.fps, contacts: plantContacts(joints, frames, raw, sk) };
 }
 // generated motions (what the page puts on a character) and a real mocap clip (a kick: long one-leg
 // stances on a nearly straight leg, where holding the foot exactly would swing the leg past 10°)

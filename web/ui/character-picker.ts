@@ -8,7 +8,7 @@
 // the character plays its previous clip until the new one is ready.
 import { AnimationMixer, Group, LoopOnce, type AnimationAction, type Object3D } from 'three';
 import { clone as cloneSkinned } from 'three/addons/utils/SkeletonUtils.js';
-import { type CharacterFile, CharacterLoadError, type LoadedCharacter, loadCharacter, type BoneInfo, type BoneMapping, MappingError, mappingFromJSON, mappingToJSON, validateMapping, type RetargetResult, retargetMotionAsync, type BvhUnits, bvhFileName, characterToBVH, characterToGLB, contactsFromFeatures, type Motion, JOINT_NAMES, type JointName, type Skeleton } from '../../src/index';
+import { type CharacterFile, CharacterLoadError, type LoadedCharacter, loadCharacter, type BoneInfo, type BoneMapping, MappingError, mappingFromJSON, mappingToJSON, validateMapping, type RetargetResult, retargetMotionAsync, type BvhUnits, bvhFileName, characterToBVH, characterToGLB, contactsFromFeatures, plantContacts, type Motion, JOINT_NAMES, type JointName, type Skeleton } from '../../src/index';
 import { saveBlob } from './dom';
 
 export interface PickerHost {
@@ -281,7 +281,8 @@ export class CharacterPicker {
     const job = new AbortController();
     p.job = job;
     if (p.root !== ch.root) restLike(p.root, ch.root);
-    const contacts = m.features.length === m.frames * 263 ? contactsFromFeatures(m.features, m.frames) : null;
+    // the runs our clean-up pinned (m.joints are the shown, cleaned joints): the character holds the same frames still
+    const contacts = m.features.length === m.frames * 263 ? plantContacts(m.joints, m.frames, contactsFromFeatures(m.features, m.frames), this.host.skeleton) : null;
     const stats = this.stats;
     stats.started++;
     const start = performance.now();

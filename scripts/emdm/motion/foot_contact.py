@@ -4,8 +4,11 @@ The model predicts per-frame contacts for l_ankle, l_foot, r_ankle, r_foot (feat
 in contact it should neither skate nor sink:
 
 1. Floor: each frame whose lowest foot joint is below y = 0 is lifted as a whole by that depth.
-2. Pinning: every contact run (≥ 2 frames with contact > threshold) of a foot joint is held at the run's mean
-   position (y clamped to ≥ 0); the correction fades in and out linearly over ``blend`` frames on both sides.
+2. Pinning: every contact run (≥ 2 frames with contact > threshold, gaps of up to ``gap`` frames closed: the
+   model's contacts flicker) of a foot joint is held at the run's mean position (y clamped to ≥ 0); the correction
+   fades in and out linearly over ``blend`` frames on both sides. A run whose joint strays more than ``max_drift``
+   m (horizontally) from that mean is no plant but a contact the model got wrong (a foot sliding at walking speed):
+   pinning it would hold the foot and then throw it up to a metre in one frame, so it is left as it is.
 3. Legs follow: a moved ankle re-solves its knee with two-bone IK (hip fixed, that frame's thigh and shin lengths,
    bending in the original knee's plane); the ball of the foot is placed at its original distance from the ankle,
    towards its pinned target; step 1 is repeated at the end (vertical lifts only).
@@ -21,17 +24,39 @@ def contacts_from_features(features: np.ndarray) -> np.ndarray:
     return np.asarray(features, np.float64)[:, -4:]
 
 
-def _runs(on: np.ndarray) -> list[tuple[int, int]]:
-    """[first, last] of every run of True of at least 2 frames."""
-    out, s = [], -1
+FOOT_CLEANUP = {"threshold": 0.5, "blend": 3, "gap": 2, "max_drift": 0.1}   # footContact.ts FOOT_CLEANUP
+
+
+def _runs(on: np.ndarray, gap: int) -> list[tuple[int, int]]:
+    """[first, last] of every run of True, gaps of up to ``gap`` frames closed, of at least 2 frames."""
+    raw, s = [], -1
     for f in range(len(on) + 1):
         cur = f < len(on) and bool(on[f])
         if cur and s < 0:
             s = f
         if not cur and s >= 0:
-            if f - s >= 2:
-                out.append((s, f - 1))
+            if raw and s - raw[-1][1] - 1 <= gap:
+                raw[-1][1] = f - 1
+            else:
+                raw.append([s, f - 1])
             s = -1
+    return [(a, b) for a, b in raw if b - a + 1 >= 2]
+
+
+def plant_runs(joints: np.ndarray, contacts: np.ndarray, threshold: float = FOOT_CLEANUP["threshold"],
+               gap: int = FOOT_CLEANUP["gap"], max_drift: float = FOOT_CLEANUP["max_drift"], foot_joints=None) -> list:
+    """Per foot joint (l_ankle, l_foot, r_ankle, r_foot), the contact runs the clean-up pins: (first, last, mean
+    position) — footContact.ts ``plantRuns``."""
+    from emdm import skeleton as sk
+
+    out = []
+    for c, j in enumerate(sk.FOOT_JOINTS if foot_joints is None else foot_joints):
+        rs = []
+        for s, e in _runs(contacts[:, c] > threshold, gap):
+            m = joints[s:e + 1, j].astype(np.float64).sum(axis=0) / (e - s + 1)
+            if np.hypot(joints[s:e + 1, j, 0] - m[0], joints[s:e + 1, j, 2] - m[2]).max() <= max_drift:
+                rs.append((s, e, m))
+        out.append(rs)
     return out
 
 
@@ -63,8 +88,9 @@ def _floor(out: np.ndarray, foot_joints) -> None:
     out[:, :, 1] -= lift[:, None]
 
 
-def cleanup_foot_contacts(joints: np.ndarray, contacts: np.ndarray, parents, foot_joints, threshold: float = 0.5,
-                          blend: int = 3) -> np.ndarray:
+def cleanup_foot_contacts(joints: np.ndarray, contacts: np.ndarray, parents, foot_joints,
+                          threshold: float = FOOT_CLEANUP["threshold"], blend: int = FOOT_CLEANUP["blend"],
+                          gap: int = FOOT_CLEANUP["gap"], max_drift: float = FOOT_CLEANUP["max_drift"]) -> np.ndarray:
     """(frames, J, 3) joints and (frames, 4) contacts → cleaned joints (frames, J, 3) float32, computed in float64."""
     out = np.array(joints, np.float64)
     frames = out.shape[0]
@@ -74,11 +100,12 @@ def cleanup_foot_contacts(joints: np.ndarray, contacts: np.ndarray, parents, foo
         raise ValueError("cleanup_foot_contacts: foot_joints must list l_ankle, l_foot, r_ankle, r_foot")
     _floor(out, foot_joints)
     targets = []
+    planted = plant_runs(out, contacts, threshold, gap, max_drift, foot_joints)
     for c, j in enumerate(foot_joints):
         tgt = np.zeros((frames, 3))
         wgt = np.zeros(frames)
-        for s, e in _runs(contacts[:, c] > threshold):
-            m = out[s:e + 1, j].sum(axis=0) / (e - s + 1)
+        for s, e, mean in planted[c]:
+            m = mean.copy()
             m[1] = max(0.0, m[1])
             for f in range(max(0, s - blend), min(frames - 1, e + blend) + 1):
                 w = 1 - (s - f) / (blend + 1) if f < s else (1 - (f - e) / (blend + 1) if f > e else 1.0)
