@@ -41,14 +41,14 @@ const FIELDS: [string, number][] = [['translation', 3], ['rotation', 4], ['scale
 
 /** Counts and node transforms of a parsed glTF JSON (throws refuse(...) naming the list, node and field). */
 export function checkDocument(json: Record<string, unknown>, refuse: Refuse): void {
-  for (const [key, list] of Object.entries(json)) {
-    if (Array.isArray(list) && list.length > MAX_ENTRIES) throw refuse('too-complex', `its '${key}' list has ${list.length} entries; up to ${MAX_ENTRIES} are read`);
-  }
   const nodes = Array.isArray(json.nodes) ? json.nodes : [];
   if (nodes.length > MAX_NODES) throw refuse('too-complex', `it has ${nodes.length} nodes; characters of up to ${MAX_NODES} nodes are read`);
   const skins = Array.isArray(json.skins) ? json.skins : [];
   const bones = skins.reduce((a: number, s) => a + (Array.isArray((s as { joints?: unknown })?.joints) ? (s as { joints: unknown[] }).joints.length : 0), 0);
   if (bones > MAX_BONES) throw refuse('too-complex', `its skins have ${bones} bones; characters of up to ${MAX_BONES} bones are read`);
+  for (const [key, list] of Object.entries(json)) {
+    if (Array.isArray(list) && list.length > MAX_ENTRIES) throw refuse('too-complex', `its '${key}' list has ${list.length} entries; up to ${MAX_ENTRIES} are read`);
+  }
   nodes.forEach((n, i) => {
     if (!n || typeof n !== 'object') return;
     for (const [field, len] of FIELDS) {
