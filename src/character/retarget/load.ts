@@ -377,6 +377,7 @@ export async function loadCharacter(files: CharacterFile[], opts: LoadCharacterO
     throw new CharacterLoadError('unsupported', file, `it declares a VRM extension (${json.extensions?.VRMC_vrm ? `VRMC_vrm ${json.extensions.VRMC_vrm.specVersion ?? '?'}` : 'VRM 0.x'}) that three-vrm could not read as a humanoid; re-export it as VRM 0.x or 1.0, or as a plain .glb`);
   }
   const root = gltf.scene;
+  if (!root) throw new CharacterLoadError('no-skin', file, 'it has no scene to show (no scenes, or none with nodes)');
   const nodeIndex = new Map<Object3D, number>();
   for (const [obj, assoc] of gltf.parser.associations as Map<Object3D, { nodes?: number }>) {
     if (assoc && Number.isInteger(assoc.nodes) && (obj as { isObject3D?: boolean }).isObject3D) {
