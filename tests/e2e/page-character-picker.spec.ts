@@ -99,6 +99,34 @@ test('hostile characters: the page keeps drawing, the current character stays an
   expect(await page.locator('#char-map select[data-joint="pelvis"] option').count(), 'the bone-map editor still lists the shown character').toBeLessThan(100);
   await stillHero();
 
+  // a 70 MB .gltf of one data: URI (made in the page): refused before it is decoded, the page drawing throughout
+  const bigDt = await page.evaluateHandle(() => {
+    const d = new DataTransfer();
+    d.items.add(new File(['{"asset":{"version":"2.0"},"buffers":[{"byteLength":4,"uri":"data:application/octet-stream;base64,', 'A'.repeat(70_000_000), '"}]}'], 'embedded.gltf'));
+    return d;
+  });
+  const bigStalls = await watchStalls(page);
+  await page.dispatchEvent('#viewport', 'drop', { dataTransfer: bigDt });
+  await expect(page.locator('#char-status')).toContainText('embedded.gltf: its glTF JSON is 66.8 MB; up to 16 MB is read');
+  await page.waitForTimeout(300);
+  const big = await bigStalls();
+  console.log(`[70 MB data: URI] longest task ${Math.round(big.longTask)} ms, longest frame gap ${Math.round(big.frameGap)} ms`);
+  expect(big.longTask).toBeLessThan(1000);
+  await stillHero();
+  // the rig as a .gltf whose buffer is a 12 MB data: URI (its bytes padded): read in slices, then shown
+  const padded = Buffer.concat([Buffer.from(bin!), Buffer.alloc(9 * 1024 * 1024)]);
+  const rigJson = readGlb(rig, 'x').json;
+  rigJson.buffers = [{ byteLength: bin!.byteLength, uri: `data:application/octet-stream;base64,${padded.toString('base64')}` }];
+  const embedDt = await dataTransfer(page, [{ name: 'embedded-rig.gltf', bytes: new TextEncoder().encode(JSON.stringify(rigJson)) }]);
+  const embedStalls = await watchStalls(page);
+  await page.dispatchEvent('#viewport', 'drop', { dataTransfer: embedDt });
+  await expect(page.locator('#char-status')).toContainText('embedded-rig.gltf: 22/22 joints mapped', { timeout: 60_000 });
+  const embed = await embedStalls();
+  console.log(`[12 MB data: URI rig] longest task ${Math.round(embed.longTask)} ms, longest frame gap ${Math.round(embed.frameGap)} ms`);
+  expect(embed.longTask).toBeLessThan(1000);
+  await drop(page, [{ name: 'hero.glb', bytes: rig }]);
+  await expect(page.locator('#char-status')).toContainText('hero.glb: 22/22 joints mapped');
+
   // a rig at 1e308: refused at load, naming the node; the current character stays and takes the next motion
   const far = readGlb(rig, 'x');
   far.json.nodes[1].translation = [1e308, 0, 0];
