@@ -366,6 +366,10 @@ export function planTimeline(segments: readonly TimelineSegment[], limits: EditL
       throw new EditError(`${label(i)} is ${Number.isFinite(s.seconds) ? fmtS(s.seconds) : String(s.seconds)} long; a segment needs at least one frame (${fmtS(1 / fps)}): set its seconds or remove it`, i);
     }
     if (!Number.isInteger(s.seed) || s.seed < 0 || s.seed > 0xffffffff) throw new EditError(`${label(i)}: seed must be an integer in 0…4294967295, got ${s.seed}`, i);
+    // a segment longer than the whole timeline may be, refused before its windows are counted (1e308 s has Infinity frames)
+    if (s.seconds > MAX_TIMELINE_SECONDS) {
+      throw new EditError(`${label(i)} is ${s.seconds < 1e6 ? fmtS(s.seconds) : `${s.seconds.toExponential(2)} s`} long; a timeline is at most ${MAX_TIMELINE_SECONDS} s: shorten it`, i);
+    }
     frames.push(n);
     windows.push(windowSizes(n, i === 0 ? maxFrames : maxFrames - C, maxFrames - C));
   });

@@ -219,7 +219,8 @@ async function main(): Promise<void> {
     return;
   }
   // Show something right away: the motion the URL (or the defaults) describe.
-  if (AUTO_GENERATE) void (timeline.restoredFromUrl ? timeline.generateAll() : generate(controls.read())).catch(() => undefined);
+  // A link whose timeline was refused generates nothing: its message stays in the panel (not replaced by another motion).
+  if (AUTO_GENERATE && !timeline.linkRefused) void (timeline.restoredFromUrl ? timeline.generateAll() : generate(controls.read())).catch(() => undefined);
 }
 
 main().catch((e) => {

@@ -29,6 +29,117 @@ async function drop(page: Page, files: { name: string; bytes: Uint8Array }[]): P
   await page.dispatchEvent('#viewport', 'drop', { dataTransfer: dt });
 }
 
+/** Files as a DataTransfer made in the page (the test's own decoding done before anything is measured). */
+async function dataTransfer(page: Page, files: { name: string; bytes: Uint8Array }[]) {
+  const payload = files.map((f) => ({ name: f.name, b64: Buffer.from(f.bytes).toString('base64') }));
+  return page.evaluateHandle((list) => {
+    const d = new DataTransfer();
+    for (const f of list) d.items.add(new File([Uint8Array.from(atob(f.b64), (c) => c.charCodeAt(0))], f.name));
+    return d;
+  }, payload);
+}
+
+/** From now on, the page's longest main-thread task and longest gap between animation frames (ms). */
+async function watchStalls(page: Page): Promise<() => Promise<{ longTask: number; frameGap: number }>> {
+  await page.evaluate(() => {
+    const w = window as unknown as { stalls: { longTask: number; frameGap: number; on: boolean } };
+    const s = (w.stalls = { longTask: 0, frameGap: 0, on: true });
+    new PerformanceObserver((l) => {
+      for (const e of l.getEntries()) s.longTask = Math.max(s.longTask, e.duration);
+    }).observe({ type: 'longtask' });
+    let last = performance.now();
+    const tick = (t: number) => {
+      s.frameGap = Math.max(s.frameGap, t - last);
+      last = t;
+      if (s.on) requestAnimationFrame(tick);
+    };
+    requestAnimationFrame(tick);
+  });
+  return () => page.evaluate(() => (window as unknown as { stalls: { longTask: number; frameGap: number } }).stalls);
+}
+
+test('hostile characters: the page keeps drawing, the current character stays and performs, each file says why', async ({ page }) => {
+  const watch = watchPage(page);
+  await page.goto('/?noauto=1&backend=wasm');
+  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+  await page.evaluate(() => window.emdm.generate({ text: 'a person walks forward', seconds: 2, steps: 1, seed: 3 }));
+  const rig = buildRigGlb(manifest.skeleton, RIGS[0]);
+  await drop(page, [{ name: 'hero.glb', bytes: rig }]);
+  await page.waitForFunction(() => window.emdmCharacter.active, null, { timeout: 30_000 });
+  const stillHero = async () => {
+    expect(await page.evaluate(() => [window.emdmCharacter.active, window.emdmCharacter.name, window.emdmCharacter.builtInVisible])).toEqual([true, 'hero.glb', false]);
+    await page.evaluate(() => window.emdm.seek(0.2));
+    await page.waitForTimeout(200);
+    const a = await page.evaluate(() => window.emdmCharacter.jointWorld('l_ankle'));
+    await page.evaluate(() => window.emdm.seek(1.5));
+    await page.waitForTimeout(200);
+    const b = await page.evaluate(() => window.emdmCharacter.jointWorld('l_ankle'));
+    expect(a && b && a.concat(b).every(Number.isFinite)).toBe(true);
+    expect(Math.hypot(a![0] - b![0], a![1] - b![1], a![2] - b![2]), 'the current character still performs').toBeGreaterThan(0.05);
+  };
+
+  // 100 000 bones (a ~5 MB GLB): refused with a message, the page drawing throughout
+  const { json, bin } = readGlb(rig, 'x');
+  const first = json.nodes.length;
+  for (let i = 0; i < 100_000; i++) json.nodes.push({ name: `bone${i}`, translation: [0, 0.01, 0] });
+  json.skins[0].joints = json.skins[0].joints.concat(Array.from({ length: 100_000 }, (_, i) => first + i));
+  const hostile = writeGlb(json, bin!);
+  const dt = await dataTransfer(page, [{ name: 'bones.glb', bytes: hostile }]);
+  const stalls = await watchStalls(page);
+  const t0 = Date.now();
+  await page.dispatchEvent('#viewport', 'drop', { dataTransfer: dt });
+  await expect(page.locator('#char-status')).toContainText(`bones.glb: it has ${first + 100_000} nodes; characters of up to 5000 nodes are read`);
+  const refusedMs = Date.now() - t0;
+  await page.waitForTimeout(300);
+  const s = await stalls();
+  console.log(`[hostile glb] ${(hostile.byteLength / 1048576).toFixed(1)} MB, ${first + 100_000} nodes: refused in ${refusedMs} ms; longest task ${Math.round(s.longTask)} ms, longest frame gap ${Math.round(s.frameGap)} ms`);
+  expect(s.longTask, 'no main-thread task of a second or more').toBeLessThan(1000);
+  expect(s.frameGap, 'no second without a frame').toBeLessThan(1000);
+  expect(await page.evaluate(() => window.emdm.notices().some((n) => n.kind === 'error' && /bones\.glb: it has \d+ nodes.*the current character stays/.test(n.text)))).toBe(true);
+  expect(await page.locator('#char-map select[data-joint="pelvis"] option').count(), 'the bone-map editor still lists the shown character').toBeLessThan(100);
+  await stillHero();
+
+  // a 70 MB .gltf of one data: URI (made in the page): refused before it is decoded, the page drawing throughout
+  const bigDt = await page.evaluateHandle(() => {
+    const d = new DataTransfer();
+    d.items.add(new File(['{"asset":{"version":"2.0"},"buffers":[{"byteLength":4,"uri":"data:application/octet-stream;base64,', 'A'.repeat(70_000_000), '"}]}'], 'embedded.gltf'));
+    return d;
+  });
+  const bigStalls = await watchStalls(page);
+  await page.dispatchEvent('#viewport', 'drop', { dataTransfer: bigDt });
+  await expect(page.locator('#char-status')).toContainText('embedded.gltf: its glTF JSON is 66.8 MB; up to 16 MB is read');
+  await page.waitForTimeout(300);
+  const big = await bigStalls();
+  console.log(`[70 MB data: URI] longest task ${Math.round(big.longTask)} ms, longest frame gap ${Math.round(big.frameGap)} ms`);
+  expect(big.longTask).toBeLessThan(1000);
+  await stillHero();
+  // the rig as a .gltf whose buffer is a 12 MB data: URI (its bytes padded): read in slices, then shown
+  const padded = Buffer.concat([Buffer.from(bin!), Buffer.alloc(9 * 1024 * 1024)]);
+  const rigJson = readGlb(rig, 'x').json;
+  rigJson.buffers = [{ byteLength: bin!.byteLength, uri: `data:application/octet-stream;base64,${padded.toString('base64')}` }];
+  const embedDt = await dataTransfer(page, [{ name: 'embedded-rig.gltf', bytes: new TextEncoder().encode(JSON.stringify(rigJson)) }]);
+  const embedStalls = await watchStalls(page);
+  await page.dispatchEvent('#viewport', 'drop', { dataTransfer: embedDt });
+  await expect(page.locator('#char-status')).toContainText('embedded-rig.gltf: 22/22 joints mapped', { timeout: 60_000 });
+  const embed = await embedStalls();
+  console.log(`[12 MB data: URI rig] longest task ${Math.round(embed.longTask)} ms, longest frame gap ${Math.round(embed.frameGap)} ms`);
+  expect(embed.longTask).toBeLessThan(1000);
+  await drop(page, [{ name: 'hero.glb', bytes: rig }]);
+  await expect(page.locator('#char-status')).toContainText('hero.glb: 22/22 joints mapped');
+
+  // a rig at 1e308: refused at load, naming the node; the current character stays and takes the next motion
+  const far = readGlb(rig, 'x');
+  far.json.nodes[1].translation = [1e308, 0, 0];
+  await drop(page, [{ name: 'far.glb', bytes: writeGlb(far.json, far.bin!) }]);
+  await expect(page.locator('#char-status')).toContainText(/far\.glb: node 1 .*translation holds 1e\+308/);
+  await stillHero();
+  const done = await page.evaluate(() => (window as unknown as { emdmCharacter: { retargets: { finished: number } } }).emdmCharacter.retargets.finished);
+  await page.evaluate(() => window.emdm.generate({ text: 'a person jumps', seconds: 2, steps: 1, seed: 4 }));
+  await page.waitForFunction((n) => (window as unknown as { emdmCharacter: { retargets: { finished: number } } }).emdmCharacter.retargets.finished > n, done, { timeout: 60_000 });
+  await stillHero();
+  watch.assertClean();
+});
+
 test('a dropped character performs the motion; bad files keep the built-in one; downloads reload', async ({ page, baseURL }) => {
   const watch = watchPage(page);
   const external = watchExternalRequests(page, baseURL!);

@@ -276,6 +276,11 @@ test.describe('demo page: faults', () => {
     const r = await page.evaluate(() => window.emdm.generate({ mode: 'action', seconds: 1, steps: 1 }));
     expect(r.frames).toBe(20);
     await expect(page.locator('#status-dot')).toHaveClass(/\bready\b/); // the action model works: ready
+    // a prompt now (the page is in action mode) is refused naming what failed, never answered with the selected action
+    const done = await page.evaluate(() => window.emdm.counters.generations);
+    await expect(page.evaluate(() => window.emdm.generate({ text: 'a person walks forward', seconds: 1, steps: 1 }))).rejects.toThrow(new RegExp(`${name}[^ ]*\\.onnx: not found`));
+    expect(await page.evaluate(() => window.emdm.counters.generations)).toBe(done);
+    await expect(page.locator('#error-title')).toContainText(name);
   });
 
   test('a diffusion model that fails to load turns compare off in the URL too, and the status says what failed', async ({ page }) => {

@@ -134,6 +134,26 @@ test('a shared link with a timeline generates that timeline on load', async ({ b
   await other.close();
 });
 
+test('a link whose timeline cannot be used says why, keeps saying it, and generates nothing in its place', async ({ browser }) => {
+  const cases: [string, RegExp][] = [
+    ['[[', /could not be read: not JSON/],
+    [`[${'['.repeat(1000)}${']'.repeat(1000)}]`, /segment 1 must be \[prompt, seconds, seed\], got a list of 1 entry/],
+    [JSON.stringify(Array.from({ length: 201 }, (_, i) => ['walk', 0.1, i])), /201 segments; at most 200/],
+    [JSON.stringify([['a person walks forward', 2, 1], ['a person waves', 1e308, 2]]), /segment 2 is 1\.00e\+308 s long; a timeline is at most 60 s/],
+  ];
+  for (const [tl, msg] of cases) {
+    const other = await browser.newPage();
+    await other.goto(`/?backend=wasm&steps=${STEPS}&tl=${encodeURIComponent(tl)}`);
+    await other.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+    await expect.poll(() => other.evaluate(() => window.emdm.edit!.message()), { timeout: 30_000 }).toMatch(msg);
+    await other.waitForTimeout(2000); // the message stays: nothing generated over it
+    expect(await other.evaluate(() => window.emdm.edit!.message())).toMatch(msg);
+    await expect(other.locator('#edit-panel .tl-body > .tl-message')).toBeVisible();
+    expect(await other.evaluate(() => [window.emdm.counters.generations, window.emdm.counters.stepsRun])).toEqual([0, 0]);
+    await other.close();
+  }
+});
+
 test('a regenerated timeline\'s link reproduces it exactly (every window depends on its own request only)', async ({ browser }) => {
   // 2 steps: the step above t = 0.55 is the one a timeline's windows begin together (with 1 step none is); the int8
   // file's windows are begun one by one, or the link's all-at-once load would round them differently (up to 22 cm)

@@ -63,6 +63,8 @@ describe('timeline plan', () => {
     ['an empty prompt', [three10s[0], three10s[1], { prompt: '   ', seconds: 2, seed: 1 }], 2, /segment 3: the prompt is empty; type what the character should do in it, or remove the segment/],
     ['61 s in all', [...three10s, { prompt: 'walk', seconds: 31, seed: 4 }], null, /the timeline is 61 s in all; at most 60 s/],
     ['no segments', [], null, /no segments/],
+    ['a 1e308 s segment (a link)', [three10s[0], { prompt: 'walk', seconds: 1e308, seed: 1 }], 1, /segment 2 is 1\.00e\+308 s long; a timeline is at most 60 s/],
+    ['a 61 s segment', [{ prompt: 'walk', seconds: 61, seed: 1 }], 0, /segment 1 is 61 s long; a timeline is at most 60 s/],
   ])('refuses %s with a message naming the segment', (_what, segs, segment, msg) => {
     let err: unknown;
     try {

@@ -1,6 +1,6 @@
 // The timeline in the page URL (web/ui/timeline-url.ts): what a shared link restores, and what it refuses.
 import { describe, expect, it } from 'vitest';
-import { TimelineUrlError, decodeTimeline, encodeTimeline, withTimeline } from '../../web/ui/timeline-url';
+import { MAX_SEGMENTS, MAX_TIMELINE_CHARS, TimelineUrlError, decodeTimeline, encodeTimeline, withTimeline } from '../../web/ui/timeline-url';
 
 const actions = ['sit', 'walk'];
 
@@ -21,6 +21,19 @@ describe('timeline URL', () => {
       ['[[', /not JSON/], ['{}', /a list of \[prompt, seconds, seed\]/], ['[["a",1]]', /segment 1 must be \[prompt, seconds, seed\]/],
       ['[["a","x",1]]', /segment 1: seconds must be a number/], ['[["a",1,-1]]', /seed must be an integer/],
       ['[["a",1,1],[{"a":"fly"},1,1]]', /segment 2: expected a prompt or \{"a": action\} with an action of sit, walk/],
+    ] as const) {
+      expect(() => decodeTimeline(v, actions)).toThrow(TimelineUrlError);
+      expect(() => decodeTimeline(v, actions)).toThrow(msg);
+    }
+  });
+
+  it('refuses a deeply nested, an over-long or a 201-segment link with its own error, not a stack overflow', () => {
+    const deep = `[${'['.repeat(250_000)}${']'.repeat(250_000)}]`;
+    const many = JSON.stringify(Array.from({ length: MAX_SEGMENTS + 1 }, (_, i) => ['walk', 0.1, i]));
+    for (const [v, msg] of [
+      [deep, /characters; at most/], [`[${'['.repeat(50_000)}"a",1,1${']'.repeat(50_000)}]`, /segment 1 must be \[prompt, seconds, seed\], got a list of 1 entry/],
+      [`[[${'['.repeat(50_000)}${']'.repeat(50_000)},1,1]]`, /segment 1: expected a prompt or \{"a": action\}.*got a list of 1 entry/],
+      [many, /201 segments; at most 200/], [`[["${'x'.repeat(MAX_TIMELINE_CHARS)}",1,1]]`, /characters; at most/],
     ] as const) {
       expect(() => decodeTimeline(v, actions)).toThrow(TimelineUrlError);
       expect(() => decodeTimeline(v, actions)).toThrow(msg);

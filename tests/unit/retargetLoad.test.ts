@@ -1,7 +1,8 @@
 // Loading users' characters (src/character/retarget/load.ts): bad files get a typed error that says what
 // is wrong; nothing outside the given files is fetched; .gltf + .bin + images are packed into one GLB.
 import { describe, expect, it } from 'vitest';
-import { CharacterLoadError, type CharacterFile, MAX_CHARACTER_BYTES, loadCharacter, readGlb, writeGlb } from '../../src/character/retarget/load';
+import { CharacterLoadError, type CharacterFile, MAX_CHARACTER_BYTES, loadCharacter, packDocument, readGlb, writeGlb } from '../../src/character/retarget/load';
+import { MAX_BONES, MAX_JSON_BYTES, MAX_NODES } from '../../src/character/retarget/check';
 import { mappingToJSON, mappingFromJSON } from '../../src/character/retarget/mapping';
 import { manifestSkeleton } from './coreFixtures';
 import { RIGS, buildRigGlb } from './retargetRigs';
@@ -130,5 +131,52 @@ describe('loading a character', () => {
     expect([v1.vrm, v1.mappingSource]).toEqual(['1.0', 'vrm']);
     const v0 = await loadCharacter([{ name: 'b.vrm', data: buildRigGlb(sk, RIGS[3]) }]);
     expect([v0.vrm, v0.mappingSource, v0.unmapped]).toEqual(['0.x', 'vrm', []]);
+  });
+
+  it('refuses a rig that could never move (1e308, NaN-free but huge, or scaled to nothing), naming the node', async () => {
+    const [r, msg] = await reason([{ name: 'far.glb', data: edited((j) => (j.nodes[2].translation = [1e308, 0, 0])) }]);
+    expect(r).toBe('bad-rig');
+    expect(msg).toMatch(/far\.glb: node 2 \('[^']*'\) translation holds 1e\+308; every value must be a finite number within ±1e\+6/);
+    expect(await reason([{ name: 's.glb', data: edited((j) => (j.nodes[1].scale = [1, 'x', 1])) }])).toEqual(['bad-rig', expect.stringMatching(/node 1 .*scale holds x/)]);
+    expect(await reason([{ name: 'm.glb', data: edited((j) => (j.nodes[1].matrix = [1, 0])) }])).toEqual(['bad-rig', expect.stringMatching(/node 1 .*matrix must be a list of 16 numbers/)]);
+    // each scale is allowed, their product along the chain is not
+    expect(await reason([{ name: 'grow.glb', data: edited((j) => j.nodes.forEach((n: any) => (n.scale = [1000, 1000, 1000]))) }])).toEqual(['bad-rig', expect.stringMatching(/bone '[^']+' lies at \(.*\) at rest/)]);
+    expect(await reason([{ name: 'flat.glb', data: edited((j) => j.nodes.forEach((n: any) => (n.scale = [0, 0, 0]))) }])).toEqual(['bad-rig', expect.stringMatching(/mapped bones all lie at one point/)]);
+  });
+
+  it('refuses a document of more nodes, bones or JSON than a character has, before building it', async () => {
+    const many = (count: number) => edited((j) => {
+      for (let i = j.nodes.length; i < count; i++) j.nodes.push({ name: `extra${i}` });
+    });
+    expect(await reason([{ name: 'crowd.glb', data: many(MAX_NODES + 1) }])).toEqual(['too-complex', expect.stringMatching(`crowd.glb: it has ${MAX_NODES + 1} nodes; characters of up to ${MAX_NODES} nodes are read`)]);
+    const bones = edited((j) => {
+      for (let i = j.nodes.length; i < MAX_BONES + 1; i++) j.nodes.push({ name: `b${i}` });
+      j.skins[0].joints = Array.from({ length: MAX_BONES + 1 }, (_, i) => i);
+    });
+    expect(await reason([{ name: 'bony.glb', data: bones }])).toEqual(['too-complex', expect.stringMatching(`its skins have ${MAX_BONES + 1} bones`)]);
+    const big = new Uint8Array(MAX_JSON_BYTES + 1).fill(0x20);
+    expect(await reason([{ name: 'big.gltf', data: big }])).toEqual(['too-large', expect.stringMatching(/big\.gltf: its glTF JSON is 16\.0 MB; up to 16 MB is read/)]);
+  });
+
+  it('decodes a large base64 data: URI in slices (the event loop turns meanwhile), byte for byte', async () => {
+    const bytes = new Uint8Array(9 * 1024 * 1024 + 5).map((_, i) => (i * 2654435761) >>> 24);
+    const b64 = Buffer.from(bytes).toString('base64');
+    const wrapped = b64.replace(/(.{76})/g, '$1\n'); // MIME-style line breaks, which atob skips
+    for (const text of [b64, wrapped]) {
+      let turns = 0;
+      let on = true;
+      const tick = () => {
+        turns++;
+        if (on) setImmediate(tick);
+      };
+      setImmediate(tick);
+      const doc = { asset: { version: '2.0' }, buffers: [{ byteLength: bytes.length, uri: `data:application/octet-stream;base64,${text}` }] };
+      const packed = await packDocument(doc, null, 'big.gltf', () => null);
+      on = false;
+      expect(turns).toBeGreaterThanOrEqual(8);
+      expect(Buffer.from(packed.bin.subarray(0, bytes.length)).equals(Buffer.from(bytes))).toBe(true); // (toEqual walks 9 M entries for minutes)
+      expect(doc.buffers[0].uri.startsWith('data:')).toBe(true); // the caller's document is not changed
+    }
+    await expect(packDocument({ buffers: [{ byteLength: 3, uri: 'data:;base64,AB%D' }] }, null, 'x.gltf', () => null)).rejects.toThrow(/undecodable data: URI/);
   });
 });

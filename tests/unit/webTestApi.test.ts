@@ -20,6 +20,17 @@ function ctx(over: Partial<RequestContext> = {}): RequestContext {
 }
 
 describe('checkRequest', () => {
+  it('a prompt asks for a text motion and an action for an action, whatever mode the page is in', () => {
+    const inAction = ctx({ current: { ...defaultState(LIMITS, 1), mode: 'action' } });
+    expect(checkRequest({ text: 'a person walks' }, inAction).state).toMatchObject({ mode: 'text', text: 'a person walks' });
+    const inText = ctx({ current: { ...defaultState(LIMITS, 1), mode: 'text' } });
+    expect(checkRequest({ action: LIMITS.actions[1] }, inText).state).toMatchObject({ mode: 'action', action: LIMITS.actions[1] });
+    expect(checkRequest({ seed: 3 }, inAction).state.mode).toBe('action'); // neither: the page's mode
+    expect(() => checkRequest({ mode: 'action', text: 'a person walks' }, inText)).toThrow(/text is the prompt of mode 'text', not of mode 'action'/);
+    expect(() => checkRequest({ mode: 'random', action: LIMITS.actions[0] }, inText)).toThrow(/action is for mode 'action', not mode 'random'/);
+    expect(() => checkRequest({ text: 'a', action: LIMITS.actions[0] }, inText)).toThrow(/give mode 'text' or 'action'/);
+  });
+
   it('fills the fields a request leaves out from the current state', () => {
     const r = checkRequest({ text: 'a person jumps', seed: 7 }, ctx());
     expect(r.state).toEqual({ ...defaultState(LIMITS, 42), text: 'a person jumps', seed: 7 });

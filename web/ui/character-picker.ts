@@ -93,6 +93,10 @@ export class CharacterPicker {
   private readonly dlGlb: HTMLButtonElement;
   private readonly dlBvh: HTMLButtonElement;
   private readonly stats: RetargetStats = { started: 0, finished: 0, cancelled: 0, last: null };
+  /** files read so far (a newer one wins over one still loading) */
+  private loads = 0;
+  /** a character being readied off the stage (the motion being put on it), null when none */
+  private pending: Shown | null = null;
 
   constructor(private readonly host: PickerHost) {
     const el = document.createElement('section');
@@ -227,34 +231,53 @@ export class CharacterPicker {
     return this.files.find((f) => /\.(glb|gltf|vrm)$/i.test(f.name))?.name ?? '';
   }
 
+  /**
+   * Read the files given and, once the new character is loaded, mapped and performing the motion on screen, put it
+   * on the stage in place of the current one; a file that fails at any point leaves the current character as it was.
+   */
   private async load(mapping?: BoneMapping): Promise<void> {
+    const token = ++this.loads;
+    this.pending?.job?.abort(); // a character still being readied gives way to this one
     let ch: LoadedCharacter;
     try {
       ch = await loadCharacter(this.files, { mapping });
     } catch (e) {
-      if (e instanceof CharacterLoadError && e.reason === 'not-humanoid' && e.bones && !mapping) {
+      if (e instanceof CharacterLoadError && e.reason === 'not-humanoid' && e.bones && !mapping && token === this.loads) {
         // offer the editor with what was recognised
         this.showEditor(e.bones, e.mapping ?? {});
       }
       throw e;
     }
-    this.useBuiltIn(false);
+    if (token !== this.loads) return; // another file came meanwhile
     const holder = new Group();
     holder.name = 'user-character';
     holder.add(ch.root);
-    this.host.add(holder);
     const summary = `${ch.name}: ${22 - ch.unmapped.length}/22 joints mapped (${ch.mappingSource === 'vrm' ? `VRM ${ch.vrm} humanoid` : ch.mappingSource === 'user' ? 'your map' : 'by bone names'}), read in ${Math.round(ch.loadMs)} ms`;
-    const shown: Shown = { ch, root: ch.root, holder, mixer: null, action: null, result: null, job: null, twin: null, summary };
-    this.shown = shown;
+    const next: Shown = { ch, root: ch.root, holder, mixer: null, action: null, result: null, job: null, twin: null, summary };
+    const motion = this.motion;
+    if (motion) {
+      // off the stage until the motion is on it: the current character keeps playing meanwhile
+      this.say(`Putting the motion on ${ch.name}…`);
+      this.pending = next;
+      try {
+        if (!(await this.perform(next, motion, ch, (f) => this.say(`Putting the motion on ${ch.name}… ${Math.round(f * 100)}%`)))) return;
+      } finally {
+        if (this.pending === next) this.pending = null;
+      }
+      if (token !== this.loads) return;
+    }
+    this.useBuiltIn(false);
+    this.host.add(holder);
+    this.shown = next;
     this.host.builtIn.visible = false;
     this.back.hidden = false;
     this.showEditor(ch.boneInfos, ch.mapping);
-    // with a motion on screen, the status says what was read once that motion is on the character
-    this.say(this.motion ? `Putting the motion on ${ch.name}…` : summary);
-    const first = this.retarget();
+    this.say(summary);
+    this.dlGlb.disabled = !next.result;
+    this.dlBvh.disabled = !next.result;
+    if (this.motion !== motion) this.retarget().catch((e) => this.fail(e)); // a newer motion came meanwhile
     if (this.compareMotion) this.compare(this.compareMotion);
     this.host.changed?.();
-    await first;
   }
 
   /** Put the motion on screen on the visitor's character (the previous clip plays until it is ready). */
@@ -344,6 +367,10 @@ export class CharacterPicker {
   }
 
   useBuiltIn(say = true): void {
+    if (say) {
+      this.loads++; // the visitor's choice: a character still loading does not replace it
+      this.pending?.job?.abort();
+    }
     const s = this.shown;
     if (s) {
       this.drop(s);
@@ -364,7 +391,12 @@ export class CharacterPicker {
   private showEditor(bones: BoneInfo[], mapping: BoneMapping): void {
     this.rows.replaceChildren();
     this.editorBones = bones;
-    const names = bones.map((b) => b.name);
+    const names = editorChoices(bones, mapping);
+    if (names.length < bones.length) {
+      this.rows.append(Object.assign(document.createElement('p'), {
+        className: 'hint', textContent: `The lists offer ${names.length} of its ${bones.length} bones (the mapped ones, then the first in the file).`,
+      }));
+    }
     for (const j of JOINT_NAMES) {
       const row = document.createElement('label');
       row.className = mapping[j] ? 'char-map-row' : 'char-map-row unmapped';
@@ -470,6 +502,19 @@ export class CharacterPicker {
   get element(): HTMLElement {
     return this.el;
   }
+}
+
+/** The most bones each of the editor's 22 lists offers (22 × 100 000 options froze the page for a minute). */
+export const MAX_EDITOR_BONES = 300;
+
+/** The bone names the editor offers: the mapped ones first, then the file's order, at most MAX_EDITOR_BONES. */
+export function editorChoices(bones: readonly BoneInfo[], mapping: BoneMapping): string[] {
+  const names = new Set(Object.values(mapping).filter((n): n is string => typeof n === 'string' && bones.some((b) => b.name === n)));
+  for (const b of bones) {
+    if (names.size >= MAX_EDITOR_BONES) break;
+    names.add(b.name);
+  }
+  return [...names];
 }
 
 /** Put every node under `copy` (a SkeletonUtils clone) at the transform of the same node under `original` (at rest). */

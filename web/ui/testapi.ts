@@ -199,6 +199,12 @@ export function checkRequest(req: unknown, ctx: RequestContext): CheckedRequest 
     }
     s.action = action;
   }
+  // a prompt asks for a text motion, an action for that action: never the other mode's motion (a page that fell back
+  // to action mode after its text model failed would run the selected action for a prompt)
+  if (text !== undefined && action !== undefined && mode === undefined) throw new TypeError(`${where}: give mode 'text' or 'action' with both a text and an action`);
+  if (mode === undefined && (text !== undefined || action !== undefined)) s.mode = text !== undefined ? 'text' : 'action';
+  if (mode !== undefined && text !== undefined && mode !== 'text') throw new TypeError(`${where}: text is the prompt of mode 'text', not of mode ${show(mode)}`);
+  if (mode !== undefined && action !== undefined && mode !== 'action') throw new TypeError(`${where}: action is for mode 'action', not mode ${show(mode)}`);
   const compare = r.compare;
   if (compare !== undefined) {
     if (typeof compare !== 'boolean') throw new TypeError(`${where}: compare must be true or false, not ${show(compare)}`);

@@ -10,6 +10,17 @@ export function encodeTimeline(segments: readonly TimelineSegment[]): string {
   return JSON.stringify(segments.map((s) => [s.action !== undefined && s.action !== '' ? { a: s.action } : (s.prompt ?? ''), s.seconds, s.seed >>> 0]));
 }
 
+/** The most segments a link may hold (a 60 s timeline of 0.3 s segments), and the most characters of its value. */
+export const MAX_SEGMENTS = 200;
+export const MAX_TIMELINE_CHARS = MAX_SEGMENTS * 2100;
+
+/** A short, bounded description of any JSON value for a message (JSON.stringify of a deeply nested list overflows the stack). */
+function preview(v: unknown): string {
+  if (Array.isArray(v)) return `a list of ${v.length} entr${v.length === 1 ? 'y' : 'ies'}`;
+  if (v !== null && typeof v === 'object') return `an object with keys ${Object.keys(v).slice(0, 5).map((k) => JSON.stringify(k.slice(0, 20))).join(', ') || '(none)'}`;
+  return (JSON.stringify(v) ?? String(v)).slice(0, 60);
+}
+
 export class TimelineUrlError extends Error {
   constructor(message: string) {
     super(`The timeline in the URL (parameter '${TIMELINE_PARAM}') could not be read: ${message}`);
@@ -23,6 +34,7 @@ export class TimelineUrlError extends Error {
  * (`actions`) and the seeds are.
  */
 export function decodeTimeline(value: string, actions: readonly string[]): TimelineSegment[] {
+  if (value.length > MAX_TIMELINE_CHARS) throw new TimelineUrlError(`${value.length} characters; at most ${MAX_TIMELINE_CHARS}`);
   let doc: unknown;
   try {
     doc = JSON.parse(value);
@@ -30,17 +42,17 @@ export function decodeTimeline(value: string, actions: readonly string[]): Timel
     throw new TimelineUrlError(`not JSON (${(e as Error).message})`);
   }
   if (!Array.isArray(doc)) throw new TimelineUrlError('expected a list of [prompt, seconds, seed] entries');
-  if (doc.length > 200) throw new TimelineUrlError(`${doc.length} segments; at most 200`);
+  if (doc.length > MAX_SEGMENTS) throw new TimelineUrlError(`${doc.length} segments; at most ${MAX_SEGMENTS}`);
   return doc.map((e, i) => {
     const where = `segment ${i + 1}`;
-    if (!Array.isArray(e) || e.length !== 3) throw new TimelineUrlError(`${where} must be [prompt, seconds, seed], got ${JSON.stringify(e)?.slice(0, 60)}`);
+    if (!Array.isArray(e) || e.length !== 3) throw new TimelineUrlError(`${where} must be [prompt, seconds, seed], got ${preview(e)}`);
     const [what, seconds, seed] = e as [unknown, unknown, unknown];
-    if (typeof seconds !== 'number' || !Number.isFinite(seconds)) throw new TimelineUrlError(`${where}: seconds must be a number, got ${JSON.stringify(seconds)}`);
-    if (typeof seed !== 'number' || !Number.isInteger(seed) || seed < 0 || seed > 0xffffffff) throw new TimelineUrlError(`${where}: seed must be an integer in 0…4294967295, got ${JSON.stringify(seed)}`);
+    if (typeof seconds !== 'number' || !Number.isFinite(seconds)) throw new TimelineUrlError(`${where}: seconds must be a number, got ${preview(seconds)}`);
+    if (typeof seed !== 'number' || !Number.isInteger(seed) || seed < 0 || seed > 0xffffffff) throw new TimelineUrlError(`${where}: seed must be an integer in 0…4294967295, got ${preview(seed)}`);
     if (typeof what === 'string') return { prompt: what.slice(0, 2000), seconds, seed };
     const a = (what as { a?: unknown } | null)?.a;
     if (typeof a === 'string' && actions.includes(a)) return { action: a, seconds, seed };
-    throw new TimelineUrlError(`${where}: expected a prompt or {"a": action} with an action of ${actions.join(', ') || '(no action model)'}, got ${JSON.stringify(what)?.slice(0, 60)}`);
+    throw new TimelineUrlError(`${where}: expected a prompt or {"a": action} with an action of ${actions.join(', ') || '(no action model)'}, got ${preview(what)}`);
   });
 }
 

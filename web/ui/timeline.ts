@@ -141,21 +141,32 @@ export class TimelinePanel {
     // ---- restore from the URL (a shared link), else one example row
     const tl = INITIAL.get(TIMELINE_PARAM);
     let restored: TimelineSegment[] | null = null;
+    let refused = '';
     if (tl !== null) {
       try {
         restored = decodeTimeline(tl, this.actions);
       } catch (e) {
-        this.say((e as Error).message);
+        refused = e instanceof Error ? e.message : String(e);
       }
     }
     for (const s of restored ?? [{ prompt: 'a person walks forward', seconds: 4, seed: randomSeed() }, { prompt: 'a person waves with the right hand', seconds: 3, seed: randomSeed() }]) this.addRow(s);
-    if (restored) details.open = true;
+    if (tl !== null) details.open = true;
     this.refreshTotal();
+    this.restored = restored !== null;
+    this.linkRefused = refused;
+    if (refused) this.say(refused);
   }
 
-  /** The URL held a timeline (the page may generate it first instead of the single motion). */
+  /** The URL held a timeline that could be read (the page generates it first instead of the single motion). */
+  readonly restored: boolean;
+  /**
+   * Why the URL's timeline could not be read ('' when it could, or there was none): the page then generates
+   * nothing on load (not the example rows, not the single motion), and the message stays in the open panel.
+   */
+  readonly linkRefused: string;
+
   get restoredFromUrl(): boolean {
-    return INITIAL.has(TIMELINE_PARAM);
+    return this.restored;
   }
 
   // ------------------------------------------------------------ rows

@@ -13,7 +13,9 @@
  *   anything else (http:, file:, blob:, an absolute path, a file that was not given) is refused with
  *   reason 'external-resource'. The packed document (`json`, `bin`) is what export/characterGlb.ts
  *   writes back, with the animation added.
- * - Errors are CharacterLoadError with a `reason`: 'no-file', 'too-large' (> 100 MB in all),
+ * - Errors are CharacterLoadError with a `reason`: 'no-file', 'too-large' (> 100 MB in all, or a glTF JSON over
+ *   16 MB), 'too-complex' (over 5 000 nodes, 2 000 bones or 20 000 entries of a list: src/character/retarget/check.ts),
+ *   'bad-rig' (a node transform that is not finite or beyond ±1e6, bones at rest beyond 1e7 or all at one point),
  *   'corrupt' (not glTF 2.0, bad GLB chunks, views outside buffers, a loader failure), 'unsupported'
  *   (a required extension that needs a decoder: Draco, meshopt, KTX2), 'external-resource', 'no-skin'
  *   (no skinned mesh), 'not-humanoid' (the mapping lacks REQUIRED_JOINTS; `bones` and `mapping` are
@@ -33,10 +35,12 @@ import type { VRM } from '@pixiv/three-vrm';
 import { JOINT_NAMES, type JointName } from '../../skeleton';
 import { type BoneInfo, type BoneMapping, MappingError, autoMap, validateMapping } from './mapping';
 import { bonesOf } from './retarget';
+import { checkDocument, checkJsonSize, checkRestPose, type Refuse } from './check';
+import { nextTask } from '../../yield';
 
 export const MAX_CHARACTER_BYTES = 100 * 1024 * 1024;
 
-export type CharacterLoadReason = 'no-file' | 'too-large' | 'corrupt' | 'unsupported' | 'external-resource' | 'no-skin' | 'not-humanoid';
+export type CharacterLoadReason = 'no-file' | 'too-large' | 'too-complex' | 'corrupt' | 'unsupported' | 'external-resource' | 'no-skin' | 'bad-rig' | 'not-humanoid';
 
 export class CharacterLoadError extends Error {
   constructor(
@@ -125,13 +129,18 @@ export function readGlb(data: Uint8Array, file: string): { json: GltfJson; bin: 
     const type = dv.getUint32(off + 4, true);
     if (off + 8 + len > total) throw bad(`chunk at byte ${off} runs past the end`);
     const body = data.subarray(off + 8, off + 8 + len);
-    if (type === CHUNK_JSON && !json) json = parseJson(new TextDecoder().decode(body), file);
+    if (type === CHUNK_JSON && !json) {
+      checkJsonSize(body.byteLength, refusing(file));
+      json = parseJson(new TextDecoder().decode(body), file);
+    }
     else if (type === CHUNK_BIN && !bin) bin = body;
     off += 8 + len;
   }
   if (!json) throw bad('no JSON chunk');
   return { json, bin };
 }
+
+const refusing = (file: string): Refuse => (reason, message) => new CharacterLoadError(reason, file, message);
 
 function parseJson(text: string, file: string): GltfJson {
   let json: unknown;
@@ -146,20 +155,40 @@ function parseJson(text: string, file: string): GltfJson {
   return json as GltfJson;
 }
 
-function decodeDataUri(uri: string, file: string): { bytes: Uint8Array; mime: string } {
-  const m = /^data:([^,;]*)((?:;[^,;]*)*?)(;base64)?,(.*)$/s.exec(uri);
+/** Base64 characters decoded per slice of decodeDataUri (~10 ms), the event loop served between slices. */
+const BASE64_SLICE = 1 << 20;
+
+/** A data: URI's bytes and type; base64 is decoded in slices with a turn of the event loop between them. */
+async function decodeDataUri(uri: string, file: string): Promise<{ bytes: Uint8Array; mime: string }> {
+  const comma = uri.indexOf(',');
+  const head = comma < 0 ? '' : uri.slice(0, comma);
+  const m = /^data:([^,;]*)((?:;[^,;]*)*?)(;base64)?$/s.exec(head);
   if (!m) throw new CharacterLoadError('corrupt', file, `malformed data: URI (${uri.slice(0, 40)}…)`);
-  try {
-    if (m[3]) {
-      const s = atob(m[4]);
-      const out = new Uint8Array(s.length);
-      for (let i = 0; i < s.length; i++) out[i] = s.charCodeAt(i);
-      return { bytes: out, mime: m[1] };
+  const undecodable = () => new CharacterLoadError('corrupt', file, `undecodable data: URI (${uri.slice(0, 40)}…)`);
+  if (!m[3]) {
+    try {
+      return { bytes: new TextEncoder().encode(decodeURIComponent(uri.slice(comma + 1))), mime: m[1] };
+    } catch {
+      throw undecodable();
     }
-    return { bytes: new TextEncoder().encode(decodeURIComponent(m[4])), mime: m[1] };
-  } catch {
-    throw new CharacterLoadError('corrupt', file, `undecodable data: URI (${uri.slice(0, 40)}…)`);
   }
+  let body = uri.slice(comma + 1);
+  if (/[^A-Za-z0-9+/=]/.test(body)) body = body.replace(/[\t\n\f\r ]+/g, ''); // atob skips ASCII white space; slices must not split a quad
+  const end = body.replace(/=+$/, '').length;
+  const out = new Uint8Array(Math.floor((end * 3) / 4));
+  let o = 0;
+  for (let at = 0; at < body.length; at += BASE64_SLICE) {
+    if (at) await nextTask();
+    let s: string;
+    try {
+      s = atob(body.slice(at, at + BASE64_SLICE));
+    } catch {
+      throw undecodable();
+    }
+    if (o + s.length > out.length) throw undecodable();
+    for (let i = 0; i < s.length; i++) out[o++] = s.charCodeAt(i);
+  }
+  return { bytes: o === out.length ? out : out.subarray(0, o), mime: m[1] };
 }
 
 const MIME: Record<string, string> = { png: 'image/png', jpg: 'image/jpeg', jpeg: 'image/jpeg', webp: 'image/webp', ktx2: 'image/ktx2' };
@@ -168,16 +197,20 @@ const MIME: Record<string, string> = { png: 'image/png', jpg: 'image/jpeg', jpeg
  * One self-contained document: every buffer and image moved into a single BIN buffer. `resolve`
  * gives the bytes of a relative URI among the given files (or null).
  */
-export function packDocument(json: GltfJson, glbBin: Uint8Array | null, file: string, resolve: (uri: string) => Uint8Array | null): { json: GltfJson; bin: Uint8Array } {
-  const doc: GltfJson = JSON.parse(JSON.stringify(json));
-  const external = (uri: string, what: string): Uint8Array => {
-    if (uri.startsWith('data:')) return decodeDataUri(uri, file).bytes;
+export async function packDocument(json: GltfJson, glbBin: Uint8Array | null, file: string, resolve: (uri: string) => Uint8Array | null): Promise<{ json: GltfJson; bin: Uint8Array }> {
+  // copies of what is rewritten (buffers, views, images), the rest shared: a deep copy of a document with a 70 MB
+  // data: URI in it held the page for over a second
+  const copies = (v: unknown): GltfJson[] => (Array.isArray(v) ? v.map((x) => (x && typeof x === 'object' ? { ...x } : x)) : []);
+  const doc: GltfJson = { ...json, buffers: copies(json.buffers), bufferViews: copies(json.bufferViews), images: copies(json.images) };
+  if (!Array.isArray(json.images)) delete doc.images;
+  const external = async (uri: string, what: string): Promise<{ bytes: Uint8Array; mime?: string }> => {
+    if (uri.startsWith('data:')) return decodeDataUri(uri, file);
     if (/^[a-z][a-z0-9+.-]*:/i.test(uri) || uri.startsWith('/') || uri.startsWith('\\')) {
       throw new CharacterLoadError('external-resource', file, `${what} points to '${uri}': nothing is fetched from outside the files you give`);
     }
     const got = resolve(uri);
     if (!got) throw new CharacterLoadError('external-resource', file, `${what} refers to '${uri}', which is not among the files given; drop it together with ${file}`);
-    return got;
+    return { bytes: got };
   };
   const parts: Uint8Array[] = [];
   let length = 0;
@@ -192,21 +225,23 @@ export function packDocument(json: GltfJson, glbBin: Uint8Array | null, file: st
     }
     return at;
   };
-  const buffers: GltfJson[] = Array.isArray(doc.buffers) ? doc.buffers : [];
-  const bufferStart = buffers.map((b, i) => {
+  const buffers: GltfJson[] = doc.buffers;
+  const bufferStart: { at: number; len: number }[] = [];
+  for (const [i, b] of buffers.entries()) {
     let bytes: Uint8Array;
+    if (!b || typeof b !== 'object') throw new CharacterLoadError('corrupt', file, `buffer ${i} is not an object`);
     if (b.uri === undefined) {
       if (i !== 0 || !glbBin) throw new CharacterLoadError('corrupt', file, `buffer ${i} has no uri and there is no GLB BIN chunk for it`);
       bytes = glbBin;
-    } else bytes = external(String(b.uri), `buffer ${i}`);
+    } else bytes = (await external(String(b.uri), `buffer ${i}`)).bytes;
     if (!(Number.isInteger(b.byteLength) && b.byteLength <= bytes.byteLength)) {
       throw new CharacterLoadError('corrupt', file, `buffer ${i} declares ${b.byteLength} bytes but holds ${bytes.byteLength}`);
     }
-    return { at: append(bytes.subarray(0, b.byteLength)), len: b.byteLength as number };
-  });
-  const views: GltfJson[] = Array.isArray(doc.bufferViews) ? doc.bufferViews : [];
+    bufferStart.push({ at: append(bytes.subarray(0, b.byteLength)), len: b.byteLength as number });
+  }
+  const views: GltfJson[] = doc.bufferViews;
   views.forEach((v, i) => {
-    const b = bufferStart[v.buffer];
+    const b = v && typeof v === 'object' ? bufferStart[v.buffer] : undefined;
     const off = v.byteOffset ?? 0;
     if (!b || !(Number.isInteger(off) && Number.isInteger(v.byteLength) && off >= 0 && off + v.byteLength <= b.len)) {
       throw new CharacterLoadError('corrupt', file, `bufferView ${i} lies outside its buffer`);
@@ -214,17 +249,17 @@ export function packDocument(json: GltfJson, glbBin: Uint8Array | null, file: st
     v.buffer = 0;
     v.byteOffset = b.at + off;
   });
-  (Array.isArray(doc.images) ? doc.images : []).forEach((img: GltfJson, i: number) => {
-    if (img.uri === undefined) return;
+  for (const [i, img] of (Array.isArray(doc.images) ? doc.images : []).entries()) {
+    if (!img || typeof img !== 'object' || img.uri === undefined) continue;
     const uri = String(img.uri);
-    const bytes = external(uri, `image ${i}`);
-    const mime = uri.startsWith('data:') ? decodeDataUri(uri, file).mime : MIME[uri.split('.').pop()!.toLowerCase()] ?? 'image/png';
+    const { bytes, mime } = await external(uri, `image ${i}`);
     views.push({ buffer: 0, byteOffset: append(bytes), byteLength: bytes.byteLength });
     img.bufferView = views.length - 1;
-    img.mimeType = img.mimeType ?? mime;
+    img.mimeType = img.mimeType ?? mime ?? MIME[uri.split('.').pop()!.toLowerCase()] ?? 'image/png';
     delete img.uri;
-  });
+  }
   if (views.length) doc.bufferViews = views;
+  else delete doc.bufferViews;
   const bin = new Uint8Array(length);
   let o = 0;
   for (const p of parts) {
@@ -293,7 +328,11 @@ export async function loadCharacter(files: CharacterFile[], opts: LoadCharacterO
   }
   const data = bytesOf(main.data);
   const isGlb = /\.(glb|vrm)$/i.test(file) || (data.byteLength >= 4 && new DataView(data.buffer, data.byteOffset, 4).getUint32(0, true) === GLB_MAGIC);
+  const refuse = refusing(file);
+  if (!isGlb) checkJsonSize(data.byteLength, refuse);
   const { json: raw, bin: glbBin } = isGlb ? readGlb(data, file) : { json: parseJson(new TextDecoder().decode(data), file), bin: null };
+  checkDocument(raw, refuse); // counts and node transforms, before anything is built from them
+  await nextTask();
 
   const required: string[] = Array.isArray(raw.extensionsRequired) ? raw.extensionsRequired : [];
   const needs = required.filter((e) => e in NEEDS_DECODER);
@@ -311,7 +350,8 @@ export async function loadCharacter(files: CharacterFile[], opts: LoadCharacterO
     if (name.split(/[\\/]/).includes('..')) return null;
     return byName.get(name) ?? byName.get(name.split(/[\\/]/).pop()!) ?? null;
   };
-  const { json, bin } = packDocument(raw, glbBin, file, resolve);
+  const { json, bin } = await packDocument(raw, glbBin, file, resolve);
+  await nextTask();
 
   const nodes: GltfJson[] = Array.isArray(json.nodes) ? json.nodes : [];
   if (!Array.isArray(json.skins) || !json.skins.length || !nodes.some((n) => Number.isInteger(n?.skin) && Number.isInteger(n?.mesh))) {
@@ -337,6 +377,7 @@ export async function loadCharacter(files: CharacterFile[], opts: LoadCharacterO
     throw new CharacterLoadError('unsupported', file, `it declares a VRM extension (${json.extensions?.VRMC_vrm ? `VRMC_vrm ${json.extensions.VRMC_vrm.specVersion ?? '?'}` : 'VRM 0.x'}) that three-vrm could not read as a humanoid; re-export it as VRM 0.x or 1.0, or as a plain .glb`);
   }
   const root = gltf.scene;
+  if (!root) throw new CharacterLoadError('no-skin', file, 'it has no scene to show (no scenes, or none with nodes)');
   const nodeIndex = new Map<Object3D, number>();
   for (const [obj, assoc] of gltf.parser.associations as Map<Object3D, { nodes?: number }>) {
     if (assoc && Number.isInteger(assoc.nodes) && (obj as { isObject3D?: boolean }).isObject3D) {
@@ -377,6 +418,7 @@ export async function loadCharacter(files: CharacterFile[], opts: LoadCharacterO
       `${opts.mapping ? 'the saved bone map does not fit' : `only ${found} of our 22 joints were recognised among its ${bones.length} bones`}: ${e.message}`,
       boneInfos, mapping);
   }
+  checkRestPose(root, bones, Object.values(mapping), refuse);
   const unmapped = JOINT_NAMES.filter((j) => mapping[j] === undefined);
   const rest: [Object3D, Object3D['position'], Object3D['quaternion'], Object3D['scale']][] = [];
   root.traverse((o) => rest.push([o, o.position.clone(), o.quaternion.clone(), o.scale.clone()]));
