@@ -24,6 +24,9 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from emdm import manifest as mf
+from emdm.paths import display_path
+
 WEIGHTS_KEYS = ("step", "wall", "meta", "last_losses", "G_ema")
 TRAIN_KEYS = ("step", "wall", "meta", "G", "G_ema", "opt_g", "D", "opt_d", "batcher", "rng")
 
@@ -80,8 +83,6 @@ def check_integrity(path: Path, st: dict, what: str) -> None:
             raise CheckpointError(f"{path}: checksum mismatch: its contents differ from what was saved (a corrupt "
                                   f"{what}); restore it or use an earlier one")
         return
-    from emdm import manifest as mf
-
     man = path.parent / mf.MANIFEST_NAME
     if not man.is_file():
         return
@@ -147,13 +148,14 @@ def check_same_model(path: Path | str, meta: dict, generator: dict, task: str, o
 
 
 def dataset_identity(root: Path, split: str) -> dict:
-    """What identifies a dataset for a resume: its path as given and a sha256 over the files that define it (info.json
-    where there is one, the split's list of clips, Mean.npy and Std.npy)."""
+    """What identifies a dataset for a resume: its path (relative to the repository when inside it: the meta goes into
+    shipped weights) and a sha256 over the files that define it (info.json where there is one, the split's list of
+    clips, Mean.npy and Std.npy)."""
     h = hashlib.sha256()
     for name in ("info.json", f"{split}.txt", "Mean.npy", "Std.npy"):
         p = Path(root) / name
         h.update(name.encode() + (b":" + p.read_bytes() if p.is_file() else b"-") + b";")
-    return {"path": str(root), "split": split, "sha256": h.hexdigest()}
+    return {"path": display_path(root), "split": split, "sha256": h.hexdigest()}
 
 
 def first_non_finite(module: torch.nn.Module | None) -> str | None:
