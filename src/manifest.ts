@@ -221,6 +221,22 @@ function isObject(v: unknown): v is Record<string, unknown> {
   return typeof v === 'object' && v !== null && !Array.isArray(v);
 }
 
+/** Bounds on the sizes a manifest sets (emdm.manifest has the same): denoising steps, a model's frames, x̂0 smoothing σ. */
+export const MAX_STEPS = 1000;
+export const MAX_MODEL_FRAMES = 1000;
+export const MAX_X0_SMOOTHING = 50;
+
+/** A path the manifest names stays inside the models folder: '/'-separated names, none '', '.' or '..', no ':' or '\\'. */
+function checkRelPath(rel: unknown, field: string): void {
+  const ok = typeof rel === 'string' && rel.length <= 1024 && !/[\\:\0]/.test(rel) &&
+    rel.split('/').every((p) => p !== '' && p !== '.' && p !== '..');
+  if (!ok) fail(field, `is ${JSON.stringify(rel)?.slice(0, 100)}; it must be a relative path inside the models folder (names separated by '/', no '..', '.', leading '/' or ':')`);
+}
+
+function isIntIn(v: unknown, lo: number, hi: number): boolean {
+  return typeof v === 'number' && Number.isInteger(v) && v >= lo && v <= hi;
+}
+
 /** Structural check of a parsed manifest; throws ModelFileError naming the first bad field. */
 export function validateManifest(data: unknown): Manifest {
   if (!isObject(data)) fail('(root)', 'must be a JSON object');
@@ -230,6 +246,7 @@ export function validateManifest(data: unknown): Manifest {
   }
   const files = data.files as Record<string, unknown>;
   for (const [rel, meta] of Object.entries(files)) {
+    checkRelPath(rel, `files["${rel}"]`);
     if (!isObject(meta)) fail(`files["${rel}"]`, 'must be {bytes, sha256}');
     if (typeof meta.bytes !== 'number' || !Number.isInteger(meta.bytes) || meta.bytes < 0) {
       fail(`files["${rel}"].bytes`, 'must be a non-negative integer');
@@ -247,6 +264,13 @@ export function validateManifest(data: unknown): Manifest {
           fail(`${section}.${name}.files`, `names ${JSON.stringify(f)}, which is not listed under 'files'`);
         }
       }
+      for (const key of ['onnx', 'meanStd', 'trainingWeights', 'dir']) {
+        if (entry[key] !== undefined) checkRelPath(entry[key], `${section}.${name}.${key}`);
+      }
+      if (entry.variants !== undefined) {
+        if (!isObject(entry.variants)) fail(`${section}.${name}.variants`, 'must be an object of files');
+        for (const [v, rel] of Object.entries(entry.variants)) checkRelPath(rel, `${section}.${name}.variants.${v}`);
+      }
     }
   }
   for (const [name, entry] of Object.entries(data.models as Record<string, Record<string, unknown>>)) {
@@ -255,8 +279,18 @@ export function validateManifest(data: unknown): Manifest {
       fail(`models.${name}.guidanceMinTime`, `is ${JSON.stringify(g)}; it must be a time ≥ 0 (guide only steps whose time is above it), or absent to guide every step`);
     }
     const sm = entry.x0Smoothing;
-    if (sm !== undefined && !(typeof sm === 'number' && Number.isFinite(sm) && sm >= 0)) {
-      fail(`models.${name}.x0Smoothing`, `is ${JSON.stringify(sm)}; it must be a σ ≥ 0 in frames (smooth x̂0 along time at every step but the last), or absent for none`);
+    if (sm !== undefined && !(typeof sm === 'number' && Number.isFinite(sm) && sm >= 0 && sm <= MAX_X0_SMOOTHING)) {
+      fail(`models.${name}.x0Smoothing`, `is ${JSON.stringify(sm)}; it must be a σ ≥ 0 in frames, at most ${MAX_X0_SMOOTHING} (smooth x̂0 along time at every step but the last), or absent for none`);
+    }
+    const steps = entry.supportedSteps;
+    if (steps !== undefined && !(Array.isArray(steps) && steps.length > 0 && steps.every((t) => isIntIn(t, 1, MAX_STEPS)))) {
+      fail(`models.${name}.supportedSteps`, `is ${JSON.stringify(steps)?.slice(0, 80)}; it must be a list of step counts in 1…${MAX_STEPS}`);
+    }
+    if (entry.defaultSteps !== undefined && !isIntIn(entry.defaultSteps, 1, MAX_STEPS)) {
+      fail(`models.${name}.defaultSteps`, `is ${JSON.stringify(entry.defaultSteps)}; it must be a step count in 1…${MAX_STEPS}`);
+    }
+    if (entry.maxFrames !== undefined && !isIntIn(entry.maxFrames, 1, MAX_MODEL_FRAMES)) {
+      fail(`models.${name}.maxFrames`, `is ${JSON.stringify(entry.maxFrames)}; it must be a frame count in 1…${MAX_MODEL_FRAMES}`);
     }
     const d = entry.defaultVariant;
     const have = isObject(entry.variants) ? Object.keys(entry.variants) : [];

@@ -8,28 +8,90 @@ Both are written atomically (a temporary file, then a rename: an interrupted sav
 hold tensors and plain values only, so every read uses ``torch.load(..., weights_only=True)``: a file from
 someone else cannot run code. A file that is missing, corrupt, holds other objects, lacks a key or belongs to
 another model raises :class:`CheckpointError`, whose message is one line naming the file and the problem.
+
+Both carry a checksum of what they hold (``CHECKSUM_KEY``: sha256 over every tensor's dtype, shape and bytes and every
+plain value, ``content_sha256``), checked on every read: a flipped byte that torch.load would take is refused, naming
+the file. A file without one (written before it existed) is still read; where the file's folder has a manifest.json
+listing it (the shipped ``public/models/*.weights.f16.pt``), its sha256 there is checked instead.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 from pathlib import Path
 
+import numpy as np
 import torch
+
+from emdm import manifest as mf
+from emdm.paths import display_path
 
 WEIGHTS_KEYS = ("step", "wall", "meta", "last_losses", "G_ema")
 TRAIN_KEYS = ("step", "wall", "meta", "G", "G_ema", "opt_g", "D", "opt_d", "batcher", "rng")
+
+
+CHECKSUM_KEY = "content_sha256"
 
 
 class CheckpointError(ValueError):
     """A checkpoint file cannot be used; the message names the file and what is wrong (one line)."""
 
 
+def _digest(obj, h) -> None:
+    if isinstance(obj, torch.Tensor):
+        t = obj.detach().to("cpu").contiguous().reshape(-1)
+        h.update(f"T{t.dtype}{tuple(obj.shape)}:".encode())
+        h.update(t.view(torch.uint8).numpy() if t.numel() else b"")     # the buffer itself, no copy
+    elif isinstance(obj, dict):
+        h.update(b"{%d" % len(obj))
+        for k, v in obj.items():
+            _digest(k, h)
+            _digest(v, h)
+    elif isinstance(obj, (list, tuple)):
+        h.update(b"[%d" % len(obj))
+        for v in obj:
+            _digest(v, h)
+    else:                                        # plain values; a numpy scalar as its Python value (same repr on numpy 1, 2)
+        v = obj.item() if isinstance(obj, np.generic) else obj
+        h.update(f"{type(v).__name__}:{v!r};".encode())
+
+
+def content_sha256(state: dict) -> str:
+    """sha256 of a checkpoint's contents without ``CHECKSUM_KEY``: each tensor's dtype, shape and bytes, each plain
+    value, in order. The same before saving and after loading (on any device)."""
+    h = hashlib.sha256()
+    _digest({k: v for k, v in state.items() if k != CHECKSUM_KEY}, h)
+    return h.hexdigest()
+
+
 def atomic_save(obj, path: Path | str) -> None:
+    """Write ``obj`` (a dict) with its checksum (``CHECKSUM_KEY``) to a temporary file, then rename it to ``path``."""
     path = Path(path)
     tmp = path.with_name(path.name + ".tmp")
+    if isinstance(obj, dict):
+        obj = {**obj, CHECKSUM_KEY: content_sha256(obj)}
     torch.save(obj, tmp)
     os.replace(tmp, path)
+
+
+def check_integrity(path: Path, st: dict, what: str) -> None:
+    """CheckpointError unless ``st`` matches its stored checksum; a file without one is checked against the sha256 of a
+    manifest.json beside it that lists it (the shipped weights), else read as it is (written before checksums)."""
+    if CHECKSUM_KEY in st:
+        if st[CHECKSUM_KEY] != content_sha256(st):
+            raise CheckpointError(f"{path}: checksum mismatch: its contents differ from what was saved (a corrupt "
+                                  f"{what}); restore it or use an earlier one")
+        return
+    man = path.parent / mf.MANIFEST_NAME
+    if not man.is_file():
+        return
+    try:
+        listed = mf.load(path.parent)["files"].get(path.name)
+    except mf.ManifestError:
+        return                                   # not a manifest this file can be checked against
+    if listed is not None and mf.sha256_file(path) != listed["sha256"]:
+        raise CheckpointError(f"{path}: sha256 differs from {man} (a changed or corrupt file); restore it")
 
 
 def _numpy_scalar_globals() -> list:
@@ -67,6 +129,7 @@ def load_file(path: Path | str, need: tuple[str, ...] = ("meta",), what: str = "
                               f"{type(e).__name__}: {cause[:200]}") from e
     if not isinstance(st, dict):
         raise CheckpointError(f"{path}: not a {what} (holds a {type(st).__name__}, expected a dict)")
+    check_integrity(path, st, what)
     missing = [k for k in need if k not in st]
     if missing:
         raise CheckpointError(f"{path}: not a {what} (missing {', '.join(map(repr, missing))})")
@@ -82,6 +145,25 @@ def check_same_model(path: Path | str, meta: dict, generator: dict, task: str, o
             if meta.get(name) != want]
     if diff:
         raise CheckpointError(f"{path}: trained with another model/task/objective ({'; '.join(diff)}); {hint}")
+
+
+def dataset_identity(root: Path, split: str) -> dict:
+    """What identifies a dataset for a resume: its path (relative to the repository when inside it: the meta goes into
+    shipped weights) and a sha256 over the files that define it (info.json where there is one, the split's list of
+    clips, Mean.npy and Std.npy)."""
+    h = hashlib.sha256()
+    for name in ("info.json", f"{split}.txt", "Mean.npy", "Std.npy"):
+        p = Path(root) / name
+        h.update(name.encode() + (b":" + p.read_bytes() if p.is_file() else b"-") + b";")
+    return {"path": display_path(root), "split": split, "sha256": h.hexdigest()}
+
+
+def first_non_finite(module: torch.nn.Module | None) -> str | None:
+    """The name of the first parameter or buffer of ``module`` holding NaN/Infinity, or None."""
+    for k, v in (module.state_dict().items() if module is not None else ()):
+        if v.is_floating_point() and not bool(torch.isfinite(v).all()):
+            return k
+    return None
 
 
 def load_state_dict(path: Path | str, module: torch.nn.Module, state: dict, key: str) -> None:

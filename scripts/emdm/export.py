@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
+import shutil
 import sys
 import time
 import warnings
@@ -25,15 +27,33 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from emdm.checkpoints import first_non_finite, save_weights_file
 from emdm.model.generator import Generator
 from emdm.model.open import INPUTS, ModelError, load_generator as open_generator, ort_session
 from emdm.model.schedule import DEFAULT_STEPS, make_schedule
 
 PARITY_CASES = ((1, 1), (1, 60), (2, 17), (3, 120), (2, 196))
+NAME = re.compile(r"[A-Za-z0-9._-]{1,100}")     # a model id: a file stem in --out and the manifest key
 
 
 class ExportError(RuntimeError):
     pass
+
+
+def check_name(name: str) -> str:
+    """A model id (``--name``): letters, digits, '.', '_', '-' (no path separator), not '.' or '..'."""
+    if not NAME.fullmatch(name) or name in (".", ".."):
+        raise ExportError(f"--name {name!r}: a model id is 1-100 letters, digits, '.', '_' or '-' (no '/' or '\\', "
+                          "not '.' or '..'), e.g. emdm-t2m-web")
+    return name
+
+
+def check_finite_weights(G: Generator, ckpt: Path | str) -> None:
+    """ExportError naming the first weight that holds NaN/Infinity: a broken model is never exported."""
+    bad = first_non_finite(G)
+    if bad is not None:
+        raise ExportError(f"{ckpt}: weight {bad!r} holds NaN/Infinity; refusing to export a broken model (export an "
+                          "earlier checkpoint)")
 
 
 def load_generator(ckpt_path: Path | str, weights: str = "G_ema") -> tuple[Generator, dict, dict]:
@@ -262,14 +282,18 @@ def run(a: argparse.Namespace) -> int:
 
     variants = [s.strip() for s in a.variants.split(",") if s.strip()]
     unknown = [v for v in variants if v not in VARIANT_MAKERS]
+    check_name(a.name)
+    if not (np.isfinite(a.tolerance) and a.tolerance > 0):
+        raise ExportError(f"--tolerance must be a finite error > 0, got {a.tolerance:g}")
     if unknown:
         raise ExportError(f"--variants: unknown {', '.join(map(repr, unknown))}; use a comma list of "
                           f"{', '.join(VARIANT_MAKERS)} (empty for none)")
     g = a.guidance_min_time
     if g is not None and not (np.isfinite(g) and g >= 0):
         raise ExportError(f"--guidance-min-time must be a finite time ≥ 0 (0 = guide every step), got {g:g}")
-    if a.x0_smoothing is not None and not (np.isfinite(a.x0_smoothing) and a.x0_smoothing >= 0):
-        raise ExportError(f"--x0-smoothing must be a finite σ ≥ 0 in frames (0 = off), got {a.x0_smoothing:g}")
+    if a.x0_smoothing is not None and not (np.isfinite(a.x0_smoothing) and 0 <= a.x0_smoothing <= mf.MAX_X0_SMOOTHING):
+        raise ExportError(f"--x0-smoothing must be a finite σ ≥ 0 in frames (0 = off), got {a.x0_smoothing:g} "
+                          f"(at most {mf.MAX_X0_SMOOTHING:g})")
     dv = a.default_variant
     if dv is not None and dv != "fp32" and dv not in variants:
         raise ExportError(f"--default-variant {dv!r} is not among the exported files: use fp32 or one of --variants "
@@ -278,13 +302,33 @@ def run(a: argparse.Namespace) -> int:
     if not a.no_manifest:
         mf.load(out, missing_ok=True)                      # a malformed manifest there is found now, not at the end
     G, meta, summary = load_generator(a.ckpt, a.weights)
+    check_finite_weights(G, a.ckpt)
     out.mkdir(parents=True, exist_ok=True)
+    stage = out / f".{a.name}.export.tmp"          # the files are made here, moved into --out once all pass
+    shutil.rmtree(stage, ignore_errors=True)
+    stage.mkdir()
+    try:
+        files, extra = make_files(a, G, meta, summary, stage, variants)
+        for f in sorted(stage.iterdir()):
+            f.replace(out / f.name)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    if not a.no_manifest:
+        write_entry(a, out, meta, summary, files, extra)
+    return 0
+
+
+def make_files(a: argparse.Namespace, G: Generator, meta: dict, summary: dict, out: Path,
+               variants: list[str]) -> tuple[dict, dict]:
+    """The model's files in ``out`` (ONNX, variants, mean/std, weights), each checked against PyTorch: (files by
+    role, the manifest entry's extra fields). A NaN error fails every check (``not err <= tolerance``)."""
     onnx_path = export_onnx(G, out / f"{a.name}.onnx")
     par = parity(G, onnx_path)
-    worst = max(par.values())
-    print(f"{onnx_path}: {onnx_path.stat().st_size / 1e6:.2f} MB, parity max abs err {worst:.2e} {par}")
-    if worst > a.tolerance:
-        raise ExportError(f"{onnx_path}: ONNX differs from PyTorch by {worst:.3g} > {a.tolerance} ({par})")
+    worst = float(np.max(list(par.values())))       # NaN wins (the builtin max may skip it)
+    print(f"{a.name}.onnx: {onnx_path.stat().st_size / 1e6:.2f} MB, parity max abs err {worst:.2e} {par}")
+    if not worst <= a.tolerance:
+        raise ExportError(f"{a.name}.onnx: ONNX differs from PyTorch by {worst:.3g}, not ≤ --tolerance {a.tolerance} "
+                          f"({par}); nothing written")
     files = {"onnx": onnx_path.name}
     extra: dict = {"parityMaxAbsErr": float(f"{worst:.3g}")}
     var_err = {}
@@ -293,19 +337,19 @@ def run(a: argparse.Namespace) -> int:
         VARIANT_MAKERS[v](onnx_path, dst)
         var_err[v] = variant_error(G, dst)
         files[v] = dst.name
-        print(f"{dst}: {dst.stat().st_size / 1e6:.2f} MB, max abs err / output std {var_err[v]:.3g}")
+        print(f"{dst.name}: {dst.stat().st_size / 1e6:.2f} MB, max abs err / output std {var_err[v]:.3g}")
+        if not np.isfinite(var_err[v]):
+            raise ExportError(f"{dst.name}: the {v} variant's error is {var_err[v]}; nothing written")
     if var_err:
         extra["variantRelErr"] = {k: float(f"{v:.3g}") for k, v in var_err.items()}
     ms_path = write_meanstd(np.array(meta["mean"]), np.array(meta["std"]), out / f"{a.name}.meanstd.f32")
     files["meanStd"] = ms_path.name
     if a.ship_weights:
-        from emdm.checkpoints import save_weights_file
-
         dst = out / f"{a.name}.weights.f16.pt"
         save_weights_file(dst, G.state_dict(), step=summary["steps"], wall=summary["wall_s"], meta=meta,
                           last_losses=summary["losses"], dtype="float16")
         files["weights"] = dst.name
-        print(f"{dst}: {dst.stat().st_size / 1e6:.2f} MB (float16 EMA weights for --init-weights)")
+        print(f"{dst.name}: {dst.stat().st_size / 1e6:.2f} MB (float16 EMA weights for --init-weights)")
     if a.bench:
         bench = {}
         for key, path in [("fp32", onnx_path)] + [(v, out / files[v]) for v in var_err]:
@@ -313,27 +357,34 @@ def run(a: argparse.Namespace) -> int:
                 bench[f"{key}_{th}t"] = round(time_step(path, G.cond_dim, threads=th), 1)
         extra["ortCpuMsPerStep196"] = bench
         print("ORT CPU ms/step (196 frames, batch 1):", bench)
-    if not a.no_manifest:
-        gmin = a.guidance_min_time
-        if gmin is None:     # a re-export keeps the threshold chosen for this model
-            gmin = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("guidanceMinTime", 0.0)
-        if gmin:
-            extra["guidanceMinTime"] = float(gmin)
-        sigma = a.x0_smoothing
-        if sigma is None:    # a re-export keeps the smoothing chosen for this model
-            sigma = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("x0Smoothing", 0.0)
-        if sigma:
-            extra["x0Smoothing"] = float(sigma)
-        dv = a.default_variant
-        if dv is None:       # a re-export keeps the variant chosen for this model, while that file is still exported
-            dv = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("defaultVariant")
-            dv = dv if dv in var_err else None
-        if dv and dv != "fp32":
-            extra["defaultVariant"] = dv
-        entry = manifest_entry(a.name, meta, summary, files, extra)
-        mf.update_entry("models", a.name, entry, out)
-        print(f"manifest: models.{a.name} written to {out / mf.MANIFEST_NAME}")
-    return 0
+    return files, extra
+
+
+def write_entry(a: argparse.Namespace, out: Path, meta: dict, summary: dict, files: dict, extra: dict) -> None:
+    """The manifest entry models.<name> (keeping the earlier entry's guidanceMinTime, x0Smoothing, defaultVariant
+    unless given)."""
+    from emdm import manifest as mf
+
+    var_err = extra.get("variantRelErr", {})
+    gmin = a.guidance_min_time
+    if gmin is None:     # a re-export keeps the threshold chosen for this model
+        gmin = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("guidanceMinTime", 0.0)
+    if gmin:
+        extra["guidanceMinTime"] = float(gmin)
+    sigma = a.x0_smoothing
+    if sigma is None:    # a re-export keeps the smoothing chosen for this model
+        sigma = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("x0Smoothing", 0.0)
+    if sigma:
+        extra["x0Smoothing"] = float(sigma)
+    dv = a.default_variant
+    if dv is None:       # a re-export keeps the variant chosen for this model, while that file is still exported
+        dv = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("defaultVariant")
+        dv = dv if dv in var_err else None
+    if dv and dv != "fp32":
+        extra["defaultVariant"] = dv
+    entry = manifest_entry(a.name, meta, summary, files, extra)
+    mf.update_entry("models", a.name, entry, out)
+    print(f"manifest: models.{a.name} written to {out / mf.MANIFEST_NAME}")
 
 
 if __name__ == "__main__":

@@ -48,6 +48,7 @@ from typing import Callable
 
 import numpy as np
 
+from emdm import manifest as mf
 from emdm.model.open import onnx_step, read_meanstd, torch_step  # noqa: F401 - the step functions, re-exported
 from emdm.model.schedule import make_schedule
 from emdm.motion.smooth import smooth_frames  # noqa: F401 - x̂0 smoothing; re-exported
@@ -60,12 +61,19 @@ class SampleError(ValueError):
 
 
 MAX_SEED = 2**32 - 1      # the page's seeds are uint32
+# Bounds on what a flag can ask for (the manifest's own: emdm.manifest): steps, samples of one run, ORT threads,
+# x̂0 smoothing σ in frames (a σ of 50 already averages a 196-frame clip almost flat).
+MAX_STEPS = mf.MAX_STEPS
+MAX_NUM = 256
+MAX_THREADS = 256
+MAX_X0_SMOOTHING = mf.MAX_X0_SMOOTHING
 
 
 def check_x0_smoothing(sigma: float, name: str = "x0_smoothing") -> float:
-    """σ in frames, finite and ≥ 0 (0 = off); anything else is a SampleError naming ``name``."""
-    if isinstance(sigma, bool) or not isinstance(sigma, (int, float, np.floating)) or not (math.isfinite(sigma) and sigma >= 0):
-        raise SampleError(f"{name} must be a finite σ ≥ 0 in frames (0 = off), got {sigma!r}")
+    """σ in frames, in 0..MAX_X0_SMOOTHING (0 = off); anything else is a SampleError naming ``name``."""
+    if (isinstance(sigma, bool) or not isinstance(sigma, (int, float, np.floating))
+            or not (math.isfinite(sigma) and 0 <= sigma <= MAX_X0_SMOOTHING)):
+        raise SampleError(f"{name} must be a finite σ ≥ 0 in frames (0 = off), got {sigma!r} (at most {MAX_X0_SMOOTHING:g})")
     return float(sigma)
 
 
@@ -271,9 +279,12 @@ def make_condition(spec: dict, text: str | None, action: str | None, uncond: boo
             raise SampleError("this is a text model: use --text or --uncond")
         if not text.strip():
             raise SampleError("--text is empty: say what the character should do (or use --uncond)")
-        from emdm.text import load_encoder, truncation_notice
+        from emdm.text import TextEncoderError, load_encoder, truncation_notice
 
-        enc = load_encoder(spec["encoder"])
+        try:
+            enc = load_encoder(spec["encoder"])
+        except (TextEncoderError, mf.ManifestError) as e:
+            raise SampleError(str(e)) from None
         emb = np.asarray(enc.encode([text]), np.float32)[0]
         notice = truncation_notice(enc, text)      # the page shows the same notice under its prompt box
         if notice:
@@ -340,8 +351,12 @@ def check_out(out: Path, num: int, bvh_units: str | None) -> None:
 
 def check_args(a) -> None:
     """What can be checked before any model is opened (one line each, as the page's limits)."""
-    if a.num < 1:
-        raise SampleError(f"--num must be ≥ 1, got {a.num}")
+    if not 1 <= a.num <= MAX_NUM:
+        raise SampleError(f"--num must be in 1..{MAX_NUM}, got {a.num} (run several times for more samples)")
+    if a.steps is not None and a.steps > MAX_STEPS:       # below 1: check_steps names the model's supported ones
+        raise SampleError(f"--steps must be in 1..{MAX_STEPS}, got {a.steps}")
+    if a.frames is not None and a.frames > mf.MAX_MODEL_FRAMES:  # the model's own maxFrames is checked once it is open
+        raise SampleError(f"--frames must be in 1..{mf.MAX_MODEL_FRAMES} (the model's maxFrames, at most), got {a.frames}")
     if a.guidance is not None and not (math.isfinite(a.guidance) and a.guidance >= 0):
         raise SampleError(f"--guidance must be a finite number ≥ 0, got {a.guidance:g} (1 = no guidance)")
     if a.guidance_min_time is not None and not (math.isfinite(a.guidance_min_time) and a.guidance_min_time >= 0):
@@ -351,8 +366,8 @@ def check_args(a) -> None:
         check_x0_smoothing(a.x0_smoothing, "--x0-smoothing")
     if not 0 <= a.seed <= MAX_SEED:
         raise SampleError(f"--seed must be in 0..{MAX_SEED}, got {a.seed}")
-    if a.threads < 1:
-        raise SampleError(f"--threads must be ≥ 1, got {a.threads}")
+    if not 1 <= a.threads <= MAX_THREADS:
+        raise SampleError(f"--threads must be in 1..{MAX_THREADS}, got {a.threads}")
     if a.ckpt is not None and a.variant not in (None, "fp32"):
         raise SampleError(f"--variant {a.variant!r} needs --model (a checkpoint has only its fp32 weights)")
     check_out(a.out, a.num, None if a.no_bvh else a.bvh_units)
@@ -527,8 +542,8 @@ def check_steps(steps: int | None, entry: dict, name: str) -> int:
     if supported:
         if steps not in supported:
             raise SampleError(f"--steps: {steps} is not supported by model {name!r}; use one of {list(supported)}")
-    elif steps < 1:
-        raise SampleError(f"--steps must be ≥ 1, got {steps}")
+    elif not 1 <= steps <= MAX_STEPS:
+        raise SampleError(f"--steps must be in 1..{MAX_STEPS}, got {steps}")
     return steps
 
 

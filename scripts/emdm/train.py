@@ -33,8 +33,8 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from emdm.checkpoints import (CheckpointError, TRAIN_KEYS, atomic_save, check_same_model, load_file, load_state_dict,
-                              load_weights_file, save_weights_file)
+from emdm.checkpoints import (CheckpointError, TRAIN_KEYS, atomic_save, check_same_model, dataset_identity,
+                              first_non_finite, load_file, load_state_dict, load_weights_file, save_weights_file)
 from emdm.data.dataset import (BucketBatcher, DeviceClips, action_shares, caption_table, cached_text_embeddings,
                                crop_plan, load_split)
 from emdm.model.discriminator import Discriminator
@@ -111,6 +111,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--time-limit-min", type=float, default=None, help="checkpoint and stop after M minutes")
     p.add_argument("--stop-at", type=int, default=None, help="checkpoint and stop at this step (testing resume)")
     p.add_argument("--no-resume", action="store_true", help="start fresh even if <out>/ckpt.pt exists")
+    p.add_argument("--allow-other-data", action="store_true",
+                   help="resume <out>/ckpt.pt even though it was trained on another dataset than --data")
     p.add_argument("--init-weights", type=Path, default=None,
                    help="start G (and its EMA) from a --weights-out file of an earlier run of the same model; "
                         "D and the optimisers start fresh. Its steps are recorded as the run's 'init' in meta")
@@ -140,6 +142,29 @@ def cosine_lr(step: int, total: int, base: float, floor: float, warmup: int = 0)
 def lr_factor(rule: str, global_batch: int) -> float:
     r = global_batch / REFERENCE_BATCH
     return {"none": 1.0, "sqrt": math.sqrt(r), "linear": r}[rule]
+
+
+def truncate_log(path: Path, step: int) -> int:
+    """Drop the rows of log.csv written after ``step`` (a run killed after its last checkpoint logged them; the resumed
+    run logs those steps again); returns how many. Rewritten atomically."""
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    if not rows:
+        return 0
+
+    def after(r: list[str]) -> bool:
+        try:
+            return int(float(r[0])) > step
+        except (ValueError, IndexError):
+            return False
+    keep = [rows[0]] + [r for r in rows[1:] if not after(r)]
+    dropped = len(rows) - len(keep)
+    if dropped:
+        tmp = path.with_name(path.name + ".tmp")
+        with open(tmp, "w", newline="") as f:
+            csv.writer(f).writerows(keep)
+        os.replace(tmp, path)
+    return dropped
 
 
 class NonFiniteLoss(RuntimeError):
@@ -283,6 +308,7 @@ class Trainer:
         a = self.args
         from emdm import paths
         self.data_dir = Path(a.data or paths.DATASET_DIR)
+        self.data_id = dataset_identity(self.data_dir, a.split)
         self.ms = load_split(self.data_dir, a.split, min_frames=a.min_frames, limit=a.limit,
                              require_action=a.task == "action")
         clip_caps = None
@@ -335,6 +361,9 @@ class Trainer:
                          "--init-weights needs the same")
         load_state_dict(path, self.G, st["G_ema"], "G_ema")
         self.G_ema.load_state_dict(st["G_ema"])
+        bad = first_non_finite(self.G_ema)
+        if bad is not None:
+            raise CheckpointError(f"{path}: 'G_ema' weight {bad!r} holds NaN/Infinity; refusing to train on from it")
         prior = m.get("init") or {"steps": 0, "wall_s": 0.0, "runs": []}
         self.init = {"steps": prior["steps"] + int(st["step"]), "wall_s": prior["wall_s"] + float(st.get("wall", 0.0)),
                      "runs": prior["runs"] + [{"file": path.name, "steps": int(st["step"]), "device": m.get("device"),
@@ -412,7 +441,7 @@ class Trainer:
                           else {"type": "action", "labels": list(self.ms.action_labels), "dim": self.cond_dim}),
             "generator": self.G.config(), "supported_steps": self.supported,
             "mean": self.ms.mean.tolist(), "std": self.ms.std.tolist(),
-            "dataset": self.data_dir.name, "clips": len(self.ms), "device": self.device_name(),
+            "dataset": self.data_dir.name, "data": self.data_id, "clips": len(self.ms), "device": self.device_name(),
             "world": self.dist.world, "batch": a.batch, "init": self.init,
             "lr": {"g": self.lr_g, "d": self.lr_d if self.D is not None else None, "scale": self.lr_scale},
             "sampling": {"balance_alpha": a.balance_alpha, "actions": self.sampling},
@@ -464,10 +493,16 @@ class Trainer:
         st = load_file(path, TRAIN_KEYS, map_location=self.device)
         check_same_model(path, st["meta"], self.G.config(), self.args.task, self.args.objective,
                          "use another --out or --no-resume")
+        self.check_same_data(path, st["meta"])
         for key, module in (("G", self.G), ("G_ema", self.G_ema), ("opt_g", self.opt_g), ("D", self.D),
                             ("opt_d", self.opt_d)):
             if module is not None:
                 load_state_dict(path, module, st[key], key)
+        for key, module in (("G", self.G), ("G_ema", self.G_ema), ("D", self.D)):
+            bad = first_non_finite(module)
+            if bad is not None:
+                raise CheckpointError(f"{path}: {key!r} weight {bad!r} holds NaN/Infinity; refusing to resume from it "
+                                      "(use --no-resume, or --init-weights an earlier good weights file)")
         self.step, self.wall, self.last_losses = st["step"], st["wall"], st.get("last_losses", {})
         try:
             self.batcher.load_state(st["batcher"][0])
@@ -480,6 +515,22 @@ class Trainer:
         self.saved_step = self.step
         if self.dist.main:
             print(f"resumed {path} at step {self.step}", file=sys.stderr)
+
+    def check_same_data(self, path: Path, meta: dict) -> None:
+        """CheckpointError if the checkpoint was trained on another dataset than --data (unless --allow-other-data)."""
+        if self.args.allow_other_data:
+            return
+        old = meta.get("data")
+        if isinstance(old, dict):
+            same = old.get("sha256") == self.data_id["sha256"]
+            was = f"{old.get('path')} (sha256 {str(old.get('sha256'))[:12]})"
+        else:                                          # a checkpoint from before the identity was recorded: the name
+            same = meta.get("dataset") == self.data_dir.name
+            was = f"a dataset named {meta.get('dataset')!r}"
+        if not same:
+            raise CheckpointError(f"{path}: trained on {was}, but --data is {self.data_dir} (sha256 "
+                                  f"{self.data_id['sha256'][:12]}); give the same --data, or --allow-other-data to go on "
+                                  "with this one")
 
     # -- loop ------------------------------------------------------------------------------------------
     def describe(self) -> None:
@@ -502,6 +553,8 @@ class Trainer:
         new_log = not log_path.exists() or self.step == 0
         fields = LOG_FIELDS
         if not new_log:              # appending: keep the columns the file already has (an older run's log)
+            if self.dist.main:       # rows logged after the checkpoint (a killed run) are logged again from here
+                truncate_log(log_path, self.step)
             with open(log_path, newline="") as f:
                 fields = next(csv.reader(f), None) or LOG_FIELDS
         logf = open(log_path, "w" if new_log else "a", newline="") if self.dist.main else None

@@ -5,6 +5,7 @@
  * deterministic DDIM (z drawn then zeroed, no ε) for the plain diffusion baseline. With `known` and
  * `keep` (src/sampler/mask.ts) the loop inpaints: docs/ARCHITECTURE.md "Sampling with constraints".
  */
+import { MAX_STEPS, MAX_X0_SMOOTHING } from '../manifest';
 import { smoothJoints } from '../motion/smooth';
 import { ddimUpdate } from './ddim';
 import type { Schedule } from './schedule';
@@ -131,7 +132,7 @@ function throwIfAborted(signal: AbortSignal | undefined, done: number, total: nu
 /** The coefficients `method` reads must be there, sized for the schedule's step count. */
 function checkSchedule(s: Schedule, method: SamplerName): void {
   const T = s?.steps;
-  if (!Number.isInteger(T) || T < 1) throw new Error(`sampler: schedule.steps must be a positive integer, got ${T} (see scheduleFor / computeSchedule)`);
+  if (!Number.isInteger(T) || T < 1 || T > MAX_STEPS) throw new Error(`sampler: schedule.steps must be an integer in 1…${MAX_STEPS}, got ${T} (see scheduleFor / computeSchedule)`);
   const want: [keyof Schedule, number][] = method === 'ddim'
     ? [['time', T], ['aCum', T + 1], ['sCum', T + 1]]
     : [['time', T], ['coef1', T], ['coef2', T], ['sigma', T]];
@@ -162,7 +163,7 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
   const gMin = o.guidanceMinTime ?? 0;
   if (!Number.isFinite(gMin) || gMin < 0) throw new RangeError(`sampler: guidanceMinTime must be a finite time ≥ 0 (0 = guide every step), got ${gMin}`);
   const xs = o.x0Smoothing ?? 0;
-  if (!Number.isFinite(xs) || xs < 0) throw new RangeError(`sampler: x0Smoothing must be a finite σ ≥ 0 in frames (0 = off), got ${xs}`);
+  if (!Number.isFinite(xs) || xs < 0 || xs > MAX_X0_SMOOTHING) throw new RangeError(`sampler: x0Smoothing must be a finite σ ≥ 0 in frames (0 = off), got ${xs} (at most ${MAX_X0_SMOOTHING})`);
   const s = o.guidance;
   const T = schedule.steps;
   // the steps this call runs: from T − 1 (or resume.next) down to just above the first step with t ≤ stopAt

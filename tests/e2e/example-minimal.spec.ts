@@ -31,8 +31,18 @@ test('minimal example: prompt → motion in the worker → the character moves',
   const external = watchExternalRequests(page, baseURL!);
   const workers: string[] = [];
   page.on('worker', (w) => workers.push(w.url()));
+  await page.addInitScript(() => {
+    const seen: string[] = ((globalThis as unknown as { cspViolations: string[] }).cspViolations = []);
+    document.addEventListener('securitypolicyviolation', (e) => seen.push(`${e.violatedDirective} ${e.blockedURI}`));
+  });
   await page.goto('/examples/minimal.html');
   await page.waitForFunction(() => window.example?.motion !== undefined, null, { timeout: 150_000 });
+  // the demo's strict CSP holds here too, and nothing the example needs is refused by it (its style is a file)
+  const csp = await page.evaluate(() => document.querySelector('meta[http-equiv="Content-Security-Policy"]')?.getAttribute('content'));
+  expect(csp).toContain("script-src 'self' 'wasm-unsafe-eval'");
+  expect(csp).toContain("style-src 'self';");
+  expect(await page.evaluate(() => (globalThis as unknown as { cspViolations: string[] }).cspViolations)).toEqual([]);
+  expect(await page.evaluate(() => getComputedStyle(document.getElementById('info')!).position)).toBe('absolute');
 
   const m = await page.evaluate(() => {
     const { motion, character } = window.example!;

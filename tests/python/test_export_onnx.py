@@ -112,3 +112,61 @@ def test_x0_smoothing_is_written_and_kept_by_a_re_export(checkpoint, tmp_path, c
     assert "x0Smoothing" not in entry()
     assert export_main(base + ["--x0-smoothing", "nan"]) == 2
     assert "--x0-smoothing must be a finite σ ≥ 0 in frames" in capsys.readouterr().err
+
+
+def _one_error_line(capsys) -> str:
+    err = [line for line in capsys.readouterr().err.strip().splitlines() if not line.startswith("W")]  # torch warnings
+    assert len(err) == 1 and err[0].startswith("error: ") and "Traceback" not in err[0], err
+    return err[0]
+
+
+@pytest.mark.parametrize("name", ["../../x", "a/b", "..", ".", "", "a\\b", "x" * 101])
+def test_a_name_that_is_not_a_model_id_writes_nothing(checkpoint, tmp_path, capsys, name):
+    out = tmp_path / "a" / "b" / "models"
+    assert export_main(["--ckpt", str(checkpoint), "--name", name, "--out", str(out), "--variants", ""]) == 2
+    assert "--name" in _one_error_line(capsys)
+    assert [p for p in tmp_path.rglob("*")] == [], "something was written"
+
+
+def test_nan_weights_are_never_exported(checkpoint, tmp_path, capsys):
+    """A checkpoint whose EMA weights are NaN: refused before anything is written (its parity error, NaN, would pass a
+    `worst > tolerance` check), the manifest left as it was."""
+    import torch
+
+    from emdm.checkpoints import atomic_save
+
+    st = torch.load(checkpoint, weights_only=True)
+    for v in st["G_ema"].values():
+        if v.is_floating_point():
+            v.fill_(float("nan"))
+    atomic_save(st, tmp_path / "nan.pt")
+    out = tmp_path / "models"
+    assert export_main(["--ckpt", str(tmp_path / "nan.pt"), "--name", "m", "--out", str(out), "--variants", ""]) == 2
+    assert "holds NaN/Infinity; refusing to export" in _one_error_line(capsys)
+    assert not out.exists() or list(out.iterdir()) == []
+
+
+def test_a_nan_parity_error_fails_the_export_and_leaves_no_file(checkpoint, tmp_path, capsys, monkeypatch):
+    import emdm.export as ex
+
+    monkeypatch.setattr(ex, "parity", lambda G, path: {"1x1": 1e-6, "1x60": float("nan")})
+    out = tmp_path / "models"
+    assert export_main(["--ckpt", str(checkpoint), "--name", "m", "--out", str(out), "--variants", ""]) == 2
+    assert "ONNX differs from PyTorch by nan, not ≤ --tolerance" in _one_error_line(capsys)
+    assert list(out.iterdir()) == [], "a file of the failed export was left"
+
+
+@pytest.mark.parametrize("content, expected", [
+    (b'{"schema": 1, "models": {"m": \xff\xfe}}', r"manifest\.json: not UTF-8 text \(byte 30\)"),
+    (b"\x00\x01 not json", r"manifest\.json:1:1: invalid JSON"),
+    (b"[1, 2]", r"manifest\.json: expected a JSON object, got a list"),
+    (b'{"schema": 1, "models": NaN}', r"manifest\.json: invalid JSON: NaN is not a JSON number"),
+    (b"[" * 100000, r"manifest\.json: invalid JSON"),
+])
+def test_an_unreadable_manifest_in_out_is_one_line(checkpoint, tmp_path, capsys, content, expected):
+    import re
+
+    (tmp_path / "manifest.json").write_bytes(content)
+    assert export_main(["--ckpt", str(checkpoint), "--name", "m", "--out", str(tmp_path), "--variants", ""]) == 2
+    assert re.search(expected, _one_error_line(capsys))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["manifest.json"]

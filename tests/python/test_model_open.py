@@ -193,13 +193,15 @@ def test_checkpoint_refusals_name_the_file(world, tmp_path):
 
     with pytest.raises(ModelError, match=r"nope\.pt: checkpoint not found"):
         open_model(tmp_path / "nope.pt")
+    from emdm.checkpoints import atomic_save
+
     st = torch.load(world / "run" / "ckpt.pt", weights_only=True)
     st["G_ema"].pop(sorted(st["G_ema"])[-1])                                   # a tensor short
-    torch.save(st, tmp_path / "short.pt")
+    atomic_save(st, tmp_path / "short.pt")              # with its checksum: a file written so, not a corrupt one
     with pytest.raises(ModelError, match=r"short\.pt: 'G_ema' does not fit this model"):
         open_model(tmp_path / "short.pt")
     del st["meta"]["generator"]
-    torch.save(st, tmp_path / "nogen.pt")
+    atomic_save(st, tmp_path / "nogen.pt")
     with pytest.raises(ModelError, match=r"nogen\.pt: not an emdm.train checkpoint \(meta lacks the generator"):
         open_model(tmp_path / "nogen.pt")
 

@@ -132,10 +132,16 @@ def _cli(models, out, *extra):
     (["--x0-smoothing", "-1"], r"--x0-smoothing must be a finite σ ≥ 0 in frames \(0 = off\), got -1"),
     (["--x0-smoothing", "nan"], r"--x0-smoothing must be a finite σ ≥ 0 in frames \(0 = off\), got nan"),
     (["--guidance-min-time", "nan"], r"--guidance-min-time must be a finite time ≥ 0, got nan"),
-    (["--num", "0"], r"--num must be ≥ 1, got 0"),
+    (["--num", "0"], r"--num must be in 1\.\.256, got 0"),
+    (["--num", "100000"], r"--num must be in 1\.\.256, got 100000"),
+    (["--steps", "100000"], r"--steps must be in 1\.\.1000, got 100000"),
+    (["--x0-smoothing", "1e9"], r"--x0-smoothing must be a finite σ ≥ 0 in frames \(0 = off\), got 1000000000\.0 "
+                                r"\(at most 50\)"),
+    (["--frames", "100000"], r"--frames must be in 1\.\.1000 \(the model's maxFrames, at most\), got 100000"),
+    (["--threads", "100000"], r"--threads must be in 1\.\.256, got 100000"),
     (["--variant", "int4"], r"--variant: model 'm' has no variant 'int4'; use one of fp32"),
     (["--seed", "-1"], r"--seed must be in 0\.\.4294967295, got -1"),
-    (["--threads", "0"], r"--threads must be ≥ 1, got 0"),
+    (["--threads", "0"], r"--threads must be in 1\.\.256, got 0"),
     (["--frames", "0"], r"--frames must be in 1\.\.196, got 0"),
 ])
 def test_bad_argument_is_one_line_and_exit_2(models, tmp_path, capsys, extra, expected):
@@ -146,6 +152,76 @@ def test_bad_argument_is_one_line_and_exit_2(models, tmp_path, capsys, extra, ex
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and re.fullmatch(r"error: " + expected + r".*", err[0]), err
     assert not (tmp_path / "o").exists()
+
+
+def _manifest_with(models, tmp_path, **fields):
+    """A copy of the models folder whose model 'm' has ``fields`` changed."""
+    import json
+    import shutil
+
+    d = tmp_path / "models"
+    shutil.copytree(models, d)
+    man = json.loads((d / "manifest.json").read_text())
+    man["models"]["m"].update(fields)
+    (d / "manifest.json").write_text(json.dumps(man))
+    return d
+
+
+@pytest.mark.parametrize("fields, expected", [
+    ({"supportedSteps": [1, 100000]}, r"field 'models\.m\.supportedSteps' is \[1, 100000\]; it must be a list of step "
+                                      r"counts in 1\.\.1000"),
+    ({"defaultSteps": 5000}, r"field 'models\.m\.defaultSteps' is 5000; it must be an integer in 1\.\.1000"),
+    ({"x0Smoothing": 1e9}, r"field 'models\.m\.x0Smoothing' is 1000000000\.0; it must be a σ ≥ 0 in frames, at most 50"),
+    ({"maxFrames": 10**9}, r"field 'models\.m\.maxFrames' is 1000000000; it must be an integer in 1\.\.1000"),
+    ({"zDim": 10**9}, r"field 'models\.m\.zDim' is 1000000000; it must be an integer in 1\.\.4096"),
+    ({"condition": {"type": "action", "dim": 10**9, "labels": []}}, r"field 'models\.m\.condition' is .*1\.\.4096"),
+    ({"meanStd": "../../../../etc/passwd"}, r"field 'models\.m\.meanStd' is \"\.\./\.\./\.\./\.\./etc/passwd\"; it must "
+                                             r"be a relative path inside the models folder"),
+    ({"onnx": "/etc/passwd"}, r"field 'models\.m\.onnx' is \"/etc/passwd\"; it must be a relative path"),
+])
+def test_manifest_sizes_and_paths_are_bounded(models, tmp_path, capsys, fields, expected):
+    """A manifest cannot make sampling allocate without bound (a huge step count with --steps to match grew to 23.5 GB)
+    or read a file outside its folder: one line naming the field, exit 2."""
+    import re
+
+    d = _manifest_with(models, tmp_path, **fields)
+    steps = fields.get("supportedSteps", [1])[-1]
+    out = tmp_path / "o" / "x"
+    assert sample_main(["--model", "m", "--models-dir", str(d), "--action", "wave", "--frames", "12",
+                        "--steps", str(min(steps, 1000)), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and re.search(expected, err[0]), err
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_linked_manifest_file_outside_the_folder_is_refused(models, tmp_path, capsys):
+    d = _manifest_with(models, tmp_path)
+    outside = tmp_path / "elsewhere.f32"
+    (d / "m.meanstd.f32").rename(outside)
+    (d / "m.meanstd.f32").symlink_to(outside)
+    out = tmp_path / "o" / "x"
+    assert sample_main(["--model", "m", "--models-dir", str(d), "--action", "wave", "--frames", "12", "--steps", "1",
+                        "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "field 'models.m.meanStd' names 'm.meanstd.f32', which resolves outside" in err[0], err
+
+
+@pytest.mark.parametrize("text, expected", [
+    ('[{"prompt": "wave", "seconds": 1e308}]', r"segment 1 \('wave'\): 1e\+308 s is too long; a timeline lasts at most 60 s"),
+    ('[{"prompt": "wave", "seconds": ' + "9" * 400 + '}]', r"segment 1 \('wave'\): over 1e300 s is too long"),
+    ('[{"prompt": "wave", "seconds": -' + "9" * 400 + '}]', r"segment 1 \('wave'\): under -1e300 s is too short"),
+    ("[" * 100000 + "]" * 100000, r"not valid JSON \(nested too deeply"),
+    ("[" + ",".join(['{"prompt": "wave", "seconds": 0.05}'] * 1201) + "]", r"the timeline has 1201 segments; at most 60 s"),
+])
+def test_timeline_json_out_of_bounds_is_one_line(models, tmp_path, capsys, text, expected):
+    import re
+
+    f = tmp_path / "t.json"
+    f.write_text(text)
+    out = tmp_path / "o" / "x"
+    assert sample_main(["--model", "m", "--models-dir", str(models), "--timeline-json", str(f), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and re.search(expected, err[0]) and "Traceback" not in err[0], err
 
 
 def test_empty_prompt_is_refused_like_the_page():

@@ -101,7 +101,7 @@ def test_weights_out_and_init_weights_continue_a_run(dataset, tmp_path, capsys):
     train_main([*common, "--out", str(first), "--steps", "3", "--weights-out", str(tmp_path / "a.pt"),
                 "--weights-dtype", "float16"])
     slim = torch.load(tmp_path / "a.pt", weights_only=True)
-    assert set(slim) == {"step", "wall", "meta", "last_losses", "G_ema"} and slim["step"] == 3
+    assert set(slim) == {"step", "wall", "meta", "last_losses", "G_ema", "content_sha256"} and slim["step"] == 3
     assert all(v.dtype == torch.float16 for v in slim["G_ema"].values())
     G, meta, summary = load_generator(tmp_path / "a.pt")               # what export/sample/eval read
     ema = torch.load(first / "ckpt.pt", weights_only=True)["G_ema"]

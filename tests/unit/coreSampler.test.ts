@@ -6,7 +6,7 @@ import { describe, expect, it } from 'vitest';
 import { getSession } from '../../src/runtime/ort';
 import { IncompatibleModelError, stepFunction } from '../../src/runtime/stepModel';
 import { sample, type StepFn } from '../../src/sampler/sampler';
-import { scheduleFromEntry } from '../../src/sampler/schedule';
+import { computeSchedule, scheduleFromEntry } from '../../src/sampler/schedule';
 import { SeededRandom } from '../../src/sampler/rng';
 import { PARITY_DIR, fixtureNoise, loadCase, maxAbsDiff } from './coreFixtures';
 
@@ -86,10 +86,13 @@ describe('runtime + sampler on the tiny step model', () => {
     const zero = await sample({ step, schedule, noise: fixtureNoise(tiny), frames: L, featureDim: D, zDim: Z, cond: tiny.get('cond'), guidance: 2.5, x0Smoothing: 0 });
     const plain = await sample({ step, schedule, noise: fixtureNoise(tiny), frames: L, featureDim: D, zDim: Z, cond: tiny.get('cond'), guidance: 2.5 });
     expect(Buffer.from(zero.x.buffer).equals(Buffer.from(plain.x.buffer))).toBe(true);
-    for (const bad of [-1, Number.NaN, Infinity]) {
+    for (const bad of [-1, Number.NaN, Infinity, 1e9]) {
       await expect(sample({ step, schedule, noise: new SeededRandom(1), frames: L, featureDim: D, zDim: Z, cond: tiny.get('cond'), guidance: 2.5, x0Smoothing: bad }))
         .rejects.toThrow(/x0Smoothing must be a finite σ ≥ 0 in frames \(0 = off\)/);
     }
+    // a step count beyond the bound every manifest keeps (1…1000) is refused before any buffer is sized by it
+    await expect(sample({ step, schedule: computeSchedule(1001), noise: new SeededRandom(1), frames: L, featureDim: D, zDim: Z, cond: tiny.get('cond'), guidance: 2.5 }))
+      .rejects.toThrow(/schedule\.steps must be an integer in 1…1000, got 1001/);
   });
 
   for (const method of ['ddgan', 'ddim'] as const) {

@@ -143,6 +143,19 @@ describe('refusals', () => {
     expect(bad((m) => (m.files[ONNX].sha256 = 'abc'))).toContain(`files["${ONNX}"].sha256`);
     expect(bad((m) => m.textEncoders['all-MiniLM-L6-v2'].files.push('x.bin'))).toContain('"x.bin", which is not listed');
     expect(bad((m) => (m.textEncoders['all-MiniLM-L6-v2'].kind = 'bert'))).toContain('textEncoders.all-MiniLM-L6-v2.kind');
+    // every path it names stays inside the models folder; every size it sets is bounded (emdm.manifest has the same)
+    const model = 'emdm-t2m-web';
+    const inside = /it must be a relative path inside the models folder/;
+    expect(bad((m) => (m.models[model].meanStd = '../../../../etc/passwd'))).toMatch(new RegExp(`field 'models.${model}.meanStd' is "../../../../etc/passwd"; ` + inside.source));
+    expect(bad((m) => (m.models[model].onnx = '/etc/passwd'))).toMatch(inside);
+    expect(bad((m) => (m.models[model].variants.int8 = 'a/../../x.onnx'))).toContain(`models.${model}.variants.int8`);
+    expect(bad((m) => (m.textEncoders['all-MiniLM-L6-v2'].dir = '..'))).toContain('textEncoders.all-MiniLM-L6-v2.dir');
+    expect(bad((m) => (m.files['../x.onnx'] = m.files[ONNX]))).toContain('files["../x.onnx"]');
+    expect(bad((m) => (m.files['C:/x.onnx'] = m.files[ONNX]))).toMatch(inside);
+    expect(bad((m) => (m.models[model].supportedSteps = [1, 100000]))).toContain(`field 'models.${model}.supportedSteps' is [1,100000]; it must be a list of step counts in 1…1000`);
+    expect(bad((m) => (m.models[model].defaultSteps = 1e6))).toContain(`models.${model}.defaultSteps`);
+    expect(bad((m) => (m.models[model].x0Smoothing = 1e9))).toContain(`field 'models.${model}.x0Smoothing' is 1000000000; it must be a σ ≥ 0 in frames, at most 50`);
+    expect(bad((m) => (m.models[model].maxFrames = 1e9))).toContain(`models.${model}.maxFrames`);
     const dir = fs.mkdtempSync(path.join(tmp, 'j-'));
     fs.writeFileSync(path.join(dir, 'manifest.json'), '{"schema": 1,');
     expect((await rejection(loadManifest(dir + '/'))).message).toContain('not valid JSON');

@@ -153,11 +153,15 @@ def variant_file(entry: dict, name: str, variant: str | None) -> str:
     return variants[variant]
 
 
-def verified_file(manifest: dict, models_dir: Path, rel: str, what: str) -> Path:
-    """``models_dir / rel`` if the manifest lists it under ``files`` and it has that size and sha256."""
+def verified_file(manifest: dict, models_dir: Path, rel: str, what: str, field: str = "files") -> Path:
+    """``models_dir / rel`` if it lies inside ``models_dir`` (``field``: the manifest field naming it), the manifest
+    lists it under ``files`` and it has that size and sha256."""
     from emdm import manifest as mf
 
-    path = Path(models_dir) / rel
+    try:
+        path = mf.file_path(models_dir, rel, field)      # relative, and inside models_dir once links are resolved
+    except mf.ManifestError as e:
+        raise ModelError(str(e)) from None
     man = Path(models_dir) / mf.MANIFEST_NAME
     listed = manifest.get("files", {}).get(rel)
     if not isinstance(listed, dict):
@@ -264,14 +268,16 @@ def open_shipped(name: str, *, models_dir: Path | str | None = None, variant: st
     where = models_dir / mf.MANIFEST_NAME
     if name not in man["models"]:
         raise ModelError(f"{where}: no model {name!r} (have: {', '.join(man['models']) or 'none'})")
-    entry = man["models"][name]
-    missing = [k for k in ("task", "condition", "onnx", "meanStd") if k not in entry]
-    if missing:
-        raise ModelError(f"{where}: models.{name} lacks {', '.join(map(repr, missing))}")
+    try:                                      # every field sampling reads: its type and a bounded size
+        entry = mf.check_model_entry(man["models"][name], name, where)
+    except mf.ManifestError as e:
+        raise ModelError(str(e)) from None
     onnx_file = variant_file(entry, name, variant)
     label = "its ONNX step file" if variant in (None, "fp32") else f"its {variant} ONNX step file"
-    ms_path = verified_file(man, models_dir, entry["meanStd"], f"model {name!r} names it as its meanStd")
-    onnx_path = verified_file(man, models_dir, onnx_file, f"model {name!r} names it as {label}")
+    ms_path = verified_file(man, models_dir, entry["meanStd"], f"model {name!r} names it as its meanStd",
+                            f"models.{name}.meanStd")
+    onnx_path = verified_file(man, models_dir, onnx_file, f"model {name!r} names it as {label}",
+                              f"models.{name}." + ("onnx" if variant in (None, "fp32") else f"variants.{variant}"))
     mean, std = read_meanstd(ms_path)
     step = onnx_step(onnx_path, threads)
     tr = entry.get("training", {})

@@ -220,19 +220,26 @@ def check_timeline(segments: Sequence[Segment], max_frames: int = 196, overlap: 
     """Each segment's new frames; a bad segment is an EditError naming it (1-based) and the limit."""
     if not segments:
         raise EditError("the timeline is empty: add at least one segment (a prompt and its seconds)")
+    if len(segments) > max_seconds * fps:         # each lasts a frame or more
+        raise EditError(f"the timeline has {len(segments)} segments; at most {max_seconds:g} s in all "
+                        f"({int(max_seconds * fps)} one-frame segments)")
     frames = []
     for k, seg in enumerate(segments):
         if not isinstance(seg.prompt, str) or not seg.prompt.strip():
             raise EditError(f"segment {k + 1}: the prompt is empty; say what the character should do")
         s = seg.seconds
-        if isinstance(s, bool) or not isinstance(s, (int, float)) or not math.isfinite(s):
-            raise EditError(f"{_name(k, seg)}: seconds must be a number, got {s!r}")
-        n = segment_frames(s, fps)
+        if isinstance(s, bool) or not isinstance(s, (int, float)) or s != s or s in (math.inf, -math.inf):
+            raise EditError(f"{_name(k, seg)}: seconds must be a number, got {s!r:.40}")
+        if s > max_seconds:           # before any arithmetic: an integer of 400 digits is no float
+            shown = f"{s:g}" if isinstance(s, float) or s < 1e300 else "over 1e300"
+            raise EditError(f"{_name(k, seg)}: {shown} s is too long; a timeline lasts at most {max_seconds:g} s in all")
+        n = segment_frames(s, fps) if s > 0 else 0
         if n < 1:
-            raise EditError(f"{_name(k, seg)}: {s:g} s is too short; a segment lasts at least {1 / fps:g} s "
+            shown = f"{s:g}" if isinstance(s, float) or s > -1e300 else "under -1e300"
+            raise EditError(f"{_name(k, seg)}: {shown} s is too short; a segment lasts at least {1 / fps:g} s "
                             f"(1 frame at {fps} fps)")
         if isinstance(seg.seed, bool) or not isinstance(seg.seed, (int, np.integer)) or not 0 <= seg.seed <= MAX_SEED:
-            raise EditError(f"{_name(k, seg)}: seed must be an integer in 0..{MAX_SEED}, got {seg.seed!r}")
+            raise EditError(f"{_name(k, seg)}: seed must be an integer in 0..{MAX_SEED}, got {seg.seed!r:.40}")
         frames.append(n)
     total = sum(frames)
     if total > max_seconds * fps:
@@ -276,6 +283,10 @@ def read_segments(path, seed: int = 0) -> list[Segment]:
         raise EditError(f"{path}: not a JSON text file (it is not UTF-8); give a list of segments as JSON") from None
     except json.JSONDecodeError as e:
         raise EditError(f"{path}:{e.lineno}: not valid JSON ({e.msg})") from None
+    except ValueError as e:          # an integer of more than 4300 digits
+        raise EditError(f"{path}: not valid JSON ({str(e).splitlines()[0][:100]})") from None
+    except RecursionError:
+        raise EditError(f"{path}: not valid JSON (nested too deeply; give a flat list of segments)") from None
     if not isinstance(doc, list):
         raise EditError(f"{path}: expected a JSON list of segments [{{\"prompt\": ..., \"seconds\": ...}}, ...]")
     out = []

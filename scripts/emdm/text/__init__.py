@@ -83,7 +83,8 @@ def load_encoder(encoder_id: str = DEFAULT_ENCODER, *, models_dir: Path | str | 
         if entry.get("kind") != "minilm":
             raise TextEncoderError(f"manifest textEncoders.{encoder_id}: field 'kind' is {entry.get('kind')!r}, "
                                    f"this loader runs 'minilm' folders (use model_dir= for clip)")
-        enc = MiniLMEncoder(Path(models_dir) / entry["dir"], encoder_id=encoder_id, max_tokens=entry.get("maxTokens"))
+        folder = mf.file_path(models_dir, entry.get("dir"), f"textEncoders.{encoder_id}.dir")   # inside models_dir
+        enc = MiniLMEncoder(folder, encoder_id=encoder_id, max_tokens=entry.get("maxTokens"))
     _CACHE[key] = enc
     return enc
 
