@@ -281,7 +281,14 @@ def _euler(order: str, angles_by_axis: dict[str, np.ndarray], n: int) -> np.ndar
 
 
 def forward_kinematics(asf: ASF, amc: AMC, length_scale: float | None = None) -> tuple[list[str], np.ndarray]:
-    """(point names ['root', bone...], positions (F, P, 3)) in metres (see module docstring)."""
+    """(point names ['root', bone...], positions (F, P, 3)) in metres (see module docstring). Finite values
+    too big to compute with (a length of 1e308) give non-finite positions, quietly: the caller checks
+    (``emdm.mocap.load.checked_joints`` names the frame)."""
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        return _forward_kinematics(asf, amc, length_scale)
+
+
+def _forward_kinematics(asf: ASF, amc: AMC, length_scale: float | None) -> tuple[list[str], np.ndarray]:
     scale = (INCH / asf.length_unit) if length_scale is None else length_scale
     ang = amc.angle_unit or asf.angle_unit
     to_rad = np.deg2rad if ang == "deg" else (lambda a: np.asarray(a, dtype=np.float64))
@@ -317,7 +324,9 @@ def forward_kinematics(asf: ASF, amc: AMC, length_scale: float | None = None) ->
         par = asf.parent[b]
         Wb = W[par] @ (C @ M @ C.T)
         W[b] = Wb
-        d = bone.direction / max(np.linalg.norm(bone.direction), 1e-12)
+        big = np.abs(bone.direction).max()
+        d = bone.direction / big if big > 0 else bone.direction        # norm of 1e308 overflows
+        d = d / max(np.linalg.norm(d), 1e-12)
         ends[b] = ends[par] + bone.length * scale * (Wb @ d)
         names.append(b)
     return names, np.stack([ends[n] for n in names], axis=1)

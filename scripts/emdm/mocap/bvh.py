@@ -354,7 +354,13 @@ def forward_kinematics(bvh: BVH, joints: list[int] | None = None) -> np.ndarray:
 def joint_positions(bvh: BVH, joints: list[int]) -> np.ndarray:
     """World positions (F, len(joints), 3) in file units of ``joints`` alone: their ancestors are computed
     and each one's rotation dropped once its last needed child is done, so memory follows the joints asked
-    for, not the rig's size."""
+    for, not the rig's size. Finite values too big to compute with give non-finite positions, quietly: the
+    caller checks (``emdm.mocap.load.checked_joints``)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return _joint_positions(bvh, joints)
+
+
+def _joint_positions(bvh: BVH, joints: list[int]) -> np.ndarray:
     F = bvh.num_frames
     order = _needed(bvh, joints)
     pending = {j: 0 for j in order}           # needed children not yet computed
