@@ -18,7 +18,7 @@ from emdm.mocap import asfamc, bvh
 from emdm.mocap.errors import MocapFormatError
 from emdm.mocap.jointmap import load_joint_map
 from emdm.mocap.load import load_bvh_clip
-from test_mocap_asfamc import AMC, ASF
+from test_mocap_asfamc import ASF
 from test_mocap_bvh import reference_bvh_text
 
 CASES = 4000           # per format

@@ -5,11 +5,12 @@
     python -m emdm.data.prepare --input-dir my_mocap --joint-map my_rig.json --out data/mine
 
 The dataset is written into a temporary folder beside ``--out`` and renamed into place at the end,
-so ``--out`` is never half-written (training may start as soon as train.txt and Mean.npy exist).
+so ``--out`` is never half-written (training may start as soon as train.txt and Mean.npy exist); a run
+killed while renaming is completed or undone by the next one (``emdm.outdir.recover``).
 An existing ``--out`` is replaced only when it is a dataset this tool wrote (or with ``--force``), and
 never when it is, or holds, an input or the repository (``emdm.outdir``). The joint map is loaded and
 checked against the first readable input file before any take is processed. A file that cannot be used
-is skipped with its reason (``skipped.txt``); when every file is skipped nothing is written, the reasons
+(for any reason, MemoryError included) is skipped with its reason (``skipped.txt``); when every file is skipped nothing is written, the reasons
 are printed and kept in ``<out>.skipped.txt`` beside ``--out``, and the exit status is 2.
 """
 
