@@ -9,8 +9,12 @@ archive cache of ``emdm.data.unpack``) asks ``check_out`` first:
 * an existing ``--out`` that this tool did not write (``recognise`` says no; an empty folder is fine) is
   refused unless ``force``.
 
-``replace_dir`` then renames a finished temp folder (made beside ``out``) into place; an older ``out`` is
-renamed aside first and removed only once the new one is in place (put back if that rename fails).
+The output is built in ``temp_dir(out)`` (``.NAME.tmp-PID-*`` beside it) and published by ``replace_dir``:
+the finished folder is renamed ``.NAME.new-PID``, an older ``out`` aside to ``.NAME.old-PID``, the new one
+onto ``out``, and only then is the old one removed. A run killed at any point leaves names that say what
+to do, and ``check_out`` starts with ``recover``: for each such name whose process is gone it completes the
+publish (a ``new`` copy is finished), else puts the old ``out`` back, removes stale copies and unfinished
+temp folders, and says so in one line. Folders of a live process are never touched.
 A refusal is an ``OutputRefused`` whose message is one line: the path and why.
 """
 
@@ -18,7 +22,9 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
+import sys
 import tempfile
 from pathlib import Path
 from typing import Callable, Iterable
@@ -58,6 +64,7 @@ def check_out(out: Path | str, *, inputs: Iterable[tuple[str, Path | str]] = (),
     ``inputs``: (option name, path) of what the run reads, e.g. ("--input-dir", "my_mocap")."""
     given = f"{option} {out}"
     out = Path(out).expanduser().resolve()
+    announce_recovery(out, given)
     repo = Path(paths.REPO_ROOT).resolve()
     if _inside(repo, out):
         raise OutputRefused(f"{given}: {'is' if out == repo else 'holds'} the repository ({repo}); "
@@ -104,6 +111,15 @@ def check_writable(path: Path | str, *, folder: bool = False, option: str = "--o
     return path
 
 
+def check_place(out: Path, given: Path | str, option: str = "--out") -> Path:
+    """OutputRefused unless the folder that will hold ``out`` (and its temp folder, beside it) can be made
+    and written: its nearest existing ancestor is a folder that takes a new file."""
+    try:
+        return writable_folder(Path(out).parent)
+    except OutputRefused as e:
+        raise OutputRefused(f"{option} {given}: {e}") from None
+
+
 def writable_folder(d: Path) -> Path:
     """The nearest existing folder at or above ``d`` if a new file can be made in it, else OutputRefused
     with the reason alone (the caller puts its option in front)."""
@@ -121,22 +137,105 @@ def writable_folder(d: Path) -> Path:
     return d
 
 
+def temp_dir(out: Path) -> Path:
+    """A new private folder beside ``out`` to build it in (``.NAME.tmp-PID-*``; ``recover`` removes it if
+    this process dies before publishing it)."""
+    out = Path(out)
+    return Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-{os.getpid()}-", dir=out.parent))
+
+
 def replace_dir(tmp: Path, out: Path) -> None:
-    """Rename the finished folder ``tmp`` (beside ``out``) onto ``out``; an older ``out`` is removed only
-    after the new one is in place."""
+    """Publish the finished folder ``tmp`` (from ``temp_dir(out)``) as ``out``; an older ``out`` is removed
+    only after the new one is in place. Killed at any point, the next ``recover(out)`` finishes the job."""
     tmp, out = Path(tmp), Path(out)
     os.chmod(tmp, 0o755)  # mkdtemp makes it private
+    new, old = _beside(out, "new", os.getpid()), _beside(out, "old", os.getpid())
+    _remove(new)           # only a dead process that had our pid can have left one
+    os.replace(tmp, new)   # finished: from here on, a killed run is completed, not undone
     if not out.exists() and not out.is_symlink():
-        os.replace(tmp, out)
+        os.replace(new, out)
         return
-    old = out.with_name(f".{out.name}.old-{os.getpid()}")
+    _remove(old)
     os.replace(out, old)
     try:
-        os.replace(tmp, out)
+        os.replace(new, out)
     except BaseException:
         os.replace(old, out)
+        _remove(new)
         raise
-    if old.is_dir() and not old.is_symlink():
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        old.unlink()
+    _remove(old)
+
+
+def _beside(out: Path, kind: str, pid: int) -> Path:
+    return out.with_name(f".{out.name}.{kind}-{pid}")
+
+
+def _remove(p: Path) -> None:
+    if p.is_dir() and not p.is_symlink():
+        shutil.rmtree(p, ignore_errors=True)
+    elif p.exists() or p.is_symlink():
+        p.unlink()
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (on this machine); when unsure, yes."""
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True
+    return True
+
+
+def _leftovers(out: Path) -> dict[int, dict[str, list[Path]]]:
+    """pid -> {'tmp'|'new'|'old': [paths]} of the names ``temp_dir``/``replace_dir`` use beside ``out``, for
+    processes that are gone."""
+    prefix, found = f".{out.name}.", {}
+    try:
+        siblings = list(out.parent.iterdir())
+    except OSError:
+        return {}
+    for p in siblings:
+        m = re.fullmatch(r"(tmp|new|old)-(\d+)(-[A-Za-z0-9_]+)?", p.name[len(prefix):]) \
+            if p.name.startswith(prefix) else None
+        if m and (m[1] == "tmp") == (m[3] is not None) and not _alive(int(m[2])):
+            found.setdefault(int(m[2]), {}).setdefault(m[1], []).append(p)
+    return found
+
+
+def announce_recovery(out: Path, given: str) -> None:
+    """``recover(out)``, and its line on stderr when it did something."""
+    note = recover(out)
+    if note:
+        print(f"note: {given}: {note}", file=sys.stderr)
+
+
+def recover(out: Path) -> str:
+    """Complete or undo the publish of ``out`` that a killed run left half done, remove what dead runs left
+    beside it; one line saying what was done ('' when nothing was there)."""
+    out, done, removed = Path(out), [], []
+    for pid, left in sorted(_leftovers(out).items()):
+        new, old = (left.get(k, [None])[0] for k in ("new", "old"))
+        if new is not None:
+            if out.exists() or out.is_symlink():
+                if old is not None:
+                    _remove(old)
+                old = _beside(out, "old", pid)
+                os.replace(out, old)
+            os.replace(new, out)
+            done.append(f"put in place the finished copy that run {pid} was killed while publishing")
+        elif old is not None and not out.exists() and not out.is_symlink():
+            os.replace(old, out)
+            old = None
+            done.append(f"put back the previous copy that run {pid} had moved aside when it was killed")
+        for p in ([old] if old is not None else []) + left.get("tmp", []):
+            _remove(p)
+            removed.append(pid)
+    if removed:
+        pids = ", ".join(str(p) for p in sorted(set(removed)))
+        done.append(f"removed {len(removed)} leftover temp folder{'s' if len(removed) > 1 else ''} of killed "
+                    f"run{'s' if len(set(removed)) > 1 else ''} {pids}")
+    return "; ".join(done)

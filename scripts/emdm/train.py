@@ -35,8 +35,8 @@ import torch.nn.functional as F
 
 from emdm.checkpoints import (CheckpointError, TRAIN_KEYS, atomic_save, check_same_model, dataset_identity,
                               first_non_finite, load_file, load_state_dict, load_weights_file, save_weights_file)
-from emdm.data.dataset import (BucketBatcher, DeviceClips, action_shares, caption_table, cached_text_embeddings,
-                               crop_plan, load_split)
+from emdm.data.dataset import (BucketBatcher, DatasetError, DeviceClips, action_shares, caption_table,
+                               cached_text_embeddings, crop_plan, load_split)
 from emdm.model.discriminator import Discriminator
 from emdm.model.generator import Generator, count_parameters
 from emdm.model.objectives import GanWeights, Geo, Nets, ScheduleTables, ddgan_step, diffusion_step
@@ -636,7 +636,7 @@ class Trainer:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Train; 0 on success, 2 (one line on stderr) for an unusable checkpoint or a non-finite loss."""
+    """Train; 0 on success, 2 (one line on stderr) for an unusable checkpoint or dataset or a non-finite loss."""
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.weights_minutes is not None and (args.weights_out is None or not args.weights_minutes >= 0):
@@ -647,7 +647,7 @@ def main(argv: list[str] | None = None) -> int:
         trainer.run()
         if args.weights_out is not None:
             trainer.save_weights(args.weights_out, args.weights_dtype)
-    except (CheckpointError, NonFiniteLoss) as e:
+    except (CheckpointError, DatasetError, NonFiniteLoss) as e:
         print(f"emdm.train: {e}", file=sys.stderr)
         return 2
     finally:

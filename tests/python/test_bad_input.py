@@ -4,6 +4,8 @@
 
 import io
 import json
+import os
+import signal
 import tarfile
 from pathlib import Path
 
@@ -313,11 +315,11 @@ def test_unpack_archive_is_not_fooled_by_a_sibling_with_the_same_prefix(tmp_path
     raw = tmp_path / "raw"
     fixed = raw / ".src.tmp"
 
-    def mkdtemp(prefix="", dir=None):
+    def temp_dir(out):
         fixed.mkdir(parents=True)
-        return str(fixed)
+        return fixed
 
-    monkeypatch.setattr(unpack_mod.tempfile, "mkdtemp", mkdtemp)
+    monkeypatch.setattr(unpack_mod, "temp_dir", temp_dir)
     arc = _tar(tmp_path / "src.tar.xz", [(_member("../.src.tmpx/f.txt"), b"x")])
     with pytest.raises(ValueError, match="outside"):
         unpack_archive(arc, raw)
@@ -349,3 +351,44 @@ def test_pack_unpack_rejects_unsafe_members_naming_them(tmp_path, kind, capsys):
     line = _last_line(capsys)
     assert repr(bad.name) in line and str(arc) in line
     assert not (tmp_path / "out").exists() and not (tmp_path / "escaped.txt").exists()
+
+
+# --- one file's failure is that file's skip (issue 29) --------------------------------------------------------
+
+def test_a_fifo_named_bvh_is_skipped_not_waited_on(tmp_path):
+    root, jm = _user_folder(tmp_path)
+    os.mkfifo(root / "walk" / "pipe.bvh")
+    class Blocked(BaseException):     # not an OSError: nothing on the way may take it for a read error
+        pass
+
+    def blocked(*_):
+        raise Blocked("prepare blocked on the FIFO for 20 s")
+
+    old = signal.signal(signal.SIGALRM, blocked)
+    signal.alarm(20)
+    try:
+        assert _prepare(tmp_path, root, jm) == 0
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+    skipped = (tmp_path / "ds" / "skipped.txt").read_text()
+    assert "pipe.bvh" in skipped and "named pipe (FIFO), not a regular file" in skipped
+
+
+def test_memory_error_on_one_file_is_its_skip_and_the_run_goes_on(tmp_path, monkeypatch):
+    root, jm = _user_folder(tmp_path)
+    real = prepare.process_job
+
+    def hungry(job, *a, **k):
+        if job.path.endswith("take1.bvh"):
+            raise MemoryError("Unable to allocate 4.8 GiB for an array")
+        return real(job, *a, **k)
+
+    monkeypatch.setattr(prepare, "process_job", hungry)
+    assert _prepare(tmp_path, root, jm) == 0
+    skipped = dict(l.split("\t", 1) for l in (tmp_path / "ds" / "skipped.txt").read_text().splitlines())
+    assert list(skipped) == [str(root / "walk" / "take1.bvh")]
+    assert skipped[str(root / "walk" / "take1.bvh")].startswith("MemoryError: the file needs more memory")
+    info = json.loads((tmp_path / "ds" / "info.json").read_text())
+    assert (info["files"], info["skipped"], info["clips"]) == (4, 1, 3)
+

@@ -89,6 +89,30 @@ def test_user_folder_becomes_a_humanml3d_dataset(tmp_path, capsys):
     assert sum(map(len, ids.values())) == 8 and len(ids["test"]) >= 2
 
 
+CLASHING = ["walk ä.bvh", "walk ö.bvh", "walk-ü.bvh", "walk.bvh", "walk.BVH"]     # all slug to 'walk'
+
+
+def test_files_whose_names_slug_alike_are_each_their_own_clip_with_a_stable_id(tmp_path, capsys):
+    root, jm = _user_folder(tmp_path)
+    take = (root / "walk" / "take0.bvh").read_text()
+    for name in CLASHING:
+        (root / "walk" / name).write_text(take)
+    out = _run(tmp_path, root, jm)
+    ids = (out / "all.txt").read_text().split()
+    assert len(ids) == len(set(ids)) == 2 * 9, "9 files, each one clip and its mirror"
+    rows = list(csv.DictReader(open(out / "metadata.csv")))
+    assert len({r["take"] for r in rows}) == 9 and len({r["id"] for r in rows}) == 18
+    info = json.loads((out / "info.json").read_text())
+    assert (info["files"], info["clips"], info["skipped"], info["takes"], info["windows"]) == (9, 9, 0, 9, 18)
+    assert "user            9                 18" in capsys.readouterr().out
+    walk = sorted(i for i in ids if i.startswith("user_walk-walk"))
+    assert len(walk) == 5 and all(len(i) == len("user_walk-walk-123456_00") for i in walk), walk
+    assert "user_walk-take0_00" in ids, "a name that does not clash keeps its plain id"
+    again = prepare.main(["--sources", "", "--input-dir", str(root), "--joint-map", str(jm), "--out",
+                          str(tmp_path / "again"), "--workers", "2"])
+    assert again == 0 and sorted((tmp_path / "again" / "all.txt").read_text().split()) == sorted(ids), "stable"
+
+
 @pytest.mark.parametrize("workers", ["1", "2"])
 def test_strict_fails_on_the_first_bad_file_and_writes_nothing(tmp_path, workers, capsys):
     root, jm = _user_folder(tmp_path, bad=True)

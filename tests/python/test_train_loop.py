@@ -88,9 +88,10 @@ def test_ddp_two_gloo_processes(dataset, tmp_path):
     assert st["step"] == 3 and st["meta"]["world"] == 2 and len(st["rng"]) == 2
 
 
-def test_missing_dataset_names_the_file(tmp_path):
-    with pytest.raises(Exception, match="train.txt"):
-        train_main(["--data", str(tmp_path), "--task", "action", "--out", str(tmp_path / "r"), "--steps", "1", *TINY])
+def test_missing_dataset_names_the_file(tmp_path, capsys):
+    rc = train_main(["--data", str(tmp_path), "--task", "action", "--out", str(tmp_path / "r"), "--steps", "1", *TINY])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and "\n" not in err and "train.txt: split file not found" in err, err
 
 
 def test_weights_out_and_init_weights_continue_a_run(dataset, tmp_path, capsys):

@@ -27,7 +27,6 @@ import os
 import shutil
 import sys
 import tarfile
-import tempfile
 import time
 from pathlib import Path
 
@@ -38,7 +37,7 @@ from emdm.data.dataset import DatasetError
 from emdm.data.unpack import UnsafeArchiveError, unsafe_member
 from emdm.motion.features import extract_features
 from emdm.motion.retarget import normalize_clip
-from emdm.outdir import OutputRefused, check_out, replace_dir
+from emdm.outdir import OutputRefused, check_out, check_place, replace_dir, temp_dir
 
 QUANTUM = 1e-5            # metres (0.01 mm)
 FORMAT = 1
@@ -78,6 +77,7 @@ def pack(root: Path, out: Path, force: bool = False) -> dict:
     if out.exists() and not force and not is_pack_archive(out):
         raise OutputRefused(f"{out}: exists and is not an archive written by emdm.data.pack; nothing was changed "
                             "(give --force to replace it, or choose a new name)")
+    check_place(out, out, option="archive")
     ids = _ids(root)
     base_ids = [i for i in ids if not i.startswith("M")]
     mirrored = sorted(set(ids) - set(base_ids))
@@ -136,37 +136,51 @@ def _rebuild_clip(job: tuple[str, str, np.ndarray, bool]) -> None:
         np.save(Path(root) / "new_joint_vecs" / f"{vid}.npy", extract_features(j))
 
 
+def _extract(archive: Path, tmp: Path) -> tuple[dict, np.ndarray]:
+    """Check the archive's members, write its small files under ``tmp``; (header, joint deltas)."""
+    with tarfile.open(archive, "r:xz") as tar:
+        members = tar.getmembers()
+        for m in members:
+            why = unsafe_member(m, tmp) or ("" if m.isfile() else "is a folder; a pack archive holds files only")
+            if why:
+                raise UnsafeArchiveError(f"{archive}: refusing member {m.name!r}: it {why}")
+        names = {m.name for m in members}
+        for need in ("pack.json", "joints_delta.npy", "all.txt", "Mean.npy", "Std.npy"):
+            if need not in names:
+                raise DatasetError(f"{archive}: member {need} missing (not written by emdm.data.pack)")
+        header = json.loads(tar.extractfile("pack.json").read())
+        if not isinstance(header, dict) or header.get("format") != FORMAT:
+            got = header.get("format") if isinstance(header, dict) else header
+            raise DatasetError(f"{archive}: pack format {got!r}, this reader knows {FORMAT}")
+        d = np.load(io.BytesIO(tar.extractfile("joints_delta.npy").read()), allow_pickle=False)
+        for m in members:
+            if m.name in ("pack.json", "joints_delta.npy"):
+                continue
+            dst = tmp / m.name
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            dst.write_bytes(tar.extractfile(m).read())
+    if d.shape != (sum(header["lengths"]), 22, 3):
+        raise DatasetError(f"{archive}: joints_delta.npy has shape {d.shape}, header says "
+                           f"{sum(header['lengths'])} frames")
+    return header, d
+
+
 def unpack(archive: Path, out: Path, workers: int = 1, force: bool = False) -> dict:
     archive, out = Path(archive), Path(out)
     if not archive.is_file():
         raise DatasetError(f"{archive}: archive not found")
     out = check_out(out, inputs=[("archive", archive)], force=force, option="unpack folder")
+    check_place(out, out, option="unpack folder")
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    tmp = temp_dir(out)
     try:
-        with tarfile.open(archive, "r:xz") as tar:
-            members = tar.getmembers()
-            for m in members:
-                why = unsafe_member(m, tmp) or ("" if m.isfile() else "is a folder; a pack archive holds files only")
-                if why:
-                    raise UnsafeArchiveError(f"{archive}: refusing member {m.name!r}: it {why}")
-            names = {m.name for m in members}
-            for need in ("pack.json", "joints_delta.npy", "all.txt", "Mean.npy", "Std.npy"):
-                if need not in names:
-                    raise DatasetError(f"{archive}: member {need} missing (not written by emdm.data.pack)")
-            header = json.loads(tar.extractfile("pack.json").read())
-            if header.get("format") != FORMAT:
-                raise DatasetError(f"{archive}: pack format {header.get('format')!r}, this reader knows {FORMAT}")
-            d = np.load(io.BytesIO(tar.extractfile("joints_delta.npy").read()))
-            for m in members:
-                if m.name in ("pack.json", "joints_delta.npy"):
-                    continue
-                dst = tmp / m.name
-                dst.parent.mkdir(parents=True, exist_ok=True)
-                dst.write_bytes(tar.extractfile(m).read())
-        if d.shape != (sum(header["lengths"]), 22, 3):
-            raise DatasetError(f"{archive}: joints_delta.npy has shape {d.shape}, header says "
-                               f"{sum(header['lengths'])} frames")
+        try:
+            header, d = _extract(archive, tmp)
+        except (tarfile.TarError, lzma.LZMAError, EOFError, ValueError, KeyError, TypeError) as e:
+            if isinstance(e, (DatasetError, UnsafeArchiveError)):
+                raise
+            raise DatasetError(f"{archive}: not a readable pack archive ({type(e).__name__}: "
+                               f"{' '.join(str(e).split()) or 'truncated'}); write it again with emdm.data.pack") from None
         (tmp / "new_joints").mkdir()
         (tmp / "new_joint_vecs").mkdir()
         mirrored = set(header["mirrored"])

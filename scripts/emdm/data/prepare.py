@@ -5,11 +5,12 @@
     python -m emdm.data.prepare --input-dir my_mocap --joint-map my_rig.json --out data/mine
 
 The dataset is written into a temporary folder beside ``--out`` and renamed into place at the end,
-so ``--out`` is never half-written (training may start as soon as train.txt and Mean.npy exist).
+so ``--out`` is never half-written (training may start as soon as train.txt and Mean.npy exist); a run
+killed while renaming is completed or undone by the next one (``emdm.outdir.recover``).
 An existing ``--out`` is replaced only when it is a dataset this tool wrote (or with ``--force``), and
 never when it is, or holds, an input or the repository (``emdm.outdir``). The joint map is loaded and
 checked against the first readable input file before any take is processed. A file that cannot be used
-is skipped with its reason (``skipped.txt``); when every file is skipped nothing is written, the reasons
+(for any reason, MemoryError included) is skipped with its reason (``skipped.txt``); when every file is skipped nothing is written, the reasons
 are printed and kept in ``<out>.skipped.txt`` beside ``--out``, and the exit status is 2.
 """
 
@@ -21,9 +22,8 @@ import json
 import math
 import shutil
 import sys
-import tempfile
 import time
-from collections import defaultdict
+from collections import Counter, defaultdict
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
@@ -40,7 +40,7 @@ from emdm.data.unpack import UnsafeArchiveError, unpack_archive
 from emdm.mocap.errors import MocapFormatError
 from emdm.mocap.jointmap import JointMap, load_joint_map
 from emdm.mocap.load import source_point_names
-from emdm.outdir import PREPARE_TOOL, OutputRefused, check_out, replace_dir
+from emdm.outdir import PREPARE_TOOL, OutputRefused, check_out, check_place, replace_dir, temp_dir
 
 ARCHIVES = {
     "bandai": "bandai-namco-motion.tar.xz",
@@ -122,7 +122,7 @@ def collect_jobs(args) -> list[sources.Job]:
             raise PrepareError(f"--sources {name}: {e}") from None
     if not jobs:
         raise PrepareError("nothing to do: give --sources and/or --input-dir")
-    return jobs
+    return sources.unique_clips(jobs)      # user clips are unique already; a clash elsewhere gets a suffix
 
 
 def _run_all(jobs, tmp: Path, args, strict: bool):
@@ -138,7 +138,7 @@ def _run_all(jobs, tmp: Path, args, strict: bool):
         if exc is not None:
             if strict:
                 raise PrepareError(f"{exc} (--strict stops at the first bad file; nothing was written)") from exc
-            skipped.append((job.path, f"{type(exc).__name__}: {exc}"))
+            skipped.append((job.path, skip_reason(exc)))
         elif fut_result["skipped"]:
             skipped.append((job.path, fut_result["skipped"]))
             results.append(fut_result)
@@ -147,7 +147,7 @@ def _run_all(jobs, tmp: Path, args, strict: bool):
         if bar:
             bar.update(1)
 
-    recoverable = (MocapFormatError, ValueError, KeyError, OSError)
+    recoverable = Exception        # one file's failure, whatever it is, is that file's skip (skip_reason)
     try:
         if args.workers <= 1:
             for w in work:
@@ -176,6 +176,17 @@ def _run_all(jobs, tmp: Path, args, strict: bool):
         if bar:
             bar.close()
     return results, skipped
+
+
+def skip_reason(exc: BaseException) -> str:
+    """One line saying why a file was skipped: the reader's message, or what else went wrong with it."""
+    if isinstance(exc, MemoryError):
+        return (f"MemoryError: the file needs more memory than this machine has ({exc or 'no detail'}); "
+                "split the take into shorter files")
+    text = " ".join(str(exc).split()) or "(no message)"
+    if isinstance(exc, (MocapFormatError, ValueError, KeyError, OSError)):
+        return f"{type(exc).__name__}: {text}"
+    return f"{type(exc).__name__}: {text} (unexpected: please report it with the file)"
 
 
 def summary_table(results: list[dict], skipped: list[tuple[str, str]], elapsed: float) -> str:
@@ -233,6 +244,9 @@ def write_dataset(results: list[dict], tmp: Path, split_of: dict[str, str], info
         meta_rows.append([w["id"], job["source"], job["take"], w["action"], label_id[w["action"]], job["style"], sk.FPS,
                           w["frames"], int(w["mirrored"]), split, round(float(r["fps"]), 3), w["start"],
                           job["extra"].get("content", job["extra"].get("description", ""))])
+    dup = next((i for i, n in Counter(i for v in ids.values() for i in v).items() if n > 1), None)
+    if dup is not None:
+        raise PrepareError(f"clip id {dup} was made by two files; nothing was written (a bug: please report it)")
     if count < 2:
         raise PrepareError(f"no training frames: the {len(windows)} windows all went to val/test "
                            "(give more takes, or check skipped files)")
@@ -329,11 +343,16 @@ def main(argv: list[str] | None = None) -> int:
     except (PrepareError, OutputRefused) as e:
         print(f"prepare: {e}", file=sys.stderr)
         return 2
+    except OSError as e:   # the disk filled up, a folder went away...: nothing was published
+        print(f"prepare: cannot write {e.filename or args.out}: {e.strerror or e}; nothing was written to "
+              f"{args.out}", file=sys.stderr)
+        return 2
 
 
 def run(args) -> int:
     t0 = time.time()
     out = check_out(args.out, inputs=run_inputs(args), force=args.force)   # before anything is read
+    check_place(out, args.out)
     jobs = collect_jobs(args)
     if args.limit:
         per = defaultdict(int)
@@ -348,7 +367,7 @@ def run(args) -> int:
         take_actions.setdefault(j.take, j.action)
     split_of = split_takes(take_actions, seed=args.seed)
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
+    tmp = temp_dir(out)
     try:
         for d in ("new_joints", "new_joint_vecs", "texts"):
             (tmp / d).mkdir()
@@ -364,6 +383,7 @@ def run(args) -> int:
                 "sources": args.sources, "input_dir": args.input_dir or "", "fps": sk.FPS,
                 "min_frames": args.min_frames, "max_frames": args.max_frames, "stride": args.stride,
                 "mirrored": not args.no_mirror, "takes": len(take_actions), "files": len(jobs), "skipped": len(skipped),
+                "clips": sum(1 for r in results if r["windows"]),
             })
         except PrepareError as e:
             if skipped:

@@ -9,12 +9,16 @@
 * a user folder (``user_jobs``): every ``*.bvh`` / ``*.amc`` below it, with one joint map; the action
   is the file's sub-folder name (or ``unknown``), captions from a ``<stem>.txt`` beside the file
   (one caption per line) or made from the action name. An AMC without its ASF is still a job: it is
-  skipped when processed, with the reason naming the file looked for.
+  skipped when processed, with the reason naming the file looked for. The clip name is the file's path
+  made file-safe; names that would clash (``walk ä.bvh``, ``walk-ü.bvh``, ``walk.BVH`` all become
+  ``walk``; case is ignored, for case-insensitive disks) each get ``-`` and a short hash of the relative
+  path (``unique_clips``), so every file is its own clip and its id is the same on every run.
 """
 
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import re
 from dataclasses import dataclass, field
@@ -43,6 +47,26 @@ class Job:
 
 def _safe(s: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "-", s).strip("-")
+
+
+def unique_clips(jobs: list[Job], key=lambda j: j.path) -> list[Job]:
+    """``jobs`` with every clip name that clashes with another of the same source (ignoring case) suffixed
+    by ``-`` and the first hex digits of sha1(``key(job)``), as many as make them all distinct."""
+    groups: dict[tuple[str, str], list[Job]] = {}
+    for j in jobs:
+        groups.setdefault((j.source, j.clip.lower()), []).append(j)
+    taken = set(groups)
+    for (source, _), same in groups.items():
+        if len(same) < 2:
+            continue
+        digests = [hashlib.sha1(key(j).encode("utf-8", "surrogateescape")).hexdigest() for j in same]
+        n = 6
+        while len({d[:n] for d in digests}) < len(same) or any((source, f"{j.clip}-{d[:n]}".lower()) in taken
+                                                                  for j, d in zip(same, digests)):
+            n += 2
+        for j, d in zip(same, digests):
+            j.clip = f"{j.clip}-{d[:n]}"
+    return jobs
 
 
 def bandai_jobs(root: Path, n_captions: int = 4) -> list[Job]:
@@ -149,7 +173,7 @@ def user_jobs(root: Path, joint_map: str, amc_fps: float = 120.0, n_captions: in
         if not caps:
             phrase = action.replace("-", " ").replace("_", " ")
             caps = [f"A person performs the motion: {phrase}."]
-        clip = _safe(str(rel.with_suffix("")).replace("/", "-"))
+        clip = _safe(str(rel.with_suffix("")).replace("/", "-")) or "clip"
         kind = "bvh" if f.suffix.lower() == ".bvh" else "amc"
         asf, extra = "", {}
         if kind == "amc":
@@ -157,6 +181,9 @@ def user_jobs(root: Path, joint_map: str, amc_fps: float = 120.0, n_captions: in
                 asf = str(find_asf(f))
             except MocapFormatError as e:   # that file is skipped with this reason, the others go on
                 extra["asf_error"] = e.message
-        jobs.append(Job("user", kind, str(f), joint_map, f"user/{clip}", clip, action, "", caps[:max(n_captions, len(caps))],
+        jobs.append(Job("user", kind, str(f), joint_map, "", clip, action, "", caps[:max(n_captions, len(caps))],
                         asf=asf, fps=amc_fps, extra=extra))
+    unique_clips(jobs, key=lambda j: Path(j.path).relative_to(root).as_posix())
+    for j in jobs:
+        j.take = f"user/{j.clip}"
     return jobs

@@ -10,11 +10,10 @@ from __future__ import annotations
 
 import shutil
 import tarfile
-import tempfile
 from pathlib import Path
 
 from emdm import paths
-from emdm.outdir import check_out, replace_dir
+from emdm.outdir import announce_recovery, check_out, replace_dir, temp_dir
 
 MARKER = ".unpacked"
 
@@ -56,12 +55,13 @@ def unpack_archive(archive: Path, dest_root: Path | None = None, force: bool = F
     dest_root = Path(dest_root) if dest_root is not None else paths.DATA_DIR / "raw"
     name = archive.name.split(".tar")[0]
     dest = dest_root / name
+    announce_recovery(dest, f"unpack folder {dest}")   # a run killed while publishing it: finish or undo that
     if (dest / MARKER).is_file():
         return dest
     check_out(dest, inputs=[("archive", archive)], force=force, recognise=lambda d: (d / MARKER).is_file(),
               what="an archive unpacked by emdm.data.unpack", option="unpack folder")
     dest_root.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{name}.", dir=dest_root))
+    tmp = temp_dir(dest)
     try:
         with tarfile.open(archive, "r:*") as tar:
             members = check_members(tar, tmp, archive)

@@ -365,6 +365,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     import torch
 
+    from emdm.data.dataset import DatasetError
     from emdm.model.open import ModelError
     from emdm.outdir import OutputRefused
 
@@ -374,7 +375,7 @@ def main(argv: list[str] | None = None) -> int:
         if a.chips:
             return print_chips(a)
         print(f"wrote {run(a)}")
-    except (CoverageError, FileNotFoundError, ModelError, OutputRefused) as e:
+    except (CoverageError, DatasetError, FileNotFoundError, ModelError, OutputRefused) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     return 0

@@ -14,11 +14,15 @@ position for bones attached to the root). Points are named by bone (its end poin
 
 Units: ASF ``length L`` means a value v is ``v / L`` inches (CMU and HDM05 use 0.45); positions
 come back in metres (``v / L * 0.0254``) unless ``length_scale`` overrides that factor.
+
+What a file can make the reader allocate is bounded (``emdm.mocap.textfile``): its size, ``MAX_BONES``
+bones, ``MAX_FRAMES`` frames and ``MAX_VALUES`` values (kept as float64 arrays, not lists of floats).
 """
 
 from __future__ import annotations
 
 import math
+from array import array
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,8 +30,10 @@ import numpy as np
 
 from emdm.mocap.errors import MocapFormatError
 from emdm.mocap.rotations import axis_rotation
+from emdm.mocap.textfile import check_frames, check_values, iter_lines, read_text
 
 INCH = 0.0254
+MAX_BONES = 1000           # real skeletons have ~30
 MAX_DEGREES = 1e7          # a rotation beyond this (~28,000 turns) is a broken value: cos/sin of it are noise
 
 
@@ -86,7 +92,7 @@ def _floats(toks: list[str], path: str, line: int, what: str) -> list[float]:
 
 
 def parse_asf_text(text: str, path: str = "<asf>") -> ASF:
-    lines = text.splitlines()
+    text = text.replace("\r\n", "\n").replace("\r", "\n") if "\r" in text else text
     section = None
     length_unit, angle_unit = 1.0, "deg"
     root_order = ["tx", "ty", "tz", "rx", "ry", "rz"]
@@ -98,8 +104,7 @@ def parse_asf_text(text: str, path: str = "<asf>") -> ASF:
     parent: dict[str, str] = {}
     cur: dict | None = None
     saw_bonedata = False
-    for k, raw in enumerate(lines):
-        ln = k + 1
+    for ln, raw, _ in iter_lines(text):
         s = raw.split("#", 1)[0].strip()
         if not s:
             continue
@@ -129,10 +134,11 @@ def parse_asf_text(text: str, path: str = "<asf>") -> ASF:
                 if len(toks) != 2 or sorted(toks[1].lower()) != ["x", "y", "z"]:
                     raise MocapFormatError(path, ln, "expected ':root axis' followed by an order such as XYZ")
                 root_axis = toks[1].lower()
-            elif key == "position":
-                root_pos = np.array(_floats(toks[1:4], path, ln, "root position"))
-            elif key == "orientation":
-                root_ori = np.array(_floats(toks[1:4], path, ln, "root orientation"))
+            elif key in ("position", "orientation"):
+                if len(toks) != 4:
+                    raise MocapFormatError(path, ln, f"expected ':root {key} x y z'")
+                v = np.array(_floats(toks[1:4], path, ln, f"root {key}"))
+                root_pos, root_ori = (v, root_ori) if key == "position" else (root_pos, v)
         elif section == "bonedata":
             if key == "begin":
                 cur = {"line": ln, "dof": []}
@@ -142,19 +148,25 @@ def parse_asf_text(text: str, path: str = "<asf>") -> ASF:
                 for need in ("name", "direction", "length"):
                     if need not in cur:
                         raise MocapFormatError(path, cur["line"], f"bone block has no '{need}'")
+                if len(bones) >= MAX_BONES:
+                    raise MocapFormatError(path, ln, f"more than {MAX_BONES} bones (real skeletons have ~30)")
                 bones[cur["name"]] = Bone(cur["name"], cur["direction"], cur["length"], cur.get("axis", np.zeros(3)),
                                           cur.get("axis_order", "xyz"), cur["dof"], cur["line"])
                 cur = None
             elif cur is None:
                 raise MocapFormatError(path, ln, f"{toks[0]!r} outside a begin/end bone block")
             elif key == "name":
+                if len(toks) != 2:
+                    raise MocapFormatError(path, ln, "expected 'name <bone>'")
                 cur["name"] = toks[1]
             elif key == "direction":
-                d = np.array(_floats(toks[1:4], path, ln, "direction"))
+                d = np.array(_floats(toks[1:], path, ln, "direction"))
                 if d.size != 3:
                     raise MocapFormatError(path, ln, "expected 'direction x y z'")
                 cur["direction"] = d
             elif key == "length":
+                if len(toks) != 2:
+                    raise MocapFormatError(path, ln, "expected 'length <value>'")
                 cur["length"] = _floats(toks[1:2], path, ln, "length")[0]
             elif key == "axis":
                 if len(toks) != 5 or sorted(toks[4].lower()) != ["x", "y", "z"]:
@@ -188,18 +200,18 @@ def parse_asf_text(text: str, path: str = "<asf>") -> ASF:
 
 
 def parse_amc_text(text: str, asf: ASF, path: str = "<amc>") -> AMC:
-    lines = text.splitlines()
+    text = text.replace("\r\n", "\n").replace("\r", "\n") if "\r" in text else text
     angle_unit = None
     counts = {b: len(asf.bones[b].dof) for b in asf.bones}
     counts["root"] = len(asf.root_order)
     rot_cols = {b: [i for i, d in enumerate(asf.bones[b].dof) if d[0] == "r"] for b in asf.bones}
     rot_cols["root"] = [i for i, d in enumerate(asf.root_order) if d[0] == "r"]
-    rows: dict[str, list[list[float]]] = {b: [] for b in counts}
+    rows: dict[str, array] = {b: array("d") for b in counts}
+    per_frame = sum(counts.values())
     frame = 0
     frame_line = 0
     seen: set[str] = set()
-    for k, raw in enumerate(lines):
-        ln = k + 1
+    for ln, raw, _ in iter_lines(text):
         s = raw.strip()
         if not s or s.startswith("#"):
             continue
@@ -215,6 +227,8 @@ def parse_amc_text(text: str, asf: ASF, path: str = "<amc>") -> AMC:
             if frame:
                 _check_frame_complete(rows, counts, frame, path, frame_line)
             frame += 1
+            check_frames(path, ln, frame)
+            check_values(path, ln, frame * per_frame)
             frame_line = ln
             seen = set()
             continue
@@ -234,29 +248,27 @@ def parse_amc_text(text: str, asf: ASF, path: str = "<amc>") -> AMC:
             if abs(vals[i]) > limit:
                 raise MocapFormatError(path, ln, f"bone {bone!r}: rotation {toks[1 + i]} is out of range (more than "
                                                  f"{MAX_DEGREES:g} degrees; the value is broken)")
-        rows[bone].append(vals)
+        rows[bone].extend(vals)
     if frame == 0:
         raise MocapFormatError(path, None, "no frames found")
     _check_frame_complete(rows, counts, frame, path, frame_line)
-    values = {b: np.array(v, dtype=np.float64).reshape(frame, counts[b]) for b, v in rows.items() if counts[b] > 0}
+    values = {b: np.frombuffer(v, dtype=np.float64).reshape(frame, counts[b]) for b, v in rows.items() if counts[b] > 0}
     return AMC(path, angle_unit, values)
 
 
-def _check_frame_complete(rows: dict[str, list[list[float]]], counts: dict[str, int], frame: int,
+def _check_frame_complete(rows: dict[str, array], counts: dict[str, int], frame: int,
                           path: str, ln: int) -> None:
     for b, r in rows.items():
-        if counts[b] > 0 and len(r) < frame:
+        if counts[b] > 0 and len(r) < frame * counts[b]:
             raise MocapFormatError(path, ln, f"frame {frame} (starting at line {ln}) has no line for bone {b!r}")
 
 
 def read_asf(path: str | Path) -> ASF:
-    p = Path(path)
-    return parse_asf_text(p.read_text(encoding="latin-1"), str(p))
+    return parse_asf_text(read_text(path, "latin-1"), str(path))
 
 
 def read_amc(path: str | Path, asf: ASF) -> AMC:
-    p = Path(path)
-    return parse_amc_text(p.read_text(encoding="latin-1"), asf, str(p))
+    return parse_amc_text(read_text(path, "latin-1"), asf, str(path))
 
 
 def _euler(order: str, angles_by_axis: dict[str, np.ndarray], n: int) -> np.ndarray:
@@ -269,7 +281,14 @@ def _euler(order: str, angles_by_axis: dict[str, np.ndarray], n: int) -> np.ndar
 
 
 def forward_kinematics(asf: ASF, amc: AMC, length_scale: float | None = None) -> tuple[list[str], np.ndarray]:
-    """(point names ['root', bone...], positions (F, P, 3)) in metres (see module docstring)."""
+    """(point names ['root', bone...], positions (F, P, 3)) in metres (see module docstring). Finite values
+    too big to compute with (a length of 1e308) give non-finite positions, quietly: the caller checks
+    (``emdm.mocap.load.checked_joints`` names the frame)."""
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        return _forward_kinematics(asf, amc, length_scale)
+
+
+def _forward_kinematics(asf: ASF, amc: AMC, length_scale: float | None) -> tuple[list[str], np.ndarray]:
     scale = (INCH / asf.length_unit) if length_scale is None else length_scale
     ang = amc.angle_unit or asf.angle_unit
     to_rad = np.deg2rad if ang == "deg" else (lambda a: np.asarray(a, dtype=np.float64))
@@ -305,7 +324,9 @@ def forward_kinematics(asf: ASF, amc: AMC, length_scale: float | None = None) ->
         par = asf.parent[b]
         Wb = W[par] @ (C @ M @ C.T)
         W[b] = Wb
-        d = bone.direction / max(np.linalg.norm(bone.direction), 1e-12)
+        big = np.abs(bone.direction).max()
+        d = bone.direction / big if big > 0 else bone.direction        # norm of 1e308 overflows
+        d = d / max(np.linalg.norm(d), 1e-12)
         ends[b] = ends[par] + bone.length * scale * (Wb @ d)
         names.append(b)
     return names, np.stack([ends[n] for n in names], axis=1)

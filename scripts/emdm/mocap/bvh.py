@@ -9,12 +9,15 @@ Position channels replace the joint's OFFSET (the usual convention); joints with
 channels use their OFFSET. Rotation channels are in degrees.
 
 Every number must be finite, a rotation within ``MAX_DEGREES`` (beyond it cos/sin are noise) and the
-Frame Time within ``FRAME_TIME_RANGE`` seconds; otherwise ``MocapFormatError`` names the line.
+Frame Time within ``FRAME_TIME_RANGE`` seconds; otherwise ``MocapFormatError`` names the line. What a file
+can make the reader allocate is bounded (``emdm.mocap.textfile``): its size, ``MAX_JOINTS`` joints in a
+HIERARCHY of at most ``MAX_HIERARCHY_CHARS``, ``MAX_FRAMES`` frames and ``MAX_VALUES`` motion values.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -22,9 +25,14 @@ import numpy as np
 
 from emdm.mocap.errors import MocapFormatError
 from emdm.mocap.rotations import axis_rotation
+from emdm.mocap.textfile import check_frames, check_values, iter_lines, read_text
 
 MAX_DEGREES = 1e7                      # ~28,000 turns: more is a broken value, not an unwrapped spin
 FRAME_TIME_RANGE = (1e-5, 10.0)        # seconds: 100,000 fps .. 0.1 fps
+MAX_JOINTS = 1000                      # real rigs have 20-150 (fingers included)
+MAX_HIERARCHY_CHARS = 4 * 2 ** 20      # ~4,000 characters a joint at MAX_JOINTS
+_CHUNK = 4 * 2 ** 20                   # motion text parsed this many characters at a time
+_MOTION = re.compile(r"^[ \t]*MOTION(?=\s|$)", re.M | re.I)
 _CHANNELS = {"xposition", "yposition", "zposition", "xrotation", "yrotation", "zrotation"}
 
 
@@ -107,6 +115,7 @@ def _parse_hierarchy(lines: list[str], path: str):
             if len(toks) < 2:
                 raise MocapFormatError(path, lineno, f"expected a joint name after {toks[0]}")
             name = " ".join(toks[1:])
+            _count_joint(names, path, lineno)
             names.append(name)
             parents.append(stack[-1] if stack else -1)
             offsets.append([np.nan, np.nan, np.nan])
@@ -117,6 +126,7 @@ def _parse_hierarchy(lines: list[str], path: str):
             if not stack:
                 raise MocapFormatError(path, lineno, "'End Site' outside of a joint")
             parent = stack[-1]
+            _count_joint(names, path, lineno)
             names.append(f"{names[parent]}_End")
             parents.append(parent)
             offsets.append([np.nan, np.nan, np.nan])
@@ -173,61 +183,105 @@ def _parse_hierarchy(lines: list[str], path: str):
     return names, parents, offsets, channels, end_site, i
 
 
+def _count_joint(names: list[str], path: str, lineno: int) -> None:
+    if len(names) >= MAX_JOINTS:
+        raise MocapFormatError(path, lineno, f"more than {MAX_JOINTS} joints in HIERARCHY (real rigs have "
+                                             "20-150): not a skeleton this reader takes")
+
+
+def _hierarchy_lines(text: str, path: str) -> tuple[list[str], int]:
+    """(the lines up to and including the MOTION line, offset of the MOTION line in ``text``; len(text) when
+    there is none). A HIERARCHY longer than MAX_HIERARCHY_CHARS is refused before it is split into lines."""
+    m = _MOTION.search(text)
+    end = m.start() if m else len(text)
+    if end > MAX_HIERARCHY_CHARS:
+        raise MocapFormatError(path, None, f"the HIERARCHY is {end / 2 ** 20:.1f} MiB, more than the "
+                                           f"{MAX_HIERARCHY_CHARS / 2 ** 20:.0f} MiB a rig of {MAX_JOINTS} joints "
+                                           f"needs{'' if m else ' (and no MOTION line follows)'}")
+    if not m:
+        return text.split("\n"), end
+    nl = text.find("\n", end)
+    return text[:end].split("\n")[:-1] + [text[end:nl if nl >= 0 else len(text)]], end
+
+
+def _normalise_newlines(text: str) -> str:
+    return text.replace("\r\n", "\n").replace("\r", "\n") if "\r" in text else text
+
+
 def read_bvh_names(path: str | Path) -> list[str]:
     """The joint names of a BVH file (End Sites as ``<parent>_End``), from its HIERARCHY only."""
-    p = Path(path)
+    p = str(path)
+    return _parse_hierarchy(_hierarchy_lines(_normalise_newlines(read_text(p)), p)[0], p)[0]
+
+
+def _motion_header(text: str, start: int, lineno: int, path: str) -> tuple[int, float, int, int]:
+    """(frames, frame time, line number of the first motion row, its offset) from the two lines after MOTION
+    (``start``: the MOTION line's offset, ``lineno`` its number)."""
+    header = []
+    for ln, line, nxt in iter_lines(text, start, lineno):
+        if ln > lineno and line.strip():
+            header.append((ln, line.strip(), nxt))
+            if len(header) == 2:
+                break
+    if not header or not header[0][1].lower().startswith("frames:"):
+        raise MocapFormatError(path, header[0][0] if header else lineno, "expected 'Frames: <count>'")
+    ln, line, _ = header[0]
     try:
-        text = p.read_text(encoding="utf-8", errors="replace")
-    except OSError as e:
-        raise MocapFormatError(str(p), None, f"cannot read: {e.strerror}") from e
-    head = text.split("\nMOTION", 1)[0].splitlines() + ["MOTION"]
-    return _parse_hierarchy(head, str(p))[0]
+        frames = int(line.split(":", 1)[1])
+    except ValueError:
+        raise MocapFormatError(path, ln, "expected an integer after 'Frames:'") from None
+    if frames < 0:
+        raise MocapFormatError(path, ln, f"'Frames: {frames}' is negative")
+    check_frames(path, ln, frames)
+    if len(header) < 2 or not header[1][1].lower().startswith("frame time:"):
+        raise MocapFormatError(path, header[1][0] if len(header) > 1 else ln, "expected 'Frame Time: <seconds>'")
+    ln, line, nxt = header[1]
+    frame_time = _parse_float(line.split(":", 1)[1].strip(), path, ln, "Frame Time")
+    lo, hi = FRAME_TIME_RANGE
+    if not lo <= frame_time <= hi:
+        raise MocapFormatError(path, ln, f"Frame Time must be between {lo:g} and {hi:g} seconds "
+                                         f"({1 / lo:g} to {1 / hi:g} fps), got {frame_time:g}")
+    return frames, frame_time, ln + 1, nxt
+
+
+def _parse_values(text: str, start: int, expected: int) -> np.ndarray | None:
+    """The ``expected`` whitespace-separated numbers from ``text[start:]``, parsed a chunk at a time into one
+    array (no list of tokens); None when they are not exactly that many numbers."""
+    out = np.empty(expected)
+    n, pos, size = 0, start, len(text)
+    while pos < size:
+        end = text.find("\n", min(pos + _CHUNK, size))
+        end = size if end < 0 else end
+        try:
+            v = np.fromstring(text[pos:end], dtype=np.float64, sep=" ")
+        except ValueError:
+            return None
+        if n + v.size > expected:
+            return None
+        out[n:n + v.size] = v
+        n, pos = n + v.size, end + 1
+    return out if n == expected else None
 
 
 def parse_bvh_text(text: str, path: str = "<string>") -> BVH:
-    lines = text.splitlines()
-    n = len(lines)
+    text = _normalise_newlines(text)
+    lines, motion_at = _hierarchy_lines(text, path)
     names, parents, offsets, channels, end_site, i = _parse_hierarchy(lines, path)
-
-    def next_nonempty(i: int) -> int:
-        while i < n and not lines[i].strip():
-            i += 1
-        return i
-
-    # MOTION header
-    i = next_nonempty(i)
-    if i >= n or not lines[i].strip().lower().startswith("frames:"):
-        raise MocapFormatError(path, i + 1 if i < n else n, "expected 'Frames: <count>'")
-    try:
-        frames = int(lines[i].split(":", 1)[1])
-    except ValueError:
-        raise MocapFormatError(path, i + 1, "expected an integer after 'Frames:'") from None
-    i = next_nonempty(i + 1)
-    if i >= n or not lines[i].strip().lower().startswith("frame time:"):
-        raise MocapFormatError(path, i + 1 if i < n else n, "expected 'Frame Time: <seconds>'")
-    frame_time = _parse_float(lines[i].split(":", 1)[1].strip(), path, i + 1, "Frame Time")
-    lo, hi = FRAME_TIME_RANGE
-    if not lo <= frame_time <= hi:
-        raise MocapFormatError(path, i + 1, f"Frame Time must be between {lo:g} and {hi:g} seconds "
-                                            f"({1 / lo:g} to {1 / hi:g} fps), got {frame_time:g}")
-    first_data = i + 1
+    frames, frame_time, first_line, first_at = _motion_header(text, motion_at, len(lines), path)
     starts, total = [], 0
     for c in channels:
         starts.append(total)
         total += len(c)
-    body = "\n".join(lines[first_data:])
-    try:
-        values = np.array(body.split(), dtype=np.float64)
-    except ValueError:
-        values = None
-    if values is None or values.size != frames * total:
-        _locate_motion_error(lines, first_data, frames, total, path)
+    check_values(path, first_line - 2, frames * total)
+    values = _parse_values(text, first_at, frames * total)
+    if values is None:
+        _locate_motion_error(text.rstrip("\n").split("\n"), first_line - 1, frames, total, path)
     motion = values.reshape(frames, total) if total else np.zeros((frames, 0))
-    _check_motion_values(motion, channels, names, lines, first_data, path)
+    _check_motion_values(motion, channels, names, text, first_line - 1, path)
     return BVH(path, names, parents, np.array(offsets, dtype=np.float64), channels, starts, frame_time, motion, end_site)
 
 
-def _check_motion_values(motion: np.ndarray, channels: list[list[str]], names: list[str], lines: list[str],
+def _check_motion_values(motion: np.ndarray, channels: list[list[str]], names: list[str], text: str,
                          first: int, path: str) -> None:
     """Every value finite, every rotation within MAX_DEGREES; else the line, joint and channel."""
     owner = [(names[j], c) for j, chans in enumerate(channels) for c in chans]
@@ -241,6 +295,7 @@ def _check_motion_values(motion: np.ndarray, channels: list[list[str]], names: l
         return
     flat = int(np.flatnonzero((bad | bad_rot).ravel())[0])
     row, col = divmod(flat, motion.shape[1])
+    lines = text.split("\n")
     seen = 0
     for k in range(first, len(lines)):          # the line holding value number ``flat`` of the motion block
         toks = lines[k].split()
@@ -268,16 +323,12 @@ def _locate_motion_error(lines: list[str], first: int, frames: int, total: int, 
         for t in toks:
             _parse_float(t, path, k + 1, f"motion row {row + 1}")
         row += 1
-    raise MocapFormatError(path, len(lines), f"file has {row} motion rows, but the header says 'Frames: {frames}'")
+    raise MocapFormatError(path, len(lines), f"file has {row} motion rows, but the header says 'Frames: {frames}'"
+                                             if row != frames else "a motion value is not a number this reader takes")
 
 
 def read_bvh(path: str | Path) -> BVH:
-    p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8", errors="replace")
-    except OSError as e:
-        raise MocapFormatError(str(p), None, f"cannot read: {e.strerror}") from e
-    return parse_bvh_text(text, str(p))
+    return parse_bvh_text(read_text(path), str(path))
 
 
 def _needed(bvh: BVH, joints: list[int] | None) -> list[int]:
@@ -294,29 +345,62 @@ def _needed(bvh: BVH, joints: list[int] | None) -> list[int]:
 def forward_kinematics(bvh: BVH, joints: list[int] | None = None) -> np.ndarray:
     """World positions (F, J, 3) in file units. With ``joints``, only those joints (and their
     ancestors) are computed; the others are NaN."""
+    pos = np.full((bvh.num_frames, len(bvh.names), 3), np.nan)
+    done = _needed(bvh, joints)
+    pos[:, done] = joint_positions(bvh, done)
+    return pos
+
+
+def joint_positions(bvh: BVH, joints: list[int]) -> np.ndarray:
+    """World positions (F, len(joints), 3) in file units of ``joints`` alone: their ancestors are computed
+    and each one's rotation dropped once its last needed child is done, so memory follows the joints asked
+    for, not the rig's size. Finite values too big to compute with give non-finite positions, quietly: the
+    caller checks (``emdm.mocap.load.checked_joints``)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return _joint_positions(bvh, joints)
+
+
+def _joint_positions(bvh: BVH, joints: list[int]) -> np.ndarray:
     F = bvh.num_frames
-    J = len(bvh.names)
-    pos = np.full((F, J, 3), np.nan)
-    rot = np.zeros((F, J, 3, 3))
-    for j in _needed(bvh, joints):
-        chans = bvh.channels[j]
-        s = bvh.channel_start[j]
-        t = np.broadcast_to(bvh.offsets[j], (F, 3)).copy()
-        R = None
-        for k, c in enumerate(chans):
-            v = bvh.motion[:, s + k]
-            if c.endswith("position"):
-                t[:, "xyz".index(c[0])] = v
-            else:
-                r = axis_rotation(c[0], np.deg2rad(v))
-                R = r if R is None else R @ r
-        if R is None:
-            R = np.broadcast_to(np.eye(3), (F, 3, 3))
+    order = _needed(bvh, joints)
+    pending = {j: 0 for j in order}           # needed children not yet computed
+    for j in order:
+        if bvh.parents[j] >= 0:
+            pending[bvh.parents[j]] += 1
+    want = set(joints)
+    rot: dict[int, np.ndarray] = {}
+    pos: dict[int, np.ndarray] = {}
+    for j in order:
+        R, t = _local(bvh, j)
         p = bvh.parents[j]
         if p < 0:
-            rot[:, j] = R
-            pos[:, j] = t
+            rot[j], pos[j] = R, t
         else:
-            rot[:, j] = rot[:, p] @ R
-            pos[:, j] = pos[:, p] + np.einsum("fij,fj->fi", rot[:, p], t)
-    return pos
+            rot[j] = rot[p] @ R
+            pos[j] = pos[p] + np.einsum("fij,fj->fi", rot[p], t)
+            pending[p] -= 1
+            if not pending[p]:
+                del rot[p]
+                if p not in want:
+                    del pos[p]
+        if not pending[j]:
+            rot.pop(j, None)
+    return np.stack([pos[j] for j in joints], axis=1) if joints else np.zeros((F, 0, 3))
+
+
+def _local(bvh: BVH, j: int) -> tuple[np.ndarray, np.ndarray]:
+    """Joint j's rotation (F, 3, 3) and translation (F, 3) relative to its parent."""
+    F = bvh.num_frames
+    s = bvh.channel_start[j]
+    t = np.broadcast_to(bvh.offsets[j], (F, 3)).copy()
+    R = None
+    for k, c in enumerate(bvh.channels[j]):
+        v = bvh.motion[:, s + k]
+        if c.endswith("position"):
+            t[:, "xyz".index(c[0])] = v
+        else:
+            r = axis_rotation(c[0], np.deg2rad(v))
+            R = r if R is None else R @ r
+    if R is None:
+        R = np.broadcast_to(np.eye(3), (F, 3, 3))
+    return R, t
