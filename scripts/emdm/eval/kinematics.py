@@ -22,6 +22,10 @@ from pathlib import Path
 
 import numpy as np
 
+from emdm.eval import data as evdata
+from emdm.motion.features import recover_joints
+from emdm.paths import DATASET_DIR
+
 FPS = 20.0
 BAR = 0.85                 # a rule judges an action when it passes at least this share of the action's real test clips
 MOVING = 0.3               # m/s: frames whose root moves faster count for the direction of travel
@@ -187,16 +191,11 @@ def judged(test_validation: dict[str, dict], bar: float = BAR) -> list[str]:
 
 def split_table(root: Path, split: str):
     """(labels, action ids, descriptor table) of a dataset split's real clips."""
-    from emdm.eval import data as evdata
-    from emdm.motion.features import recover_joints
-
     s = evdata.load_split(root, split, require_action=True)
     return s.action_labels, s.actions, table([recover_joints(m) for m in s.motions])
 
 
 def main(argv: list[str] | None = None) -> int:
-    from emdm.paths import DATASET_DIR
-
     ap = argparse.ArgumentParser(prog="python -m emdm.eval.kinematics", description=__doc__.split("\n\n")[0])
     ap.add_argument("--data", type=Path, default=DATASET_DIR)
     ap.add_argument("--quantiles", action="store_true", help="also print each action's train descriptor quantiles")

@@ -178,6 +178,7 @@ def run(a) -> Path:
     bench = C.Benchmark(a.dataset, a.split, a.classifier, a.prompts, a.seeds, a.seed)
     labels = bench.labels
     real, validation = real_row(bench, labels)
+    on_train = K.validate(*K.split_table(a.dataset, "train")) if (Path(a.dataset) / "train.txt").is_file() else {}
     src = ModelSource(opened=opened, steps=a.steps, guidance=guidance, guidance_min_time=gmin, x0_smoothing=sigma,
                       batch_size=a.batch, threads=a.threads)
     t0 = time.time()
@@ -195,6 +196,7 @@ def run(a) -> Path:
               "info": {k: v for k, v in src.info.items()}, "key": C._key(a, guidance, gmin, sigma), "steps": a.steps,
               "x0_smoothing": sigma, "labels": labels, "real": real, "generated": gen,
               "rules": {act: {"rule": v["rule"], "own": v["own"], "n": v["n"], "false_pass": v["false_pass"],
+                              "own_train": on_train.get(act, {}).get("own"), "n_train": on_train.get(act, {}).get("n"),
                               "confused": v["confused"], "confused_rate": v["confused_rate"]}
                         for act, v in validation.items()},
               "judged": K.judged(validation), "bar": K.BAR, "speed_slack": SPEED_SLACK,
@@ -275,7 +277,7 @@ def section(r: dict, plot: str | None = None) -> list[str]:
     """One realism result: per action, the generated figures beside the real clips' (in brackets)."""
     real, gen = r["real"], r["generated"]
     header = ["Action", "Real clips", "Speed m/s (real)", "× real", "In real range", "Step p99 m (real)",
-              "Motions with a step > real max", "Airborne (real)", "Kinematic rule (real)", "Classifier (real)"]
+              "Motions with a step > real max", "Steps > real max (all / action)", "Airborne (real)", "Kinematic rule (real)", "Classifier (real)"]
     rows = []
     for a in r["labels"] + ["all"]:
         g = gen["all"] if a == "all" else gen["per_action"].get(a)
@@ -286,7 +288,8 @@ def section(r: dict, plot: str | None = None) -> list[str]:
                      f"{g['speed']:.2f} ({rv['speed']:.2f})" if rv else f"{g['speed']:.2f}",
                      _p(g.get("speed_ratio"), "{:.2f}"), _p(g.get("speed_in_range")),
                      f"{g['step_p99']:.3f} ({rv['step_p99']:.3f})" if rv else f"{g['step_p99']:.3f}",
-                     _p(g["motions_over_all"]), f"{g['airborne']:.1%} ({rv['airborne']:.1%})" if rv else f"{g['airborne']:.1%}",
+                     _p(g["motions_over_all"]), f"{g['over_all']:.2%} / {_p(g.get('over_action'), '{:.2%}')}",
+                     f"{g['airborne']:.1%} ({rv['airborne']:.1%})" if rv else f"{g['airborne']:.1%}",
                      f"{_p(gen['kinematic'].get(a))} ({_p(real['kinematic'].get(a))})" if a in r["judged"] else "not judged",
                      f"{_p(gen['classifier'].get(a))} ({_p(real['classifier'].get(a))})"])
     ref = real["reference"]
@@ -310,7 +313,7 @@ def section(r: dict, plot: str | None = None) -> list[str]:
 
 def rules_section(r: dict) -> list[str]:
     """The kinematic rules and their validation on the real test clips."""
-    rows = [[a, v["rule"], f"{_p(v['own'])} ({v['n']})", _p(v["false_pass"], "{:.1%}"),
+    rows = [[a, v["rule"], f"{_p(v.get('own_train'))} ({v.get('n_train') or 0})", f"{_p(v['own'])} ({v['n']})", _p(v["false_pass"], "{:.1%}"),
              f"{v['confused']} {v['confused_rate']:.0%}" if v["confused"] else "–",
              "✓" if a in r["judged"] else ("no test clips" if not v["n"] else "below the bar")]
             for a, v in r["rules"].items()]
@@ -318,7 +321,7 @@ def rules_section(r: dict) -> list[str]:
     return ["### Kinematic rules (`emdm/eval/kinematics.py`)", "",
             f"Each rule's thresholds were read off the train split; an action is judged when its rule passes ≥ "
             f"{r['bar']:.0%} of its real test clips. *False pass*: share of the other actions' test clips that pass it.", "",
-            _table(["Action", "Rule", "Own test clips", "False pass", "Most confused with", "Judged"], rows), "",
+            _table(["Action", "Rule", "Own train clips", "Own test clips", "False pass", "Most confused with", "Judged"], rows), "",
             "No rule: " + ", ".join(none) + ".", ""]
 
 
