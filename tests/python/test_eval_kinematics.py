@@ -82,8 +82,10 @@ def test_validate_and_judged_on_a_hand_made_table():
     assert v["run"]["own"] == 0.5
     assert "bow" in v and v["bow"]["own"] == 0.0             # lean 0 < 0.25
     assert K.judged(v) == [] and K.judged(v, bar=0.75) == ["walk"]
-    v["walk"]["own"] = None                                   # an action without test clips is never judged
-    assert K.judged(v, bar=0.0) == ["run", "bow"]
+    assert K.judged(v, bar=0.0) == ["walk"]                   # run (2 clips) and bow (1) have too few to judge by
+    assert K.judged(v, bar=0.0, min_clips=1) == ["walk", "run", "bow"]
+    v["walk"].update(own=None, n=0)                           # an action without test clips is never judged
+    assert K.judged(v, bar=0.0, min_clips=0) == ["run", "bow"]
 
 
 def test_every_rule_reads_known_descriptors():

@@ -9,9 +9,9 @@ of travel against the body's facing, turning angle, hand heights, head and pelvi
 both feet off the floor, ...). ``RULES`` says, per action, which ranges of those numbers the action needs, e.g.
 walk = ``speed ≥ 0.5 and speed ≤ 1.85 and forward ≥ 0.6``. The thresholds were read off the train split's clips
 (``python -m emdm.eval.kinematics`` prints each rule's pass rate there and on the test split); an action is
-*judged* only when its rule passes ≥ ``BAR`` of its own real test clips (``validate``), and the rule's false-pass
-rate on the other actions' clips is reported beside it. Actions without a rule, or whose rule misses the bar or
-has no test clips, are reported as not judged.
+*judged* only when its rule passes ≥ ``BAR`` of its own real test clips (``validate``), of which it needs at least
+coverage's ``MIN_CLIPS``, and the rule's false-pass rate on the other actions' clips is reported beside it. Actions
+without a rule, or whose rule misses the bar or has too few test clips, are reported as not judged.
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from emdm.eval import data as evdata
+from emdm.eval.coverage import MIN_CLIPS
 from emdm.motion.features import recover_joints
 from emdm.paths import DATASET_DIR
 
@@ -184,9 +185,9 @@ def validate(labels: list[str], actions: np.ndarray, desc: dict[str, np.ndarray]
     return out
 
 
-def judged(test_validation: dict[str, dict], bar: float = BAR) -> list[str]:
-    """The actions whose rule passes ≥ ``bar`` of their own real test clips."""
-    return [a for a, v in test_validation.items() if v["own"] is not None and v["own"] >= bar]
+def judged(test_validation: dict[str, dict], bar: float = BAR, min_clips: int = MIN_CLIPS) -> list[str]:
+    """The actions whose rule passes ≥ ``bar`` of their own real test clips, of which they have ≥ ``min_clips``."""
+    return [a for a, v in test_validation.items() if v["n"] >= max(min_clips, 1) and v["own"] >= bar]
 
 
 def split_table(root: Path, split: str):

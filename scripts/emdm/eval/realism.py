@@ -101,14 +101,29 @@ def group(joints: list[np.ndarray], rows: list[dict], real_max_all: float, real_
     return out
 
 
-def judge(labels: list[str], action: np.ndarray, rows: list[dict], judged: list[str]) -> dict[str, float]:
-    """Per judged action: the share of its motions passing its kinematic rule."""
+def judge(labels: list[str], action: np.ndarray, rows: list[dict]) -> dict[str, float]:
+    """Per action with a kinematic rule and motions: the share of its motions passing the rule (whether the rule
+    may judge the action is ``kinematics.judged``'s call, made on the real clips)."""
     desc = {k: np.array([r["desc"][k] for r in rows]) for k in K.DESCRIPTORS}
     out = {}
     for i, a in enumerate(labels):
         sel = action == i
-        if a in judged and sel.any():
+        if a in K.RULES and sel.any():
             out[a] = float(K.passes(a, {k: v[sel] for k, v in desc.items()}).mean())
+    return out
+
+
+def prompt_rows(labels: list[str], action: np.ndarray, prompt_of: list[str], rows: list[dict]) -> dict[str, dict]:
+    """Per prompt: its action, motions, median root speed, largest joint step (median over its motions) and the share
+    passing its action's kinematic rule (None without a rule): e.g. how fast "a person walks forward" walks."""
+    out = {}
+    for p in dict.fromkeys(prompt_of):
+        idx = [k for k, q in enumerate(prompt_of) if q == p]
+        a = labels[int(action[idx[0]])]
+        desc = {d: np.array([rows[k]["desc"][d] for k in idx]) for d in K.DESCRIPTORS}
+        out[p] = {"action": a, "n": len(idx), "speed": float(np.median(desc["speed"])),
+                  "max_step": float(np.median([rows[k]["max_step"] for k in idx])),
+                  "kinematic": float(K.passes(a, desc).mean()) if a in K.RULES else None}
     return out
 
 
@@ -155,7 +170,7 @@ def real_row(bench, labels) -> tuple[dict, dict]:
     r = measure(labels, bench.test.actions, joints)
     rows = r.pop("rows")
     validation = K.validate(labels, bench.test.actions, {k: np.array([x["desc"][k] for x in rows]) for k in K.DESCRIPTORS})
-    r["kinematic"] = judge(labels, bench.test.actions, rows, K.judged(validation))
+    r["kinematic"] = judge(labels, bench.test.actions, rows)
     r["classifier"] = {a: v["rate"] for a, v in bench.real["per_action"].items() if v["rate"] is not None}
     r["n"] = len(joints)
     r["flip_share"] = bench.real["flip_share"]
@@ -183,11 +198,13 @@ def run(a) -> Path:
     src = ModelSource(opened=opened, steps=a.steps, guidance=guidance, guidance_min_time=gmin, x0_smoothing=sigma,
                       batch_size=a.batch, threads=a.threads)
     t0 = time.time()
-    cond, action, _ = bench.conditions(src)
+    cond, action, prompt_of = bench.conditions(src)
     motions = src.generate(cond, a.seed)
     t_gen = time.time() - t0
     gen = measure(labels, action, [recover_joints(m) for m in motions], real)
-    gen["kinematic"] = judge(labels, action, gen.pop("rows"), K.judged(validation))
+    if src.task == "text":
+        gen["prompts"] = prompt_rows(labels, action, prompt_of, gen["rows"])
+    gen["kinematic"] = judge(labels, action, gen.pop("rows"))
     gen["classifier"] = {k: v["rate"] for k, v in C.rates(labels, action, bench.predict(motions)).items() if v["n"]}
     gen.pop("reference")
     gen.update({"n": len(motions), "flip_share": flip_share(motions), "generate_seconds": round(t_gen, 1),
@@ -200,7 +217,7 @@ def run(a) -> Path:
                               "own_train": on_train.get(act, {}).get("own"), "n_train": on_train.get(act, {}).get("n"),
                               "confused": v["confused"], "confused_rate": v["confused_rate"]}
                         for act, v in validation.items()},
-              "judged": K.judged(validation), "bar": K.BAR, "speed_slack": SPEED_SLACK,
+              "judged": K.judged(validation), "bar": K.BAR, "min_clips": K.MIN_CLIPS, "speed_slack": SPEED_SLACK,
               "dataset": dataset_info(Path(a.dataset), a.split), "hardware": hardware(),
               "classifier": _evaluator_info(bench.classifier, a.classifier),
               "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
@@ -208,6 +225,10 @@ def run(a) -> Path:
     g = gen["all"]
     print(f"[{result['name']}] {len(motions)} motions, {gen['seconds']:.0f} s in all: joint step p99 {g['step_p99']:.3f} m, "
           f"motions with a step over the real maximum {g['motions_over_all']:.1%}, airborne {g['airborne']:.1%}")
+    for p, e in gen.get("prompts", {}).items():
+        if e["action"] in ("walk", "dance"):
+            print(f"  \"{p}\": speed {e['speed']:.2f} m/s, median largest joint step {e['max_step']:.2f} m, "
+                  f"kinematic {_p(e['kinematic'])}")
     for act in ("walk", "run", "dance"):
         if act in gen["per_action"]:
             p = gen["per_action"][act]
@@ -316,12 +337,13 @@ def rules_section(r: dict) -> list[str]:
     """The kinematic rules and their validation on the real test clips."""
     rows = [[a, v["rule"], f"{_p(v.get('own_train'))} ({v.get('n_train') or 0})", f"{_p(v['own'])} ({v['n']})", _p(v["false_pass"], "{:.1%}"),
              f"{v['confused']} {v['confused_rate']:.0%}" if v["confused"] else "–",
-             "✓" if a in r["judged"] else ("no test clips" if not v["n"] else "below the bar")]
+             "✓" if a in r["judged"] else ("no test clips" if not v["n"] else "too few test clips"
+                                           if v["n"] < r.get("min_clips", 3) else "below the bar")]
             for a, v in r["rules"].items()]
     none = [a for a in r["labels"] if a not in r["rules"]]
     return ["### Kinematic rules (`emdm/eval/kinematics.py`)", "",
             f"Each rule's thresholds were read off the train split; an action is judged when its rule passes ≥ "
-            f"{r['bar']:.0%} of its real test clips. *False pass*: share of the other actions' test clips that pass it.", "",
+            f"{r['bar']:.0%} of its real test clips, of which it needs at least {r.get('min_clips', 3)}. *False pass*: share of the other actions' test clips that pass it.", "",
             _table(["Action", "Rule", "Own train clips", "Own test clips", "False pass", "Most confused with", "Judged"], rows), "",
             "No rule: " + ", ".join(none) + ".", ""]
 
