@@ -6,6 +6,8 @@ synthetic world with the RESULTS.md section it feeds."""
 from __future__ import annotations
 
 import json
+import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -16,6 +18,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from test_eval_coverage import _args, world  # noqa: E402,F401 - the coverage tests' tiny models and classifier
 from test_eval_kinematics import needs_bandai, real_clip  # noqa: E402
 
+from emdm import paths  # noqa: E402
 from emdm.eval import kinematics as K  # noqa: E402
 from emdm.eval import realism as R  # noqa: E402
 
@@ -79,10 +82,15 @@ def test_cli_writes_the_json_and_the_report_renders_it(world, capsys):
         assert 0 <= r["generated"]["classifier"][a] <= 1
     assert set(r["judged"]) <= set(r["rules"]) and set(r["generated"]["kinematic"]) == set(r["labels"]) & set(K.RULES)
     assert "motions" in capsys.readouterr().out
-    # a second setting beside it: the report shows both and the side-by-side table
+    # a second setting beside it, through the command line (the prompts' embeddings are in the run's cache): the
+    # report shows both and the side-by-side table
     out0 = out.with_name("realism-t2m-x0s0.json")
-    assert R.main(_args(root, ds, out0, "--ckpt", str(root / "t2m" / "ckpt.pt"), "--steps", "2", "--x0-smoothing", "0",
-                        "--name", "t2m-x0s0")) == 0
+    cmd = [sys.executable, "-m", "emdm.eval.realism", *_args(root, ds, out0, "--ckpt", str(root / "t2m" / "ckpt.pt"),
+                                                             "--steps", "2", "--x0-smoothing", "0", "--name", "t2m-x0s0")]
+    done = subprocess.run(cmd, capture_output=True, text=True, cwd=paths.REPO_ROOT,
+                          env={**os.environ, "PYTHONPATH": str(paths.REPO_ROOT / "scripts")})
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert json.loads(out0.read_text())["x0_smoothing"] == 0 and "wrote" in done.stdout
     md = root / "RESULTS.md"
     assert report.main(["--results", str(root / "results"), "--out", str(md)]) == 0
     text = md.read_text()

@@ -278,9 +278,6 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-if __name__ == "__main__":
-    sys.exit(main())
-
 
 # ----------------------------------------------------------------------------- RESULTS.md
 
@@ -399,3 +396,7 @@ def plot(r: dict, path: Path) -> bool:
     fig.savefig(path)
     plt.close(fig)
     return True
+
+
+if __name__ == "__main__":
+    sys.exit(main())
