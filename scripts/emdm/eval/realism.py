@@ -86,7 +86,7 @@ def group(joints: list[np.ndarray], rows: list[dict], real_max_all: float, real_
     out = {"n": len(rows), "speed": float(np.median(speed)),
            "step_p99": float(np.percentile(steps, STEP_Q)),
            "over_all": float((steps > real_max_all).mean()),
-           "motions_over_all": float(np.mean([r["max_step"] > real_max_all for r in rows])),
+           "motions_over_all": float(np.mean([not steps_ok(j, real_max_all) for j in joints])),
            "max_step": float(steps.max()),
            "airborne": float(np.mean([r["airborne"] for r in rows])),
            "penetration_mm": float(plaus["penetration_mm"].mean()), "floating_mm": float(plaus["floating_mm"].mean()),
@@ -94,7 +94,7 @@ def group(joints: list[np.ndarray], rows: list[dict], real_max_all: float, real_
            "bone_worst": float(np.median([r["bone"] for r in rows]))}
     if real_max_action is not None:
         out["over_action"] = float((steps > real_max_action).mean())
-        out["motions_over_action"] = float(np.mean([r["max_step"] > real_max_action for r in rows]))
+        out["motions_over_action"] = float(np.mean([not steps_ok(j, real_max_action) for j in joints]))
     if real_speeds is not None and len(real_speeds):
         out["speed_ratio"] = out["speed"] / max(float(np.median(real_speeds)), 1e-6)
         out["speed_in_range"] = float(speed_in_range(speed, real_speeds).mean())
