@@ -18,6 +18,9 @@ Coverage JSON (``python -m emdm.eval.coverage``), one file per model:
     {"schema": 1, "task": "coverage", "name": ..., "condition": "text"|"action", "labels": [...],
      "real": {"per_action": {label: {"n", "recognised", "rate"}}, "reference": [...], "too_few": {label: n}},
      "runs": [{"steps": T, "per_action": {...}, "macro_accuracy", "covered": [...], ...}], "chips": {...}}
+Realism JSON (``python -m emdm.eval.realism``), one file per model and setting: {"schema": 1, "task": "realism",
+     "name": ..., "labels": [...], "real": {"per_action", "all", "reference", "kinematic", "classifier"},
+     "generated": {same, "n", "seconds"}, "rules": {action: {"rule", "own", "false_pass", ...}}, "judged": [...]}
 Poses JSON (``python -m emdm.eval.poses``), one file per model: {"schema": 1, "task": "poses", "name": ...,
      "rows": [{"steps", "guidance", "seconds", "failed_motions", "motions", "impossible_share", ..., "ok"}]}
 Editing JSON (``python -m emdm.eval.editing``), one file per model: {"schema": 1, "task": "editing", "name": ...,
@@ -88,10 +91,11 @@ def load_results(json_dir: Path | str) -> list[dict]:
         if r.get("schema") != SCHEMA:
             raise ReportError(f"{path}: field 'schema' is {r.get('schema')!r}, expected {SCHEMA}")
         task = r.get("task")
-        if task not in ("text", "action", "timing", "coverage", "editing", "editing-time", "poses"):
+        if task not in ("text", "action", "timing", "coverage", "editing", "editing-time", "poses", "realism"):
             raise ReportError(f"{path}: field 'task' is {task!r}, expected 'text', 'action', 'timing', 'coverage', "
-                              f"'editing', 'editing-time' or 'poses'")
+                              f"'editing', 'editing-time', 'poses' or 'realism'")
         need = {"timing": ("rows", "runtime"), "coverage": ("name", "labels", "real", "runs"), "poses": ("name", "rows"),
+                "realism": ("name", "labels", "real", "generated", "rules", "judged"),
                 "editing": ("name", "seams", "semantics", "kept", "loops", "time", "bars"),
                 "editing-time": ("name", "runtime", "hardware", "steps", "time", "bars")}.get(
             task, ("name", "kind", "info", "metrics"))
@@ -525,6 +529,18 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
                 "name each motion. An action is *covered* when at least half its motions are recognised.", ""]
         for r in cov:
             out += coverage_section(r, plots.get("coverage:" + r["_file"]))
+    real = sorted((r for r in results if r["task"] == "realism"), key=lambda r: r["name"])
+    if real:
+        from emdm.eval import realism
+
+        out += ["## Realism per action: speed, jitter, ground, and a second judge of meaning (issue 28)", "",
+                "`python -m emdm.eval.realism` generates the coverage benchmark's motions and sets each action's against "
+                "its real test clips: root speed, per-frame joint steps, airborne frames, and a kinematic rule per action "
+                "(independent of the classifier) beside the classifier's verdict.", ""]
+        out += realism.comparison(real) if len(real) > 1 else []
+        for r in real:
+            out += realism.section(r, plots.get("realism:" + r["_file"]))
+        out += realism.rules_section(real[-1])
     edits = [r for r in results if r["task"] == "editing"]
     if edits:
         from emdm.eval.editing import section as editing_section, time_section
@@ -586,6 +602,9 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
             "    --diffusion runs/t2m-diffusion/ckpt.pt --naive runs/t2m-naive/ckpt.pt --nodcond runs/t2m-nodcond/ckpt.pt",
             "python -m emdm.eval.coverage --model emdm-t2m-web   # coverage per action, 1/2/4/10 steps (--seeds, default 8)",
             "python -m emdm.eval.coverage --model emdm-a2m-web",
+            "python -m emdm.eval.realism --model emdm-t2m-web --variant int8   # realism per action at the page's settings (issue 28)",
+            "python -m emdm.eval.realism --model emdm-t2m-web --variant int8 --x0-smoothing 0   # ... without x̂0 smoothing",
+            "python -m emdm.eval.kinematics              # the kinematic rules' pass rates on the real train and test clips",
             "python -m emdm.eval.editing --model emdm-t2m-web   # timelines, in-betweens, body-part edits, loops (issue 14)",
             "python -m emdm.eval.editing --time-only --ckpt public/models/emdm-t2m-web.weights.f16.pt   # its time bar on PyTorch",
             "scripts/gpu/editing-time.sh runs/editing-time       # ... on a GPU machine (PyTorch CUDA, and ORT on its cores)",
@@ -616,6 +635,12 @@ def main(argv: list[str] | None = None) -> int:
     if plot_time_vs_steps(results, a.results / "time_vs_steps.png"):
         plots["time"] = rel((a.results / "time_vs_steps.png").resolve())
     for r in results:
+        if r["task"] == "realism":
+            from emdm.eval.realism import plot as plot_realism
+
+            png = a.results / (Path(r["_file"]).stem + ".png")
+            if plot_realism(r, png):
+                plots["realism:" + r["_file"]] = rel(png.resolve())
         if r["task"] == "coverage":
             png = a.results / (Path(r["_file"]).stem + ".png")
             if plot_coverage(r, png):
