@@ -36,6 +36,9 @@ SCHEMA = 1
 CAPTIONS = 16          # training captions per covered action kept as anchors
 SUGGESTIONS = 3        # closest working prompts offered for an unknown one
 SCALE = 127            # int8 embedding = round(v · SCALE); unit vectors, so |q| ≤ 127
+# prompts a new visitor tried (issue 30) and covered ones: checked by both runtimes against the file's answers
+EXAMPLES = ["a person kicks", "bows", "throws a punch", "dances", "swims", "a person walks", "a person walks forward",
+            "a person raises the left hand"]
 
 
 def file_name(model: str) -> str:
@@ -176,6 +179,8 @@ def build(coverage: dict, prompts: dict[str, list[str]] | None, captions: dict[s
                                  "every prompt of the uncovered actions (should be warned)"}
     out["anchors"] = {"scale": SCALE, "dim": int(q.shape[1]), "texts": texts, "actions": acts, "suggest": suggest,
                       "embeddings": base64.b64encode(q.tobytes()).decode("ascii")}
+    # what this side's check says of a few prompts: the page's and the library's check must say the same
+    out["examples"] = [{"prompt": p, **check(out, e)} for p, e in zip(EXAMPLES, encode(EXAMPLES))]
     return out
 
 
