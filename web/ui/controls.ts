@@ -69,12 +69,7 @@ export class Controls {
     for (const ex of examples) {
       const chip = el('button', 'chip', ex);
       chip.type = 'button';
-      chip.addEventListener('click', () => {
-        this.prompt.value = ex;
-        this.setMode('text');
-        this.refresh();
-        if (!this.button.disabled) this.on.generate();
-      });
+      chip.addEventListener('click', () => this.usePrompt(ex));
       box.append(chip);
     }
     byId('examples').hidden = examples.length === 0;
@@ -100,6 +95,14 @@ export class Controls {
       if (!this.button.disabled) this.on.generate();
     });
     this.button.addEventListener('click', () => this.on.generate());
+  }
+
+  /** Put `text` in the prompt box (Text mode) and generate it, as an example chip does. */
+  usePrompt(text: string): void {
+    this.prompt.value = text;
+    this.setMode('text');
+    this.refresh(true);
+    if (!this.button.disabled) this.on.generate();
   }
 
   /** Show a state in the controls (no events fired). */
