@@ -123,6 +123,7 @@ async function main(): Promise<void> {
   // ------------------------------------------------------------ controls + URL
   const controls = new Controls(limits, examplePrompts(manifest, models.text?.name ?? null, limits.actions), {
     generate: () => void generate(controls.read()).catch(() => undefined),
+    cancel: () => session.engine.cancel(),
     change: (s) => {
       history.replaceState(null, '', stateToSearch(s));
       if (s.compare) preloadDiffusion();

@@ -77,3 +77,38 @@ test('the list of what the model knows opens from the prompt; weak action labels
   await expect(page.locator('#action-hint')).toContainText('(weak)');
   watch.assertClean();
 });
+
+test('a running generation can be cancelled; the link can be copied; sliders say steps and seconds', async ({ page, context }) => {
+  test.setTimeout(180_000);
+  const watch = watchPage(page);
+  await open(page);
+  await expect(page.locator('#steps')).toHaveAttribute('aria-valuetext', '4 steps');
+  await expect(page.locator('#seconds')).toHaveAttribute('aria-valuetext', '2.0 s');
+
+  // Cancel stops the request mid-denoising: nothing more is generated, the page is idle again with no error
+  await page.locator('#prompt').fill('a person walks');
+  await page.locator('#steps').fill(await page.locator('#steps').getAttribute('max') ?? '0');   // the most steps
+  const g0 = await page.evaluate(() => window.emdm.counters.generations);
+  const cancelledAt = await page.evaluate(() => new Promise<string>((resolve) => {
+    const text = document.getElementById('progress-text')!;
+    new MutationObserver((_, obs) => {
+      if (!/Denoising step 1 \//.test(text.textContent ?? '')) return;
+      obs.disconnect();
+      document.getElementById('cancel')!.click();      // pressed while the request runs
+      resolve(text.textContent ?? '');
+    }).observe(text, { childList: true, characterData: true, subtree: true });
+    document.getElementById('generate')!.click();
+  }));
+  expect(cancelledAt).toMatch(/Denoising step 1 \/ \d+/);
+  await page.waitForFunction(() => window.emdm.counters.cancelled >= 1, null, { timeout: 60_000 });
+  await expect(page.locator('#cancel')).toBeHidden();
+  await expect(page.locator('#generate')).toHaveText('Generate');
+  expect(await page.evaluate(() => window.emdm.counters.generations)).toBe(g0);
+  await expect(page.locator('#error-panel')).toBeHidden();
+
+  await context.grantPermissions(['clipboard-read', 'clipboard-write']);
+  await page.locator('#copy-link').click();
+  await expect(page.locator('#copy-link')).toHaveText('Link copied');
+  expect(await page.evaluate(() => navigator.clipboard.readText())).toBe(page.url());
+  watch.assertClean();
+});

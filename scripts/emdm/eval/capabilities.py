@@ -14,7 +14,7 @@ library's ``generate`` (``promptCheck``) and ``python -m emdm.sample`` say so an
 The threshold is calibrated on prompts the file was not built from: of each action's ``prompts.json`` paraphrases
 the first is used to build, the others are held apart. Held-apart paraphrases of covered actions should pass,
 every prompt of an uncovered action should be warned; the threshold maximises the mean of the two success rates
-and the file records both error rates (``check.calibration``). Rebuild it whenever a model ships.
+and the file records both error counts (``check``). Rebuild it whenever a model ships.
 """
 
 from __future__ import annotations
