@@ -66,6 +66,8 @@ export interface GeneratedMotion extends Motion {
   pose: { rootPos: Float32Array /* frames × 3 */; quats: Float32Array /* frames × 22 × 4, xyzw */ };
   timings: GenerateResult['timings'];
   prompt?: GenerateResult['prompt'];
+  /** a text prompt far from what the model does well, and the closest prompts that work (absent: no capabilities file) */
+  promptCheck?: GenerateResult['promptCheck'];
 }
 
 /** Options of MotionGenerator.timeline. */
@@ -215,5 +217,6 @@ function motionOf(model: string, o: WireGenerateOptions, r: GenerateResult, back
   return {
     ...r.motion, model, backend, seed: o.seed, steps: r.steps, guidance: o.guidance,
     pose: { rootPos: pose.rootPos, quats: pose.quats }, timings: r.timings, prompt: r.prompt,
+    ...(r.promptCheck ? { promptCheck: r.promptCheck } : {}),
   };
 }

@@ -5,6 +5,7 @@
  * place, src/backends.ts (loadModel, runWithFallback), which the library's entry createGenerator
  * (src/createGenerator.ts) runs through.
  */
+import { type PromptCheck, type Capabilities, checkPrompt, loadCapabilities } from './capabilities';
 import { assertFinite } from './errors';
 import { type Manifest, type ModelEntry, ModelFileError, fetchVerified } from './manifest';
 import { decodeJoints } from './motion/decode';
@@ -101,6 +102,8 @@ export interface GenerateResult {
   steps: number;
   /** a text prompt's tokens: `truncated` when it had more than the encoder reads (manifest maxTokens) */
   prompt?: { tokens: number; maxTokens: number; truncated: boolean };
+  /** a text prompt far from what the model does well (`known` false) and the closest prompts that work (src/capabilities.ts); absent without a capabilities file */
+  promptCheck?: PromptCheck;
 }
 
 /**
@@ -318,6 +321,19 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     }
   }
 
+  let capabilities: Promise<Capabilities | null> | null = null;
+  /** The model's capabilities check of a prompt's embedding; undefined without a capabilities file (a broken one is said once on the console). */
+  async function promptCheck(embedding: Float32Array): Promise<PromptCheck | undefined> {
+    // the coverage benchmark measures the EMDM models: an unlisted file of a diffusion model is not looked for (no 404)
+    if (entry.objective === 'diffusion' && typeof entry.capabilities !== 'string') return undefined;
+    capabilities ??= loadCapabilities(manifest, baseUrl, model).catch((e) => {
+      console.warn(`generate: no prompt check for ${model}: ${(e as Error).message}`);
+      return null;
+    });
+    const caps = await capabilities;
+    return caps?.anchors ? checkPrompt(caps, embedding) : undefined;
+  }
+
   /** How the encoder read the prompt (after conditionVector loaded it); undefined if it cannot say. */
   async function promptTokens(text: string): Promise<GenerateResult['prompt']> {
     const t = await (await encoder)?.tokenize?.(text);
@@ -335,7 +351,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
   }
 
   /** The sampler's options for a request (checked; its condition encoded), all but the step function. */
-  async function samplerOptions(o: GenerateOptions | BeginOptions, noise: NoiseSource): Promise<{ options: Omit<SampleOptions, 'step'>; prompt: GenerateResult['prompt'] }> {
+  async function samplerOptions(o: GenerateOptions | BeginOptions, noise: NoiseSource): Promise<{ options: Omit<SampleOptions, 'step'>; prompt: GenerateResult['prompt']; check?: PromptCheck }> {
     if (disposed) throw new Error(`generator for ${model} was disposed`);
     if (!Number.isInteger(o.frames) || o.frames < 1 || o.frames > entry.maxFrames) {
       throw new RangeError(`generate: frames must be an integer in 1…${entry.maxFrames}, got ${o.frames}`);
@@ -350,9 +366,10 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     }
     const cond = await conditionVector(o.condition);
     const prompt = o.condition.type === 'text' ? await promptTokens(o.condition.text) : undefined;
+    const check = o.condition.type === 'text' ? await promptCheck(cond) : undefined;
     const known = o.known?.features?.map((v, i) => (v - mean[i % D]) / std[i % D]);
     return {
-      prompt,
+      prompt, ...(check ? { check } : {}),
       options: {
         ...choice, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance,
         guidanceMinTime: o.guidanceMinTime ?? entry.guidanceMinTime ?? 0, x0Smoothing: o.x0Smoothing ?? entry.x0Smoothing ?? 0, signal: o.signal, onStep: o.onStep,
@@ -387,7 +404,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
   async function run(o: GenerateOptions): Promise<GenerateResult> {
     const t0 = now();
     const noise = o.noise ?? (o.resume?.rng ? SeededRandom.fromState(o.resume.rng) : new SeededRandom(o.seed));
-    const { options, prompt } = await samplerOptions(o, noise);
+    const { options, prompt, check } = await samplerOptions(o, noise);
     const t1 = now();
     const onPreview = o.onPreview;
     const onX0 = onPreview && ((x0: Float32Array, done: number, total: number) => {
@@ -407,6 +424,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
       sampler: r.sampler,
       steps: o.steps,
       ...(prompt ? { prompt } : {}),
+      ...(check ? { promptCheck: check } : {}),
     };
   }
 

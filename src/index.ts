@@ -12,6 +12,8 @@ export type { ClientEvents, FileEvent, GenerationClientOptions, ModelInfo, Remot
 export type { TimelineHooks, TimelineRequest, TimelineResult, WindowRun } from './worker/host';
 export type { WireBeginOptions } from './worker/protocol';
 export { clearModelCache, modelCacheUsage } from './cache/modelCache';
+export { capabilitiesFile, checkPrompt, loadCapabilities, validateCapabilities } from './capabilities';
+export type { ActionCapability, Capabilities, PromptCheck } from './capabilities';
 export { loadManifest, fetchVerified, ModelFileError, sha256Hex, chooseVariant, stepFileOf } from './manifest';
 export { assertFinite, NonFiniteMotionError } from './errors';
 export type { Manifest, ModelEntry } from './manifest';

@@ -6,7 +6,7 @@
 //   - the controls (web/ui/controls.ts) and their URL form (web/ui/state.ts);
 //   - the test API (web/ui/testapi.ts, window.emdm).
 // A new panel gets `page` (PageContext: session, view, controls, generate) — see the end of main().
-import { clearModelCache, loadManifest, ModelFileError, modelCacheUsage, type Manifest } from '../src/index';
+import { clearModelCache, loadCapabilities, loadManifest, ModelFileError, modelCacheUsage, type Manifest } from '../src/index';
 import { compareNote } from './ui/compare';
 import { Controls } from './ui/controls';
 import { byId } from './ui/dom';
@@ -17,6 +17,7 @@ import { ErrorPanel, Notices } from './ui/notices';
 import { failedModel, limitsFor, Session, type Generation, type PageContext, type SessionGenerateOptions } from './ui/session';
 import { pageFlagNotices, parseState, randomSeed, stateToSearch, unknownParamsNotice, type PageState } from './ui/state';
 import { connectTestApi, installTestApi } from './ui/testapi';
+import { KnowsPanel, markWeakActions } from './ui/knows';
 import { TimelinePanel } from './ui/timeline';
 import { describe, promptNote, View } from './ui/view';
 
@@ -122,6 +123,7 @@ async function main(): Promise<void> {
   // ------------------------------------------------------------ controls + URL
   const controls = new Controls(limits, examplePrompts(manifest, models.text?.name ?? null, limits.actions), {
     generate: () => void generate(controls.read()).catch(() => undefined),
+    cancel: () => session.engine.cancel(),
     change: (s) => {
       history.replaceState(null, '', stateToSearch(s));
       if (s.compare) preloadDiffusion();
@@ -142,6 +144,16 @@ async function main(): Promise<void> {
     });
   }
   controls.set(parsed.state);
+  // what the models do well (capabilities files): the list beside the prompt, the weak actions, the far-prompt notice
+  const knows = new KnowsPanel((text) => controls.usePrompt(text));
+  const capsOf = (name: string | undefined) => (name ? loadCapabilities(manifest, MODELS_URL, name).catch((e) => {
+    notices.show('warn', `What ${name} does well is unknown: ${describe(e)}`, 14000);
+    return null;
+  }) : Promise.resolve(null));
+  void Promise.all([capsOf(models.text?.name), capsOf(models.action?.name)]).then(([t, a]) => {
+    knows.setCapabilities(t, a);
+    markWeakActions(byId('action', HTMLSelectElement), a);
+  });
   if (!models.action) controls.setModeAvailable('action', 'No action model is shipped with this demo');
   if (!models.text) {
     controls.setModeAvailable('text', 'No text model is shipped with this demo');
@@ -164,6 +176,8 @@ async function main(): Promise<void> {
       }, controls.compareUnavailable(s.mode));
       view.show(g);
       if (s.mode === 'text') controls.setPromptNote(s.text, promptNote(g.main.result.prompt));
+      if (s.mode === 'text') knows.showCheck(s.text, g.main.result.promptCheck);
+      else knows.hideCheck();
       history.replaceState(null, '', stateToSearch(g.state));
       const t = g.main.result.timings;
       view.status.show('ready', `Ready · ${t.backend === 'webgpu' ? 'WebGPU' : 'WASM'} · ${t.threads} thread${t.threads === 1 ? '' : 's'}`);

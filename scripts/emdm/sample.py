@@ -49,6 +49,7 @@ from typing import Callable
 import numpy as np
 
 from emdm import manifest as mf
+from emdm.eval import capabilities
 from emdm.model.open import onnx_step, read_meanstd, torch_step  # noqa: F401 - the step functions, re-exported
 from emdm.model.schedule import make_schedule
 from emdm.motion.smooth import smooth_frames  # noqa: F401 - x̂0 smoothing; re-exported
@@ -623,6 +624,9 @@ def run(a: argparse.Namespace) -> int:
         feats, joints = run_edit(a, step, entry, mean, std, steps, guidance, frames)
         return write_motion(a, feats[None], joints[None])
     cond = make_condition(entry["condition"], a.text, a.action, a.uncond)
+    far = a.text and a.model and capabilities.prompt_notice(a.model, cond, a.models_dir)
+    if far:                                          # the page says the same beside its prompt box
+        print(far, file=sys.stderr)
     known, keep = known_and_keep(a, frames, mean, std) if a.keep else (None, None)
     gmin = float(entry.get("guidanceMinTime", 0.0)) if a.guidance_min_time is None else a.guidance_min_time
     sigma = float(entry.get("x0Smoothing", 0.0)) if a.x0_smoothing is None else a.x0_smoothing

@@ -207,3 +207,24 @@ for (const size of SIZES) {
     });
   });
 }
+
+test.describe('phone on load (390×844)', () => {
+  test.use({ viewport: { width: 390, height: 844 } });
+
+  test('the prompt box, the example chips, Generate and the character show without scrolling', async ({ page }, info) => {
+    test.setTimeout(180_000);
+    const watch = watchPage(page);
+    await open(page);
+    await shot(page, info, 'phone-0-load');
+    for (const sel of ['#prompt', '#generate', '#examples .chip:first-child']) expect.soft(await onScreen(page, sel), sel).toBe('');
+    // every example chip is on screen: none hides in a row that scrolls sideways
+    const chips = await page.locator('#examples .chip').count();
+    for (let i = 1; i <= chips; i++) expect.soft(await onScreen(page, `#examples .chip:nth-child(${i})`)).toBe('');
+    const chars = await page.evaluate(() => window.emdm.characterRects());
+    expect(chars.length).toBeGreaterThan(0);
+    const stage = (await page.locator('#scene').boundingBox())!;
+    for (const c of chars) expect.soft(c.y + c.height, 'the character inside the visible stage').toBeLessThanOrEqual(Math.min(844, stage.y + stage.height) + 1);
+    expect(await page.evaluate(() => [scrollY, document.getElementById('panel')!.scrollTop])).toEqual([0, 0]);
+    watch.assertClean();
+  });
+});

@@ -17,9 +17,23 @@ export function promptLanguageNote(text: string): string {
     : '';
 }
 
+/** Copy the page's address (it always says the current state) and say so on the button for a moment. */
+async function copyLink(button: HTMLButtonElement): Promise<void> {
+  const label = 'Copy link';
+  try {
+    await navigator.clipboard.writeText(location.href);
+    button.textContent = 'Link copied';
+  } catch {
+    button.textContent = 'Copy the address bar';
+  }
+  setTimeout(() => (button.textContent = label), 2500);
+}
+
 export interface ControlsEvents {
   generate(): void;
   change(state: PageState): void;
+  /** stop the running generation */
+  cancel?(): void;
   /** the note under the steps slider for a state ('' = none), e.g. what each model runs in compare mode */
   stepsNote?(state: PageState): string;
 }
@@ -35,6 +49,7 @@ export class Controls {
   private readonly guidance = byId('guidance', HTMLInputElement);
   private readonly seed = byId('seed', HTMLInputElement);
   private readonly button = byId('generate', HTMLButtonElement);
+  private readonly cancel = byId('cancel', HTMLButtonElement);
   private readonly compare = byId('compare', HTMLInputElement);
   private readonly compareParam = byId('compare-param');
   private readonly compareHint = byId('compare-hint');
@@ -69,12 +84,7 @@ export class Controls {
     for (const ex of examples) {
       const chip = el('button', 'chip', ex);
       chip.type = 'button';
-      chip.addEventListener('click', () => {
-        this.prompt.value = ex;
-        this.setMode('text');
-        this.refresh();
-        if (!this.button.disabled) this.on.generate();
-      });
+      chip.addEventListener('click', () => this.usePrompt(ex));
       box.append(chip);
     }
     byId('examples').hidden = examples.length === 0;
@@ -100,6 +110,16 @@ export class Controls {
       if (!this.button.disabled) this.on.generate();
     });
     this.button.addEventListener('click', () => this.on.generate());
+    this.cancel.addEventListener('click', () => this.on.cancel?.());
+    byId('copy-link').addEventListener('click', (e) => void copyLink(e.currentTarget as HTMLButtonElement));
+  }
+
+  /** Put `text` in the prompt box (Text mode) and generate it, as an example chip does. */
+  usePrompt(text: string): void {
+    this.prompt.value = text;
+    this.setMode('text');
+    this.refresh(true);
+    if (!this.button.disabled) this.on.generate();
   }
 
   /** Show a state in the controls (no events fired). */
@@ -178,6 +198,7 @@ export class Controls {
   setBusy(busy: boolean): void {
     this.button.classList.toggle('busy', busy);
     this.button.textContent = busy ? 'Generating… (click to restart)' : 'Generate';
+    this.cancel.hidden = !busy;
   }
 
   /** Disable a mode (e.g. its model failed to load) with the reason as tooltip. */
@@ -225,6 +246,10 @@ export class Controls {
     this.compare.title = why;
     byId('seconds-out').textContent = `${s.seconds.toFixed(1)} s`;
     byId('guidance-out').textContent = s.guidance.toFixed(1);
+    // screen readers announce these instead of the sliders' positions ("5", "0.593")
+    this.steps.setAttribute('aria-valuetext', `${s.steps} step${s.steps === 1 ? '' : 's'}`);
+    this.seconds.setAttribute('aria-valuetext', `${s.seconds.toFixed(1)} s`);
+    this.guidance.setAttribute('aria-valuetext', `guidance ${s.guidance.toFixed(1)}`);
     const empty = s.text.trim() === '';
     let hint = '';
     let warn = false;

@@ -73,6 +73,14 @@ export class SupersededError extends Error {
   }
 }
 
+/** The visitor pressed Cancel. */
+export class CancelledError extends Error {
+  constructor() {
+    super('cancelled');
+    this.name = 'AbortError';
+  }
+}
+
 export function isAbort(e: unknown): boolean {
   return e instanceof Error && e.name === 'AbortError';
 }
@@ -158,6 +166,11 @@ export class Engine {
 
   get busy(): boolean {
     return this.current !== null;
+  }
+
+  /** Stop the running request at its next denoising step (it rejects with a CancelledError). */
+  cancel(): void {
+    this.current?.ctrl.abort(new CancelledError());
   }
 
   dispose(): Promise<void> {

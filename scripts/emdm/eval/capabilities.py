@@ -1,0 +1,285 @@
+"""What a shipped model does well, as a small file the page ships (issue 30).
+
+    python -m emdm.eval.capabilities --model emdm-t2m-web     # → public/models/capabilities-emdm-t2m-web.json
+    python -m emdm.eval.capabilities --model emdm-a2m-web     # an action model: the action list only
+    python -m emdm.eval.capabilities --model emdm-t2m-web --register   # also list it in manifest.json (sha256)
+
+From the coverage benchmark's result (``docs/results/json/coverage-<model>.json``, ``emdm.eval.coverage``) at the
+model's default step count: every action with its recognition rate, *covered* (rate ≥ 0.5) or weak, and its best
+prompt. For a text model also *anchors*: the well-covered benchmark prompts (the chips: recognised ≥ 75 %) and up
+to ``--captions`` training captions of each covered action, embedded with the text encoder the page runs
+(int8, base64). A prompt whose best cosine to the anchors is below ``check.threshold`` is *unknown*: the page, the
+library's ``generate`` (``promptCheck``) and ``python -m emdm.sample`` say so and offer the three closest chips.
+
+The threshold is calibrated on prompts the file was not built from: of each action's ``prompts.json`` paraphrases
+the first is used to build, the others are held apart. Held-apart paraphrases of covered actions should pass,
+every prompt of an uncovered action should be warned; the threshold maximises the mean of the two success rates
+and the file records both error counts (``check``). Rebuild it whenever a model ships.
+"""
+
+from __future__ import annotations
+
+import argparse
+import base64
+import csv
+import json
+import sys
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from emdm.eval.coverage import COVERED, PROMPTS_FILE, CoverageError, chips, load_prompts, normalise, read_result
+from emdm.paths import DATASET_DIR, display_path
+
+SCHEMA = 1
+CAPTIONS = 16          # training captions per covered action kept as anchors
+SUGGESTIONS = 3        # closest working prompts offered for an unknown one
+SCALE = 127            # int8 embedding = round(v · SCALE); unit vectors, so |q| ≤ 127
+# prompts a new visitor tried (issue 30) and covered ones: checked by both runtimes against the file's answers
+EXAMPLES = ["a person kicks", "bows", "throws a punch", "dances", "swims", "a person walks", "a person walks forward",
+            "a person raises the left hand"]
+
+
+def file_name(model: str) -> str:
+    return f"capabilities-{model}.json"
+
+
+# ----------------------------------------------------------------------------- pure parts
+
+def build_split(prompts: dict[str, list[str]]) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
+    """(used to build, held apart) per action: plain prompt + first paraphrase build, the other paraphrases are held."""
+    return {a: ps[:2] for a, ps in prompts.items()}, {a: ps[2:] for a, ps in prompts.items()}
+
+
+def quantise(emb: np.ndarray) -> np.ndarray:
+    return np.clip(np.rint(np.asarray(emb, np.float32) * SCALE), -127, 127).astype(np.int8)
+
+
+def dequantise(q: np.ndarray) -> np.ndarray:
+    """int8 rows → unit float rows (what the page computes with)."""
+    v = np.asarray(q, np.float32)
+    return v / np.maximum(np.linalg.norm(v, axis=1, keepdims=True), 1e-12)
+
+
+def scores(anchors: np.ndarray, emb: np.ndarray) -> np.ndarray:
+    """Best cosine of each (unit) row of ``emb`` [N, d] to the anchors [M, d]."""
+    return (np.atleast_2d(emb) @ anchors.T).max(axis=1)
+
+
+def calibrate(known: np.ndarray, unknown: np.ndarray) -> dict:
+    """The threshold between scores that should pass (``known``) and those that should be warned (``unknown``):
+    maximises (pass rate of known + warn rate of unknown) / 2, midway between neighbouring scores."""
+    cand = np.unique(np.concatenate([known, unknown]))
+    cuts = np.concatenate([[cand[0] - 1e-3], (cand[1:] + cand[:-1]) / 2, [cand[-1] + 1e-3]])
+    best = max(cuts, key=lambda t: ((known >= t).mean() + (unknown < t).mean(), -abs(t - 0.7)))
+    return {"threshold": round(float(best), 4),
+            "falseWarnings": {"n": int(known.size), "warned": int((known < best).sum())},
+            "misses": {"n": int(unknown.size), "notWarned": int((unknown >= best).sum())}}
+
+
+def check(caps: dict, emb: np.ndarray) -> dict:
+    """{known, score, nearest: [chip prompts, closest first, one per action]} for one unit embedding."""
+    a = caps["anchors"]
+    vecs = dequantise(np.frombuffer(base64.b64decode(a["embeddings"]), np.int8).reshape(len(a["texts"]), -1))
+    cos = vecs @ np.asarray(emb, np.float32)
+    nearest, seen = [], set()
+    for i in np.argsort(-cos, kind="stable"):
+        if a["suggest"][i] and a["actions"][i] not in seen:
+            seen.add(a["actions"][i])
+            nearest.append(a["texts"][i])
+            if len(nearest) == SUGGESTIONS:
+                break
+    score = float(cos.max())
+    return {"known": score >= caps["check"]["threshold"], "score": round(score, 4), "nearest": nearest}
+
+
+def notice(result: dict) -> str | None:
+    """The one line the CLI prints for an unknown prompt (None for a known one); the page says the same."""
+    if result["known"]:
+        return None
+    return ("this prompt is far from what the model does well (best match "
+            f"{result['score']:.2f}); it may come out as walking or standing. Closest prompts that work: "
+            + "; ".join(repr(p) for p in result["nearest"]))
+
+
+# ----------------------------------------------------------------------------- building
+
+def actions_table(coverage: dict, prompts: dict[str, list[str]] | None) -> tuple[int, list[dict]]:
+    """(steps, [{label, rate, covered, prompt?}] best first) at the model's default step count."""
+    steps = int(coverage.get("default_steps", 10))
+    run = next((r for r in coverage.get("runs", []) if r["steps"] == steps), None)
+    if run is None:
+        raise CoverageError(f"{coverage.get('_file')}: no run at the default {steps} steps; measure it first")
+    per_prompt = run.get("prompts") or {}
+    out = []
+    for label, v in run["per_action"].items():
+        if not v["n"]:
+            continue
+        row = {"label": label, "rate": round(v["rate"], 4), "covered": v["rate"] >= COVERED}
+        ps = sorted((p for p in (prompts or {}).get(label, []) if p in per_prompt), key=lambda p: -per_prompt[p]["rate"])
+        if ps and per_prompt[ps[0]]["rate"] >= COVERED:
+            row["prompt"] = ps[0]
+        out.append(row)
+    out.sort(key=lambda r: (-r["rate"], r["label"]))
+    return steps, out
+
+
+def training_captions(dataset: Path, actions: set[str], per_action: int = CAPTIONS) -> dict[str, list[str]]:
+    """Up to ``per_action`` distinct train-split captions per action (evenly spread over the sorted list)."""
+    from emdm.data.dataset import parse_text_file
+
+    meta = Path(dataset) / "metadata.csv"
+    if not meta.is_file():
+        raise CoverageError(f"{meta}: missing; pass --dataset (the prepared dataset the model was trained on)")
+    found: dict[str, dict[str, str]] = {a: {} for a in actions}
+    with open(meta, newline="") as f:
+        for row in csv.DictReader(f):
+            if row.get("split") == "train" and row.get("action") in actions:
+                for cap, _, _ in parse_text_file(Path(dataset) / "texts" / f"{row['id']}.txt"):
+                    found[row["action"]].setdefault(normalise(cap), cap.strip())
+    out = {}
+    for a, caps in found.items():
+        cs = sorted(caps.values())
+        stride = max(1, len(cs) // per_action) if cs else 1
+        out[a] = cs[::stride][:per_action]
+    return out
+
+
+def build(coverage: dict, prompts: dict[str, list[str]] | None, captions: dict[str, list[str]],
+          encode: Callable[[list[str]], np.ndarray], encoder: dict) -> dict:
+    """The capabilities file (see the module doc) from a coverage result, the benchmark prompts, the training captions
+    of covered actions and an encoder (``encode``: texts → unit rows; ``encoder``: {id, sha256} of its file)."""
+    steps, table = actions_table(coverage, prompts)
+    out = {"schema": SCHEMA, "model": coverage["name"], "condition": coverage.get("condition", "text"),
+           "source": coverage.get("_file"), "coverageCreated": coverage.get("created"), "steps": steps,
+           "thresholds": {"covered": COVERED, **({"chip": coverage["thresholds"]["chip"]} if "thresholds" in coverage else {})},
+           "actions": table}
+    if out["condition"] != "text":
+        return out
+    covered = {r["label"] for r in table if r["covered"]}
+    used, held = build_split(prompts)
+    good = set(chips(coverage, steps))
+    texts, acts, suggest = [], [], []
+    for a in sorted(covered):
+        for p in used[a]:
+            if p in good:
+                texts.append(p), acts.append(a), suggest.append(True)
+        for c in captions.get(a, []):
+            if normalise(c) not in {normalise(t) for t in texts}:
+                texts.append(c), acts.append(a), suggest.append(False)
+    q = quantise(encode(texts))
+    anchors = dequantise(q)
+    should_pass = [p for a in sorted(covered) for p in held[a]]
+    should_warn = [p for a, ps in prompts.items() if a not in covered for p in ps]
+    cal = calibrate(scores(anchors, encode(should_pass)), scores(anchors, encode(should_warn)))
+    out["encoder"] = encoder
+    out["check"] = {**cal, "suggestions": SUGGESTIONS,
+                    "heldApart": "prompts.json paraphrases after the first of each covered action (should pass) and "
+                                 "every prompt of the uncovered actions (should be warned)"}
+    out["anchors"] = {"scale": SCALE, "dim": int(q.shape[1]), "texts": texts, "actions": acts, "suggest": suggest,
+                      "embeddings": base64.b64encode(q.tobytes()).decode("ascii")}
+    # what this side's check says of a few prompts: the page's and the library's check must say the same
+    out["examples"] = [{"prompt": p, **check(out, e)} for p, e in zip(EXAMPLES, encode(EXAMPLES))]
+    return out
+
+
+# ----------------------------------------------------------------------------- files
+
+def encoder_info(manifest: dict, encoder_id: str) -> dict:
+    entry = manifest["textEncoders"].get(encoder_id)
+    if entry is None:
+        raise CoverageError(f"manifest.json: no textEncoders entry {encoder_id!r}")
+    return {"id": encoder_id, "onnx": entry["onnx"], "sha256": manifest["files"][entry["onnx"]]["sha256"]}
+
+
+def load(model: str, models_dir: Path | str | None = None) -> dict | None:
+    """The shipped capabilities file of ``model`` (None when there is none, or it was built for another encoder file)."""
+    from emdm import manifest as mf
+
+    models_dir = Path(models_dir) if models_dir is not None else mf.DEFAULT_MODELS_DIR
+    path = models_dir / file_name(model)
+    if not path.is_file():
+        return None
+    caps = json.loads(path.read_text())
+    if caps.get("schema") != SCHEMA or caps.get("model") != model or "check" not in caps:
+        return None
+    enc = caps["encoder"]
+    if mf.load(models_dir)["files"].get(enc["onnx"], {}).get("sha256") != enc["sha256"]:
+        return None                           # embeddings of another encoder file: stale, say nothing
+    return caps
+
+
+def prompt_notice(model: str, emb: np.ndarray, models_dir: Path | str | None = None) -> str | None:
+    caps = load(model, models_dir)
+    return None if caps is None else notice(check(caps, emb))
+
+
+def write(caps: dict, path: Path) -> None:
+    from emdm.outdir import check_writable
+
+    check_writable(path)
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(json.dumps(caps, indent=1, ensure_ascii=False) + "\n")
+    tmp.replace(path)
+
+
+def register(model: str, rel: str, models_dir: Path) -> None:
+    """List the file under the model's manifest entry (``capabilities`` and ``files``), so the page verifies it."""
+    from emdm import manifest as mf
+
+    m = mf.load(models_dir)
+    entry = m["models"][model]
+    entry["capabilities"] = rel
+    entry["files"] = sorted(set(entry.get("files", [])) | {rel})
+    mf.save(m, models_dir)
+
+
+def main(argv: list[str] | None = None) -> int:
+    from emdm import manifest as mf
+    from emdm.eval.report import RESULTS_DIR
+    from emdm.outdir import OutputRefused
+    from emdm.text import encode_texts
+
+    ap = argparse.ArgumentParser(prog="python -m emdm.eval.capabilities", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--model", required=True, help="a shipped model with a coverage result")
+    ap.add_argument("--coverage", type=Path, default=None, help="default docs/results/json/coverage-<model>.json")
+    ap.add_argument("--dataset", type=Path, default=DATASET_DIR, help="its training captions (text models)")
+    ap.add_argument("--prompts", type=Path, default=PROMPTS_FILE)
+    ap.add_argument("--captions", type=int, default=CAPTIONS, help="training captions per covered action")
+    ap.add_argument("--models-dir", type=Path, default=mf.DEFAULT_MODELS_DIR)
+    ap.add_argument("--register", action="store_true", help="also list the file in manifest.json with its sha256")
+    a = ap.parse_args(argv)
+    try:
+        cov_path = a.coverage or RESULTS_DIR / "json" / f"coverage-{a.model}.json"
+        coverage = read_result(cov_path)
+        if coverage is None:
+            raise CoverageError(f"{cov_path}: no coverage result; run python -m emdm.eval.coverage --model {a.model}")
+        manifest = mf.load(a.models_dir)
+        entry = manifest["models"].get(a.model)
+        if entry is None:
+            raise CoverageError(f"{a.models_dir / mf.MANIFEST_NAME}: no model {a.model!r}")
+        text = entry["condition"]["type"] == "text"
+        prompts = load_prompts(a.prompts, coverage["labels"]) if text else None
+        covered = {r for r in next(r for r in coverage["runs"] if r["steps"] == coverage.get("default_steps", 10))["covered"]}
+        captions = training_captions(a.dataset, covered, a.captions) if text else {}
+        enc_id = entry["condition"].get("encoder", "")
+        caps = build(coverage, prompts, captions, lambda ts: encode_texts(ts, enc_id, models_dir=a.models_dir),
+                     encoder_info(manifest, enc_id) if text else {})
+        out = a.models_dir / file_name(a.model)
+        write(caps, out)
+        if a.register:
+            register(a.model, file_name(a.model), a.models_dir)
+    except (CoverageError, mf.ManifestError, OutputRefused, OSError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    c = caps.get("check")
+    print(f"wrote {display_path(out)} ({out.stat().st_size // 1024} KB): "
+          f"{sum(r['covered'] for r in caps['actions'])} of {len(caps['actions'])} actions covered"
+          + (f"; threshold {c['threshold']}: {c['falseWarnings']['warned']}/{c['falseWarnings']['n']} covered prompts "
+             f"wrongly warned, {c['misses']['notWarned']}/{c['misses']['n']} uncovered ones not warned" if c else ""))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

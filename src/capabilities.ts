@@ -1,0 +1,155 @@
+/**
+ * What a shipped model does well: `capabilities-<model>.json` beside the manifest, built from the coverage benchmark by
+ * `python -m emdm.eval.capabilities` (its doc says how; docs/MODELS.md "Reproduce" when a model ships).
+ *
+ * ```ts
+ * const caps = await loadCapabilities(manifest, baseUrl, 'emdm-t2m-web');   // null when the model has none
+ * caps?.actions.filter((a) => !a.covered);                                  // what it does not do yet
+ * checkPrompt(caps!, embedding);   // {known: false, score: 0.54, nearest: ['a person walks backward', ...]}
+ * ```
+ *
+ * The check: a prompt is *unknown* when its best cosine to the file's anchors (well-covered benchmark prompts and
+ * training captions of covered actions, int8) is under `check.threshold`, calibrated on held-apart paraphrases; the
+ * suggestions are the closest well-covered prompts, one per action. Python computes the same (emdm.eval.capabilities).
+ * The file is verified like a model file when the manifest lists it; an unlisted one is read and checked for shape,
+ * and one built for another encoder file is ignored (its embeddings would be stale).
+ */
+import { type Manifest, ModelFileError, fetchBytes, fetchVerified } from './manifest';
+
+export interface ActionCapability {
+  label: string;
+  /** share of the benchmark's motions the action classifier recognised, at the model's default steps */
+  rate: number;
+  /** rate ≥ thresholds.covered */
+  covered: boolean;
+  /** its best benchmark prompt, where one works (text models) */
+  prompt?: string;
+}
+
+export interface Capabilities {
+  schema: 1;
+  model: string;
+  condition: 'text' | 'action';
+  steps: number;
+  thresholds: { covered: number; chip?: number };
+  /** best first */
+  actions: ActionCapability[];
+  encoder?: { id: string; onnx: string; sha256: string };
+  check?: { threshold: number; suggestions: number; falseWarnings: { n: number; warned: number }; misses: { n: number; notWarned: number } };
+  anchors?: { scale: number; dim: number; texts: string[]; actions: string[]; suggest: boolean[]; embeddings: string };
+  /** what Python's check said of a few prompts (both runtimes must agree: tests/unit/capabilities.test.ts) */
+  examples?: ({ prompt: string } & PromptCheck)[];
+}
+
+/** Whether a prompt is near what the model does well, and the closest prompts that work (best first, one per action). */
+export interface PromptCheck {
+  known: boolean;
+  /** best cosine to the anchors */
+  score: number;
+  nearest: string[];
+}
+
+export const capabilitiesFile = (model: string): string => `capabilities-${model}.json`;
+
+function fail(file: string, field: string, what: string): never {
+  throw new ModelFileError(file, 'incompatible', `field '${field}' ${what}; rebuild it with python -m emdm.eval.capabilities`);
+}
+
+/** Check the shape of a parsed capabilities file (errors name the file and field). */
+export function validateCapabilities(data: unknown, file: string): Capabilities {
+  const d = data as Partial<Capabilities> | null;
+  if (!d || typeof d !== 'object') fail(file, '(root)', 'must be an object');
+  if (d.schema !== 1) fail(file, 'schema', `is ${JSON.stringify(d.schema)}, expected 1`);
+  if (!Array.isArray(d.actions) || d.actions.some((a) => typeof a?.label !== 'string' || typeof a.covered !== 'boolean' || typeof a.rate !== 'number')) {
+    fail(file, 'actions', 'must be a list of {label, rate, covered}');
+  }
+  const a = d.anchors;
+  if (a) {
+    const n = a.texts?.length ?? -1;
+    if (!Array.isArray(a.texts) || a.actions?.length !== n || a.suggest?.length !== n) fail(file, 'anchors', 'needs texts, actions and suggest of one length');
+    if (!Number.isInteger(a.dim) || a.dim < 1) fail(file, 'anchors.dim', 'must be a positive integer');
+    if (typeof d.check?.threshold !== 'number') fail(file, 'check.threshold', 'must be a number');
+  }
+  return d as Capabilities;
+}
+
+function decodeBase64(s: string): Uint8Array {
+  const bin = atob(s);
+  const out = new Uint8Array(bin.length);
+  for (let i = 0; i < bin.length; i++) out[i] = bin.charCodeAt(i);
+  return out;
+}
+
+const unit = new WeakMap<Capabilities, Float32Array>();
+
+/** The anchors as unit float rows [N × dim] (decoded once per file). */
+function anchorVectors(caps: Capabilities, file: string): Float32Array {
+  let v = unit.get(caps);
+  if (v) return v;
+  const a = caps.anchors!;
+  const q = new Int8Array(decodeBase64(a.embeddings).buffer);
+  if (q.length !== a.texts.length * a.dim) fail(file, 'anchors.embeddings', `holds ${q.length} values, expected ${a.texts.length} × ${a.dim}`);
+  v = new Float32Array(q.length);
+  for (let i = 0; i < a.texts.length; i++) {
+    let n = 0;
+    for (let k = 0; k < a.dim; k++) n += q[i * a.dim + k] ** 2;
+    const s = 1 / Math.max(Math.sqrt(n), 1e-12);
+    for (let k = 0; k < a.dim; k++) v[i * a.dim + k] = q[i * a.dim + k] * s;
+  }
+  unit.set(caps, v);
+  return v;
+}
+
+/** Check a unit prompt embedding against a text model's capabilities (see the header). */
+export function checkPrompt(caps: Capabilities, embedding: ArrayLike<number>): PromptCheck {
+  const a = caps.anchors;
+  if (!a || !caps.check) throw new Error(`checkPrompt: ${capabilitiesFile(caps.model)} has no anchors (an action model's file)`);
+  if (embedding.length !== a.dim) throw new RangeError(`checkPrompt: the embedding has ${embedding.length} values, ${capabilitiesFile(caps.model)} ${a.dim}`);
+  const v = anchorVectors(caps, capabilitiesFile(caps.model));
+  const cos = a.texts.map((_, i) => {
+    let s = 0;
+    for (let k = 0; k < a.dim; k++) s += v[i * a.dim + k] * embedding[k];
+    return s;
+  });
+  const order = cos.map((_, i) => i).sort((x, y) => cos[y] - cos[x] || x - y);
+  const nearest: string[] = [];
+  const seen = new Set<string>();
+  for (const i of order) {
+    if (!a.suggest[i] || seen.has(a.actions[i])) continue;
+    seen.add(a.actions[i]);
+    nearest.push(a.texts[i]);
+    if (nearest.length === (caps.check.suggestions ?? 3)) break;
+  }
+  const score = cos[order[0]];
+  return { known: score >= caps.check.threshold, score: Math.round(score * 1e4) / 1e4, nearest };
+}
+
+/**
+ * The capabilities of `model`, or null when it has none (no file, or one built for another text encoder file).
+ * Listed in the manifest (`models[model].capabilities` and `files`): fetched and verified like a model file.
+ */
+export async function loadCapabilities(manifest: Manifest, baseUrl: string, model: string): Promise<Capabilities | null> {
+  const entry = manifest.models[model];
+  if (!entry) return null;
+  const path = typeof entry.capabilities === 'string' ? entry.capabilities : capabilitiesFile(model);
+  let bytes: ArrayBuffer;
+  try {
+    bytes = manifest.files[path] ? await fetchVerified(baseUrl, manifest, path) : await fetchBytes(baseUrl, path);
+  } catch (e) {
+    if (e instanceof ModelFileError && e.reason === 'missing') return null;
+    throw e;
+  }
+  let data: unknown;
+  try {
+    data = JSON.parse(new TextDecoder().decode(bytes));
+  } catch (e) {
+    throw new ModelFileError(path, 'incompatible', `not valid JSON (${(e as Error).message}); rebuild it with python -m emdm.eval.capabilities`);
+  }
+  const caps = validateCapabilities(data, path);
+  if (caps.model !== model) fail(path, 'model', `is ${JSON.stringify(caps.model)}, expected ${JSON.stringify(model)}`);
+  if (caps.encoder) {
+    const enc = manifest.textEncoders[caps.encoder.id];
+    if (!enc || manifest.files[caps.encoder.onnx]?.sha256 !== caps.encoder.sha256) return null; // stale: embeddings of another encoder file
+  }
+  return caps;
+}

@@ -1,0 +1,114 @@
+// What the model knows (issue 30), through the real prompt box: a prompt far from everything the text model does well
+// says so under the box and offers three prompts that work (each one, clicked, generates without the notice), and still
+// generates; a covered prompt shows no notice; the list of actions the model does well and does not is one click from
+// the prompt; the Action tab marks the labels its model does not make yet.
+import { expect, test, type Page } from '@playwright/test';
+import { watchPage } from './helpers';
+
+async function open(page: Page): Promise<void> {
+  await page.goto('/?noauto=1&backend=wasm&steps=4&seconds=2');
+  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+  expect(await page.evaluate(() => window.emdm.error)).toBe('');
+}
+
+/** Click Generate (or run `start`) and wait until the page counted one more finished generation. */
+async function generated(page: Page, start: () => Promise<void>): Promise<void> {
+  const n = await page.evaluate(() => window.emdm.counters.generations);
+  await start();
+  await page.waitForFunction((k) => window.emdm.counters.generations === k + 1, n, { timeout: 120_000 });
+}
+
+test('a far prompt gets the notice and three working prompts, and still generates; a covered one none', async ({ page }) => {
+  test.setTimeout(300_000);
+  const watch = watchPage(page);
+  await open(page);
+  const notice = page.locator('#prompt-check');
+
+  await page.locator('#prompt').fill('a person kicks');
+  await generated(page, () => page.locator('#generate').click());
+  await expect(page.locator('#play')).toBeEnabled();                     // it generated all the same
+  await expect(notice).toBeVisible();
+  await expect(notice).toContainText('has not learned anything close to “a person kicks”');
+  const chips = notice.locator('button.chip');
+  await expect(chips).toHaveCount(3);
+  const suggestions = await chips.allTextContents();
+  expect(new Set(suggestions).size).toBe(3);
+
+  // editing the prompt hides the notice of the old one
+  await page.locator('#prompt').fill('a person kicks twice');
+  await expect(notice).toBeHidden();
+
+  // each suggestion works: clicked, it becomes the prompt, generates, and draws no notice
+  await page.locator('#prompt').fill('throws a punch');
+  await generated(page, () => page.locator('#generate').click());
+  await expect(notice).toBeVisible();
+  const first = (await chips.first().textContent())!;
+  await generated(page, () => chips.first().click());
+  await expect(page.locator('#prompt')).toHaveValue(first);
+  await expect(notice).toBeHidden();
+
+  await page.locator('#prompt').fill('a person walks forward');
+  await generated(page, () => page.locator('#generate').click());
+  await expect(notice).toBeHidden();
+  watch.assertClean();
+});
+
+test('the list of what the model knows opens from the prompt; weak action labels are marked', async ({ page }) => {
+  test.setTimeout(180_000);
+  const watch = watchPage(page);
+  await open(page);
+  const button = page.locator('#knows-open');
+  await expect(button).toBeVisible();
+  await expect(button).toHaveAttribute('aria-expanded', 'false');
+  await button.click();
+  const list = page.locator('#knows');
+  await expect(list).toBeVisible();
+  await expect(button).toHaveAttribute('aria-expanded', 'true');
+  await expect(page.locator('#knows-good li')).toHaveCount(10);
+  await expect(page.locator('#knows-good')).toContainText('walk backward');
+  await expect(page.locator('#knows-weak')).toContainText('kick');
+  await expect(page.locator('#knows-weak')).toContainText('dance');
+  // a covered action's prompt is a chip that generates it
+  await generated(page, () => page.locator('#knows-good button.chip').first().click());
+
+  await page.locator('#mode-action').click();
+  await expect(page.locator('#action option[value="kick"]')).toHaveText('kick (weak)');
+  await expect(page.locator('#action option[value="walk"]')).toHaveText('walk');
+  await expect(page.locator('#action-hint')).toContainText('(weak)');
+  watch.assertClean();
+});
+
+test('a running generation can be cancelled; the link can be copied; sliders say steps and seconds', async ({ page, context }) => {
+  test.setTimeout(180_000);
+  const watch = watchPage(page);
+  await open(page);
+  await expect(page.locator('#steps')).toHaveAttribute('aria-valuetext', '4 steps');
+  await expect(page.locator('#seconds')).toHaveAttribute('aria-valuetext', '2.0 s');
+
+  // Cancel stops the request mid-denoising: nothing more is generated, the page is idle again with no error
+  await page.locator('#prompt').fill('a person walks');
+  await page.locator('#steps').fill(await page.locator('#steps').getAttribute('max') ?? '0');   // the most steps
+  const g0 = await page.evaluate(() => window.emdm.counters.generations);
+  const cancelledAt = await page.evaluate(() => new Promise<string>((resolve) => {
+    const text = document.getElementById('progress-text')!;
+    new MutationObserver((_, obs) => {
+      if (!/Denoising step 1 \//.test(text.textContent ?? '')) return;
+      obs.disconnect();
+      document.getElementById('cancel')!.click();      // pressed while the request runs
+      resolve(text.textContent ?? '');
+    }).observe(text, { childList: true, characterData: true, subtree: true });
+    document.getElementById('generate')!.click();
+  }));
+  expect(cancelledAt).toMatch(/Denoising step 1 \/ \d+/);
+  await page.waitForFunction(() => window.emdm.counters.cancelled >= 1, null, { timeout: 60_000 });
+  await expect(page.locator('#cancel')).toBeHidden();
+  await expect(page.locator('#generate')).toHaveText('Generate');
+  expect(await page.evaluate(() => window.emdm.counters.generations)).toBe(g0);
+  await expect(page.locator('#error-panel')).toBeHidden();
+
+  await context.grantPermissions(['clipboard-read', 'clipboard-write']);
+  await page.locator('#copy-link').click();
+  await expect(page.locator('#copy-link')).toHaveText('Link copied');
+  expect(await page.evaluate(() => navigator.clipboard.readText())).toBe(page.url());
+  watch.assertClean();
+});

@@ -1,0 +1,92 @@
+"""The shipped capabilities file (emdm.eval.capabilities, issue 30): which prompts a model does well, the unknown-prompt
+check the page, the library and the CLI share, and its calibration on prompts the file was not built from."""
+
+import json
+
+import numpy as np
+import pytest
+
+from emdm import manifest as mf
+from emdm.eval import capabilities as C
+from emdm.eval.coverage import PROMPTS_FILE, load_prompts, normalise, read_result
+from emdm.eval.report import RESULTS_DIR
+from emdm.sample import main as sample_main
+from emdm.text import encode_texts
+
+T2M, A2M = "emdm-t2m-web", "emdm-a2m-web"
+
+
+@pytest.fixture(scope="module")
+def caps():
+    c = C.load(T2M)
+    assert c is not None, f"public/models/{C.file_name(T2M)} missing or stale: python -m emdm.eval.capabilities --model {T2M}"
+    return c
+
+
+def test_far_prompts_are_unknown_and_get_three_working_suggestions(caps):
+    chips = set(read_result(RESULTS_DIR / "json" / f"coverage-{T2M}.json")["chips"]["prompts"])
+    for p in ["a person kicks", "bows", "throws a punch", "dances", "swims"]:
+        r = C.check(caps, encode_texts([p])[0])
+        assert not r["known"], (p, r)
+        assert len(r["nearest"]) == 3 and set(r["nearest"]) <= chips, r
+        assert C.notice(r).startswith("this prompt is far from what the model does well")
+
+
+def test_covered_prompts_are_known(caps):
+    for p in ["a person walks", "a person walks forward", "a person raises the left hand", "a person is running"]:
+        r = C.check(caps, encode_texts([p])[0])
+        assert r["known"] and C.notice(r) is None, (p, r)
+
+
+def test_held_apart_paraphrases_are_not_anchors_and_the_calibration_is_recorded(caps):
+    prompts = load_prompts(PROMPTS_FILE, [r["label"] for r in caps["actions"]])
+    _, held = C.build_split(prompts)
+    anchors = {normalise(t) for t in caps["anchors"]["texts"]}
+    assert not anchors & {normalise(p) for ps in held.values() for p in ps}
+    covered = {r["label"] for r in caps["actions"] if r["covered"]}
+    assert set(caps["anchors"]["actions"]) == covered
+    c = caps["check"]
+    assert c["falseWarnings"]["n"] == sum(len(held[a]) for a in covered)
+    assert c["misses"]["n"] == sum(len(prompts[a]) for a in prompts if a not in covered)
+    # the recorded rates are what the threshold gives on the shipped (int8) anchors
+    vecs = C.dequantise(np.frombuffer(__import__("base64").b64decode(caps["anchors"]["embeddings"]), np.int8)
+                        .reshape(len(caps["anchors"]["texts"]), -1))
+    s = C.scores(vecs, encode_texts([p for a in sorted(covered) for p in held[a]]))
+    assert int((s < c["threshold"]).sum()) == c["falseWarnings"]["warned"]
+
+
+def test_calibrate_separates_and_counts_errors():
+    r = C.calibrate(np.array([0.9, 0.85, 0.6]), np.array([0.3, 0.5, 0.88]))
+    assert r["threshold"] == 0.55                  # all known pass, 2 of 3 unknown warned: the best mean
+    assert r["falseWarnings"] == {"n": 3, "warned": 0} and r["misses"] == {"n": 3, "notWarned": 1}
+    assert C.calibrate(np.array([0.9]), np.array([0.2]))["falseWarnings"]["warned"] == 0
+
+
+def test_action_model_lists_weak_actions():
+    c = json.loads((mf.DEFAULT_MODELS_DIR / C.file_name(A2M)).read_text())
+    assert c["condition"] == "action" and "anchors" not in c
+    rows = {r["label"]: r for r in c["actions"]}
+    assert rows["walk"]["covered"] and not rows["kick"]["covered"]
+
+
+def test_stale_encoder_means_no_check(tmp_path, caps):
+    for f in ["manifest.json", C.file_name(T2M)]:
+        (tmp_path / f).write_bytes((mf.DEFAULT_MODELS_DIR / f).read_bytes())
+    assert C.load(T2M, tmp_path) is not None
+    stale = dict(caps, encoder=dict(caps["encoder"], sha256="0" * 64))
+    (tmp_path / C.file_name(T2M)).write_text(json.dumps(stale))
+    assert C.load(T2M, tmp_path) is None
+
+
+def test_sample_cli_says_one_line_for_a_far_prompt(tmp_path, capsys):
+    assert sample_main(["--model", T2M, "--text", "a person kicks", "--frames", "20", "--steps", "1", "--out", str(tmp_path / "k")]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("this prompt is far from"), err
+    assert sample_main(["--model", T2M, "--text", "a person walks", "--frames", "20", "--steps", "1", "--out", str(tmp_path / "w")]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def test_missing_coverage_result_is_one_line_exit_2(tmp_path, capsys):
+    assert C.main(["--model", T2M, "--coverage", str(tmp_path / "none.json")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "none.json: no coverage result" in err[0]

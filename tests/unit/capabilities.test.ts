@@ -1,0 +1,77 @@
+// The unknown-prompt check (src/capabilities.ts) on the shipped capabilities file: the same answers as Python's
+// (emdm.eval.capabilities wrote them into the file), and generate() returning it with the motion.
+import { beforeAll, describe, expect, test } from 'vitest';
+import fs from 'node:fs';
+import path from 'node:path';
+import { type Capabilities, checkPrompt, loadCapabilities, validateCapabilities } from '../../src/capabilities';
+import { openModel } from '../../src/generate';
+import { type Manifest, ModelFileError, loadManifest } from '../../src/manifest';
+import { createTextEncoder, type TextEncoder } from '../../src/text';
+
+const MODELS = path.resolve(__dirname, '../../public/models') + '/';
+const T2M = 'emdm-t2m-web';
+let manifest: Manifest;
+let enc: TextEncoder;
+let caps: Capabilities;
+
+beforeAll(async () => {
+  manifest = await loadManifest(MODELS);
+  enc = await createTextEncoder(manifest, MODELS);
+  caps = (await loadCapabilities(manifest, MODELS, T2M))!;
+});
+
+describe('capabilities', () => {
+  test('the shipped text model has a check; the action model lists its weak actions', async () => {
+    expect(caps?.check?.threshold).toBeGreaterThan(0);
+    const a2m = (await loadCapabilities(manifest, MODELS, 'emdm-a2m-web'))!;
+    expect(a2m.anchors).toBeUndefined();
+    expect(a2m.actions.find((a) => a.label === 'kick')?.covered).toBe(false);
+    expect(a2m.actions.find((a) => a.label === 'walk')?.covered).toBe(true);
+    expect(await loadCapabilities(manifest, MODELS, 'diffusion-t2m-web')).toBeNull(); // no coverage result, no file
+  });
+
+  test("agrees with Python's check on the file's examples", async () => {
+    expect(caps.examples!.length).toBeGreaterThanOrEqual(6);
+    for (const ex of caps.examples!) {
+      const got = checkPrompt(caps, await enc.encode(ex.prompt));
+      expect(got.known, ex.prompt).toBe(ex.known);
+      expect(Math.abs(got.score - ex.score), ex.prompt).toBeLessThan(3e-3);
+      expect(got.nearest, ex.prompt).toEqual(ex.nearest);
+    }
+  });
+
+  test('a far prompt is unknown with three working suggestions, one per action', async () => {
+    const r = checkPrompt(caps, await enc.encode('a person swims across a pool'));
+    expect(r.known).toBe(false);
+    expect(r.nearest).toHaveLength(3);
+    const a = caps.anchors!;
+    const acts = r.nearest.map((p) => a.actions[a.texts.indexOf(p)]);
+    expect(new Set(acts).size).toBe(3);
+    for (const p of r.nearest) expect(a.suggest[a.texts.indexOf(p)]).toBe(true);
+  });
+
+  test('generate() returns the check with the motion', async () => {
+    const gen = await openModel({ manifest, baseUrl: MODELS, model: T2M, backend: 'wasm', threads: 1, textEncoder: enc });
+    const o = { frames: 4, steps: 1, guidance: 1, seed: 1 };
+    const far = await gen.generate({ ...o, condition: { type: 'text', text: 'a person kicks' } });
+    expect(far.promptCheck?.known).toBe(false);
+    expect(far.promptCheck?.nearest).toHaveLength(3);
+    expect(far.motion.frames).toBe(4); // it still generates
+    const near = await gen.generate({ ...o, condition: { type: 'text', text: 'a person walks' } });
+    expect(near.promptCheck?.known).toBe(true);
+    const none = await gen.generate({ ...o, condition: { type: 'none' } });
+    expect(none.promptCheck).toBeUndefined();
+    await gen.dispose();
+  });
+
+  test('a stale file (another encoder file) is ignored, a broken one names its field', async () => {
+    const stale = { ...manifest, files: { ...manifest.files } };
+    const onnx = manifest.textEncoders['all-MiniLM-L6-v2'].onnx as string;
+    stale.files[onnx] = { ...stale.files[onnx], sha256: '0'.repeat(64) };
+    expect(await loadCapabilities(stale, MODELS, T2M)).toBeNull();
+    expect(() => validateCapabilities({ schema: 1, actions: [{ label: 'walk' }] }, 'c.json')).toThrow(/c.json: field 'actions'/);
+    const broken = JSON.parse(fs.readFileSync(path.join(MODELS, 'capabilities-emdm-t2m-web.json'), 'utf8'));
+    broken.anchors.suggest.pop();
+    expect(() => validateCapabilities(broken, 'c.json')).toThrow(ModelFileError);
+  });
+});

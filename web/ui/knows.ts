@@ -1,0 +1,97 @@
+// What the shipped models do well (src/capabilities.ts, from the coverage benchmark): the notice under the prompt
+// when a prompt is far from all of it (with the closest prompts that work, as chips), the "What this model knows"
+// list one click from the prompt, and the weak labels of the Action tab. The check itself runs in the worker with
+// the motion (generate's promptCheck); this module only shows it.
+import type { Capabilities, PromptCheck } from '../../src/index';
+import { byId, el } from './dom';
+
+/** The notice's words for an unknown prompt. */
+export function farNote(prompt: string): string {
+  return `The model has not learned anything close to “${prompt.trim()}”, so the motion will probably be walking, `
+    + 'standing or a raised arm. These prompts are the closest it does well:';
+}
+
+const pct = (r: number) => `${Math.round(r * 100)} %`;
+
+export class KnowsPanel {
+  private readonly check = byId('prompt-check');
+  private readonly checkText = byId('prompt-check-text');
+  private readonly checkChips = byId('prompt-check-chips');
+  private readonly open = byId('knows-open', HTMLButtonElement);
+  private readonly list = byId('knows');
+  private readonly prompt = byId('prompt', HTMLTextAreaElement);
+  /** the prompt the notice speaks of (it hides when the prompt changes) */
+  private checked = '';
+
+  constructor(private readonly usePrompt: (text: string) => void) {
+    this.open.hidden = true;
+    this.open.addEventListener('click', () => this.toggle());
+    this.prompt.addEventListener('input', () => {
+      if (this.prompt.value !== this.checked) this.check.hidden = true;
+    });
+  }
+
+  toggle(show = this.list.hidden): void {
+    this.list.hidden = !show;
+    this.open.setAttribute('aria-expanded', String(show));
+  }
+
+  /** Fill the list from the text model's (and the action model's) capabilities. */
+  setCapabilities(text: Capabilities | null, action: Capabilities | null): void {
+    const caps = text ?? action;
+    if (!caps) return;
+    const good = byId('knows-good');
+    const weak = byId('knows-weak');
+    good.replaceChildren();
+    weak.replaceChildren();
+    for (const a of caps.actions) {
+      const li = el('li');
+      const name = el('span', 'knows-label', `${a.label.replace(/[_-]+/g, ' ')} `);
+      li.append(name, el('span', 'knows-rate', pct(a.rate)));
+      if (a.covered && a.prompt && caps.condition === 'text') {
+        const chip = el('button', 'chip', a.prompt);
+        chip.type = 'button';
+        chip.addEventListener('click', () => this.usePrompt(a.prompt!));
+        li.append(' ', chip);
+      }
+      (a.covered ? good : weak).append(li);
+    }
+    byId('knows-source').textContent = `Share of ${caps.steps}-step motions the project's action classifier recognised `
+      + `(coverage benchmark, ${caps.model}); “does well” is ${pct(caps.thresholds.covered)} or more.`;
+    this.open.hidden = false;
+  }
+
+  /** After a text generation: the notice for a far prompt, nothing for a known one. */
+  showCheck(prompt: string, c: PromptCheck | undefined): void {
+    this.checked = prompt;
+    if (!c || c.known) {
+      this.check.hidden = true;
+      return;
+    }
+    this.checkText.textContent = farNote(prompt);
+    this.checkChips.replaceChildren(...c.nearest.map((p) => {
+      const chip = el('button', 'chip', p);
+      chip.type = 'button';
+      chip.addEventListener('click', () => this.usePrompt(p));
+      return chip;
+    }));
+    this.check.hidden = false;
+  }
+
+  hideCheck(): void {
+    this.check.hidden = true;
+  }
+}
+
+/** The Action tab's labels the action model does not do yet: "(weak)" after each. */
+export function markWeakActions(select: HTMLSelectElement, caps: Capabilities | null): void {
+  if (!caps) return;
+  const weak = new Set(caps.actions.filter((a) => !a.covered).map((a) => a.label));
+  for (const o of Array.from(select.options)) {
+    const base = o.value.replace(/[_-]+/g, ' ');
+    o.textContent = weak.has(o.value) ? `${base} (weak)` : base;
+    o.classList.toggle('weak', weak.has(o.value));
+  }
+  const hint = byId('action-hint');
+  hint.textContent = `The actions the action model was trained on; those marked (weak) it does not make recognisably yet (${weak.size} of ${select.options.length}).`;
+}
