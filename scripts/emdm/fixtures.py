@@ -100,8 +100,8 @@ def reference_sample(sess, x_T: np.ndarray, zs: list[np.ndarray], epss: list[np.
 
     Guidance (s != 1 and a non-zero condition) at the steps whose time is above ``guidance_min_time`` (all
     of them for 0): one batched call with rows [cond, 0], same x and z, x0 = x0_u + s (x0_c - x0_u); at the
-    other steps one conditional call. ``x0_smoothing`` σ > 0: at every step but the last (k > 0), x0 ← the Gaussian
-    along frames of ``emdm.sample.smooth_frames`` (src/motion/smooth.ts smoothJoints). ``objective="diffusion"``: z = 0 (the drawn z is ignored) and the
+    other steps one conditional call. ``x0_smoothing`` σ > 0: at every step but the last (k > 0), x0's pose channels ← the
+    Gaussian along frames of ``emdm.motion.smooth.smooth_pose`` (src/motion/smooth.ts smoothPose). ``objective="diffusion"``: z = 0 (the drawn z is ignored) and the
     DDIM update (η = 0) of docs/ARCHITECTURE.md "DDIM sampling", in float32 like emdm.sample."""
     x = x_T.astype(np.float32)[None]
     guided = bool(np.any(cond != 0)) and guidance != 1.0
@@ -115,9 +115,9 @@ def reference_sample(sess, x_T: np.ndarray, zs: list[np.ndarray], epss: list[np.
         else:
             x0 = run_step(sess, x, z[None], cond[None], np.array([t], np.float32))
         if x0_smoothing > 0 and k > 0:
-            from emdm.sample import smooth_frames
+            from emdm.motion.smooth import smooth_pose
 
-            x0 = smooth_frames(x0, x0_smoothing)
+            x0 = smooth_pose(x0, x0_smoothing)
         if objective == "diffusion":
             if k == 0:
                 x = x0.astype(np.float32)

@@ -19,7 +19,7 @@ The loop is docs/ARCHITECTURE.md "Sampling":
 x_T ~ N(0, I); per step: fresh z, x0 = G(x, z, c, time[k], mask) (with guidance s ≠ 1, at the steps whose time is above
 --guidance-min-time (the manifest's guidanceMinTime; default every step), one batched call
 [c, 0] with the same x and z, x0 = x0_u + s·(x0_c − x0_u)); with --x0-smoothing σ (the manifest's x0Smoothing),
-at every step but the last, x0 ← x0 smoothed along time (``smooth_frames``); x = coef1·x0 + coef2·x + sigma·ε. Random
+at every step but the last, x0 ← x0 with its pose channels smoothed along time (``smooth_pose``); x = coef1·x0 + coef2·x + sigma·ε. Random
 draws come from numpy's default_rng(seed) in the order x_T, then per step z, then ε. Models trained with
 ``--objective diffusion`` are sampled with DDIM (η = 0, z = 0) on the same time grid.
 
@@ -52,7 +52,7 @@ from emdm import manifest as mf
 from emdm.eval import capabilities
 from emdm.model.open import onnx_step, read_meanstd, torch_step  # noqa: F401 - the step functions, re-exported
 from emdm.model.schedule import make_schedule
-from emdm.motion.smooth import smooth_frames  # noqa: F401 - x̂0 smoothing; re-exported
+from emdm.motion.smooth import smooth_frames, smooth_pose  # noqa: F401 - x̂0 smoothing; re-exported
 
 StepFn = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
@@ -92,7 +92,9 @@ def sample_features(step: StepFn, cond: np.ndarray, frames: int, steps: int = 10
     way (z is drawn once per step for both rows), so only the skipped steps' x̂_0 changes.
 
     Smoothing x̂_0 along time (the manifest's ``x0Smoothing``, σ in frames; 0 = off, bit for bit as without it): at
-    every step but the last, after guidance and before the kept part is replaced, x̂_0 ← ``smooth_frames(x̂_0, σ)``.
+    every step but the last, after guidance and before the kept part is replaced, x̂_0's pose channels (root-relative
+    positions and rotations, ``emdm.motion.smooth.POSE_CHANNELS``) ← ``smooth_frames(·, σ)``; its root, velocity and
+    contact channels stay the model's (smoothing those made the sampler choose faster motion).
     The model's x̂_0 at intermediate steps chooses each frame's phase on its own (a wrist front, back, front on
     consecutive frames); the smoothed estimate is what is re-noised, so the next step sees one coherent motion.
     The last x̂_0 (the result) is the model's own. docs/ARCHITECTURE.md "Sampling"; the same random draws.
@@ -184,7 +186,7 @@ def sampling(cond: np.ndarray, frames: int, steps: int = 10, guidance: float = 1
         if guided:
             x0 = x0[num:] + np.float32(guidance) * (x0[:num] - x0[num:])
         if sigma > 0 and k > 0:
-            x0 = smooth_frames(x0, sigma, None if lengths is None else np.asarray(lengths) - f0)
+            x0 = smooth_pose(x0, sigma, None if lengths is None else np.asarray(lengths) - f0)
         if imposed[k]:
             x0 = np.where(keep, known, x0)
         if objective == "diffusion":     # DDIM, η = 0

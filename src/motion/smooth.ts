@@ -24,3 +24,25 @@ export function smoothJoints(joints: Float32Array, frames: number, sigma = 1): F
   }
   return out;
 }
+
+/**
+ * The pose channels of the HumanML3D layout, [from, to): the 21 root-relative joint positions [4:67] and their 6D
+ * rotations [67:193]. x̂0 smoothing touches these only: smoothing the root channels, the local velocities or the foot
+ * contacts of x̂0 made the sampler choose faster motion (docs/MODELS.md "Smoothing x̂0"). emdm.motion.smooth.POSE_CHANNELS.
+ */
+export const POSE_CHANNELS = [4, 193] as const;
+
+/** `smoothJoints` on the pose channels of (frames × dim) features only, the other channels copied (emdm smooth_pose). */
+export function smoothPose(x: Float32Array, frames: number, sigma: number): Float32Array {
+  if (frames < 1 || x.length % frames !== 0) throw new RangeError(`smoothPose: ${x.length} values is not frames (${frames}) × dim`);
+  const dim = x.length / frames;
+  const [a, b] = POSE_CHANNELS;
+  if (dim < b) throw new RangeError(`smoothPose: ${dim} channels; the pose channels are [${a}, ${b})`);
+  const w = b - a;
+  const pose = new Float32Array(frames * w);
+  for (let f = 0; f < frames; f++) pose.set(x.subarray(f * dim + a, f * dim + b), f * w);
+  const sm = smoothJoints(pose, frames, sigma);
+  const out = Float32Array.from(x);
+  for (let f = 0; f < frames; f++) out.set(sm.subarray(f * w, (f + 1) * w), f * dim + a);
+  return out;
+}

@@ -6,7 +6,7 @@
  * `keep` (src/sampler/mask.ts) the loop inpaints: docs/ARCHITECTURE.md "Sampling with constraints".
  */
 import { MAX_STEPS, MAX_X0_SMOOTHING } from '../manifest';
-import { smoothJoints } from '../motion/smooth';
+import { smoothPose } from '../motion/smooth';
 import { ddimUpdate } from './ddim';
 import type { Schedule } from './schedule';
 
@@ -58,10 +58,11 @@ export type SampleOptions = SamplerChoice & {
   guidanceMinTime?: number;
   /**
    * Smoothing x̂0 along time (the manifest's `x0Smoothing`, σ in frames; docs/ARCHITECTURE.md "Sampling"): at every
-   * step but the last, after guidance and before the kept part is replaced, x̂0 is filtered along frames, each
-   * channel, with `smoothJoints`' Gaussian — what is re-noised for the next step is then one coherent motion rather
-   * than per-frame phase choices. The last x̂0 (the result) is the model's own. Absent or 0: off, bit for bit; the
-   * random draws do not depend on it.
+   * step but the last, after guidance and before the kept part is replaced, x̂0's pose channels (root-relative
+   * positions and rotations, `POSE_CHANNELS`) are filtered along frames with `smoothJoints`' Gaussian (`smoothPose`) —
+   * what is re-noised for the next step is then one coherent pose sequence rather than per-frame phase choices; the
+   * root, velocity and contact channels stay the model's (smoothing them made the sampler choose faster motion).
+   * The last x̂0 (the result) is the model's own. Absent or 0: off, bit for bit; the random draws do not depend on it.
    */
   x0Smoothing?: number;
   /**
@@ -236,7 +237,7 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     if (guidedK) guidedSteps++;
     checkLength(out, inputs.batch * nk, `model output x0 at step ${k}`);
     // x̂0 smoothed along time at every step but the last (x0Smoothing), before the kept part is replaced
-    const smoothed = xs > 0 && k > 0 ? smoothJoints(guidedK ? guidedX0(out, nk, s) : out, L - f0, xs) : null;
+    const smoothed = xs > 0 && k > 0 ? smoothPose(guidedK ? guidedX0(out, nk, s) : out, L - f0, xs) : null;
     /** what onX0 sees: all L frames (the lead frames sitting out shown as their known motion) */
     const fullX0 = (x0: ArrayLike<number>): Float32Array => {
       const a = new Float32Array(n);

@@ -14,7 +14,7 @@ REGENERATE = "regenerate with `.venv/bin/python -m emdm.motion.decode_fixture` a
 
 
 def test_fixture_is_current():
-    meta, arrays = decode_fixture.build()
+    meta, arrays = decode_fixture.build(decode_fixture.committed_features())
     for key, want in arrays.items():
         got = read_case_array(decode_fixture.PARITY_DIR, decode_fixture.NAME, key)
         # numpy float64 arithmetic on float32 inputs read from files: no kernel varies with the CPU here
@@ -22,7 +22,7 @@ def test_fixture_is_current():
 
 
 def test_off_is_recover_joints_and_smoothing_keeps_the_path():
-    feats = decode_fixture.case_features()["generated"]       # a generated walk: 1.9 m in 2 s
+    feats = decode_fixture.committed_features()["generated"]   # a generated walk: 1.9 m in 2 s
     np.testing.assert_array_equal(decode_joints(feats, smooth=False, foot_cleanup=False), recover_joints(feats).astype(np.float32))
     raw, smooth = recover_joints(feats), decode_joints(feats, smooth=True, foot_cleanup=False)
     # a low-pass filter: the root gets from A to B as it did (sway and jitter go, the way stays)
@@ -31,7 +31,7 @@ def test_off_is_recover_joints_and_smoothing_keeps_the_path():
 
 
 def test_contact_runs_pin_the_feet_on_the_floor_and_keep_the_legs():
-    feats = decode_fixture.case_features()["contacts"]
+    feats = decode_fixture.committed_features()["contacts"]
     before = decode_joints(feats, smooth=True, foot_cleanup=False)
     after = decode_joints(feats, smooth=True, foot_cleanup=True)
     assert before[:, sk.FOOT_JOINTS, 1].min() < -0.01              # the case sinks the body below the floor

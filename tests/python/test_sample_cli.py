@@ -322,11 +322,12 @@ def test_cli_guidance_min_time_defaults_to_the_manifest_entry(models, tmp_path):
 
 
 def test_x0_smoothing_smooths_every_x0_but_the_last_and_keeps_the_draws():
-    """x0_smoothing σ: x̂0 is smoothed along time at every step but the last (a spy sees the smoothed estimate in the
-    x it is given next), the result equals the fixture reference fed the same noise; 0 = today's loop bit for bit."""
+    """x0_smoothing σ: x̂0's pose channels are smoothed along time at every step but the last (a spy sees the
+    smoothed estimate in the x it is given next; root, velocity and contact channels the model's own), the result
+    equals the fixture reference fed the same noise; 0 = today's loop bit for bit."""
     from emdm import fixtures as fx
     from emdm.model.schedule import make_schedule
-    from emdm.sample import smooth_frames
+    from emdm.motion.smooth import POSE_CHANNELS, smooth_frames
 
     path = fx.PARITY_DIR / "tiny-step.onnx"
     cond = np.random.default_rng(4).standard_normal(fx.TINY_COND_DIM).astype(np.float32)
@@ -363,7 +364,11 @@ def test_x0_smoothing_smooths_every_x0_but_the_last_and_keeps_the_draws():
     x_T = rng.standard_normal((1, 12, 263), dtype=np.float32)
     rng.standard_normal((1, 64), dtype=np.float32)
     eps = rng.standard_normal((1, 12, 263), dtype=np.float32)
-    want = np.float32(sched2.coef1[1]) * smooth_frames(spikes, 1.0) + np.float32(sched2.coef2[1]) * x_T \
+    smoothed = spikes.copy()
+    a, b = POSE_CHANNELS
+    smoothed[..., a:b] = smooth_frames(spikes, 1.0)[..., a:b]
+    assert (a, b) == (4, 193) and np.abs(smoothed - spikes).max() > 0.1
+    want = np.float32(sched2.coef1[1]) * smoothed + np.float32(sched2.coef2[1]) * x_T \
         + np.float32(sched2.sigma[1]) * eps
     np.testing.assert_allclose(seen[1], want, atol=1e-6)
     for bad in (-0.1, float("nan"), float("inf")):

@@ -17,6 +17,8 @@ The input features are copied into the fixture, so it does not go stale when the
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 
 from emdm import paths
@@ -39,9 +41,17 @@ def case_features() -> dict[str, np.ndarray]:
     return {"real": real, "generated": gen, "contacts": contacts}
 
 
-def build() -> tuple[dict, dict[str, np.ndarray]]:
+def committed_features() -> dict[str, np.ndarray]:
+    """The input features of the committed fixture, per case (what the currency test decodes again)."""
+    meta = json.loads((PARITY_DIR / f"{NAME}.json").read_text())
+    return {c: read_case_array(PARITY_DIR, NAME, f"{c}_features") for c in meta["cases"]}
+
+
+def build(features: dict[str, np.ndarray] | None = None) -> tuple[dict, dict[str, np.ndarray]]:
+    """Meta and arrays of the fixture for ``features`` per case (default: ``case_features()``, from the other
+    fixtures)."""
     arrays, cases = {}, {}
-    for name, feats in case_features().items():
+    for name, feats in (case_features() if features is None else features).items():
         arrays[f"{name}_features"] = feats
         for mode, (smooth, cleanup) in MODES.items():
             arrays[f"{name}_{mode}"] = decode_joints(feats, smooth=smooth, foot_cleanup=cleanup)
