@@ -41,6 +41,7 @@ from emdm.eval import kinematics as K
 from emdm.eval.plausibility import batch_plausibility, flip_share
 from emdm.eval.poses import check_frames
 from emdm.eval.report import RESULTS_DIR, SCHEMA, _table
+from emdm.motion.decode import decode_joints
 from emdm.motion.features import recover_joints
 from emdm.paths import DATASET_DIR, RUNS_DIR, display_path
 
@@ -160,7 +161,8 @@ def default_out(a) -> Path:
 
     sigma = "" if a.x0_smoothing is None else f"-x0s{a.x0_smoothing:g}"
     model = a.model or slug(Path(a.ckpt).parent.name, Path(a.ckpt).stem)
-    name = a.name or slug(model, None if a.variant in (None, "fp32") else a.variant) + sigma
+    raw = "-raw" if getattr(a, "decode", "page") == "raw" else ""
+    name = a.name or slug(model, None if a.variant in (None, "fp32") else a.variant) + sigma + raw
     return RESULTS_DIR / "json" / f"realism-{slug(name)}.json"
 
 
@@ -201,7 +203,9 @@ def run(a) -> Path:
     cond, action, prompt_of = bench.conditions(src)
     motions = src.generate(cond, a.seed)
     t_gen = time.time() - t0
-    gen = measure(labels, action, [recover_joints(m) for m in motions], real)
+    # the joints judged: as the page and the library show them (smoothed σ = 1, feet cleaned up), or raw
+    shown = decode_joints if a.decode == "page" else recover_joints
+    gen = measure(labels, action, [shown(m) for m in motions], real)
     if src.task == "text":
         gen["prompts"] = prompt_rows(labels, action, prompt_of, gen["rows"])
     gen["kinematic"] = judge(labels, action, gen.pop("rows"))
@@ -212,7 +216,7 @@ def run(a) -> Path:
     result = {"schema": SCHEMA, "task": "realism", "name": a.name or out.stem.removeprefix("realism-"),
               "model": opened.name, "variant": opened.variant, "condition": src.task,
               "info": {k: v for k, v in src.info.items()}, "key": C._key(a, guidance, gmin, sigma), "steps": a.steps,
-              "x0_smoothing": sigma, "labels": labels, "real": real, "generated": gen,
+              "x0_smoothing": sigma, "decode": a.decode, "labels": labels, "real": real, "generated": gen,
               "rules": {act: {"rule": v["rule"], "own": v["own"], "n": v["n"], "false_pass": v["false_pass"],
                               "own_train": on_train.get(act, {}).get("own"), "n_train": on_train.get(act, {}).get("n"),
                               "confused": v["confused"], "confused_rate": v["confused_rate"]}
@@ -252,6 +256,9 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--guidance", type=float, default=None, help="default: the manifest's")
     ap.add_argument("--guidance-min-time", type=float, default=None, metavar="T", help="default: the manifest's")
     ap.add_argument("--x0-smoothing", type=float, default=None, metavar="SIGMA", help="default: the manifest's")
+    ap.add_argument("--decode", choices=["page", "raw"], default="page",
+                    help="judge the joints as the page shows them (page: σ = 1 smoothing and foot clean-up, "
+                         "emdm.motion.decode) or as recovered (raw); the classifier reads the sampler's features")
     ap.add_argument("--data", "--dataset", dest="dataset", type=Path, default=DATASET_DIR)
     ap.add_argument("--split", default="test")
     ap.add_argument("--classifier", type=Path, default=RUNS_DIR / "eval" / "classifier.pt")
