@@ -36,11 +36,15 @@ def require_models_dir(given: Path | str | None = None) -> Path:
     d = models_dir(given)
     if (d / "manifest.json").is_file():
         return d
+    if given is None and not os.environ.get(MODELS_ENV) and not (REPO_ROOT / "package.json").is_file():
+        raise ModelsDirError(f"no models folder: the installed package does not include the models; pass "
+                             f"models_dir= / --models-dir or set ${MODELS_ENV} to a copy of the repository's "
+                             "public/models (docs/PYTHON.md)")
     source = ("models_dir / --models-dir" if given is not None else
               f"${MODELS_ENV}" if os.environ.get(MODELS_ENV) else "the default, the repository's public/models")
     what = "is not a folder" if not d.is_dir() else "has no manifest.json"
     raise ModelsDirError(f"{d}: {what} (models folder from {source}); point models_dir= / --models-dir or "
-                         f"${MODELS_ENV} at a copy of the repository's public/models (docs/MODELS.md)")
+                         f"${MODELS_ENV} at a copy of the repository's public/models (docs/PYTHON.md)")
 
 
 def shared_data_dir() -> Path:
