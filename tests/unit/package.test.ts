@@ -1,0 +1,88 @@
+// The npm package as a new user gets it: `npm pack` (prepack builds dist-lib/ with scripts/build/build-lib.mjs),
+// the tarball unpacked as node_modules/emdm-web of a scratch folder outside the checkout (its dependencies and the
+// three peer linked from this checkout's node_modules: no registry needed), then
+// - plain Node imports 'emdm-web' and 'emdm-web/three' by name and generates a BVH from the shipped models;
+// - a consumer's strict tsc (erasableSyntaxOnly, no unused locals/parameters, skipLibCheck off) accepts its types;
+// - the tarball holds the built library, not models, tests, sources or the Python pipeline, and is under 5 MB.
+import { execFileSync } from 'node:child_process';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { afterAll, beforeAll, describe, expect, it } from 'vitest';
+
+const ROOT = path.resolve(__dirname, '../..');
+const MODELS = path.join(ROOT, 'public', 'models');
+const pkg = JSON.parse(fs.readFileSync(path.join(ROOT, 'package.json'), 'utf8'));
+const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-pack-'));
+const app = path.join(tmp, 'app');
+let packed: { size: number; files: { path: string }[]; filename: string };
+
+function link(name: string): void {
+  const to = path.join(app, 'node_modules', name);
+  fs.mkdirSync(path.dirname(to), { recursive: true });
+  fs.symlinkSync(fs.realpathSync(path.join(ROOT, 'node_modules', name)), to);
+}
+
+beforeAll(() => {
+  const out = execFileSync('npm', ['pack', '--json', '--pack-destination', tmp], { cwd: ROOT, encoding: 'utf8' });
+  packed = JSON.parse(out.slice(out.indexOf('[')))[0];
+  const target = path.join(app, 'node_modules', 'emdm-web');
+  fs.mkdirSync(target, { recursive: true });
+  execFileSync('tar', ['-xzf', path.join(tmp, packed.filename), '-C', target, '--strip-components=1']);
+  for (const name of [...Object.keys(pkg.dependencies), ...Object.keys(pkg.peerDependencies), '@types/node']) link(name);
+  fs.writeFileSync(path.join(app, 'package.json'), JSON.stringify({ name: 'app', type: 'module', private: true }));
+}, 180_000);
+afterAll(() => fs.rmSync(tmp, { recursive: true, force: true }));
+
+describe('npm package', () => {
+  it('holds the built library only, under 5 MB', () => {
+    const files = packed.files.map((f) => f.path);
+    expect(packed.size).toBeLessThan(5_000_000);
+    expect(files).toEqual(expect.arrayContaining(['package.json', 'LICENSE', 'README.md', 'dist-lib/index.js', 'dist-lib/index.d.ts',
+      'dist-lib/three.js', 'dist-lib/three.d.ts', 'dist-lib/worker/generation.worker.js']));
+    expect(files.filter((f) => !f.startsWith('dist-lib/') && !['package.json', 'LICENSE', 'README.md', 'CHANGELOG.md'].includes(f))).toEqual([]);
+    expect(files.filter((f) => /\.(onnx|pt|f32|py)$/.test(f) || (f.endsWith('.ts') && !f.endsWith('.d.ts')))).toEqual([]);
+    expect(pkg.private).toBeUndefined();
+    expect(pkg.dependencies.three).toBeUndefined();
+    expect(pkg.peerDependencies.three).toBeDefined();
+  });
+
+  it('plain Node imports it by name and writes a BVH from the shipped models', () => {
+    fs.writeFileSync(path.join(app, 'run.mjs'), `
+      import { createGenerator, writeBVH } from 'emdm-web';
+      import { createCharacter } from 'emdm-web/three';
+      const g = await createGenerator({ baseUrl: process.argv[2], backend: 'wasm', worker: false, threads: 1 });
+      const m = await g.generate({ prompt: 'a person walks forward', seconds: 2, seed: 1 });
+      console.log(JSON.stringify({ frames: m.frames, three: typeof createCharacter, bvh: writeBVH(m, g.skeleton) }));
+    `);
+    const out = JSON.parse(execFileSync(process.execPath, ['run.mjs', MODELS], { cwd: app, encoding: 'utf8' }).trim().split('\n').pop()!);
+    expect(out.frames).toBe(40);
+    expect(out.three).toBe('function');
+    expect(out.bvh.startsWith('HIERARCHY')).toBe(true);
+    expect(out.bvh).toContain('Frames: 40');
+  });
+
+  it("a consumer's strict tsc accepts its types", () => {
+    fs.writeFileSync(path.join(app, 'main.ts'), `
+      import { createGenerator, writeBVH, type GeneratedMotion } from 'emdm-web';
+      import { createCharacter } from 'emdm-web/three';
+      const g = await createGenerator({ baseUrl: '/models/' });
+      const m: GeneratedMotion = await g.generate({ prompt: 'a person walks forward', seconds: 2 });
+      export const text: string = writeBVH(m, g.skeleton);
+      export const character = createCharacter(g.skeleton);
+    `);
+    fs.writeFileSync(path.join(app, 'tsconfig.json'), JSON.stringify({
+      compilerOptions: { target: 'ES2022', module: 'ESNext', moduleResolution: 'Bundler', strict: true, noEmit: true, skipLibCheck: false,
+        erasableSyntaxOnly: true, noUnusedLocals: true, noUnusedParameters: true, lib: ['ES2022', 'DOM'], types: [] },
+      files: ['main.ts'],
+    }));
+    const tsc = path.join(ROOT, 'node_modules', 'typescript', 'bin', 'tsc');
+    let out = '';
+    try {
+      execFileSync(process.execPath, [tsc, '-p', app], { cwd: app, encoding: 'utf8' });
+    } catch (e) {
+      out = String((e as { stdout?: string }).stdout);
+    }
+    expect(out).toBe('');
+  });
+});
