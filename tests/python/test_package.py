@@ -97,6 +97,17 @@ def test_generate_outside_the_checkout(venv, tmp_path):
     assert (tmp_path / "walk.glb").read_bytes()[:4] == b"glTF"
 
 
+def test_prepare_needs_no_extra(venv, tmp_path):
+    assert "--sources" in ok(run([venv / "bin" / "emdm-prepare", "--help"], cwd=tmp_path)).stdout
+
+
+@pytest.mark.parametrize("command", ["emdm-train", "emdm-export", "emdm-eval"])
+def test_pipeline_commands_name_the_extra(venv, tmp_path, command):
+    r = run([venv / "bin" / command, "--help"], cwd=tmp_path)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert f"{command} needs" in r.stderr and "pip install 'emdm[train]'" in r.stderr
+
+
 def test_models_folder_from_the_environment(venv, tmp_path):
     cmd = [venv / "bin" / "emdm-sample", "--model", "emdm-t2m-web", "--text", "a person waves", "--frames", "20",
            "--variant", "int8", "--out", tmp_path / "w"]
