@@ -3,11 +3,16 @@
 // three peer linked from this checkout's node_modules: no registry needed), then
 // - plain Node imports 'emdm-web' and 'emdm-web/three' by name and generates a BVH from the shipped models;
 // - a consumer's strict tsc (erasableSyntaxOnly, no unused locals/parameters, skipLibCheck off) accepts its types;
-// - the tarball holds the built library, not models, tests, sources or the Python pipeline, and is under 5 MB.
-import { execFileSync } from 'node:child_process';
+// - the tarball holds the built library, not models, tests, sources or the Python pipeline, and is under 5 MB;
+// - a Vite app whose only wiring is `emdm({ models })` from 'emdm-web/vite' generates a motion in Chromium, from
+//   its production build (vite build + vite preview) and its dev server, cross-origin isolated, fetching nothing
+//   from another host, its dist/ without ORT .wasm under assets/.
+import { type ChildProcess, execFileSync, spawn } from 'node:child_process';
 import fs from 'node:fs';
+import net from 'node:net';
 import os from 'node:os';
 import path from 'node:path';
+import { chromium } from 'playwright-core';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 
 const ROOT = path.resolve(__dirname, '../..');
@@ -29,7 +34,7 @@ beforeAll(() => {
   const target = path.join(app, 'node_modules', 'emdm-web');
   fs.mkdirSync(target, { recursive: true });
   execFileSync('tar', ['-xzf', path.join(tmp, packed.filename), '-C', target, '--strip-components=1']);
-  for (const name of [...Object.keys(pkg.dependencies), ...Object.keys(pkg.peerDependencies), '@types/node']) link(name);
+  for (const name of [...Object.keys(pkg.dependencies), ...Object.keys(pkg.peerDependencies), '@types/node', 'vite']) link(name);
   fs.writeFileSync(path.join(app, 'package.json'), JSON.stringify({ name: 'app', type: 'module', private: true }));
 }, 180_000);
 afterAll(() => fs.rmSync(tmp, { recursive: true, force: true }));
@@ -85,4 +90,95 @@ describe('npm package', () => {
     }
     expect(out).toBe('');
   });
+});
+
+const CHROMIUM = process.env.CHROMIUM_PATH ?? '/usr/bin/chromium';
+const VITE = path.join(app, 'node_modules', 'vite', 'bin', 'vite.js');
+
+function freePort(): Promise<number> {
+  return new Promise((resolve) => {
+    const srv = net.createServer().listen(0, '127.0.0.1', () => {
+      const { port } = srv.address() as net.AddressInfo;
+      srv.close(() => resolve(port));
+    });
+  });
+}
+
+/** `vite <args>` in the app until it prints its address. */
+async function serve(args: string[]): Promise<{ url: string; server: ChildProcess }> {
+  const port = await freePort();
+  const server = spawn(process.execPath, [VITE, ...args, '--port', String(port), '--strictPort', '--host', '127.0.0.1'], { cwd: app });
+  await new Promise<void>((resolve, reject) => {
+    let log = '';
+    server.stdout!.on('data', (d) => { log += d; if (log.includes(`:${port}`)) resolve(); });
+    server.stderr!.on('data', (d) => { log += d; });
+    server.on('exit', (code) => reject(new Error(`vite ${args.join(' ')} exited ${code}: ${log}`)));
+  });
+  return { url: `http://127.0.0.1:${port}/`, server };
+}
+
+/** Open the page in Chromium and wait for its motion; what a user would see, and every host it asked. */
+async function generateIn(url: string) {
+  const profile = fs.mkdtempSync(path.join(tmp, 'chromium-'));
+  const ctx = await chromium.launchPersistentContext(profile, {
+    executablePath: CHROMIUM, headless: true,
+    args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking', '--disable-component-update', '--disable-sync'],
+  });
+  try {
+    const page = await ctx.newPage();
+    const hosts = new Set<string>();
+    const failed: string[] = [];
+    page.on('request', (r) => hosts.add(new URL(r.url()).host));
+    page.on('response', (r) => { if (r.status() >= 400) failed.push(`${r.status()} ${r.url()}`); });
+    await page.goto(url);
+    const result = await page.evaluate(() => (window as unknown as { result: Promise<unknown> }).result);
+    return { result, hosts: [...hosts], failed, isolated: await page.evaluate(() => crossOriginIsolated) };
+  } finally {
+    await ctx.close();
+  }
+}
+
+describe('Vite app with emdm-web/vite', () => {
+  beforeAll(() => {
+    fs.writeFileSync(path.join(app, 'index.html'),
+      '<!doctype html><html><head><link rel="icon" href="data:,"></head><body><script type="module" src="/main.js"></script></body></html>');
+    fs.writeFileSync(path.join(app, 'main.js'), `
+      import { createGenerator } from 'emdm-web';
+      window.result = (async () => {
+        const g = await createGenerator({ threads: 1 });
+        const m = await g.generate({ prompt: 'a person walks forward', seconds: 2, seed: 1 });
+        return { frames: m.frames, joints: m.joints.length };
+      })().catch((e) => ({ error: String((e && e.stack) || e) }));
+    `);
+    fs.writeFileSync(path.join(app, 'vite.config.js'),
+      `import { emdm } from 'emdm-web/vite';\nexport default { plugins: [emdm({ models: ${JSON.stringify(MODELS)} })] };\n`);
+  });
+
+  it('its production build generates in Chromium', async () => {
+    execFileSync(process.execPath, [VITE, 'build'], { cwd: app, encoding: 'utf8' });
+    const dist = path.join(app, 'dist');
+    expect(fs.existsSync(path.join(dist, 'models', 'manifest.json'))).toBe(true);
+    expect(Object.keys(JSON.parse(fs.readFileSync(path.join(dist, 'ort', 'files.json'), 'utf8')))).toEqual(
+      ['ort-wasm-simd-threaded.asyncify.wasm', 'ort-wasm-simd-threaded.wasm']);       // WebGPU's and WASM's runtimes
+    expect(fs.readdirSync(path.join(dist, 'assets')).filter((f) => f.endsWith('.wasm'))).toEqual([]);
+    const { url, server } = await serve(['preview']);
+    try {
+      const r = await generateIn(url);
+      expect(r.result).toEqual({ frames: 40, joints: 40 * 22 * 3 });
+      expect(r).toMatchObject({ hosts: [new URL(url).host], failed: [], isolated: true });
+    } finally {
+      server.kill();
+    }
+  }, 240_000);
+
+  it('its dev server generates in Chromium', async () => {
+    const { url, server } = await serve([]);
+    try {
+      const r = await generateIn(url);
+      expect(r.result).toEqual({ frames: 40, joints: 40 * 22 * 3 });
+      expect(r).toMatchObject({ hosts: [new URL(url).host], failed: [], isolated: true });
+    } finally {
+      server.kill();
+    }
+  }, 240_000);
 });
