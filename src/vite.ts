@@ -20,12 +20,11 @@
  *   every file it lists copied there by the build (createGenerator's default baseUrl).
  * - Cross-origin isolation headers on the dev and preview servers, so ORT runs on several threads.
  */
-import { createHash } from 'node:crypto';
 import fs from 'node:fs';
-import { createRequire } from 'node:module';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import type { Plugin } from 'vite';
+import { AssetError, copyModels, copyOrt, modelFiles, ortFiles } from './assets';
 
 export interface EmdmPluginOptions {
   /** a models folder (manifest.json and the files it lists); omit when the app serves models itself */
@@ -37,45 +36,7 @@ export const CROSS_ORIGIN_ISOLATION_HEADERS = {
   'Cross-Origin-Embedder-Policy': 'require-corp',
   'Cross-Origin-Resource-Policy': 'same-origin',
 };
-// The runtimes the browser loads: onnxruntime-web/wasm's (the WASM backend; transformers.js runs on it too) and
-// onnxruntime-web/webgpu's (.asyncify). The .jsep build (the package's default entry, Node only here) and .jspi are
-// never fetched: 45 MB left out.
-const ORT_FILE = /^ort-wasm-simd-threaded(\.asyncify)?\.(wasm|mjs)$/;
 const HERE = path.dirname(fileURLToPath(import.meta.url));
-
-/** onnxruntime-web's folder, as this library resolves it (its exports map hides package.json). */
-function ortDir(): string {
-  const req = createRequire(path.join(HERE, 'index.js'));
-  for (const base of req.resolve.paths('onnxruntime-web') ?? []) {
-    const dir = path.join(base, 'onnxruntime-web');
-    if (fs.existsSync(path.join(dir, 'package.json'))) return dir;
-  }
-  throw new Error(`emdm-web/vite: onnxruntime-web not found from ${HERE}; install the app's dependencies`);
-}
-
-/** ORT's wasm runtime files (name → path) and the files.json the library verifies the .wasm with. */
-function ortFiles(): { files: Map<string, string>; list: string } {
-  const dist = path.join(ortDir(), 'dist');
-  const files = new Map(fs.readdirSync(dist).filter((n) => ORT_FILE.test(n)).sort().map((n) => [n, path.join(dist, n)]));
-  const list: Record<string, { bytes: number; sha256: string }> = {};
-  for (const [n, p] of files) {
-    if (!n.endsWith('.wasm')) continue;
-    const bytes = fs.readFileSync(p);
-    list[n] = { bytes: bytes.length, sha256: createHash('sha256').update(bytes).digest('hex') };
-  }
-  return { files, list: JSON.stringify(list, null, 1) + '\n' };
-}
-
-/** The models folder's files: manifest.json and every file its `files` table lists (relative paths). */
-function modelFiles(dir: string): string[] {
-  const man = path.join(dir, 'manifest.json');
-  if (!fs.existsSync(man)) throw new Error(`emdm-web/vite: models: ${man} not found; point it at a copy of public/models`);
-  const listed = Object.keys((JSON.parse(fs.readFileSync(man, 'utf8')) as { files?: Record<string, unknown> }).files ?? {});
-  for (const rel of listed) {
-    if (!fs.existsSync(path.join(dir, rel))) throw new Error(`emdm-web/vite: models: ${path.join(dir, rel)} (listed in ${man}) not found`);
-  }
-  return ['manifest.json', ...listed];
-}
 
 /** A file under `root` named by a URL path below it, or null (no file, or outside root). */
 function inside(root: string, rel: string): string | null {
@@ -116,7 +77,11 @@ function dropOrtAssets(): Plugin {
 /** The plugins: add `emdm({ models })` to the app's `plugins`. */
 export function emdm(options: EmdmPluginOptions = {}): Plugin[] {
   const models = options.models ? path.resolve(options.models) : null;
-  if (models) modelFiles(models);                  // a wrong folder is an error now, not a 404 in the browser
+  try {
+    if (models) modelFiles(models);                // a wrong folder is an error now, not a 404 in the browser
+  } catch (e) {
+    throw e instanceof AssetError ? new Error(`emdm-web/vite: models: ${e.message}`) : e;
+  }
   let base = '/';
   let ort: ReturnType<typeof ortFiles> | null = null;
   const ortNow = () => (ort ??= ortFiles());
@@ -150,16 +115,9 @@ export function emdm(options: EmdmPluginOptions = {}): Plugin[] {
     },
     writeBundle(out) {
       const dir = out.dir;
-      if (!dir || fs.existsSync(path.join(dir, 'ort', 'files.json'))) return;
-      const { files, list } = ortNow();
-      fs.mkdirSync(path.join(dir, 'ort'), { recursive: true });
-      for (const [n, p] of files) fs.copyFileSync(p, path.join(dir, 'ort', n));
-      fs.writeFileSync(path.join(dir, 'ort', 'files.json'), list);
-      if (!models) return;
-      for (const rel of modelFiles(models)) {
-        fs.mkdirSync(path.dirname(path.join(dir, 'models', rel)), { recursive: true });
-        fs.copyFileSync(path.join(models, rel), path.join(dir, 'models', rel));
-      }
+      if (!dir || fs.existsSync(path.join(dir, 'ort', 'files.json'))) return;   // once per build
+      copyOrt(path.join(dir, 'ort'));
+      if (models) copyModels(models, path.join(dir, 'models'));
     },
   };
   return [oneOnnxRuntime(), dropOrtAssets(), main];

@@ -4,10 +4,12 @@
 // - plain Node imports 'emdm-web' and 'emdm-web/three' by name and generates a BVH from the shipped models;
 // - a consumer's strict tsc (erasableSyntaxOnly, no unused locals/parameters, skipLibCheck off) accepts its types;
 // - the tarball holds the built library, not models, tests, sources or the Python pipeline, and is under 5 MB;
+// - `emdm-web models|ort` copies a verified models folder / ORT's browser runtimes into an app's static folder;
 // - a Vite app whose only wiring is `emdm({ models })` from 'emdm-web/vite' generates a motion in Chromium, from
 //   its production build (vite build + vite preview) and its dev server, cross-origin isolated, fetching nothing
 //   from another host, its dist/ without ORT .wasm under assets/.
 import { type ChildProcess, execFileSync, spawn } from 'node:child_process';
+import { createHash } from 'node:crypto';
 import fs from 'node:fs';
 import net from 'node:net';
 import os from 'node:os';
@@ -44,7 +46,7 @@ describe('npm package', () => {
     const files = packed.files.map((f) => f.path);
     expect(packed.size).toBeLessThan(5_000_000);
     expect(files).toEqual(expect.arrayContaining(['package.json', 'LICENSE', 'README.md', 'dist-lib/index.js', 'dist-lib/index.d.ts',
-      'dist-lib/three.js', 'dist-lib/three.d.ts', 'dist-lib/worker/generation.worker.js']));
+      'dist-lib/three.js', 'dist-lib/three.d.ts', 'dist-lib/vite.js', 'dist-lib/cli.js', 'dist-lib/worker/generation.worker.js']));
     expect(files.filter((f) => !f.startsWith('dist-lib/') && !['package.json', 'LICENSE', 'README.md', 'CHANGELOG.md'].includes(f))).toEqual([]);
     expect(files.filter((f) => /\.(onnx|pt|f32|py)$/.test(f) || (f.endsWith('.ts') && !f.endsWith('.d.ts')))).toEqual([]);
     expect(pkg.private).toBeUndefined();
@@ -89,6 +91,41 @@ describe('npm package', () => {
       out = String((e as { stdout?: string }).stdout);
     }
     expect(out).toBe('');
+  });
+});
+
+describe('emdm-web command', () => {
+  const cli = (...args: string[]) => {
+    try {
+      return { code: 0, out: execFileSync(process.execPath, [path.join(app, 'node_modules', 'emdm-web', pkg.bin['emdm-web']), ...args], { cwd: app, encoding: 'utf8', stdio: 'pipe' }) };
+    } catch (e) {
+      return { code: (e as { status: number }).status, out: String((e as { stderr: string }).stderr) };
+    }
+  };
+
+  it('copies ORT\'s browser runtimes with their files.json', () => {
+    expect(cli('ort', 'static/ort').code).toBe(0);
+    const list = JSON.parse(fs.readFileSync(path.join(app, 'static', 'ort', 'files.json'), 'utf8'));
+    expect(Object.keys(list)).toEqual(['ort-wasm-simd-threaded.asyncify.wasm', 'ort-wasm-simd-threaded.wasm']);
+    expect(fs.statSync(path.join(app, 'static', 'ort', 'ort-wasm-simd-threaded.wasm')).size).toBe(list['ort-wasm-simd-threaded.wasm'].bytes);
+  });
+
+  it('copies a models folder after checking every file, and nothing when one is wrong', () => {
+    const src = path.join(tmp, 'models-src');
+    fs.mkdirSync(path.join(src, 'text'), { recursive: true });
+    const body = Buffer.from('step model bytes');
+    fs.writeFileSync(path.join(src, 'text', 'm.onnx'), body);
+    const sha256 = createHash('sha256').update(body).digest('hex');
+    fs.writeFileSync(path.join(src, 'manifest.json'), JSON.stringify({ schema: 1, files: { 'text/m.onnx': { bytes: body.length, sha256 } } }));
+    expect(cli('models', src, 'static/models').code).toBe(0);
+    expect(fs.readFileSync(path.join(app, 'static', 'models', 'text', 'm.onnx'))).toEqual(body);
+    fs.writeFileSync(path.join(src, 'text', 'm.onnx'), 'changed');
+    const bad = cli('models', src, 'static/models2');
+    expect(bad.code).toBe(2);
+    expect(bad.out.trim().split('\n')).toEqual([expect.stringMatching(/m\.onnx: 7 bytes \/ sha256 differ from .*manifest\.json/)]);
+    expect(fs.existsSync(path.join(app, 'static', 'models2'))).toBe(false);
+    expect(cli('models', path.join(tmp, 'nowhere'), 'x').out).toMatch(/nowhere\/manifest\.json not found/);
+    expect(cli('copy').code).toBe(2);
   });
 });
 
