@@ -80,3 +80,16 @@ def test_generate_bad_input(kw, what):
 def test_generate_empty_prompt():
     with pytest.raises(SampleError, match="prompt must be"):
         emdm.generate("  ")
+
+
+def test_python_m_runs_without_warnings(tmp_path):
+    """`import emdm` must not import emdm.sample: `python -m emdm.sample` would then run a second copy of it and
+    runpy warns on stderr."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "PYTHONPATH": str(paths.REPO_ROOT / "scripts")}
+    r = subprocess.run([sys.executable, "-m", "emdm.sample", "--help"], capture_output=True, text=True, env=env,
+                       cwd=tmp_path)
+    assert r.returncode == 0 and r.stderr == "", r.stderr
