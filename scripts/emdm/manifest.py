@@ -168,7 +168,9 @@ def _int_in(v: Any, lo: int, hi: int) -> bool:
 
 
 def _number_in(v: Any, lo: float, hi: float) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and lo <= v <= hi
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return False
+    return (isinstance(v, int) or math.isfinite(v)) and lo <= v <= hi    # an int past float's range: no isfinite
 
 
 def check_model_entry(entry: dict[str, Any], name: str, where: Path | str) -> dict[str, Any]:
