@@ -20,6 +20,7 @@ SCHEMA_VERSION = 1
 REPO_ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_MODELS_DIR = REPO_ROOT / "public" / "models"
 MANIFEST_NAME = "manifest.json"
+KEPT_ON_UPDATE = ("license", "card")      # an entry's fields that re-exporting it keeps (update_entry)
 # Bounds on every size a manifest can set (what sampling allocates follows from them): a step count, a model's frames,
 # its noise and condition widths, x̂0 smoothing σ (frames). The page's validateManifest (src/manifest.ts) has the same.
 MAX_STEPS = 1000
@@ -167,7 +168,9 @@ def _int_in(v: Any, lo: int, hi: int) -> bool:
 
 
 def _number_in(v: Any, lo: float, hi: float) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and lo <= v <= hi
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return False
+    return (isinstance(v, int) or math.isfinite(v)) and lo <= v <= hi    # an int past float's range: no isfinite
 
 
 def check_model_entry(entry: dict[str, Any], name: str, where: Path | str) -> dict[str, Any]:
@@ -266,7 +269,9 @@ def update_entry(section: str, name: str, entry: dict[str, Any], models_dir: Pat
     if section not in ("textEncoders", "models"):
         raise ManifestError(f"unknown manifest section {section!r}")
     manifest = load(models_dir, missing_ok=True)
-    manifest[section][name] = entry
+    old = manifest[section].get(name) or {}
+    # the terms of use and the model card are written by hand (docs/MODELS.md "Model card"): a re-export keeps them
+    manifest[section][name] = {**{k: old[k] for k in KEPT_ON_UPDATE if k in old}, **entry}
     return save(manifest, models_dir)
 
 

@@ -14,6 +14,39 @@ RUNS_DIR = REPO_ROOT / "runs"                 # git-ignored: checkpoints and log
 FIXTURES_DIR = REPO_ROOT / "tests" / "fixtures"
 
 
+MODELS_ENV = "EMDM_MODELS_DIR"
+
+
+class ModelsDirError(ValueError):
+    """The models folder to read has no manifest.json (the message is one line: which folder, where it came from)."""
+
+
+def models_dir(given: Path | str | None = None) -> Path:
+    """The models folder to read (manifest.json, the step models, the text encoder): ``given`` (``models_dir=``,
+    ``--models-dir``), else ``$EMDM_MODELS_DIR``, else the repository's public/models. The models are not part of
+    the Python package: an installed package is pointed at a copy of public/models by one of the first two."""
+    if given is not None:
+        return Path(given)
+    env = os.environ.get(MODELS_ENV)
+    return Path(env) if env else MODELS_DIR
+
+
+def require_models_dir(given: Path | str | None = None) -> Path:
+    """``models_dir(given)`` if it holds a manifest.json; else ModelsDirError saying which folder and from where."""
+    d = models_dir(given)
+    if (d / "manifest.json").is_file():
+        return d
+    if given is None and not os.environ.get(MODELS_ENV) and not (REPO_ROOT / "package.json").is_file():
+        raise ModelsDirError(f"no models folder: the installed package does not include the models; pass "
+                             f"models_dir= / --models-dir or set ${MODELS_ENV} to a copy of the repository's "
+                             "public/models (docs/PYTHON.md)")
+    source = ("models_dir / --models-dir" if given is not None else
+              f"${MODELS_ENV}" if os.environ.get(MODELS_ENV) else "the default, the repository's public/models")
+    what = "is not a folder" if not d.is_dir() else "has no manifest.json"
+    raise ModelsDirError(f"{d}: {what} (models folder from {source}); point models_dir= / --models-dir or "
+                         f"${MODELS_ENV} at a copy of the repository's public/models (docs/PYTHON.md)")
+
+
 def shared_data_dir() -> Path:
     """The read-only folder of mocap archives and the CLIP tokenizer (see its README)."""
     env = os.environ.get("EMDM_SHARED_DATA")

@@ -269,8 +269,10 @@ def check_known(known, keep, frames: int, feature_dim: int) -> tuple[np.ndarray 
     return keep, np.where(keep, known, np.float32(0))
 
 
-def make_condition(spec: dict, text: str | None, action: str | None, uncond: bool) -> np.ndarray:
-    """The condition vector for a model's ``condition`` spec (manifest format)."""
+def make_condition(spec: dict, text: str | None, action: str | None, uncond: bool,
+                   models_dir: Path | str | None = None) -> np.ndarray:
+    """The condition vector for a model's ``condition`` spec (manifest format); a text model's encoder is read from
+    ``models_dir`` (default ``emdm.paths.models_dir()``: $EMDM_MODELS_DIR or public/models)."""
     dim = int(spec["dim"])
     given = sum(v is not None and v is not False for v in (text, action)) + int(bool(uncond))
     if given != 1:
@@ -285,7 +287,7 @@ def make_condition(spec: dict, text: str | None, action: str | None, uncond: boo
         from emdm.text import TextEncoderError, load_encoder, truncation_notice
 
         try:
-            enc = load_encoder(spec["encoder"])
+            enc = load_encoder(spec["encoder"], models_dir=models_dir)
         except (TextEncoderError, mf.ManifestError) as e:
             raise SampleError(str(e)) from None
         emb = np.asarray(enc.encode([text]), np.float32)[0]
@@ -507,7 +509,7 @@ def run_edit(a, step, entry: dict, mean, std, steps: int, guidance: float, frame
     """(features, joints) of one motion made by the edit mode (emdm.motion.edit), de-normalised."""
     from emdm.motion import edit as E
 
-    model = E.Editor.from_entry(step, entry, mean, std, steps, guidance)
+    model = E.Editor.from_entry(step, entry, mean, std, steps, guidance, models_dir=a.models_dir)
     if a.guidance_min_time is not None:
         model = dataclasses.replace(model, guidance_min_time=a.guidance_min_time)
     if a.x0_smoothing is not None:
@@ -557,7 +559,9 @@ def build_parser() -> argparse.ArgumentParser:
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--model", help="model name in the manifest (e.g. emdm-t2m-web)")
     src.add_argument("--ckpt", type=Path, help="an emdm.train checkpoint (EMA weights)")
-    p.add_argument("--models-dir", type=Path, default=paths.MODELS_DIR)
+    p.add_argument("--models-dir", type=Path, default=None,
+                   help=f"the models folder (manifest.json, step models, text encoder; default ${paths.MODELS_ENV}, "
+                        "else the repository's public/models)")
     p.add_argument("--variant", default=None, help="fp32 (default) or a manifest variant such as int8")
     p.add_argument("--text")
     p.add_argument("--action")
@@ -625,7 +629,7 @@ def run(a: argparse.Namespace) -> int:
     if edit_mode(a):
         feats, joints = run_edit(a, step, entry, mean, std, steps, guidance, frames)
         return write_motion(a, feats[None], joints[None])
-    cond = make_condition(entry["condition"], a.text, a.action, a.uncond)
+    cond = make_condition(entry["condition"], a.text, a.action, a.uncond, a.models_dir)
     far = a.text and a.model and capabilities.prompt_notice(a.model, cond, a.models_dir)
     if far:                                          # the page says the same beside its prompt box
         print(far, file=sys.stderr)

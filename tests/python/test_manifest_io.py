@@ -42,3 +42,11 @@ def test_malformed_manifest_names_line_and_field(tmp_path):
     (tmp_path / "manifest.json").write_text('{"schema": 7}')
     with pytest.raises(mf.ManifestError, match="field 'schema' is 7"):
         mf.load(tmp_path)
+
+
+def test_an_int_past_floats_range_is_a_field_error():
+    """JSON's 10**400 is a Python int that math.isfinite cannot take (OverflowError): a field error like any other."""
+    entry = {"task": "text", "condition": {"type": "text", "encoder": "e", "dim": 4}, "onnx": "m.onnx",
+             "meanStd": "m.f32", "guidance": 10**400}
+    with pytest.raises(mf.ManifestError, match="field 'models.m.guidance' is 1000"):
+        mf.check_model_entry(entry, "m", "manifest.json")

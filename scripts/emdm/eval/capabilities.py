@@ -195,10 +195,9 @@ def encoder_info(manifest: dict, encoder_id: str) -> dict:
 
 def load(model: str, models_dir: Path | str | None = None) -> dict | None:
     """The shipped capabilities file of ``model`` (None when there is none, or it was built for another encoder file)."""
-    from emdm import manifest as mf
+    from emdm import paths
 
-    models_dir = Path(models_dir) if models_dir is not None else mf.DEFAULT_MODELS_DIR
-    path = models_dir / file_name(model)
+    path = paths.models_dir(models_dir) / file_name(model)
     if not path.is_file():
         return None
     caps = json.loads(path.read_text())

@@ -258,12 +258,12 @@ def open_checkpoint(path: Path | str, *, device: str = "cpu", weights: str = "G_
 def open_shipped(name: str, *, models_dir: Path | str | None = None, variant: str | None = None,
                  threads: int = 1) -> OpenedModel:
     from emdm import manifest as mf
-    from emdm.paths import MODELS_DIR
+    from emdm import paths
 
-    models_dir = Path(models_dir or MODELS_DIR)
     try:
+        models_dir = paths.require_models_dir(models_dir)
         man = mf.load(models_dir)
-    except mf.ManifestError as e:
+    except (paths.ModelsDirError, mf.ManifestError) as e:
         raise ModelError(str(e)) from None
     where = models_dir / mf.MANIFEST_NAME
     if name not in man["models"]:

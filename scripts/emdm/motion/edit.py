@@ -115,8 +115,9 @@ class Editor:
 
     @classmethod
     def from_entry(cls, step: Callable, meta: dict, mean: np.ndarray, std: np.ndarray, steps: int | None = None,
-                   guidance: float | None = None) -> "Editor":
-        """From a step function, its manifest-like entry and mean/std (what ``emdm.sample.load_model`` returns)."""
+                   guidance: float | None = None, models_dir=None) -> "Editor":
+        """From a step function, its manifest-like entry and mean/std (what ``emdm.sample.load_model`` returns); a text
+        model's prompts are encoded by the encoder in ``models_dir`` (default ``emdm.paths.models_dir()``)."""
         from emdm.sample import make_condition
 
         spec = meta["condition"]
@@ -126,7 +127,7 @@ class Editor:
             if prompt not in cache:
                 text = prompt if spec["type"] == "text" else None
                 action = prompt if spec["type"] != "text" else None
-                cache[prompt] = make_condition(spec, text, action, False)
+                cache[prompt] = make_condition(spec, text, action, False, models_dir)
             return cache[prompt]
 
         return cls(step, np.asarray(mean, np.float32), np.asarray(std, np.float32), condition,

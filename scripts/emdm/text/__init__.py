@@ -56,13 +56,14 @@ def load_encoder(encoder_id: str = DEFAULT_ENCODER, *, models_dir: Path | str | 
     """Load a text encoder by id.
 
     ``all-MiniLM-L6-v2`` (and any manifest entry of kind ``minilm``): the shipped ONNX folder named by
-    the manifest under ``models_dir`` (default public/models), or ``model_dir`` directly.
+    the manifest under ``models_dir`` (default ``emdm.paths.models_dir()``: $EMDM_MODELS_DIR or public/models), or ``model_dir`` directly.
     ``clip-vit-b32`` / a manifest entry of kind ``clip``: CLIP's text tower via transformers from
     ``model_dir`` (a local folder with weights) or the Hub id ``openai/clip-vit-base-patch32``.
     """
     from emdm import manifest as mf
+    from emdm import paths
 
-    models_dir = Path(models_dir) if models_dir is not None else mf.DEFAULT_MODELS_DIR
+    given, models_dir = models_dir, paths.models_dir(models_dir)      # an argument, $EMDM_MODELS_DIR or public/models
     key = (encoder_id, str(model_dir or models_dir))
     if key in _CACHE:
         return _CACHE[key]
@@ -73,7 +74,10 @@ def load_encoder(encoder_id: str = DEFAULT_ENCODER, *, models_dir: Path | str | 
     elif model_dir is not None:
         enc = MiniLMEncoder(model_dir, encoder_id=encoder_id)
     else:
-        manifest = mf.load(models_dir)
+        try:
+            manifest = mf.load(paths.require_models_dir(given))
+        except paths.ModelsDirError as e:
+            raise TextEncoderError(str(e)) from None
         entry = manifest["textEncoders"].get(encoder_id)
         if entry is None:
             known = ", ".join(sorted(manifest["textEncoders"])) or "none"

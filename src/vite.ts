@@ -1,0 +1,124 @@
+/**
+ * The Vite plugin of the npm package (`emdm-web/vite`): the wiring a Vite app needs to run the library in the
+ * browser, in one call.
+ *
+ * ```ts
+ * // vite.config.ts
+ * import { defineConfig } from 'vite';
+ * import { emdm } from 'emdm-web/vite';
+ * export default defineConfig({ plugins: [emdm({ models: 'path/to/models' })] });
+ * ```
+ *
+ * - ONNX Runtime's wasm at `<base>ort/` with the `files.json` (size, sha256) the library checks it against: served
+ *   from node_modules by the dev server, written by the build (scripts/build/copy-ort.mjs does the same for this
+ *   repository), the two runtimes the browser loads (28 MB) only. The copies Rollup emits under assets/ for ORT's
+ *   own `new URL(...)` are dropped: never fetched (69 MB).
+ * - transformers.js (the text encoder) resolved onto the library's onnxruntime-web: one runtime, one .wasm, no CDN
+ *   (scripts/build/one-ort.mjs), in workers too; ES-module workers; `optimizeDeps.exclude` for the packages whose
+ *   `import.meta.url` lookups pre-bundling would break.
+ * - `models` (a copy of the repository's public/models): served at `<base>models/` in dev, and the manifest with
+ *   every file it lists copied there by the build (createGenerator's default baseUrl).
+ * - Cross-origin isolation headers on the dev and preview servers, so ORT runs on several threads.
+ */
+import fs from 'node:fs';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+import type { Plugin } from 'vite';
+import { AssetError, copyModels, copyOrt, modelFiles, ortFiles } from './assets';
+
+export interface EmdmPluginOptions {
+  /** a models folder (manifest.json and the files it lists); omit when the app serves models itself */
+  models?: string;
+}
+
+export const CROSS_ORIGIN_ISOLATION_HEADERS = {
+  'Cross-Origin-Opener-Policy': 'same-origin',
+  'Cross-Origin-Embedder-Policy': 'require-corp',
+  'Cross-Origin-Resource-Policy': 'same-origin',
+};
+const HERE = path.dirname(fileURLToPath(import.meta.url));
+
+/** A file under `root` named by a URL path below it, or null (no file, or outside root). */
+function inside(root: string, rel: string): string | null {
+  const p = path.resolve(root, decodeURIComponent(rel));
+  return p.startsWith(root + path.sep) && fs.existsSync(p) && fs.statSync(p).isFile() ? p : null;
+}
+
+const TYPES: Record<string, string> = { '.mjs': 'text/javascript', '.wasm': 'application/wasm', '.json': 'application/json' };
+
+/** transformers.js's 'onnxruntime-web' → the library's 'onnxruntime-web/wasm' (scripts/build/one-ort.mjs). */
+function oneOnnxRuntime(): Plugin {
+  const ours = path.join(HERE, 'runtime', fs.existsSync(path.join(HERE, 'runtime', 'ort.ts')) ? 'ort.ts' : 'ort.js');
+  return {
+    name: 'emdm-web:one-onnxruntime',
+    enforce: 'pre',
+    async resolveId(source, importer) {
+      if (source !== 'onnxruntime-web' || !importer?.split(path.sep).join('/').includes('/@huggingface/transformers/')) return null;
+      const hit = await this.resolve('onnxruntime-web/wasm', ours, { skipSelf: true });
+      if (!hit) throw new Error(`emdm-web/vite: cannot resolve onnxruntime-web/wasm for ${importer}`);
+      return hit;
+    },
+  };
+}
+
+/** Drop the .wasm copies Rollup emits for ORT's default `new URL('ort-wasm-*.wasm', import.meta.url)`: the library
+ * points ORT at `<base>ort/` (wasmPaths), so they are never fetched (~86 MB). */
+function dropOrtAssets(): Plugin {
+  return {
+    name: 'emdm-web:drop-ort-assets',
+    generateBundle(_out, bundle) {
+      for (const name of Object.keys(bundle)) {
+        if (/(^|\/)ort-wasm[^/]*\.wasm$/.test(name) && !name.startsWith('ort/')) delete bundle[name];
+      }
+    },
+  };
+}
+
+/** The plugins: add `emdm({ models })` to the app's `plugins`. */
+export function emdm(options: EmdmPluginOptions = {}): Plugin[] {
+  const models = options.models ? path.resolve(options.models) : null;
+  try {
+    if (models) modelFiles(models);                // a wrong folder is an error now, not a 404 in the browser
+  } catch (e) {
+    throw e instanceof AssetError ? new Error(`emdm-web/vite: models: ${e.message}`) : e;
+  }
+  let base = '/';
+  let ort: ReturnType<typeof ortFiles> | null = null;
+  const ortNow = () => (ort ??= ortFiles());
+  const main: Plugin = {
+    name: 'emdm-web',
+    config: () => ({
+      optimizeDeps: { exclude: ['emdm-web', 'onnxruntime-web', '@huggingface/transformers'] },
+      worker: { format: 'es', plugins: () => [oneOnnxRuntime(), dropOrtAssets()] },
+      server: { headers: CROSS_ORIGIN_ISOLATION_HEADERS },
+      preview: { headers: CROSS_ORIGIN_ISOLATION_HEADERS },
+    }),
+    configResolved(config) {
+      base = config.base.endsWith('/') ? config.base : config.base + '/';
+    },
+    configureServer(server) {
+      server.middlewares.use((req, res, next) => {
+        const url = (req.url ?? '').split('?')[0];
+        if (!url.startsWith(base)) return next();
+        const rel = url.slice(base.length);
+        let file: string | null = null;
+        let body: string | null = null;
+        if (rel === 'ort/files.json') body = ortNow().list;
+        else if (rel.startsWith('ort/')) file = ortNow().files.get(rel.slice(4)) ?? null;
+        else if (models && rel.startsWith('models/')) file = inside(models, rel.slice(7));
+        if (!file && body === null) return next();
+        res.setHeader('Content-Type', TYPES[path.extname(file ?? rel)] ?? 'application/octet-stream');
+        for (const [k, v] of Object.entries(CROSS_ORIGIN_ISOLATION_HEADERS)) res.setHeader(k, v);
+        if (body !== null) res.end(body);
+        else fs.createReadStream(file!).pipe(res);
+      });
+    },
+    writeBundle(out) {
+      const dir = out.dir;
+      if (!dir || fs.existsSync(path.join(dir, 'ort', 'files.json'))) return;   // once per build
+      copyOrt(path.join(dir, 'ort'));
+      if (models) copyModels(models, path.join(dir, 'models'));
+    },
+  };
+  return [oneOnnxRuntime(), dropOrtAssets(), main];
+}
