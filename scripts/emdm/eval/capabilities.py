@@ -195,9 +195,11 @@ def encoder_info(manifest: dict, encoder_id: str) -> dict:
 
 def load(model: str, models_dir: Path | str | None = None) -> dict | None:
     """The shipped capabilities file of ``model`` (None when there is none, or it was built for another encoder file)."""
+    from emdm import manifest as mf
     from emdm import paths
 
-    path = paths.models_dir(models_dir) / file_name(model)
+    models_dir = paths.models_dir(models_dir)       # the argument, $EMDM_MODELS_DIR or public/models
+    path = models_dir / file_name(model)
     if not path.is_file():
         return None
     caps = json.loads(path.read_text())
