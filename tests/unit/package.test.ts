@@ -147,9 +147,11 @@ async function serve(args: string[]): Promise<{ url: string; server: ChildProces
   const server = spawn(process.execPath, [VITE, ...args, '--port', String(port), '--strictPort', '--host', '127.0.0.1'], { cwd: app });
   await new Promise<void>((resolve, reject) => {
     let log = '';
-    server.stdout!.on('data', (d) => { log += d; if (log.includes(`:${port}`)) resolve(); });
+    // CI=true turns Vite's colours on, and it prints the port in bold: match the text without escape codes
+    server.stdout!.on('data', (d) => { log += d; if (log.replace(/\x1b\[[0-9;]*m/g, '').includes(`:${port}`)) resolve(); });
     server.stderr!.on('data', (d) => { log += d; });
     server.on('exit', (code) => reject(new Error(`vite ${args.join(' ')} exited ${code}: ${log}`)));
+    setTimeout(() => reject(new Error(`vite ${args.join(' ')} printed no :${port} in 60 s: ${log}`)), 60_000).unref();
   });
   return { url: `http://127.0.0.1:${port}/`, server };
 }
