@@ -198,8 +198,13 @@ export class TimelinePanel {
     const again = this.button('↻', 'icon', () => void this.regenerate(this.rows.indexOf(row)).catch(() => undefined));
     const remove = this.button('✕', 'icon', () => this.remove(row));
     const unit = el('span', 'tl-unit', 's');
-    // the prompt first (its own line), then prompt-or-action, seconds and the buttons: the Tab order is the reading order
-    li.append(el('span', 'tl-num'), prompt, kind, seconds, unit, up, down, again, remove);
+    // the prompt first (its own line), then prompt-or-action, seconds and the buttons: the Tab order is the reading order;
+    // the buttons wrap to a line of their own where the selector's longest label and the seconds leave them no room
+    const buttons = el('span', 'tl-seg-buttons');
+    buttons.append(up, down, again, remove);
+    const controls = el('div', 'tl-seg-controls');
+    controls.append(kind, seconds, unit, buttons);
+    li.append(el('span', 'tl-num'), prompt, controls);
     const sync = () => {
       prompt.disabled = kind.value !== '';
       this.refreshTotal();
