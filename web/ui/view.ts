@@ -159,8 +159,11 @@ export class View {
   readonly showSteps = byId('show-steps', HTMLInputElement);
 
   constructor(private readonly notices: Notices, private readonly errorPanel: ErrorPanel) {
-    // `?quality=high` keeps full resolution and shadows even when frames are slow (screenshots).
-    this.stage.adaptive = new URLSearchParams(location.search).get('quality') !== 'high';
+    // `?quality=high` keeps full resolution and shadows even when frames are slow (screenshots); `?quality=low` starts
+    // at the lowest quality the page drops to when frames are slow (half resolution, no shadows).
+    const quality = new URLSearchParams(location.search).get('quality');
+    this.stage.adaptive = quality !== 'high';
+    if (quality === 'low') this.stage.lowest();
   }
 
   /** Put the characters of a manifest's skeleton on the stage (rest pose), wire the downloads, start drawing. */
