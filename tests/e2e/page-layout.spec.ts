@@ -22,7 +22,7 @@ interface Rect { x: number; y: number; width: number; height: number }
 interface Box extends Rect { name: string }
 
 /** Things drawn over (or beside) the 3-D view: none may cover the character or each other. */
-const OVERLAYS = ['#caption', '#timings', '#playback', '#notices .notice', '#notices .notices-more', '#panel-emdm', '#panel-ddim', '#panel', '#step-strip'];
+const OVERLAYS = ['#caption', '#timings', '#playback', '#notices .notice', '#notices .notices-more', '#panel-emdm', '#panel-ddim', '#compare-figures', '.stage-label', '#panel', '#step-strip'];
 
 const overlap = (a: Rect, b: Rect) => Math.max(0, Math.min(a.x + a.width, b.x + b.width) - Math.max(a.x, b.x))
   * Math.max(0, Math.min(a.y + a.height, b.y + b.height) - Math.max(a.y, b.y));

@@ -138,10 +138,8 @@ export class Stage {
   setSplit(split: { left: Object3D; right: Object3D } | null): void {
     this.split = split;
     this.path.visible = !split;
-    if (!split) {
-      // the right object may stay in the scene hidden; the left one is the main view's again
-      this.resize(true);
-    }
+    // the page's CSS may move the covered bands with the view (labels on the stage in split view): read them again
+    this.resize(true);
   }
 
   get isSplit(): boolean {

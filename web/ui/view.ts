@@ -15,6 +15,7 @@ import { fileStem, motionToBVH, motionToGLB, motionToJSON } from './downloads';
 import type { ErrorPanel, Notices } from './notices';
 import { PlaybackBar } from './playback';
 import type { Generation, Produced } from './session';
+import { showFigures } from './compare-figures';
 import { Stage } from './stage';
 import type { PageState } from './state';
 import { StepStrip } from './step-strip';
@@ -155,6 +156,7 @@ export class View {
   private readonly caption = byId('caption');
   private readonly timingsHud = byId('timings');
   readonly comparePanels = byId('compare-panels');
+  private readonly compareFigures = byId('compare-figures');
   private readonly compareDivider = byId('compare-divider');
   readonly showSteps = byId('show-steps', HTMLInputElement);
 
@@ -285,6 +287,11 @@ export class View {
     // the visitor's character, when one is shown, performs both motions (a second copy for DDIM)
     const theirs = this.picker.compare(ddim ? ddim.result.motion : null);
     this.ddimCharacter.object.visible = !!ddim && !theirs;
+    // the stage's own labels (EMDM left, DDIM right) take a band under the caption; set before the split reads it
+    byId('stage').classList.toggle('comparing', !!ddim);
+    byId('stage-label-emdm').hidden = !ddim;
+    byId('stage-label-ddim').hidden = !ddim;
+    this.compareFigures.hidden = !ddim;
     // split view: EMDM in the left half, DDIM in the right, each followed by its own camera
     this.stage.setSplit(ddim ? theirs ?? { left: this.character.object, right: this.ddimCharacter.object } : null);
     this.comparePanels.hidden = !ddim;
@@ -301,7 +308,9 @@ export class View {
       byId(`panel-${id}-steps`).textContent = `${p.result.steps} (${p.result.modelCalls} model call${p.result.modelCalls === 1 ? '' : 's'})`;
       byId(`panel-${id}-step`).textContent = formatMs(mean);
       byId(`panel-${id}-total`).textContent = formatMs(t.totalMs + p.ikMs);
+      byId(`stage-label-${id}`).textContent = `${id === 'emdm' ? 'EMDM' : 'DDIM'} · ${p.result.steps} step${p.result.steps === 1 ? '' : 's'}`;
     }
+    showFigures(emdm.result.motion, ddim.result.motion);
   }
 
   /** Say what failed: a model file in the error panel, a bad generation in a notice. */
