@@ -178,6 +178,7 @@ async function main(): Promise<void> {
       if (s.mode === 'text') controls.setPromptNote(s.text, promptNote(g.main.result.prompt));
       if (s.mode === 'text') knows.showCheck(s.text, g.main.result.promptCheck);
       else knows.hideCheck();
+      view.stepStrip.reveal();
       history.replaceState(null, '', stateToSearch(g.state));
       const t = g.main.result.timings;
       view.status.show('ready', `Ready · ${t.backend === 'webgpu' ? 'WebGPU' : 'WASM'} · ${t.threads} thread${t.threads === 1 ? '' : 's'}`);

@@ -22,7 +22,7 @@ interface Rect { x: number; y: number; width: number; height: number }
 interface Box extends Rect { name: string }
 
 /** Things drawn over (or beside) the 3-D view: none may cover the character or each other. */
-const OVERLAYS = ['#caption', '#timings', '#playback', '#notices .notice', '#notices .notices-more', '#panel-emdm', '#panel-ddim', '#panel', '#step-strip'];
+const OVERLAYS = ['#caption', '#timings', '#playback', '#notices .notice', '#notices .notices-more', '#panel-emdm', '#panel-ddim', '#compare-figures', '.stage-label', '#panel', '#step-strip'];
 
 const overlap = (a: Rect, b: Rect) => Math.max(0, Math.min(a.x + a.width, b.x + b.width) - Math.max(a.x, b.x))
   * Math.max(0, Math.min(a.y + a.height, b.y + b.height) - Math.max(a.y, b.y));
@@ -228,3 +228,50 @@ test.describe('phone on load (390×844)', () => {
     watch.assertClean();
   });
 });
+
+/**
+ * What of the timeline panel's fields does not show whole: a select narrower than the same select sized to its
+ * longest option (a copy with `width: auto` beside it: the browser's own measure, arrow included), a text field whose
+ * value (or placeholder) is wider than its box (scrollWidth > clientWidth). One line per field; [] when all fit.
+ */
+async function truncatedTimelineFields(page: Page): Promise<string[]> {
+  return page.evaluate(() => {
+    const out: string[] = [];
+    const name = (e: HTMLElement) => e.getAttribute('aria-label') ?? e.id ?? e.className;
+    for (const s of document.querySelectorAll<HTMLSelectElement>('#edit-panel select')) {
+      if (!s.checkVisibility()) continue;
+      const copy = s.cloneNode(true) as HTMLSelectElement;
+      copy.removeAttribute('id');
+      copy.style.cssText = 'width: auto; min-width: 0; max-width: none; flex: none; position: absolute; visibility: hidden';
+      s.parentElement!.append(copy);
+      const need = copy.offsetWidth;
+      copy.remove();
+      if (s.offsetWidth + 0.5 < need) out.push(`select ${name(s)}: ${s.offsetWidth} px wide, its longest option needs ${need} px`);
+    }
+    for (const i of document.querySelectorAll<HTMLInputElement>('#edit-panel input[type="text"]')) {
+      if (!i.checkVisibility()) continue;
+      const had = i.value;
+      i.value = had || i.placeholder; // an empty field: measure its placeholder as text
+      if (i.scrollWidth > i.clientWidth) out.push(`input ${name(i)} "${i.value}": ${i.scrollWidth} px of text in ${i.clientWidth} px`);
+      i.value = had;
+    }
+    return out;
+  });
+}
+
+for (const vp of [{ width: 1280, height: 800 }, { width: 390, height: 844 }]) {
+  test.describe(`timeline panel at ${vp.width}×${vp.height}`, () => {
+    test.use({ viewport: vp });
+    test('the prompt/action selectors and the edit prompts show whole', async ({ page }, info) => {
+      const watch = watchPage(page);
+      await open(page);
+      await page.locator('#edit-panel summary').click();
+      await expect(page.locator('#edit-panel details')).toHaveAttribute('open', '');
+      await expect(page.locator('#tl-body-prompt')).toHaveValue('a person waves with both hands');
+      await page.locator('#edit-panel').scrollIntoViewIfNeeded();
+      await page.locator('#edit-panel details').screenshot({ path: info.outputPath(`timeline-${vp.width}.png`) });
+      expect(await truncatedTimelineFields(page)).toEqual([]);
+      watch.assertClean();
+    });
+  });
+}

@@ -113,8 +113,9 @@ describe('unknownParamsNotice', () => {
 });
 
 describe('pageFlagNotices', () => {
-  it("names a quality other than 'high'", () => {
-    expect(pageFlagNotices('?quality=low')).toEqual(["URL quality='low' is not 'high' (the only value); the page lowers its resolution when frames are slow."]);
+  it("names a quality other than 'high' or 'low'", () => {
+    expect(pageFlagNotices('?quality=medium')).toEqual(["URL quality='medium' is not 'high' or 'low'; the page lowers its resolution when frames are slow."]);
     expect(pageFlagNotices('?quality=high&noauto=1')).toEqual([]);
+    expect(pageFlagNotices('?quality=low')).toEqual([]);
   });
 });

@@ -103,7 +103,7 @@ export class CharacterPicker {
     el.className = 'character-picker';
     el.id = 'character-picker';
     el.innerHTML = `
-      <h3>Character</h3>
+      <h2>Character</h2>
       <div class="download-row">
         <button type="button" id="char-open" class="ghost" title="A rigged humanoid: .glb, .vrm, or .gltf with its files (or drop them on the page)">Your character…</button>
         <input type="file" id="char-file" accept="${ACCEPT}" multiple hidden>

@@ -6,8 +6,8 @@
 // the cameras frame the band between them (CSS --stage-top / --stage-bottom on the canvas's parent),
 // so the character is centred and sized in the part of the stage nothing covers.
 import {
-  ACESFilmicToneMapping, BufferAttribute, BufferGeometry, CircleGeometry, Color, DirectionalLight, Fog,
-  GridHelper, HemisphereLight, Line, LineBasicMaterial, Mesh, MeshStandardMaterial, PCFShadowMap,
+  ACESFilmicToneMapping, BufferAttribute, BufferGeometry, CanvasTexture, CircleGeometry, Color, DirectionalLight, Fog,
+  GridHelper, HemisphereLight, Line, LineBasicMaterial, Mesh, MeshBasicMaterial, MeshStandardMaterial, PCFShadowMap,
   PerspectiveCamera, Scene, SkinnedMesh, SRGBColorSpace, Vector2, Vector3, WebGLRenderer, type Object3D,
 } from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -23,6 +23,8 @@ export interface ScreenRect {
   height: number;
 }
 const MAX_PATH_FRAMES = 1024;
+/** The adaptive resolution's floor (CSS pixel → canvas pixels). */
+const MIN_PIXEL_RATIO = 0.5;
 
 export class Stage {
   readonly renderer: WebGLRenderer;
@@ -43,6 +45,9 @@ export class Stage {
   private slowFor = 0;
   adaptive = true;
   private readonly tmp = new Vector3();
+  /** Contact shadows under each character's root (one per split half), drawn when the shadow map is off. */
+  private readonly contact = contactShadow('contact-shadow');
+  private readonly contact2 = contactShadow('contact-shadow-2');
   /** CSS pixels at the top and bottom of the canvas that overlays cover (read from the page's CSS). */
   private insets = { top: 0, bottom: 0 };
 
@@ -88,6 +93,7 @@ export class Stage {
     (grid.material as LineBasicMaterial).transparent = true;
     (grid.material as LineBasicMaterial).opacity = 0.55;
     this.scene.add(grid);
+    this.scene.add(this.contact, this.contact2);
 
     // One buffer for the longest motion, updated in place (replacing attributes would leak GPU buffers).
     this.pathGeometry.setAttribute('position', new BufferAttribute(new Float32Array(MAX_PATH_FRAMES * 3), 3));
@@ -132,10 +138,8 @@ export class Stage {
   setSplit(split: { left: Object3D; right: Object3D } | null): void {
     this.split = split;
     this.path.visible = !split;
-    if (!split) {
-      // the right object may stay in the scene hidden; the left one is the main view's again
-      this.resize(true);
-    }
+    // the page's CSS may move the covered bands with the view (labels on the stage in split view): read them again
+    this.resize(true);
   }
 
   get isSplit(): boolean {
@@ -149,6 +153,11 @@ export class Stage {
     if (root) this.moveView(this.follow.update(root, dt));
     this.controls.update();
     this.resize();
+    const contacts = !this.renderer.shadowMap.enabled;
+    if (root) this.contact.position.set(root[0], CONTACT_Y, root[2]);
+    if (root2) this.contact2.position.set(root2[0], CONTACT_Y, root2[2]);
+    this.contact.visible = contacts;
+    this.contact2.visible = false;
     if (!this.split) {
       this.renderer.render(this.scene, this.camera);
       return;
@@ -166,6 +175,8 @@ export class Stage {
     const pass = (x: number, w: number, cam: PerspectiveCamera, show: Object3D, hide: Object3D) => {
       show.visible = true;
       hide.visible = false;
+      this.contact.visible = contacts && show === left;
+      this.contact2.visible = contacts && show === right;
       r.setViewport(x, 0, w, h);
       r.setScissor(x, 0, w, h);
       r.render(this.scene, cam);
@@ -223,14 +234,24 @@ export class Stage {
     this.slowFor = 0;
     this.frameTime = 1 / 60;
     const pr = this.renderer.getPixelRatio();
-    if (pr > 0.5) this.renderer.setPixelRatio(Math.max(0.5, pr * 0.7));
-    else if (this.renderer.shadowMap.enabled) {
-      this.renderer.shadowMap.enabled = false;
-      this.scene.traverse((o) => {
-        const m = (o as { material?: { needsUpdate: boolean } }).material;
-        if (m) m.needsUpdate = true;
-      });
-    }
+    if (pr > MIN_PIXEL_RATIO) this.renderer.setPixelRatio(Math.max(MIN_PIXEL_RATIO, pr * 0.7));
+    else if (this.renderer.shadowMap.enabled) this.dropShadows();
+  }
+
+  /** The lowest quality at once (URL `quality=low`): the smallest pixel ratio, no shadows, no further adapting. */
+  lowest(): void {
+    this.adaptive = false;
+    this.renderer.setPixelRatio(MIN_PIXEL_RATIO);
+    this.dropShadows();
+    this.resize(true);
+  }
+
+  private dropShadows(): void {
+    this.renderer.shadowMap.enabled = false;
+    this.scene.traverse((o) => {
+      const m = (o as { material?: { needsUpdate: boolean } }).material;
+      if (m) m.needsUpdate = true;
+    });
   }
 
   /**
@@ -286,6 +307,32 @@ export class Stage {
       this.frameView(this.camera, w, h);
     }
   }
+}
+
+/** Height of the contact shadows: above the grid (1 mm), below the root path (4 mm). */
+const CONTACT_Y = 0.002;
+
+/**
+ * A soft dark disc on the floor (radius 0.6 m, darkest at its centre: a step's feet stay on it): where the character stands when the shadow
+ * map is off (the lowered quality of slow frames, `quality=low`), so its feet still meet a visible floor.
+ */
+function contactShadow(name: string): Mesh {
+  const size = 64;
+  const c = document.createElement('canvas');
+  c.width = c.height = size;
+  const g = c.getContext('2d')!;
+  const grad = g.createRadialGradient(size / 2, size / 2, 0, size / 2, size / 2, size / 2);
+  grad.addColorStop(0, 'rgba(0, 0, 0, 0.6)');
+  grad.addColorStop(0.6, 'rgba(0, 0, 0, 0.3)');
+  grad.addColorStop(1, 'rgba(0, 0, 0, 0)');
+  g.fillStyle = grad;
+  g.fillRect(0, 0, size, size);
+  const m = new Mesh(new CircleGeometry(0.6, 48), new MeshBasicMaterial({ map: new CanvasTexture(c), transparent: true, depthWrite: false }));
+  m.rotation.x = -Math.PI / 2;
+  m.position.y = CONTACT_Y;
+  m.name = name;
+  m.visible = false;
+  return m;
 }
 
 function hasSkinnedMesh(o: Object3D): boolean {

@@ -146,7 +146,8 @@ export function parseState(search: string, l: StateLimits, fallbackSeed: number)
 /** The URL parameters of a state (parseState reads them; stateToSearch writes them). */
 export const STATE_PARAMS = ['mode', 'text', 'action', 'steps', 'seconds', 'guidance', 'seed', 'backend', 'compare'] as const;
 /**
- * Page flags read elsewhere: `noauto` (no first motion on load), `quality=high` (no adaptive resolution), `tl` (a
+ * Page flags read elsewhere: `noauto` (no first motion on load), `quality=high` (no adaptive resolution) or `low` (the
+ * lowest at once), `tl` (a
  * timeline, web/ui/timeline-url.ts), `variant` (the model file: fp32, int8, …; web/ui/engine.ts pageVariant), `threads`
  * (WASM threads, 1…16; web/ui/engine.ts pageThreads).
  */
@@ -162,12 +163,12 @@ export function unknownParamsNotice(search: string): string {
     + `(known: ${known.join(', ')}${unknown.some((k) => /len|dur|time|frame/i.test(k)) ? "; the motion's length is 'seconds'" : ''}).`;
 }
 
-/** Notices for page flags with a value the page does not use (`quality` other than 'high'). */
+/** Notices for page flags with a value the page does not use (`quality` other than 'high' or 'low'). */
 export function pageFlagNotices(search: string): string[] {
   const q = new URLSearchParams(search);
   const quality = q.get('quality');
-  return quality !== null && quality !== 'high'
-    ? [`URL quality='${quality}' is not 'high' (the only value); the page lowers its resolution when frames are slow.`]
+  return quality !== null && quality !== 'high' && quality !== 'low'
+    ? [`URL quality='${quality}' is not 'high' or 'low'; the page lowers its resolution when frames are slow.`]
     : [];
 }
 

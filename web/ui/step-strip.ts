@@ -73,9 +73,28 @@ export class StepStrip {
     this.el.append(fig);
     this.el.hidden = false;
     this.count++;
+    revealInPanel(this.el);
+  }
+
+  /** Bring the strip, when shown, into the side panel's view (after a generation: a notice may have pushed it down). */
+  reveal(): void {
+    if (!this.el.hidden) revealInPanel(this.el);
   }
 
   get length(): number {
     return this.count;
   }
+}
+
+/**
+ * Scroll the side panel (#panel, when it scrolls) just enough that `e` shows above the panel's sticky bottom bar
+ * (#panel-actions): a notice above the strip (a far prompt's) can push it below the fold of a laptop screen.
+ */
+function revealInPanel(e: HTMLElement): void {
+  const panel = e.closest<HTMLElement>('#panel');
+  if (!panel || panel.scrollHeight <= panel.clientHeight) return;
+  const bar = document.getElementById('panel-actions');
+  const limit = Math.min(panel.getBoundingClientRect().bottom, bar?.getBoundingClientRect().top ?? Infinity);
+  const over = e.getBoundingClientRect().bottom - limit;
+  if (over > 0) panel.scrollTop += over + 8;
 }

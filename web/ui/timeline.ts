@@ -105,7 +105,7 @@ export class TimelinePanel {
       this.busy[k].setAttribute('aria-live', 'polite');
       this.busy[k].hidden = true;
     }
-    body.append(el('h4', undefined, 'Timeline'), intro, this.list, bar, genAll, this.busy.timeline, this.msgs.timeline);
+    body.append(el('h2', undefined, 'Timeline'), intro, this.list, bar, genAll, this.busy.timeline, this.msgs.timeline);
 
     // ---- edits of the motion on screen
     const ibPrompt = this.input('tl-ib-prompt', 'New middle (prompt)', 'a person jumps up');
@@ -131,7 +131,7 @@ export class TimelinePanel {
     inPlaceLabel.append(inPlace, document.createTextNode(' in place (no travel)'));
     const loopGo = this.button('Make it loop', 'ghost', () => void this.loop(inPlace.checked).catch(() => undefined));
     body.append(
-      el('h4', undefined, 'Edit the motion on screen'),
+      el('h2', undefined, 'Edit the motion on screen'),
       el('p', 'tl-hint', 'Works on a motion of one model window (up to 9.8 s).'),
       this.group('In-between: keep the start and the end', ibKeep, ibPrompt, ibGo, this.busy.inbetween, this.msgs.inbetween),
       this.group('Body part', bodyKeep, bodyPrompt, bodyGo, this.busy.body, this.msgs.body),
@@ -198,8 +198,13 @@ export class TimelinePanel {
     const again = this.button('↻', 'icon', () => void this.regenerate(this.rows.indexOf(row)).catch(() => undefined));
     const remove = this.button('✕', 'icon', () => this.remove(row));
     const unit = el('span', 'tl-unit', 's');
-    // the prompt first (its own line), then prompt-or-action, seconds and the buttons: the Tab order is the reading order
-    li.append(el('span', 'tl-num'), prompt, kind, seconds, unit, up, down, again, remove);
+    // the prompt first (its own line), then prompt-or-action, seconds and the buttons: the Tab order is the reading order;
+    // the buttons wrap to a line of their own where the selector's longest label and the seconds leave them no room
+    const buttons = el('span', 'tl-seg-buttons');
+    buttons.append(up, down, again, remove);
+    const controls = el('div', 'tl-seg-controls');
+    controls.append(kind, seconds, unit, buttons);
+    li.append(el('span', 'tl-num'), prompt, controls);
     const sync = () => {
       prompt.disabled = kind.value !== '';
       this.refreshTotal();

@@ -15,6 +15,7 @@ import { fileStem, motionToBVH, motionToGLB, motionToJSON } from './downloads';
 import type { ErrorPanel, Notices } from './notices';
 import { PlaybackBar } from './playback';
 import type { Generation, Produced } from './session';
+import { showFigures } from './compare-figures';
 import { Stage } from './stage';
 import type { PageState } from './state';
 import { StepStrip } from './step-strip';
@@ -155,12 +156,16 @@ export class View {
   private readonly caption = byId('caption');
   private readonly timingsHud = byId('timings');
   readonly comparePanels = byId('compare-panels');
+  private readonly compareFigures = byId('compare-figures');
   private readonly compareDivider = byId('compare-divider');
   readonly showSteps = byId('show-steps', HTMLInputElement);
 
   constructor(private readonly notices: Notices, private readonly errorPanel: ErrorPanel) {
-    // `?quality=high` keeps full resolution and shadows even when frames are slow (screenshots).
-    this.stage.adaptive = new URLSearchParams(location.search).get('quality') !== 'high';
+    // `?quality=high` keeps full resolution and shadows even when frames are slow (screenshots); `?quality=low` starts
+    // at the lowest quality the page drops to when frames are slow (half resolution, no shadows).
+    const quality = new URLSearchParams(location.search).get('quality');
+    this.stage.adaptive = quality !== 'high';
+    if (quality === 'low') this.stage.lowest();
   }
 
   /** Put the characters of a manifest's skeleton on the stage (rest pose), wire the downloads, start drawing. */
@@ -282,6 +287,11 @@ export class View {
     // the visitor's character, when one is shown, performs both motions (a second copy for DDIM)
     const theirs = this.picker.compare(ddim ? ddim.result.motion : null);
     this.ddimCharacter.object.visible = !!ddim && !theirs;
+    // the stage's own labels (EMDM left, DDIM right) take a band under the caption; set before the split reads it
+    byId('stage').classList.toggle('comparing', !!ddim);
+    byId('stage-label-emdm').hidden = !ddim;
+    byId('stage-label-ddim').hidden = !ddim;
+    this.compareFigures.hidden = !ddim;
     // split view: EMDM in the left half, DDIM in the right, each followed by its own camera
     this.stage.setSplit(ddim ? theirs ?? { left: this.character.object, right: this.ddimCharacter.object } : null);
     this.comparePanels.hidden = !ddim;
@@ -298,7 +308,9 @@ export class View {
       byId(`panel-${id}-steps`).textContent = `${p.result.steps} (${p.result.modelCalls} model call${p.result.modelCalls === 1 ? '' : 's'})`;
       byId(`panel-${id}-step`).textContent = formatMs(mean);
       byId(`panel-${id}-total`).textContent = formatMs(t.totalMs + p.ikMs);
+      byId(`stage-label-${id}`).textContent = `${id === 'emdm' ? 'EMDM' : 'DDIM'} · ${p.result.steps} step${p.result.steps === 1 ? '' : 's'}`;
     }
+    showFigures(emdm.result.motion, ddim.result.motion);
   }
 
   /** Say what failed: a model file in the error panel, a bad generation in a notice. */

@@ -1,0 +1,70 @@
+// Accessibility scan (issue 30): axe-core (WCAG 2.0/2.1 A and AA rules plus its best practices) on the demo page
+// after load, with the compare view on and a motion generated, and with the "Timeline & editing" panel open. No
+// serious or critical violation may remain (nor an undecided result of such a rule, save the two listed below), and no moderate one (checked softly); each is listed with the elements it names.
+import AxeBuilder from '@axe-core/playwright';
+import { expect, test, type Page } from '@playwright/test';
+import { watchPage } from './helpers';
+
+async function open(page: Page): Promise<void> {
+  await page.goto('/?noauto=1&backend=wasm&steps=4&seconds=2');
+  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+  expect(await page.evaluate(() => window.emdm.error)).toBe('');
+}
+
+/**
+ * Results axe could not decide ("incomplete") that are left to the other checks, each for one reason:
+ * - color-contrast: text over the WebGL canvas, over a gradient (Generate) or beside icon glyphs has no background
+ *   axe can compute; the page's colours are checked against 4.5:1 where they are set (issue 30's contrast fixes).
+ * - label-content-name-mismatch: icon buttons (↑ ↓ ↻ ×) whose visible glyph is not a word; their aria-label names them.
+ */
+const UNDECIDABLE = new Set(['color-contrast', 'label-content-name-mismatch']);
+
+/**
+ * One axe run (WCAG 2.0/2.1 A and AA, best practices): `serious` lists serious and critical violations and the undecided
+ * results of those rules not in UNDECIDABLE, `minor` the moderate and minor violations; one line each: rule, impact,
+ * the elements it names.
+ */
+async function scan(page: Page): Promise<{ serious: string[]; minor: string[] }> {
+  const r = await new AxeBuilder({ page }).withTags(['wcag2a', 'wcag2aa', 'wcag21a', 'wcag21aa', 'best-practice']).analyze();
+  const bad = (v: { impact?: string | null }) => v.impact === 'serious' || v.impact === 'critical';
+  const line = (v: (typeof r.violations)[number]) => `${v.id} (${v.impact}): ${v.help} — ${v.nodes.slice(0, 4).map((n) => n.target.join(' ')).join(', ')}`;
+  return {
+    serious: [...r.violations.filter(bad), ...r.incomplete.filter((v) => bad(v) && !UNDECIDABLE.has(v.id))].map(line),
+    minor: r.violations.filter((v) => !bad(v)).map(line),
+  };
+}
+
+/** The page passes the scan: nothing serious; the moderate ones (heading order, …) reported softly. */
+async function expectAccessible(page: Page, state: string): Promise<void> {
+  const { serious, minor } = await scan(page);
+  expect.soft(minor, `${state}: moderate or minor axe violations`).toEqual([]);
+  expect(serious, `${state}: serious or critical axe violations`).toEqual([]);
+}
+
+test('after load: no serious or critical axe violation', async ({ page }) => {
+  const watch = watchPage(page);
+  await open(page);
+  await expectAccessible(page, 'after load');
+  watch.assertClean();
+});
+
+test('compare view on, two motions shown: no serious or critical axe violation', async ({ page }) => {
+  test.setTimeout(300_000);
+  const m = await (await page.request.get('/models/manifest.json')).json() as { models: Record<string, { objective?: string; task: string }> };
+  test.skip(!Object.values(m.models).some((e) => e.objective === 'diffusion' && e.task === 'text'), 'no diffusion text model in public/models');
+  const watch = watchPage(page);
+  await open(page);
+  await page.evaluate(() => window.emdm.compare({ mode: 'text', text: 'a person walks forward', steps: 20, seconds: 2, seed: 7 }));
+  await expect(page.locator('#compare-panels')).toBeVisible();
+  await expectAccessible(page, 'compare view');
+  watch.assertClean();
+});
+
+test('timeline panel open: no serious or critical axe violation', async ({ page }) => {
+  const watch = watchPage(page);
+  await open(page);
+  await page.locator('#edit-panel summary').click();
+  await expect(page.locator('#edit-panel details')).toHaveAttribute('open', '');
+  await expectAccessible(page, 'timeline panel open');
+  watch.assertClean();
+});

@@ -1,0 +1,86 @@
+// The compare view for an educator (issue 30): each half of the stage says which model it shows and the steps it
+// actually ran ("EMDM · 10 steps", "DDIM · 20 steps"), and a small table beside the motions gives what the steps
+// change: jerk (m/s³) and foot skate (cm/s), measured in the page on the two motions on screen. The test measures
+// both again here, from window.emdm's joints of each panel, and checks the table follows a new pair of motions.
+import { expect, test, type Page } from '@playwright/test';
+import { watchPage } from './helpers';
+
+const PROMPT = 'a person walks forward';
+const J = 22;
+
+/** The figures, computed here independently of web/ui/motion-figures.ts (same definitions, see its header). */
+function figures(joints: number[], frames: number, fps: number): { jerk: number; skate: number } {
+  const p = (f: number, j: number) => joints.slice((f * J + j) * 3, (f * J + j) * 3 + 3);
+  let jerk = 0;
+  let nj = 0;
+  for (let f = 3; f < frames; f++) {
+    for (let j = 0; j < J; j++) {
+      const [a, b, c, d] = [p(f, j), p(f - 1, j), p(f - 2, j), p(f - 3, j)];
+      jerk += Math.hypot(...[0, 1, 2].map((k) => a[k] - 3 * b[k] + 3 * c[k] - d[k]));
+      nj++;
+    }
+  }
+  const feet = [10, 11];
+  let skate = 0;
+  let ns = 0;
+  for (let f = 1; f < frames; f++) {
+    for (const j of feet) {
+      const [a, b] = [p(f, j), p(f - 1, j)];
+      if (!(a[1] < 0.05 && b[1] < 0.05)) continue; // both frames' foot below 5 cm: on the floor
+      skate += Math.hypot(a[0] - b[0], a[2] - b[2]);
+      ns++;
+    }
+  }
+  return { jerk: (jerk / nj) * fps ** 3, skate: ns ? (skate / ns) * fps * 100 : NaN };
+}
+
+/** The table's four numbers as shown. */
+async function shown(page: Page): Promise<Record<string, number>> {
+  const out: Record<string, number> = {};
+  for (const side of ['emdm', 'ddim']) for (const row of ['jerk', 'skate']) out[`${side}-${row}`] = Number(await page.locator(`#fig-${side}-${row}`).textContent());
+  return out;
+}
+
+/** A shown figure (3 significant figures) agrees with the one computed here. */
+function agrees(shownValue: number, computed: number): boolean {
+  return Math.abs(shownValue - computed) <= 0.006 * Math.abs(computed) + 0.006;
+}
+
+test('stage labels from the steps run; jerk and foot skate of the motions on screen, updated with them', async ({ page }) => {
+  test.setTimeout(300_000);
+  const m = await (await page.request.get('/models/manifest.json')).json() as { models: Record<string, { objective?: string; task: string }> };
+  test.skip(!Object.values(m.models).some((e) => e.objective === 'diffusion' && e.task === 'text'), 'no diffusion text model in public/models');
+  const watch = watchPage(page);
+  await page.goto('/?noauto=1&backend=wasm');
+  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+
+  const check = async (steps: number, seed: number) => {
+    const r = await page.evaluate(([text, steps, seed]) => window.emdm.compare({ mode: 'text', text, steps, seconds: 3, seed }), [PROMPT, steps, seed] as const);
+    const { emdm, ddim } = r;
+    await expect(page.locator('#stage-label-emdm')).toBeVisible();
+    await expect(page.locator('#stage-label-emdm')).toHaveText(`EMDM · ${emdm.steps} steps`);
+    await expect(page.locator('#stage-label-ddim')).toHaveText(`DDIM · ${ddim.steps} steps`);
+    expect(ddim.steps).toBe(steps);
+    await expect(page.locator('#compare-figures')).toBeVisible();
+    await expect(page.getByRole('table')).toContainText('Jerk, m/s³');
+    const figs = await shown(page);
+    const want = { emdm: figures(emdm.joints, emdm.frames, emdm.fps), ddim: figures(ddim.joints, ddim.frames, ddim.fps) };
+    for (const side of ['emdm', 'ddim'] as const) {
+      expect(agrees(figs[`${side}-jerk`], want[side].jerk), `${side} jerk: shown ${figs[`${side}-jerk`]}, measured ${want[side].jerk}`).toBe(true);
+      expect(agrees(figs[`${side}-skate`], want[side].skate), `${side} foot skate: shown ${figs[`${side}-skate`]}, measured ${want[side].skate}`).toBe(true);
+    }
+    console.log(`${steps} DDIM steps, seed ${seed}: EMDM (${emdm.steps} steps) jerk ${want.emdm.jerk.toFixed(1)} m/s³, skate ${want.emdm.skate.toFixed(1)} cm/s;`
+      + ` DDIM jerk ${want.ddim.jerk.toFixed(1)} m/s³, skate ${want.ddim.skate.toFixed(1)} cm/s`);
+    return figs;
+  };
+  const first = await check(20, 7);
+  const second = await check(50, 8); // new motions: the table follows them
+  expect(second).not.toEqual(first);
+
+  // off: the labels and the table go with the compare view
+  await page.locator('#compare').uncheck();
+  await expect(page.locator('#stage-label-emdm')).toBeHidden();
+  await expect(page.locator('#stage-label-ddim')).toBeHidden();
+  await expect(page.locator('#compare-figures')).toBeHidden();
+  watch.assertClean();
+});
