@@ -11,7 +11,7 @@ export { GenerationClient } from './worker/client';
 export type { ClientEvents, FileEvent, GenerationClientOptions, ModelInfo, RemoteGenerateOptions, RemoteResult, RemoteTimelineOptions, RemoteTimelineResult, WirePose, WireStepPreview, WorkerEnvironment } from './worker/client';
 export type { TimelineHooks, TimelineRequest, TimelineResult, WindowRun } from './worker/host';
 export type { WireBeginOptions } from './worker/protocol';
-export { clearModelCache, modelCacheUsage } from './cache/modelCache';
+export { clearModelCache, modelCacheUsage, useModelCache } from './cache/modelCache';
 export { capabilitiesFile, checkPrompt, loadCapabilities, validateCapabilities } from './capabilities';
 export type { ActionCapability, Capabilities, PromptCheck } from './capabilities';
 export { loadManifest, fetchVerified, ModelFileError, sha256Hex, chooseVariant, stepFileOf } from './manifest';

@@ -6,7 +6,7 @@
 //   - the controls (web/ui/controls.ts) and their URL form (web/ui/state.ts);
 //   - the test API (web/ui/testapi.ts, window.emdm).
 // A new panel gets `page` (PageContext: session, view, controls, generate) — see the end of main().
-import { clearModelCache, loadCapabilities, loadManifest, ModelFileError, modelCacheUsage, type Manifest } from '../src/index';
+import { clearModelCache, loadCapabilities, loadManifest, ModelFileError, modelCacheUsage, useModelCache, type Manifest } from '../src/index';
 import { compareNote } from './ui/compare';
 import { Controls } from './ui/controls';
 import { byId } from './ui/dom';
@@ -146,6 +146,8 @@ async function main(): Promise<void> {
   controls.set(parsed.state);
   // what the models do well (capabilities files): the list beside the prompt, the weak actions, the far-prompt notice
   const knows = new KnowsPanel((text) => controls.usePrompt(text));
+  // the capabilities files are verified files like the models: served from the same Cache Storage on a second visit
+  useModelCache(undefined, (text) => notices.show('warn', text, 14000));
   const capsOf = (name: string | undefined) => (name ? loadCapabilities(manifest, MODELS_URL, name).catch((e) => {
     notices.show('warn', `What ${name} does well is unknown: ${describe(e)}`, 14000);
     return null;

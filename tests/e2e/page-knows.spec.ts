@@ -2,6 +2,8 @@
 // says so under the box and offers three prompts that work (each one, clicked, generates without the notice), and still
 // generates; a covered prompt shows no notice; the list of actions the model does well and does not is one click from
 // the prompt; the Action tab marks the labels its model does not make yet.
+import fs from 'node:fs';
+import path from 'node:path';
 import { expect, test, type Page } from '@playwright/test';
 import { watchPage } from './helpers';
 
@@ -64,7 +66,11 @@ test('the list of what the model knows opens from the prompt; weak action labels
   const list = page.locator('#knows');
   await expect(list).toBeVisible();
   await expect(button).toHaveAttribute('aria-expanded', 'true');
-  await expect(page.locator('#knows-good li')).toHaveCount(10);
+  // as many as the shipped file says the model does well (it is rebuilt whenever a model or the sampler changes)
+  const covered = JSON.parse(fs.readFileSync(path.join(__dirname, '../../public/models/capabilities-emdm-t2m-web.json'), 'utf8'))
+    .actions.filter((a: { covered: boolean }) => a.covered).length;
+  expect(covered).toBeGreaterThan(5);
+  await expect(page.locator('#knows-good li')).toHaveCount(covered);
   await expect(page.locator('#knows-good')).toContainText('walk backward');
   await expect(page.locator('#knows-weak')).toContainText('kick');
   await expect(page.locator('#knows-weak')).toContainText('dance');
