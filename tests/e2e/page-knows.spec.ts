@@ -94,6 +94,9 @@ test('a running generation can be cancelled; the link can be copied; sliders say
   // Cancel stops the request mid-denoising: nothing more is generated, the page is idle again with no error
   await page.locator('#prompt').fill('a person walks');
   await page.locator('#steps').fill(await page.locator('#steps').getAttribute('max') ?? '0');   // the most steps
+  // and the longest motion: each step then takes long enough that a loaded CPU's main thread sees step 1 while the
+  // worker is still denoising (with 2 s at 10 steps the whole run could finish before the cancel arrived)
+  await page.locator('#seconds').fill(await page.locator('#seconds').getAttribute('max') ?? '0');
   const g0 = await page.evaluate(() => window.emdm.counters.generations);
   const cancelledAt = await page.evaluate(() => new Promise<string>((resolve) => {
     const text = document.getElementById('progress-text')!;
