@@ -146,8 +146,9 @@ async function main(): Promise<void> {
   controls.set(parsed.state);
   // what the models do well (capabilities files): the list beside the prompt, the weak actions, the far-prompt notice
   const knows = new KnowsPanel((text) => controls.usePrompt(text));
-  // the capabilities files are verified files like the models: served from the same Cache Storage on a second visit
-  useModelCache(undefined, (text) => notices.show('warn', text, 14000));
+  // the capabilities files are verified files like the models: listed with them, and served from the same Cache
+  // Storage on a second visit
+  useModelCache((e) => fileList.update(e), (text) => notices.show('warn', text, 14000));
   const capsOf = (name: string | undefined) => (name ? loadCapabilities(manifest, MODELS_URL, name).catch((e) => {
     notices.show('warn', `What ${name} does well is unknown: ${describe(e)}`, 14000);
     return null;

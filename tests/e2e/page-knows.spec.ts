@@ -67,7 +67,7 @@ test('the list of what the model knows opens from the prompt; weak action labels
   await expect(list).toBeVisible();
   await expect(button).toHaveAttribute('aria-expanded', 'true');
   // as many as the shipped file says the model does well (it is rebuilt whenever a model or the sampler changes)
-  const covered = JSON.parse(fs.readFileSync(path.join(__dirname, '../../public/models/capabilities-emdm-t2m-web.json'), 'utf8'))
+  const covered = JSON.parse(fs.readFileSync(path.join(process.cwd(), 'public/models/capabilities-emdm-t2m-web.json'), 'utf8'))
     .actions.filter((a: { covered: boolean }) => a.covered).length;
   expect(covered).toBeGreaterThan(5);
   await expect(page.locator('#knows-good li')).toHaveCount(covered);
