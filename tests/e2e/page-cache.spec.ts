@@ -28,6 +28,9 @@ async function openReady(page: Page): Promise<number> {
   await page.goto('/?noauto=1&backend=wasm');
   await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
   expect(await page.evaluate(() => window.emdm.error)).toBe('');
+  // the capabilities files (the "what this model knows" list) are verified files too, loaded beside the models:
+  // the page has all its files once that list is filled
+  await page.locator('#knows-good li').first().waitFor({ state: 'attached', timeout: 60_000 });
   return page.evaluate(() => window.emdm.startup.readyMs);
 }
 

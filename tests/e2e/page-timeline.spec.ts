@@ -334,7 +334,9 @@ test('a timeline shows its progress per segment and gives way to a newer request
   await page.evaluate(() => window.emdm.generate({ mode: 'text', text: 'a person walks forward', seconds: 1, steps: 10, seed: 70 }));
   const cancelled0 = await page.evaluate(() => window.emdm.counters.cancelled);
   const running = page.evaluate(() => window.emdm.edit!.generateAll().then(() => 'finished', (e: Error) => e.name));
-  await expect(page.locator('#progress-text')).toContainText(/Segment [12] of 3: step/);
+  // while it runs: its windows' early steps run together, then each window's last steps (segments 1 and 2's can pass
+  // between two polls of a loaded CPU's page, so the windows' joint phase is the one always seen)
+  await expect(page.locator('#progress-text')).toContainText(/windows together: step|Segment [12] of 3: step/);
   const single = await page.evaluate((s) => window.emdm.generate({ mode: 'text', text: 'a person walks forward', seconds: 2, steps: s, seed: 71 }), STEPS);
   expect(await running).toBe('AbortError');
   expect(single.frames).toBe(40);
