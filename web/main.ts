@@ -154,6 +154,7 @@ async function main(): Promise<void> {
     return null;
   }) : Promise.resolve(null));
   void Promise.all([capsOf(models.text?.name), capsOf(models.action?.name)]).then(([t, a]) => {
+    fileList.settle();                       // their rows fold away with the models' once they are in
     knows.setCapabilities(t, a);
     markWeakActions(byId('action', HTMLSelectElement), a);
   });
