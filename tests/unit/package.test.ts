@@ -177,6 +177,18 @@ async function generateIn(url: string) {
   }
 }
 
+/** `vite <args>` serves the app, and the page generates a motion from its own origin only, cross-origin isolated. */
+async function generatesThrough(args: string[]): Promise<void> {
+  const { url, server } = await serve(args);
+    try {
+      const r = await generateIn(url);
+      expect(r.result).toEqual({ frames: 40, joints: 40 * 22 * 3 });
+      expect(r).toMatchObject({ hosts: [new URL(url).host], failed: [], isolated: true });
+    } finally {
+      server.kill();
+    }
+}
+
 describe('Vite app with emdm-web/vite', () => {
   beforeAll(() => {
     fs.writeFileSync(path.join(app, 'index.html'),
@@ -200,24 +212,10 @@ describe('Vite app with emdm-web/vite', () => {
     expect(Object.keys(JSON.parse(fs.readFileSync(path.join(dist, 'ort', 'files.json'), 'utf8')))).toEqual(
       ['ort-wasm-simd-threaded.asyncify.wasm', 'ort-wasm-simd-threaded.wasm']);       // WebGPU's and WASM's runtimes
     expect(fs.readdirSync(path.join(dist, 'assets')).filter((f) => f.endsWith('.wasm'))).toEqual([]);
-    const { url, server } = await serve(['preview']);
-    try {
-      const r = await generateIn(url);
-      expect(r.result).toEqual({ frames: 40, joints: 40 * 22 * 3 });
-      expect(r).toMatchObject({ hosts: [new URL(url).host], failed: [], isolated: true });
-    } finally {
-      server.kill();
-    }
+    await generatesThrough(['preview']);
   }, 240_000);
 
   it('its dev server generates in Chromium', async () => {
-    const { url, server } = await serve([]);
-    try {
-      const r = await generateIn(url);
-      expect(r.result).toEqual({ frames: 40, joints: 40 * 22 * 3 });
-      expect(r).toMatchObject({ hosts: [new URL(url).host], failed: [], isolated: true });
-    } finally {
-      server.kill();
-    }
+    await generatesThrough([]);
   }, 240_000);
 });
