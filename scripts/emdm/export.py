@@ -30,7 +30,7 @@ import torch
 from emdm.checkpoints import first_non_finite, save_weights_file
 from emdm.model.generator import Generator
 from emdm.model.open import INPUTS, ModelError, load_generator as open_generator, ort_session
-from emdm.model.schedule import DEFAULT_STEPS, make_schedule
+from emdm.sampler.schedule import DEFAULT_STEPS, make_schedule
 
 PARITY_CASES = ((1, 1), (1, 60), (2, 17), (3, 120), (2, 196))
 NAME = re.compile(r"[A-Za-z0-9._-]{1,100}")     # a model id: a file stem in --out and the manifest key

@@ -38,7 +38,7 @@ import numpy as np
 from emdm import fixtures as fx
 from emdm import manifest as mf
 from emdm import paths
-from emdm.model import schedule as schedule_mod
+from emdm.sampler import schedule as schedule_mod
 from emdm.motion import edit_fixture, mask_fixture
 
 COMMITTED = fx.PARITY_DIR

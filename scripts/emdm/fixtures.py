@@ -11,8 +11,8 @@ What it writes (each case = ``<name>.json`` index + ``<name>.bin`` float32 littl
   interval (``guidanceMinTime``: guided only at t > 0.6, one conditional row below) and the same noise; the same
   guided run with x̂0 smoothed along time at every step but the last (``x0Smoothing`` σ = 1 frame).
 * ``tiny-ddim``: the same step model sampled as a diffusion-objective model with DDIM
-  (``emdm.sample.sample_features(objective="diffusion")``, guided and unconditional, 5 steps) with
-  the noise it drew, and the DDIM marginals a_cum / s_cum of ``emdm.model.schedule`` for the step
+  (``emdm.sampler.sample_features`` with method "ddim", guided and unconditional, 5 steps) with
+  the noise it drew, and the DDIM marginals a_cum / s_cum of ``emdm.sampler.schedule`` for the step
   counts a diffusion model ships (1 … 100), which the TypeScript schedule must reproduce.
 * ``recover``: features of a real clip from the prepared dataset and the joints
   ``emdm.motion.features.recover_joints`` gives for them (the TypeScript port must match).
@@ -40,7 +40,10 @@ import numpy as np
 
 from emdm import manifest as mf
 from emdm import paths
-from emdm.model.schedule import make_schedule
+from emdm.model.open import onnx_step
+from emdm.sampler import SamplingSettings, sample_features
+from emdm.sampler.schedule import make_schedule
+from emdm.sampler.settings import method_of
 
 PARITY_DIR = paths.FIXTURES_DIR / "parity"
 FRAMES = 40          # fixture motion length (the models take any L <= 196)
@@ -102,7 +105,7 @@ def reference_sample(sess, x_T: np.ndarray, zs: list[np.ndarray], epss: list[np.
     of them for 0): one batched call with rows [cond, 0], same x and z, x0 = x0_u + s (x0_c - x0_u); at the
     other steps one conditional call. ``x0_smoothing`` σ > 0: at every step but the last (k > 0), x0's pose channels ← the
     Gaussian along frames of ``emdm.motion.smooth.smooth_pose`` (src/motion/smooth.ts smoothPose). ``objective="diffusion"``: z = 0 (the drawn z is ignored) and the
-    DDIM update (η = 0) of docs/ARCHITECTURE.md "DDIM sampling", in float32 like emdm.sample."""
+    DDIM update (η = 0) of docs/ARCHITECTURE.md "DDIM sampling", in float32 like emdm.sampler."""
     x = x_T.astype(np.float32)[None]
     guided = bool(np.any(cond != 0)) and guidance != 1.0
     for k in range(sched.steps - 1, -1, -1):
@@ -134,9 +137,9 @@ def reference_sample(sess, x_T: np.ndarray, zs: list[np.ndarray], epss: list[np.
 
 def draw_noise(rng: np.random.Generator, steps: int, frames: int, dim: int, z_dim: int, sched,
                objective: str = "ddgan"):
-    """Noise in emdm.sample's order and dtype (x_T, then per step k = T-1..0: z, then eps when
+    """Noise in emdm.sampler's order and dtype (x_T, then per step k = T-1..0: z, then eps when
     sigma[k] > 0; DDIM draws z (then zeroes it) and no eps), so a fixture run equals
-    ``emdm.sample.sample_features`` with the same rng."""
+    ``emdm.sampler.sample_features`` with the same rng."""
     x_T = rng.standard_normal((1, frames, dim), dtype=np.float32)[0]
     zs: list = [None] * steps
     epss: list = [None] * steps
@@ -241,10 +244,8 @@ def make_tiny(out_dir: Path, export: bool = True) -> dict[str, Any]:
 
 
 def make_tiny_ddim(out_dir: Path) -> dict[str, Any]:
-    """The tiny step model as a diffusion-objective model: DDIM runs of ``emdm.sample.sample_features``
+    """The tiny step model as a diffusion-objective model: DDIM runs of ``emdm.sampler.sample_features``
     (the Python pipeline itself) with the noise they drew, plus the DDIM marginals for every step count."""
-    from emdm.sample import onnx_step, sample_features
-
     onnx_path = out_dir / "tiny-step.onnx"
     if not onnx_path.is_file():
         raise FileNotFoundError(f"{onnx_path}: run `python -m emdm.fixtures --only tiny` first")
@@ -255,9 +256,9 @@ def make_tiny_ddim(out_dir: Path) -> dict[str, Any]:
     cond = np.random.default_rng(20251123).standard_normal(C).astype(np.float32)
     seed = 77
     x_T, zs, epss = draw_noise(np.random.default_rng(seed), T, L, D, Z, sched, objective="diffusion")
-    x = sample_features(step, cond, L, steps=T, guidance=2.5, seed=seed, z_dim=Z, feature_dim=D, objective="diffusion")[0]
-    x_u = sample_features(step, np.zeros(C, np.float32), L, steps=T, guidance=2.5, seed=seed, z_dim=Z, feature_dim=D,
-                          objective="diffusion")[0]
+    ddim = SamplingSettings(method="ddim", steps=T, guidance=2.5, z_dim=Z, feature_dim=D)
+    x = sample_features(step, cond, L, ddim, seed)[0]
+    x_u = sample_features(step, np.zeros(C, np.float32), L, ddim, seed)[0]
     # the supplied noise reproduces the Python run (so the TypeScript loop can be fed exactly this noise)
     for got, c in ((x, cond), (x_u, np.zeros(C, np.float32))):
         ref = reference_sample(sess, x_T, zs, epss, c, 2.5, sched, objective="diffusion")
@@ -372,7 +373,7 @@ def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[s
     if m_sched:
         for key in ("time", "coef1", "coef2", "sigma"):
             if np.max(np.abs(np.asarray(m_sched[key]) - getattr(sched, key))) > 1e-6:
-                raise ValueError(f"manifest models.{name}.schedules[{steps}].{key} differs from emdm.model.schedule")
+                raise ValueError(f"manifest models.{name}.schedules[{steps}].{key} differs from emdm.sampler.schedule")
     sess = step_session(onnx_path)
     rng = np.random.default_rng(int.from_bytes(name.encode(), 'little') % (2 ** 32))  # stable per model name
     cond, cond_desc = condition_vector(name, entry, manifest, models_dir, rng)
@@ -386,17 +387,15 @@ def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[s
     x_T, zs, epss = draw_noise(np.random.default_rng(seed), steps, L, D, Z, sched, objective)
     x = reference_sample(sess, x_T, zs, epss, cond, guidance, sched, objective, gmin, sigma)
     # the fixture run must be what the Python pipeline itself samples with this seed
-    from emdm.sample import onnx_step, sample_features
-
-    x_py = sample_features(onnx_step(onnx_path), cond, L, steps=steps, guidance=guidance, seed=seed, z_dim=Z, feature_dim=D,
-                           objective=objective, guidance_min_time=gmin, x0_smoothing=sigma)[0]
+    settings = SamplingSettings(method_of(objective), steps, guidance, gmin, sigma, z_dim=Z, feature_dim=D)
+    x_py = sample_features(onnx_step(onnx_path), cond, L, settings, seed)[0]
     # float32 rounding (the reference updates x in float64) grows over the steps, amplified by guidance:
     # compare relative to the motion's scale
     scale = max(1.0, float(np.max(np.abs(x))))
     diff = float(np.max(np.abs(x_py - x)))
     print(f"{name}: reference vs sample_features max abs diff {diff:.2e}, scale {scale:.2f}")
     if diff > 1e-4 * scale:
-        raise AssertionError(f"fixtures {name}: reference_sample differs from emdm.sample.sample_features by "
+        raise AssertionError(f"fixtures {name}: reference_sample differs from emdm.sampler.sample_features by "
                              f"{diff:.2e} (more than 1e-4 × {scale:.2f}, the motion's largest value)")
     feats = (x * std + mean).astype(np.float32)
     joints = recover_joints(feats).astype(np.float32)

@@ -8,10 +8,10 @@
 
 The models are not inside the package: ``models_dir`` (else ``$EMDM_MODELS_DIR``, else the repository's
 public/models; ``emdm.paths.models_dir``) is a copy of the repository's public/models folder. The same loop as
-``emdm-sample`` (``emdm.sample.sample_features``, the shipped ONNX step model through onnxruntime, the text
+``emdm-sample`` (``emdm.sampler.sample_features``, the shipped ONNX step model through onnxruntime, the text
 encoder of the same folder), so a prompt, seed and step count give the same motion as the CLI; torch is never
 imported. Bad input (a prompt that is empty, a length the model cannot make, an unsupported step count, a models
-folder without a manifest) is a :class:`emdm.sample.SampleError` whose message is one line.
+folder without a manifest) is a :class:`emdm.sampler.SampleError` whose message is one line.
 """
 
 from __future__ import annotations
@@ -27,7 +27,8 @@ from emdm.mocap.bvh_writer import write_bvh
 from emdm.mocap.glb_writer import write_glb
 from emdm.model.open import ModelError, open_shipped
 from emdm.motion.features import recover_joints
-from emdm.sample import MAX_SEED, SampleError, check_steps, denormalise, make_condition, sample_features
+from emdm.sampler import (MAX_SEED, SampleError, SamplingSettings, check_steps, denormalise, make_condition,
+                          sample_features)
 
 DEFAULT_MODEL = "emdm-t2m-web"
 
@@ -82,9 +83,7 @@ def generate(prompt: str, *, seconds: float = 6.0, seed: int = 0, steps: int | N
     g = float(entry.get("guidance", 2.5)) if guidance is None else guidance
     if not (math.isfinite(g) and g >= 0):
         raise SampleError(f"guidance must be a finite number ≥ 0, got {guidance!r}")
-    x = sample_features(opened.step, cond, frames, steps, g, seed, 1, opened.z_dim, objective=opened.objective,
-                        guidance_min_time=float(entry.get("guidanceMinTime", 0.0)),
-                        x0_smoothing=float(entry.get("x0Smoothing", 0.0)))
+    x = sample_features(opened.step, cond, frames, SamplingSettings.from_entry(entry, steps, g), seed)
     feats = denormalise(x[0], opened.mean, opened.std).astype(np.float32)
     if not np.isfinite(feats).all():
         raise SampleError(f"model {model!r} returned non-finite numbers; check its files against the manifest's sha256")

@@ -40,7 +40,7 @@ from emdm.data.dataset import (BucketBatcher, DatasetError, DeviceClips, action_
 from emdm.model.discriminator import Discriminator
 from emdm.model.generator import Generator, count_parameters
 from emdm.model.objectives import GanWeights, Geo, Nets, ScheduleTables, ddgan_step, diffusion_step
-from emdm.model.schedule import SUPPORTED_STEPS
+from emdm.sampler.schedule import SUPPORTED_STEPS
 
 __all__ = ["main", "build_parser", "Trainer", "cosine_lr", "save_weights_file", "atomic_save"]   # save_weights_file: re-exported
 

@@ -15,6 +15,7 @@ from emdm.motion import edit_fixture
 from emdm.motion.features import heading_angles, recover_joints
 from emdm.motion.ik_fixture import read_case_array
 from emdm.motion.mask import group_channels
+from emdm.sampler import SamplingSettings
 
 PARITY = edit_fixture.PARITY_DIR
 
@@ -36,7 +37,7 @@ class Spy:
                 return x
 
         base = edit_fixture.tiny_editor()
-        return Spying(base.step, base.mean, base.std, base.condition, steps=2, guidance=2.5)
+        return Spying(base.step, base.mean, base.std, base.condition, SamplingSettings(steps=2, guidance=2.5))
 
 
 @pytest.fixture(scope="module")
@@ -434,7 +435,8 @@ def test_timeline_together_runs_every_window_s_early_steps_in_one_call_and_gives
         calls.append((x.shape[0], x.shape[1], float(mask.min())))
         return base.step(x, z, c, t, mask)
 
-    model = E.Editor(counting, base.mean, base.std, base.condition, steps=4, guidance=2.5, max_frames=base.max_frames)
+    model = E.Editor(counting, base.mean, base.std, base.condition, SamplingSettings(steps=4, guidance=2.5),
+                     max_frames=base.max_frames)
     segs = [E.Segment("b", 1.2, 1), E.Segment("e", 0.7, 2), E.Segment("g", 12.0, 3)]     # windows 24, 34, 20+120, 20+120
     in_turn = E.timeline(model, segs)
     calls.clear()

@@ -213,7 +213,8 @@ def test_time_only_times_pytorch_weights_with_the_shipped_settings_and_the_repor
     # the editor the time bar runs samples as the manifest says, not with a checkpoint's defaults
     import argparse
     ed = ev.timed_editor(argparse.Namespace(ckpt=weights, device="cpu", model="emdm-t2m-web", models_dir=None, steps=2), 1)
-    assert (ed.guidance, ed.guidance_min_time, ed.x0_smoothing, ed.steps) == (
+    s = ed.settings
+    assert (s.guidance, s.guidance_min_time, s.x0_smoothing, s.steps) == (
         entry["guidance"], entry["guidanceMinTime"], entry["x0Smoothing"], 2)
 
 

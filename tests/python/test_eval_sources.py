@@ -6,7 +6,8 @@ import torch
 
 from emdm.eval.sources import batched_features, variant_of
 from emdm.model.generator import Generator
-from emdm.sample import sample_features, torch_step
+from emdm.model.open import torch_step
+from emdm.sampler import SamplingSettings, sample_features
 
 torch.set_num_threads(1)
 
@@ -19,19 +20,19 @@ def _tiny(cond_dim=8):
 def test_rows_with_one_condition_equal_sample_features_exactly():
     G = _tiny()
     c = np.random.default_rng(0).normal(size=8).astype(np.float32)
-    ref = sample_features(torch_step(G), c, 30, steps=4, guidance=2.5, seed=7, num=3)
-    got = batched_features(torch_step(G), np.stack([c] * 3), np.array([30, 30, 30]), steps=4, guidance=2.5, seed=7)
+    ref = sample_features(torch_step(G), c, 30, SamplingSettings(steps=4, guidance=2.5), seed=7, num=3)
+    got = batched_features(torch_step(G), np.stack([c] * 3), np.array([30, 30, 30]), SamplingSettings(steps=4, guidance=2.5), 7)
     np.testing.assert_array_equal(np.stack(got), ref)
 
 
 def test_guidance_interval_rows_equal_sample_features_exactly():
     G = _tiny()
     c = np.random.default_rng(1).normal(size=8).astype(np.float32)
-    ref = sample_features(torch_step(G), c, 30, steps=4, guidance=2.5, seed=7, num=2, guidance_min_time=0.6)
-    got = batched_features(torch_step(G), np.stack([c] * 2), np.array([30, 30]), steps=4, guidance=2.5, seed=7,
-                           guidance_min_time=0.6)
+    interval = SamplingSettings(steps=4, guidance=2.5, guidance_min_time=0.6)
+    ref = sample_features(torch_step(G), c, 30, interval, seed=7, num=2)
+    got = batched_features(torch_step(G), np.stack([c] * 2), np.array([30, 30]), interval, 7)
     np.testing.assert_array_equal(np.stack(got), ref)
-    full = sample_features(torch_step(G), c, 30, steps=4, guidance=2.5, seed=7, num=2)
+    full = sample_features(torch_step(G), c, 30, SamplingSettings(steps=4, guidance=2.5), seed=7, num=2)
     assert np.abs(full - ref).max() > 1e-6
 
 
@@ -43,7 +44,7 @@ def test_each_row_gets_its_condition_and_mask():
         return np.zeros_like(x)
 
     conds = np.arange(3 * 4, dtype=np.float32).reshape(3, 4) + 1
-    out = batched_features(spy, conds, np.array([5, 9, 7]), steps=2, guidance=2.5, seed=0)
+    out = batched_features(spy, conds, np.array([5, 9, 7]), SamplingSettings(steps=2, guidance=2.5), 0)
     assert [o.shape for o in out] == [(5, 263), (9, 263), (7, 263)]
     assert len(calls) == 2
     for c, m in calls:
@@ -58,7 +59,7 @@ def test_unconditional_rows_skip_guidance():
         calls.append(c.shape[0])
         return np.zeros_like(x)
 
-    batched_features(spy, np.zeros((2, 4), np.float32), np.array([6, 6]), steps=3, guidance=2.5, seed=0)
+    batched_features(spy, np.zeros((2, 4), np.float32), np.array([6, 6]), SamplingSettings(steps=3, guidance=2.5), 0)
     assert calls == [2, 2, 2]
 
 
@@ -77,7 +78,7 @@ def test_guidance_interval_runs_the_conditional_rows_alone_below_it():
         return np.zeros_like(x)
 
     conds = np.arange(2 * 4, dtype=np.float32).reshape(2, 4) + 1
-    batched_features(spy, conds, np.array([5, 9]), steps=4, guidance=2.5, seed=0, guidance_min_time=0.6)
+    batched_features(spy, conds, np.array([5, 9]), SamplingSettings(steps=4, guidance=2.5, guidance_min_time=0.6), 0)
     assert [round(t, 3) for t, _, _ in calls] == [1.0, 0.75, 0.501, 0.251]
     for t, c, m in calls:
         want = np.concatenate([conds, np.zeros_like(conds)]) if t > 0.6 else conds
@@ -91,11 +92,11 @@ def test_x0_smoothing_rows_equal_sample_features_and_stay_within_each_length():
     numerics), not over the padding."""
     G = _tiny()
     c = np.random.default_rng(2).normal(size=8).astype(np.float32)
-    ref = sample_features(torch_step(G), c, 30, steps=4, guidance=2.5, seed=7, num=2, x0_smoothing=1.0)
-    got = batched_features(torch_step(G), np.stack([c] * 2), np.array([30, 30]), steps=4, guidance=2.5, seed=7,
-                           x0_smoothing=1.0)
+    smoothed = SamplingSettings(steps=4, guidance=2.5, x0_smoothing=1.0)
+    ref = sample_features(torch_step(G), c, 30, smoothed, seed=7, num=2)
+    got = batched_features(torch_step(G), np.stack([c] * 2), np.array([30, 30]), smoothed, 7)
     np.testing.assert_array_equal(np.stack(got), ref)
-    plain = sample_features(torch_step(G), c, 30, steps=4, guidance=2.5, seed=7, num=2)
+    plain = sample_features(torch_step(G), c, 30, SamplingSettings(steps=4, guidance=2.5), seed=7, num=2)
     assert np.abs(plain - ref).max() > 1e-6
     calls = []
 
@@ -103,9 +104,9 @@ def test_x0_smoothing_rows_equal_sample_features_and_stay_within_each_length():
         calls.append(x.copy())
         return np.where(mask[..., None] > 0, 1.0, 50.0).astype(np.float32) * np.ones_like(x)
 
-    batched_features(spy, np.ones((2, 4), np.float32), np.array([9, 5]), steps=2, guidance=1.0, seed=0, x0_smoothing=1.0)
+    batched_features(spy, np.ones((2, 4), np.float32), np.array([9, 5]), SamplingSettings(steps=2, guidance=1.0, x0_smoothing=1.0), 0)
     # the second call's x holds coef1·smooth(x̂0) + …: a row smoothed over its padding (50s) would carry them in
-    from emdm.model.schedule import make_schedule
+    from emdm.sampler.schedule import make_schedule
 
     sch = make_schedule(2)
     rng = np.random.default_rng(0)

@@ -7,8 +7,8 @@ import onnx
 import pytest
 
 from emdm.export import PARITY_CASES, export_onnx, load_generator, main as export_main, parity
-from emdm.model.schedule import make_schedule
-from emdm.sample import read_meanstd
+from emdm.model.open import read_meanstd
+from emdm.sampler.schedule import make_schedule
 from emdm.train import main as train_main
 from model_synth_data import write_synthetic_dataset
 

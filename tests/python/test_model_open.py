@@ -138,14 +138,16 @@ def test_checkpoint_and_shipped_model_open_to_the_same_network(world):
 def test_sample_cli_is_the_loop_over_the_opened_model_bit_for_bit(world, tmp_path):
     """emdm.sample's output is sample_features over open_model's step, de-normalised by its mean/std, exactly."""
     from emdm.model.open import open_model
-    from emdm.sample import main, sample_features
+    from emdm.sample import main
+    from emdm.sampler import SamplingSettings, sample_features
 
     for src, opened in ((["--model", "m", "--models-dir", str(world / "models")], open_model("m", models_dir=world / "models")),
                         (["--ckpt", str(world / "run" / "ckpt.pt")], open_model(world / "run" / "ckpt.pt"))):
         out = tmp_path / "s"
         assert main([*src, "--action", "turn", "--frames", "20", "--steps", "2", "--seed", "4", "--num", "2",
                      "--out", str(out), "--no-bvh"]) == 0
-        x = sample_features(opened.step, np.eye(3, dtype=np.float32)[2], 20, 2, 2.5, 4, 2, opened.z_dim)
+        settings = SamplingSettings(steps=2, guidance=2.5, z_dim=opened.z_dim)
+        x = sample_features(opened.step, np.eye(3, dtype=np.float32)[2], 20, settings, seed=4, num=2)
         np.testing.assert_array_equal(np.load(out.with_suffix(".features.npy")), x * opened.std + opened.mean)
 
 

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from emdm.model.schedule import SUPPORTED_STEPS, make_schedule, marginal_coeffs
+from emdm.sampler.schedule import SUPPORTED_STEPS, make_schedule, marginal_coeffs
 
 # GUIDE.md §2, the released EMDM schedule for T = 10
 COEF1 = [1, .733296, .533459, .395428, .285253, .192545, .118440, .065528, .032485, .014439]

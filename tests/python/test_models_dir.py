@@ -10,7 +10,8 @@ import pytest
 
 import emdm
 from emdm import paths
-from emdm.sample import SampleError, main as sample_main
+from emdm.sample import main as sample_main
+from emdm.sampler import SampleError
 
 MODEL = "emdm-t2m-web"
 

@@ -8,7 +8,9 @@ from emdm.export import main as export_main
 from emdm.mocap.bvh import forward_kinematics as bvh_fk, read_bvh
 from emdm.mocap.bvh_writer import write_bvh
 from emdm.motion.ik import forward_kinematics, solve_ik
-from emdm.sample import main as sample_main, onnx_step, sample_features, SampleError, make_condition
+from emdm.model.open import onnx_step
+from emdm.sample import main as sample_main
+from emdm.sampler import SampleError, SamplingSettings, make_condition, sample_features
 from emdm.train import main as train_main
 from model_synth_data import write_synthetic_dataset
 
@@ -39,9 +41,9 @@ class CountingStep:
 def test_seeds(models):
     step = onnx_step(models / "m.onnx")
     c = np.eye(3, dtype=np.float32)[0]
-    a = sample_features(step, c, 30, steps=4, guidance=2.5, seed=1)
-    b = sample_features(step, c, 30, steps=4, guidance=2.5, seed=1)
-    d = sample_features(step, c, 30, steps=4, guidance=2.5, seed=2)
+    a = sample_features(step, c, 30, SamplingSettings(steps=4, guidance=2.5), seed=1)
+    b = sample_features(step, c, 30, SamplingSettings(steps=4, guidance=2.5), seed=1)
+    d = sample_features(step, c, 30, SamplingSettings(steps=4, guidance=2.5), seed=2)
     assert a.shape == (1, 30, 263) and np.isfinite(a).all()
     np.testing.assert_array_equal(a, b)
     assert np.abs(a - d).mean() > 1e-3
@@ -49,17 +51,18 @@ def test_seeds(models):
 
 def test_guidance_batches_conditional_and_unconditional_in_one_call(models):
     counting = CountingStep(onnx_step(models / "m.onnx"))
-    sample_features(counting, np.eye(3, dtype=np.float32)[1], 20, steps=5, guidance=2.5, seed=0, num=2)
+    guided = SamplingSettings(steps=5, guidance=2.5)
+    sample_features(counting, np.eye(3, dtype=np.float32)[1], 20, guided, seed=0, num=2)
     assert counting.calls == 5 and counting.batches == [4] * 5
     counting = CountingStep(onnx_step(models / "m.onnx"))
-    sample_features(counting, np.zeros(3, np.float32), 20, steps=5, guidance=2.5, seed=0)      # unconditional
+    sample_features(counting, np.zeros(3, np.float32), 20, guided, seed=0)      # unconditional
     assert counting.batches == [1] * 5
 
 
 def test_one_step_is_the_generator_output(models):
     """T = 1: x = coef1·G(x_T) with coef1 = 1 and no noise."""
     step = onnx_step(models / "m.onnx")
-    out = sample_features(step, np.zeros(3, np.float32), 12, steps=1, guidance=1.0, seed=5)
+    out = sample_features(step, np.zeros(3, np.float32), 12, SamplingSettings(steps=1, guidance=1.0), seed=5)
     rng = np.random.default_rng(5)
     x = rng.standard_normal((1, 12, 263), dtype=np.float32)
     z = rng.standard_normal((1, 64), dtype=np.float32)
@@ -277,24 +280,25 @@ def test_guidance_interval_skips_the_unconditional_row_below_its_time_and_keeps_
     """guidance_min_time: 2 rows only at steps with t > it, 1 below; the same random draws (the committed tiny
     parity model, against the fixture reference that feeds the noise in emdm.sample's order); 0 = today's loop."""
     from emdm import fixtures as fx
-    from emdm.model.schedule import make_schedule
+    from emdm.sampler.schedule import make_schedule
 
     path = fx.PARITY_DIR / "tiny-step.onnx"
     cond = np.random.default_rng(3).standard_normal(fx.TINY_COND_DIM).astype(np.float32)
     sched, seed = make_schedule(10), 11
     counting = CountingStep(onnx_step(path))
-    x = sample_features(counting, cond, 12, steps=10, guidance=2.5, seed=seed, guidance_min_time=0.55)[0]
+    interval = SamplingSettings(steps=10, guidance=2.5, guidance_min_time=0.55)
+    x = sample_features(counting, cond, 12, interval, seed=seed)[0]
     assert counting.batches == [2] * 5 + [1] * 5            # t = 1 … 0.6004 guided, 0.5005 … 0.1009 not
     x_T, zs, epss = fx.draw_noise(np.random.default_rng(seed), 10, 12, 263, 64, sched)
     ref = fx.reference_sample(fx.step_session(path), x_T, zs, epss, cond, 2.5, sched, guidance_min_time=0.55)
     np.testing.assert_allclose(x, ref, atol=1e-4)
-    full = sample_features(onnx_step(path), cond, 12, steps=10, guidance=2.5, seed=seed)[0]
+    full = sample_features(onnx_step(path), cond, 12, SamplingSettings(steps=10, guidance=2.5), seed=seed)[0]
     assert np.abs(x - full).max() > 1e-6
-    np.testing.assert_array_equal(full, sample_features(onnx_step(path), cond, 12, steps=10, guidance=2.5, seed=seed,
-                                                        guidance_min_time=0.0)[0])
+    every = SamplingSettings(steps=10, guidance=2.5, guidance_min_time=0.0)
+    np.testing.assert_array_equal(full, sample_features(onnx_step(path), cond, 12, every, seed=seed)[0])
     for bad in (-0.1, float("nan"), float("inf")):
         with pytest.raises(SampleError, match="guidance_min_time must be a finite time"):
-            sample_features(onnx_step(path), cond, 12, steps=2, guidance=2.5, guidance_min_time=bad)
+            sample_features(onnx_step(path), cond, 12, SamplingSettings(steps=2, guidance=2.5, guidance_min_time=bad))
 
 
 def test_cli_guidance_min_time_defaults_to_the_manifest_entry(models, tmp_path):
@@ -326,20 +330,21 @@ def test_x0_smoothing_smooths_every_x0_but_the_last_and_keeps_the_draws():
     smoothed estimate in the x it is given next; root, velocity and contact channels the model's own), the result
     equals the fixture reference fed the same noise; 0 = today's loop bit for bit."""
     from emdm import fixtures as fx
-    from emdm.model.schedule import make_schedule
+    from emdm.sampler.schedule import make_schedule
     from emdm.motion.smooth import POSE_CHANNELS, smooth_frames
 
     path = fx.PARITY_DIR / "tiny-step.onnx"
     cond = np.random.default_rng(4).standard_normal(fx.TINY_COND_DIM).astype(np.float32)
     sched, seed = make_schedule(4), 5
-    x = sample_features(onnx_step(path), cond, 12, steps=4, guidance=2.5, seed=seed, x0_smoothing=1.0)[0]
+    smoothed = SamplingSettings(steps=4, guidance=2.5, x0_smoothing=1.0)
+    x = sample_features(onnx_step(path), cond, 12, smoothed, seed=seed)[0]
     x_T, zs, epss = fx.draw_noise(np.random.default_rng(seed), 4, 12, 263, 64, sched)
     ref = fx.reference_sample(fx.step_session(path), x_T, zs, epss, cond, 2.5, sched, x0_smoothing=1.0)
     np.testing.assert_allclose(x, ref, atol=1e-4)
-    plain = sample_features(onnx_step(path), cond, 12, steps=4, guidance=2.5, seed=seed)[0]
+    plain = sample_features(onnx_step(path), cond, 12, SamplingSettings(steps=4, guidance=2.5), seed=seed)[0]
     assert np.abs(x - plain).max() > 1e-3
-    np.testing.assert_array_equal(plain, sample_features(onnx_step(path), cond, 12, steps=4, guidance=2.5, seed=seed,
-                                                         x0_smoothing=0.0)[0])
+    off = SamplingSettings(steps=4, guidance=2.5, x0_smoothing=0.0)
+    np.testing.assert_array_equal(plain, sample_features(onnx_step(path), cond, 12, off, seed=seed)[0])
 
     # a step returning a spike train: the last x̂0 (the result) is the model's own, the others are smoothed
     spikes = np.zeros((1, 12, 263), np.float32)
@@ -348,7 +353,7 @@ def test_x0_smoothing_smooths_every_x0_but_the_last_and_keeps_the_draws():
     def spiky(x, z, c, t, mask):
         return np.repeat(spikes, x.shape[0], 0)
 
-    out = sample_features(spiky, cond, 12, steps=1, seed=0, x0_smoothing=1.0)
+    out = sample_features(spiky, cond, 12, SamplingSettings(steps=1, x0_smoothing=1.0), seed=0)
     np.testing.assert_array_equal(out, spikes)               # one step: nothing before the last
     seen = []
 
@@ -357,7 +362,7 @@ def test_x0_smoothing_smooths_every_x0_but_the_last_and_keeps_the_draws():
         return np.repeat(spikes, x.shape[0], 0)
 
     sched2 = make_schedule(2)
-    out = sample_features(spy, cond, 12, steps=2, seed=0, guidance=1.0, x0_smoothing=1.0)
+    out = sample_features(spy, cond, 12, SamplingSettings(steps=2, guidance=1.0, x0_smoothing=1.0), seed=0)
     np.testing.assert_array_equal(out, spikes)
     # the second call's x = coef1·smooth(x̂0) + coef2·x_T + σ·ε: remove the known parts and compare
     rng = np.random.default_rng(0)
@@ -373,11 +378,11 @@ def test_x0_smoothing_smooths_every_x0_but_the_last_and_keeps_the_draws():
     np.testing.assert_allclose(seen[1], want, atol=1e-6)
     for bad in (-0.1, float("nan"), float("inf")):
         with pytest.raises(SampleError, match="x0_smoothing must be a finite σ ≥ 0 in frames"):
-            sample_features(onnx_step(path), cond, 12, steps=2, guidance=2.5, x0_smoothing=bad)
+            sample_features(onnx_step(path), cond, 12, SamplingSettings(steps=2, guidance=2.5, x0_smoothing=bad))
 
 
 def test_smooth_frames_is_the_pages_kernel_and_keeps_rows_within_their_length():
-    from emdm.sample import smooth_frames
+    from emdm.motion.smooth import smooth_frames
 
     x = np.zeros((2, 15, 1), np.float32)
     x[:, 7] = 1.0

@@ -4,19 +4,22 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from emdm import paths
 from emdm.fixtures import TINY_COND_DIM
-from emdm.model.schedule import make_schedule
+from emdm.sampler.schedule import make_schedule
 from emdm.motion import mask_fixture
 from emdm.motion.features import heading_angles, recover_joints
 from emdm.motion.ik_fixture import read_case_array
 from emdm.motion.mask import GROUPS, KeepRect, KeepSpecError, group_channels, keep_mask, parse_keep
 from emdm.motion.stitch import align_segment, append_segment, pin_kept_root, pin_root, root_pose
-from emdm.sample import SampleError, main as sample_main, onnx_step, sample_features
+from emdm.model.open import onnx_step
+from emdm.sample import main as sample_main
+from emdm.sampler import SampleError, SamplingSettings, finish, run_together, sample_features, sampling
 
 PARITY = mask_fixture.PARITY_DIR
 
@@ -77,16 +80,16 @@ def _known_keep(real_features, frames=16):
     return known, keep_mask(frames, [parse_keep("frames:0-5"), parse_keep("group:legs")])
 
 
-@pytest.mark.parametrize("objective, steps, guidance, num", [("ddgan", 4, 2.5, 1), ("ddgan", 2, 1.0, 2),
-                                                              ("diffusion", 5, 2.5, 1)])
-def test_the_result_equals_the_known_motion_exactly_where_kept(tiny_step, real_features, objective, steps, guidance, num):
+@pytest.mark.parametrize("method, steps, guidance, num", [("ddgan", 4, 2.5, 1), ("ddgan", 2, 1.0, 2),
+                                                           ("ddim", 5, 2.5, 1)])
+def test_the_result_equals_the_known_motion_exactly_where_kept(tiny_step, real_features, method, steps, guidance, num):
     known, keep = _known_keep(real_features)
     cond = np.random.default_rng(0).standard_normal(TINY_COND_DIM).astype(np.float32)
-    x = sample_features(tiny_step, cond, 16, steps=steps, guidance=guidance, seed=3, num=num, objective=objective,
-                        known=known, keep=keep)
+    free_settings = SamplingSettings(method=method, steps=steps, guidance=guidance)
+    x = sample_features(tiny_step, cond, 16, replace(free_settings, known=known, keep=keep), seed=3, num=num)
     kept = np.broadcast_to(keep.astype(bool), x.shape)
     assert np.array_equal(x[kept], np.broadcast_to(known, x.shape)[kept])        # exactly, in normalised space
-    free = sample_features(tiny_step, cond, 16, steps=steps, guidance=guidance, seed=3, num=num, objective=objective)
+    free = sample_features(tiny_step, cond, 16, free_settings, seed=3, num=num)
     assert np.abs(free - known)[kept].mean() > 0.1                                  # not kept by accident
     assert np.abs(x - free)[~kept].mean() > 1e-3                                   # the rest follows the kept part
 
@@ -98,18 +101,18 @@ def test_the_model_sees_the_known_motion_noised_to_each_steps_level(tiny_step):
     known = np.tile(mask_fixture.known_motion(), (4, 1))[:frames]
     keep = keep_mask(frames, [parse_keep("group:root,legs")])
     kept = keep.astype(bool)
-    for objective, steps in (("diffusion", 5), ("ddgan", 4)):
+    for method, steps in (("ddim", 5), ("ddgan", 4)):
         inputs = []
         def recording(x, z, c, t, mask):
             inputs.append(x[0].copy())
             return tiny_step(x, z, c, t, mask)
-        sample_features(recording, np.zeros(TINY_COND_DIM, np.float32), frames, steps=steps, seed=11,
-                        objective=objective, known=known, keep=keep)
+        settings = SamplingSettings(method=method, steps=steps, known=known, keep=keep)
+        sample_features(recording, np.zeros(TINY_COND_DIM, np.float32), frames, settings, seed=11)
         sch = make_schedule(steps)
         x_T = np.random.default_rng(11).standard_normal((1, frames, 263), dtype=np.float32)[0]
         for i, k in enumerate(range(steps - 1, -1, -1)):
             eps = ((inputs[i] - sch.a_cum[k + 1] * known) / sch.s_cum[k + 1])[kept]
-            if objective == "diffusion":
+            if method == "ddim":
                 np.testing.assert_allclose(eps, x_T[kept], atol=2e-3)
             else:
                 assert abs(eps.mean()) < 0.05 and abs(eps.std() - 1) < 0.05, (k, eps.mean(), eps.std())
@@ -128,7 +131,8 @@ def test_keep_from_time_imposes_the_kept_part_only_at_the_later_steps(tiny_step,
         def recording(x, z, c, t, mask):
             inputs.append(x[0].copy())
             return tiny_step(x, z, c, t, mask)
-        return sample_features(recording, cond, 16, steps=4, guidance=2.5, seed=3, known=known, keep=keep, **kw)[0], inputs
+        settings = SamplingSettings(steps=4, guidance=2.5, known=known, keep=keep, **kw)
+        return sample_features(recording, cond, 16, settings, seed=3)[0], inputs
     every, _ = run()
     assert np.array_equal(run(keep_from_time=1.0)[0], every)
     late, inputs = run(keep_from_time=0.6)                     # t = 1, 0.75 free; 0.5, 0.25 kept
@@ -142,7 +146,8 @@ def test_keep_from_time_imposes_the_kept_part_only_at_the_later_steps(tiny_step,
     np.testing.assert_array_equal(inputs[2][6:], free_inputs[2])                     # joined at t = 0.5; then it steers
     assert np.abs(late - every)[~kept].mean() > 1e-3
     with pytest.raises(SampleError, match="keep_from_time must be a finite time"):
-        sample_features(tiny_step, cond, 16, steps=2, known=known, keep=keep, keep_from_time=float("nan"))
+        sample_features(tiny_step, cond, 16, SamplingSettings(steps=2, known=known, keep=keep,
+                                                              keep_from_time=float("nan")))
 
 
 @pytest.mark.parametrize("known, keep, says", [
@@ -153,7 +158,8 @@ def test_keep_from_time_imposes_the_kept_part_only_at_the_later_steps(tiny_step,
 ])
 def test_bad_inpainting_arguments_are_one_line_errors(tiny_step, known, keep, says):
     with pytest.raises(SampleError, match=says):
-        sample_features(tiny_step, np.zeros(TINY_COND_DIM, np.float32), 16, steps=2, known=known, keep=keep)
+        sample_features(tiny_step, np.zeros(TINY_COND_DIM, np.float32), 16,
+                        SamplingSettings(steps=2, known=known, keep=keep))
 
 
 # ----------------------------------------------------------------------------------------------- the fixture
@@ -290,29 +296,28 @@ def test_pin_kept_root_finds_the_free_stretch_from_the_mask(real_features):
 def test_a_run_stopped_where_its_context_joins_and_finished_equals_one_whole_run(tiny_step, real_features):
     """``sampling(stop_at)`` + ``finish``: bit for bit ``sample_features`` (ddgan, ddim, one step), known given only at
     the stop; ``run_together`` gives each run its own rows (frames padded) within float rounding."""
-    from emdm.sample import finish, run_together, sampling
-
     known, keep = _known_keep(real_features)
     keep = keep_mask(16, [parse_keep("frames:0-5")])
     cond = np.random.default_rng(0).standard_normal(TINY_COND_DIM).astype(np.float32)
-    for objective, steps in (("ddgan", 10), ("diffusion", 10), ("ddgan", 1)):
-        kw = dict(steps=steps, guidance=2.5, seed=5, objective=objective, keep=keep, keep_from_time=0.55,
-                  guidance_min_time=0.55, x0_smoothing=1.0)
-        whole = sample_features(tiny_step, cond, 16, known=known, **kw)
-        run = sampling(cond, 16, stop_at=0.55, **kw)
+    for method, steps in (("ddgan", 10), ("ddim", 10), ("ddgan", 1)):
+        settings = SamplingSettings(method, steps, 2.5, guidance_min_time=0.55, x0_smoothing=1.0, keep=keep,
+                                    keep_from_time=0.55)
+        whole = sample_features(tiny_step, cond, 16, replace(settings, known=known), seed=5)
+        run = sampling(cond, 16, settings, seed=5, stop_at=0.55)
         run_together([run], tiny_step)
         np.testing.assert_array_equal(finish(run, tiny_step, known), whole)
-    runs = [sampling(cond, n, steps=10, guidance=2.5, seed=s, stop_at=0.55, **({"keep": keep_mask(n, [parse_keep("frames:0-5")]), "keep_from_time": 0.55} if n > 16 else {}))
-            for n, s in ((16, 1), (26, 2), (21, 3))]
+    def window(n):     # a window with 6 frames of context (n > 16), or a first window
+        plain = SamplingSettings(steps=10, guidance=2.5)
+        return replace(plain, keep=keep_mask(n, [parse_keep("frames:0-5")]), keep_from_time=0.55) if n > 16 else plain
+    runs = [sampling(cond, n, window(n), seed=s, stop_at=0.55) for n, s in ((16, 1), (26, 2), (21, 3))]
     run_together(runs, tiny_step)
     for (n, s), run in zip(((16, 1), (26, 2), (21, 3)), runs):
         kn = np.zeros((n, 263), np.float32) if n > 16 else None
-        alone = sample_features(tiny_step, cond, n, steps=10, guidance=2.5, seed=s, known=kn,
-                                **({"keep": keep_mask(n, [parse_keep("frames:0-5")]), "keep_from_time": 0.55} if n > 16 else {}))
+        alone = sample_features(tiny_step, cond, n, replace(window(n), known=kn), seed=s)
         np.testing.assert_allclose(finish(run, tiny_step, kn), alone, atol=1e-5)
     with pytest.raises(SampleError, match="imposed before t ≤ 0.3, so known is needed"):
-        next(sampling(cond, 16, steps=4, keep=keep, keep_from_time=0.6, stop_at=0.3))
-    run = sampling(cond, 16, steps=4, keep=keep, keep_from_time=0.6, stop_at=0.6)
+        next(sampling(cond, 16, SamplingSettings(steps=4, keep=keep, keep_from_time=0.6), stop_at=0.3))
+    run = sampling(cond, 16, SamplingSettings(steps=4, keep=keep, keep_from_time=0.6), stop_at=0.6)
     run_together([run], tiny_step)
     with pytest.raises(SampleError, match="stopped for its known motion"):
         finish(run, tiny_step)

@@ -14,7 +14,9 @@ from emdm import paths
 from emdm import skeleton as sk
 from emdm.eval import models_report
 from emdm.motion.features import recover_joints
-from emdm.sample import denormalise, onnx_step, read_meanstd, sample_features
+from emdm.model.open import onnx_step, read_meanstd, torch_step
+from emdm.sampler import SamplingSettings, denormalise, sample_features
+from emdm.sampler.settings import method_of
 
 MODELS = ["emdm-t2m-web", "emdm-a2m-web", "diffusion-t2m-web"]
 FRAMES = 120
@@ -86,6 +88,8 @@ def generated(request):
     step = onnx_step(paths.MODELS_DIR / onnx, threads=1)
     mean, std = read_meanstd(paths.MODELS_DIR / entry["meanStd"])
     c = condition(entry)
+    settings = SamplingSettings(method_of(entry.get("objective", "ddgan")), entry["defaultSteps"], entry["guidance"],
+                                z_dim=entry["zDim"])      # guided at every step, no x̂0 smoothing
 
     done: dict[tuple[int, bytes], tuple[np.ndarray, np.ndarray]] = {}
 
@@ -93,8 +97,7 @@ def generated(request):
         """(features, joints); a (seed, condition) already generated for another check is reused unless fresh."""
         key = (seed, np.asarray(cond, np.float32).tobytes())
         if fresh or key not in done:
-            x = sample_features(step, cond, FRAMES, entry["defaultSteps"], entry["guidance"], seed, 1, entry["zDim"],
-                                objective=entry.get("objective", "ddgan"))
+            x = sample_features(step, cond, FRAMES, settings, seed)
             feats = denormalise(x[0], mean, std)
             done[key] = (feats, recover_joints(feats))
         return done[key]
@@ -179,7 +182,6 @@ def test_shipped_training_weights_are_the_onnx_model(model):
     import torch
 
     from emdm.export import load_generator
-    from emdm.sample import torch_step
 
     path = paths.MODELS_DIR / entry["trainingWeights"]
     assert torch.load(path, weights_only=True)["meta"]["weights_dtype"] == "float16"

@@ -8,8 +8,8 @@ import pytest
 import torch
 
 from emdm.model import objectives as O
-from emdm.model.schedule import SUPPORTED_STEPS, make_schedule
-from emdm.sample import sample_features
+from emdm.sampler.schedule import SUPPORTED_STEPS, make_schedule
+from emdm.sampler import SamplingSettings, sample_features
 
 F_DIM, FRAMES = 5, 7
 
@@ -39,7 +39,8 @@ def test_tables_hold_the_samplers_float32_schedule(T):
 def test_sampler_steps_replayed_through_the_trainer_posterior(T):
     calls: list = []
     cond = np.array([0.3, -1.0], np.float32)
-    out = sample_features(fake_model(calls), cond, FRAMES, steps=T, seed=5, num=2, z_dim=3, feature_dim=F_DIM)
+    settings = SamplingSettings(steps=T, z_dim=3, feature_dim=F_DIM)
+    out = sample_features(fake_model(calls), cond, FRAMES, settings, seed=5, num=2)
     assert len(calls) == T
     tab = O.ScheduleTables(list(SUPPORTED_STEPS), torch.device("cpu"))
     slot = torch.full((2,), list(SUPPORTED_STEPS).index(T))
@@ -92,7 +93,8 @@ def test_top_step_input_is_the_samplers_pure_noise_start():
 def test_guidance_uses_one_z_and_the_zero_condition_the_trainer_drops_to():
     calls: list = []
     cond = np.array([0.3, -1.0], np.float32)
-    sample_features(fake_model(calls), cond, FRAMES, steps=4, guidance=2.5, seed=1, num=3, z_dim=3, feature_dim=F_DIM)
+    settings = SamplingSettings(steps=4, guidance=2.5, z_dim=3, feature_dim=F_DIM)
+    sample_features(fake_model(calls), cond, FRAMES, settings, seed=1, num=3)
     for c in calls:
         assert np.array_equal(c["z"][:3], c["z"][3:]) and np.array_equal(c["x"][:3], c["x"][3:])
         assert np.array_equal(c["c"][:3], np.repeat(cond[None], 3, 0)) and not c["c"][3:].any()

@@ -610,7 +610,8 @@ def run(a) -> Path:
     bench = Benchmark(a.dataset, a.split, a.classifier, a.prompts, seeds=1, seed=a.seed)
     m = measure(model, bench, a)
     result = {"schema": SCHEMA, "task": "editing", "name": a.model, "variant": opened.variant, "steps": a.steps,
-              "guidance": model.guidance, "guidance_min_time": model.guidance_min_time, "x0_smoothing": model.x0_smoothing,
+              "guidance": model.settings.guidance, "guidance_min_time": model.settings.guidance_min_time,
+              "x0_smoothing": model.settings.x0_smoothing,
               "seed": a.seed, **m, "bars": bars(m), "classifier": _evaluator_info(bench.classifier, a.classifier),
               "classifier_real_macro": bench.real.get("macro_accuracy"),
               "dataset": dataset_info(Path(a.dataset), a.split), "hardware": hardware(), "threads": a.threads,

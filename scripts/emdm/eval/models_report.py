@@ -28,6 +28,8 @@ import numpy as np
 from emdm import manifest as mf
 from emdm import paths
 from emdm import skeleton as sk
+from emdm.model.open import onnx_step, read_meanstd
+from emdm.sampler import SamplingSettings, denormalise, make_condition, sample_features
 
 MODELS_MD = paths.REPO_ROOT / "docs" / "MODELS.md"
 BONES_JSON = paths.REPO_ROOT / "docs" / "results" / "json" / "models-bones.json"
@@ -52,8 +54,6 @@ class ModelsReportError(ValueError):
 # ----------------------------------------------------------------------------------------------- measuring
 
 def condition(entry: dict, i: int) -> np.ndarray:
-    from emdm.sample import make_condition
-
     if entry["condition"]["type"] == "text":
         return make_condition(entry["condition"], PROMPTS[i], None, False)
     return make_condition(entry["condition"], None, ACTIONS[i], False)
@@ -75,7 +75,6 @@ def measure_file(entry: dict, onnx: Path) -> dict:
     """Worst bone (median over frames, worst over conditions and seeds) and the mean over bones of each bone's
     worst, for one ONNX file."""
     from emdm.motion.features import recover_joints
-    from emdm.sample import denormalise, onnx_step, read_meanstd, sample_features
 
     step = onnx_step(onnx, threads=1)
     mean, std = read_meanstd(paths.MODELS_DIR / entry["meanStd"])
@@ -83,10 +82,7 @@ def measure_file(entry: dict, onnx: Path) -> dict:
     for i in range(len(PROMPTS)):
         cond = condition(entry, i)
         for seed in SEEDS:
-            x = sample_features(step, cond, FRAMES, entry["defaultSteps"], entry["guidance"], seed, 1, entry["zDim"],
-                                objective=entry.get("objective", "ddgan"),
-                                guidance_min_time=float(entry.get("guidanceMinTime", 0.0)),
-                                x0_smoothing=float(entry.get("x0Smoothing", 0.0)))
+            x = sample_features(step, cond, FRAMES, SamplingSettings.from_entry(entry), seed)
             per_bone = np.maximum(per_bone, bone_errors(recover_joints(denormalise(x[0], mean, std))))
     worst = int(np.argmax(per_bone))
     return {"worst": float(per_bone[worst]), "worst_bone": sk.JOINT_NAMES[worst + 1], "mean": float(per_bone.mean())}

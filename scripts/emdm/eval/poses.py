@@ -31,6 +31,7 @@ JSON: {"schema": 1, "task": "poses", "name": model, "variant", "seeds", "conditi
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import itertools
 import json
 import sys
@@ -41,6 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from emdm import skeleton as sk
+from emdm.sampler import SampleError, SamplingSettings, make_condition, sample_features
 
 BONE_TOL = 0.30
 LEG_TOL = 1.15
@@ -124,8 +126,6 @@ def setting_row(steps: int, guidance: float, seconds: float, motions: list[np.nd
 
 def conditions(opened, prompts: list[str], actions: list[str] | None) -> list[tuple[str, np.ndarray]]:
     """(label, condition vector) for every prompt (text model) or action label (action model)."""
-    from emdm.sample import make_condition
-
     spec = opened.meta["condition"]
     if spec["type"] == "text":
         return [(p, make_condition(spec, p, None, False)) for p in prompts]
@@ -142,7 +142,6 @@ def run_grid(opened, steps: list[int], guidance: list[float], seconds: list[floa
     ``guidance_min_time``: guide only steps above it (None: the model's manifest guidanceMinTime, else 0);
     ``x0_smoothing``: σ of x̂_0's smoothing along time (None: the manifest's x0Smoothing, else 0)."""
     from emdm.motion.features import recover_joints
-    from emdm.sample import sample_features
 
     meta = opened.meta
     supported = meta.get("supportedSteps")
@@ -155,16 +154,17 @@ def run_grid(opened, steps: list[int], guidance: list[float], seconds: list[floa
         raise PosesError(f"--seconds {','.join(map(str, too_long))}: lengths must be in (0, {max_s:g}] s for this model")
     if any(not np.isfinite(g) or g < 1 for g in guidance):
         raise PosesError(f"--guidance {guidance}: scales must be finite and ≥ 1")
-    gmin = float(meta.get("guidanceMinTime", 0.0)) if guidance_min_time is None else guidance_min_time
-    sigma = float(meta.get("x0Smoothing", 0.0)) if x0_smoothing is None else x0_smoothing
+    model = SamplingSettings.from_entry(meta)
+    gmin = model.guidance_min_time if guidance_min_time is None else guidance_min_time
+    sigma = model.x0_smoothing if x0_smoothing is None else x0_smoothing
     rows = []
     for T, g, sec in itertools.product(steps, guidance, seconds):
         t0 = time.perf_counter()
         frames = max(2, min(meta["maxFrames"], int(round(sec * sk.FPS))))
         motions = []
         for ci, (_, c) in enumerate(conds):
-            x = sample_features(opened.step, c, frames, T, g, seed + 1000 * ci, seeds, meta["zDim"],
-                                objective=meta.get("objective", "ddgan"), guidance_min_time=gmin, x0_smoothing=sigma)
+            settings = dataclasses.replace(model, steps=T, guidance=g, guidance_min_time=gmin, x0_smoothing=sigma)
+            x = sample_features(opened.step, c, frames, settings, seed + 1000 * ci, seeds)
             motions += [recover_joints(xi * opened.std + opened.mean) for xi in x]
         row = setting_row(T, g, sec, motions)
         rows.append(row)
@@ -232,7 +232,6 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     from emdm.model.open import ModelError, open_model
     from emdm.outdir import OutputRefused, check_writable
-    from emdm.sample import SampleError
 
     a = build_parser().parse_args(argv)
     try:

@@ -1,4 +1,4 @@
-"""Motion sources for the protocols: a trained model, sampled by ``emdm.sample.sample_features`` (the
+"""Motion sources for the protocols: a trained model, sampled by ``emdm.sampler.sample_features`` (the
 one sampling loop the project has; DDIM for ``--objective diffusion`` checkpoints).
 
 ``sample_features`` takes one condition vector and one length per call. To evaluate hundreds of
@@ -11,6 +11,7 @@ motion then cropped to its length.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -19,6 +20,8 @@ import numpy as np
 from emdm.eval.data import TEXT_ENCODER
 from emdm.eval.protocol import Conditions
 from emdm.model.open import DEFAULT_GUIDANCE, OpenedModel, open_model
+from emdm.sampler import SamplingSettings, sample_features
+from emdm.sampler.settings import method_of
 
 
 def variant_of(meta: dict) -> str:
@@ -33,13 +36,10 @@ def variant_of(meta: dict) -> str:
     return "ddgan-nodcond" if geo > 0 else "ddgan-naive"
 
 
-def batched_features(step, conds: np.ndarray, lengths: np.ndarray, *, steps: int, guidance: float, seed: int,
-                     objective: str = "ddgan", z_dim: int = 64, guidance_min_time: float = 0.0,
-                     x0_smoothing: float = 0.0) -> list[np.ndarray]:
+def batched_features(step, conds: np.ndarray, lengths: np.ndarray, settings: SamplingSettings,
+                     seed: int) -> list[np.ndarray]:
     """Normalised x̂_0 for B rows with their own condition (B, C) and length (B,), via
-    ``emdm.sample.sample_features`` on one padded batch; returns B arrays (length_i, 263)."""
-    from emdm.sample import sample_features
-
+    ``emdm.sampler.sample_features`` on one padded batch; returns B arrays (length_i, 263)."""
     conds = np.asarray(conds, np.float32)
     lengths = np.asarray(lengths, np.int64)
     b = len(lengths)
@@ -62,9 +62,8 @@ def batched_features(step, conds: np.ndarray, lengths: np.ndarray, *, steps: int
 
     # a non-zero stand-in makes sample_features apply guidance; the wrapper swaps in the real rows
     stand_in = np.ones(conds.shape[1], np.float32) if any_cond else np.zeros(conds.shape[1], np.float32)
-    x = sample_features(row_step, stand_in, frames, steps, guidance if any_cond else 1.0, seed, b, z_dim,
-                        objective=objective, guidance_min_time=guidance_min_time, x0_smoothing=x0_smoothing,
-                        lengths=lengths)
+    settings = settings if any_cond else dataclasses.replace(settings, guidance=1.0)
+    x = sample_features(row_step, stand_in, frames, settings, seed, lengths)
     return [x[i, : lengths[i]] for i in range(b)]
 
 
@@ -122,6 +121,12 @@ class ModelSource:
                      "geo_weight": self.flags.get("geo_weight"), "d_cond": self.flags.get("d_cond"),
                      **self.origin, **self.info}
 
+    @property
+    def settings(self) -> SamplingSettings:
+        """How this source samples: its method, steps, guidance (and interval), x̂_0 smoothing and z size."""
+        return SamplingSettings(method_of(self.objective), self.steps, self.guidance, self.guidance_min_time,
+                                self.x0_smoothing, z_dim=self.z_dim)
+
     def conditions_of(self, cond: Conditions) -> np.ndarray:
         spec = self.cond_spec
         who = self.ckpt or self.model
@@ -152,9 +157,7 @@ class ModelSource:
         out: list[np.ndarray | None] = [None] * len(lengths)
         for s in range(0, len(order), self.batch_size):
             idx = order[s:s + self.batch_size]
-            xs = batched_features(self.step, c[idx], lengths[idx], steps=self.steps, guidance=self.guidance,
-                                  seed=seed * 100003 + s, objective=self.objective, z_dim=self.z_dim,
-                                  guidance_min_time=self.guidance_min_time, x0_smoothing=self.x0_smoothing)
+            xs = batched_features(self.step, c[idx], lengths[idx], self.settings, seed * 100003 + s)
             for i, x in zip(idx, xs):
                 out[i] = x * self.std + self.mean
         return out  # type: ignore[return-value]

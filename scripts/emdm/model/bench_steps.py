@@ -5,13 +5,13 @@ x leaves the distribution the trainer's pairs come from, and what guidance in a 
     python -m emdm.model.bench_steps --model emdm-t2m-web --prompts "a person kicks" "a person bows" --guidance 1
     python -m emdm.model.bench_steps --model emdm-t2m-web emdm-a2m-web diffusion-t2m-web --steps 10 --interval
 
-Runs ``emdm.sample.sample_features`` (the sampler itself, with a step function that records what it is given and
+Runs ``emdm.sampler.sample_features`` (the sampler itself, with a step function that records what it is given and
 returns), and prints per step k (time t = t_{k+1}): std of the sampler's input x (the trainer's x_{k+1} has
 std √(a² Var x_0 + s²) ≈ 1 for normalised data), std of the conditional x̂_0, and the condition's effect
 |x̂_0(c) − x̂_0(0)| / |x̂_0(0)|; then the final motion's mean within-clip (temporal) std: near 0 is a frozen pose.
 A text model is conditioned on ``--prompts``, an action model on each of its labels (or ``--prompts`` naming labels).
 
-``--interval``: guidance in a limited interval (``sample_features(guidance_min_time=τ)``, the manifest's
+``--interval``: guidance in a limited interval (``SamplingSettings.guidance_min_time`` = τ, the manifest's
 ``guidanceMinTime``): for each τ on the step grid, the share of guidance's effect on the final motion that is kept,
 1 − |x(τ) − x(guided everywhere)| / |x(no guidance) − x(guided everywhere)| over all conditions and seeds (same
 seeds, same noise), the largest per-condition loss, and the model rows the sampler runs (2 per guided step, 1 per
@@ -21,11 +21,14 @@ other step; guided everywhere = 2·T).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 
 import numpy as np
 
-from emdm.model.schedule import make_schedule
+from emdm.model.open import onnx_step
+from emdm.sampler import SamplingSettings, make_condition, sample_features
+from emdm.sampler.schedule import make_schedule
 
 PROMPTS = ["a person kicks", "a person bows", "a person squats", "a person walks forward"]
 
@@ -40,8 +43,6 @@ def recorder(step, calls: list):
 
 def conditions(entry: dict, prompts: list[str] | None) -> list[tuple[str, np.ndarray]]:
     """(name, condition vector) per prompt (text model) or action label (action model)."""
-    from emdm.sample import make_condition
-
     spec = entry["condition"]
     if spec["type"] == "text":
         from emdm.text import encode_texts
@@ -53,16 +54,19 @@ def conditions(entry: dict, prompts: list[str] | None) -> list[tuple[str, np.nda
     return [(lab, make_condition(spec, None, lab, False)) for lab in labels]
 
 
+def bench_settings(entry: dict, T: int, guidance: float) -> SamplingSettings:
+    """The model's method and sizes with T steps and ``guidance`` at every step, no x̂0 smoothing."""
+    return dataclasses.replace(SamplingSettings.from_entry(entry, T, guidance), guidance_min_time=0.0, x0_smoothing=0.0)
+
+
 def per_step(step, conds, entry: dict, T: int, a) -> None:
     """The per-step table: input std, x̂_0 std, the condition's effect at each step time."""
     sch = make_schedule(T)
-    objective = entry.get("objective", "ddgan")
-    z_dim = int(entry.get("zDim", 64))
+    settings = bench_settings(entry, T, a.guidance)
     effects = np.zeros((len(conds), T))
     for ci, (name, c) in enumerate(conds):
         calls: list = []
-        x = sample_features(recorder(step, calls), c, a.frames, steps=T, guidance=a.guidance, seed=a.seed, num=a.num,
-                            z_dim=z_dim, objective=objective)
+        x = sample_features(recorder(step, calls), c, a.frames, settings, a.seed, a.num)
         if a.verbose:
             print(f"  {name!r}: final within-clip std {x.std(axis=1).mean():.3f}")
         for (xin, out), k in zip(calls, range(T - 1, -1, -1)):
@@ -81,37 +85,29 @@ def per_step(step, conds, entry: dict, T: int, a) -> None:
 
 def interval_table(step, conds, entry: dict, T: int, a) -> None:
     """For each threshold τ on the grid: the share of guidance's effect on the final motion kept."""
-    from emdm.sample import sample_features
-
     sch = make_schedule(T)
-    kw = dict(steps=T, seed=a.seed, num=a.num, z_dim=int(entry.get("zDim", 64)), objective=entry.get("objective", "ddgan"))
+    guided, plain = bench_settings(entry, T, a.guidance), bench_settings(entry, T, 1.0)
     full, none = [], []
     for _, c in conds:
-        full.append(sample_features(step, c, a.frames, guidance=a.guidance, **kw))
-        none.append(sample_features(step, c, a.frames, guidance=1.0, **kw))
+        full.append(sample_features(step, c, a.frames, guided, a.seed, a.num))
+        none.append(sample_features(step, c, a.frames, plain, a.seed, a.num))
     effect = [np.linalg.norm(f - n) for f, n in zip(full, none)]
     print(f"  guidance in a limited interval (guided where t > τ), final motion vs guided everywhere, "
           f"{len(conds)} conditions × {a.num} seeds; guidance's effect |x(s={a.guidance:g}) − x(s=1)|/|x(s={a.guidance:g})| "
           f"{sum(effect) / sum(np.linalg.norm(f) for f in full):.3f}:")
     print(f"    {'τ':>8}  guided steps  rows (of {2 * T})  kept (all)  kept (worst condition)")
     for tau in [0.0] + [float(t) for t in sch.time[:-1]]:
-        part = [sample_features(step, c, a.frames, guidance=a.guidance, guidance_min_time=tau, **kw) for _, c in conds]
+        at_tau = dataclasses.replace(guided, guidance_min_time=tau)
+        part = [sample_features(step, c, a.frames, at_tau, a.seed, a.num) for _, c in conds]
         lost = [np.linalg.norm(p - f) for p, f in zip(part, full)]
         guided = int(np.sum(sch.time > tau))
         print(f"    {tau:8.4f}  {guided:>12}  {T + guided:>14}  {1 - sum(lost) / sum(effect):10.4f}  "
               f"{min(1 - lo / e for lo, e in zip(lost, effect)):22.4f}")
 
 
-def sample_features(*args, **kw):
-    from emdm.sample import sample_features as sf
-
-    return sf(*args, **kw)
-
-
 def main(argv=None) -> int:
     from emdm import manifest as mf
     from emdm.paths import MODELS_DIR
-    from emdm.sample import onnx_step
 
     ap = argparse.ArgumentParser(prog="python -m emdm.model.bench_steps", description=__doc__.split("\n\n")[0])
     ap.add_argument("--model", nargs="+", default=["emdm-t2m-web"])

@@ -6,8 +6,8 @@
              step count T from the supported set and k ∈ 0..T−1; G sees the continuous time t_{k+1}.
   diffusion  the same transformer on the plain x0 objective at t ~ U(ε, 1) (z = 0), sampled with DDIM.
 
-The pairs (x_k, x_{k+1}) come from the forward process of :mod:`emdm.model.schedule` and the fake x_k from its
-posterior q(x_k | x_{k+1}, x̂_0) — exactly the transition ``emdm.sample.sample_features`` takes (a test holds the
+The pairs (x_k, x_{k+1}) come from the forward process of :mod:`emdm.sampler.schedule` and the fake x_k from its
+posterior q(x_k | x_{k+1}, x̂_0) — exactly the transition ``emdm.sampler.sample_features`` takes (a test holds the
 two together). Every step function returns its loss terms as 0-d tensors still on the device (no host sync).
 """
 
@@ -21,7 +21,7 @@ import torch
 import torch.nn.functional as F
 
 from emdm.model.geometry import geometric_losses
-from emdm.model.schedule import EPS_SMALL, make_schedule, marginal_coeffs
+from emdm.sampler.schedule import EPS_SMALL, make_schedule, marginal_coeffs
 
 TABLE_KEYS = ("time", "time_prev", "coef1", "coef2", "sigma", "a_cum", "s_cum", "a_step", "s_step")
 

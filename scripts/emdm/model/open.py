@@ -1,5 +1,5 @@
 """Open a model for sampling: the one place that turns a shipped model or a checkpoint into what the sampling
-loop (``emdm.sample.sample_features``) needs, for ``emdm.sample``, ``emdm.export`` and the evaluation
+loop (``emdm.sampler.sample_features``) needs, for ``emdm.sample``, ``emdm.export`` and the evaluation
 (``emdm.eval.sources`` and through it ``evaluate``, ``coverage``, ``suite``).
 
     from emdm.model.open import open_model

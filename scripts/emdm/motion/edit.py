@@ -1,5 +1,5 @@
 """Beyond one prompt (issue 14): a prompt timeline for long motions, in-betweening, body-part edits and loops, all
-made of masked sampling (``emdm.sample.sample_features(..., known, keep)``), masks (``emdm.motion.mask``) and root
+made of masked sampling (``emdm.sampler.sample_features`` with ``known``/``keep`` settings), masks (``emdm.motion.mask``) and root
 stitching (``emdm.motion.stitch``); docs/ARCHITECTURE.md "Sampling with constraints". The TypeScript twin is
 ``src/edit.ts``; both follow the same frame bookkeeping, checked by the ``tiny-edit`` parity fixture
 (``python -m emdm.motion.edit_fixture``).
@@ -49,6 +49,7 @@ import numpy as np
 from emdm.motion.features import recover_joints
 from emdm.motion.mask import KeepRect, keep_mask
 from emdm.motion.stitch import append_segment, pin_kept_root
+from emdm.sampler import SamplingSettings, finish, make_condition, run_together, sample_features, sampling
 
 FPS = 20
 OVERLAP = 20               # C: frames of the previous segment a new one starts from (1 s)
@@ -92,13 +93,8 @@ class Editor:
     mean: np.ndarray
     std: np.ndarray
     condition: Callable[[str], np.ndarray]
-    steps: int = 10
-    guidance: float = 2.5
-    z_dim: int = 64
-    objective: str = "ddgan"
+    settings: SamplingSettings = SamplingSettings(guidance=2.5)   # the manifest's, with its guidanceMinTime, x0Smoothing
     max_frames: int = 196
-    guidance_min_time: float = 0.0       # guidance only at steps above it (the manifest's guidanceMinTime)
-    x0_smoothing: float = 0.0            # σ (frames) of x̂_0's smoothing along time (the manifest's x0Smoothing)
     # a row's result is the same in any batch; False for a step file that quantises activations per call (int8):
     # ``begin`` then runs its loops alone (the TypeScript Generator.batchesExactly)
     batches_exactly: bool = True
@@ -116,10 +112,8 @@ class Editor:
     @classmethod
     def from_entry(cls, step: Callable, meta: dict, mean: np.ndarray, std: np.ndarray, steps: int | None = None,
                    guidance: float | None = None, models_dir=None) -> "Editor":
-        """From a step function, its manifest-like entry and mean/std (what ``emdm.sample.load_model`` returns); a text
-        model's prompts are encoded by the encoder in ``models_dir`` (default ``emdm.paths.models_dir()``)."""
-        from emdm.sample import make_condition
-
+        """From a step function, its manifest-like entry and mean/std (what ``emdm.model.open.open_model`` gives); a
+        text model's prompts are encoded by the encoder in ``models_dir`` (default ``emdm.paths.models_dir()``)."""
         spec = meta["condition"]
         cache: dict[str, np.ndarray] = {}
 
@@ -131,43 +125,29 @@ class Editor:
             return cache[prompt]
 
         return cls(step, np.asarray(mean, np.float32), np.asarray(std, np.float32), condition,
-                   int(meta.get("defaultSteps", 10)) if steps is None else steps,
-                   float(meta.get("guidance", 2.5)) if guidance is None else guidance,
-                   int(meta.get("zDim", 64)), meta.get("objective", "ddgan"), int(meta.get("maxFrames", 196)),
-                   float(meta.get("guidanceMinTime", 0.0)), float(meta.get("x0Smoothing", 0.0)))
+                   SamplingSettings.from_entry(meta, steps, guidance), int(meta.get("maxFrames", 196)))
 
     def sample(self, prompt: str, frames: int, seed: int, known: np.ndarray | None = None,
                keep: np.ndarray | None = None, keep_from_time: float = 1.0) -> np.ndarray:
-        """(frames, 263) normalised x̂_0 of one motion (``emdm.sample.sample_features``)."""
-        from emdm.sample import sample_features
-
-        return sample_features(self.step, self.condition(prompt), frames, self.steps, self.guidance, seed, 1,
-                               self.z_dim, objective=self.objective, known=known, keep=keep,
-                               guidance_min_time=self.guidance_min_time, x0_smoothing=self.x0_smoothing,
-                               keep_from_time=keep_from_time)[0]
+        """(frames, 263) normalised x̂_0 of one motion (``emdm.sampler.sample_features``)."""
+        settings = dataclasses.replace(self.settings, known=known, keep=keep, keep_from_time=keep_from_time)
+        return sample_features(self.step, self.condition(prompt), frames, settings, seed)[0]
 
     def sampling(self, prompt: str, frames: int, seed: int, keep: np.ndarray | None = None,
                  keep_from_time: float = 1.0, stop_at: float | None = None):
-        """``sample``'s loop as a generator (``emdm.sample.sampling``) that stops before t ≤ ``stop_at`` for its
+        """``sample``'s loop as a generator (``emdm.sampler.sampling``) that stops before t ≤ ``stop_at`` for its
         known motion: ``begin`` runs several together, ``finish`` each."""
-        from emdm.sample import sampling
-
-        return sampling(self.condition(prompt), frames, self.steps, self.guidance, seed, 1, self.z_dim,
-                        objective=self.objective, keep=keep, guidance_min_time=self.guidance_min_time,
-                        x0_smoothing=self.x0_smoothing, keep_from_time=keep_from_time, stop_at=stop_at)
+        settings = dataclasses.replace(self.settings, keep=keep, keep_from_time=keep_from_time)
+        return sampling(self.condition(prompt), frames, settings, seed, stop_at=stop_at)
 
     def begin(self, runs: list) -> None:
         """Advance ``sampling`` runs together, one model call per step, until each stops (``run_together``); one by
         one where the step file does not batch exactly (``batches_exactly``)."""
-        from emdm.sample import run_together
-
         for group in ([runs] if self.batches_exactly else [[r] for r in runs]):
             run_together(group, self.step)
 
     def finish(self, run, known: np.ndarray | None = None) -> np.ndarray:
         """(frames, 263) normalised x̂_0 of a stopped run, given its known motion (normalised; None: nothing kept)."""
-        from emdm.sample import finish
-
         return finish(run, self.step, known)[0]
 
     def normalise(self, features: np.ndarray) -> np.ndarray:

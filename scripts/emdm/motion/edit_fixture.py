@@ -24,7 +24,7 @@ constants (C = 20, K = 10, seam easing M ≥ 10 frames at ≤ 5 m/s², 20 fps, m
 
 Every sampling call is a ``run`` (JSON ``runs``, in call order) with its frames, label, seed and the key prefix of
 its noise arrays: ``<prefix>x_T``, then for k = steps−1..0 ``<prefix>z_<k>`` and ``<prefix>eps_<k>`` when drawn
-(the order emdm.sample draws them; ``emdm.fixtures.draw_noise``). Features are de-normalised throughout. Operations 3–5 start from the stored
+(the order emdm.sampler draws them; ``emdm.fixtures.draw_noise``). Features are de-normalised throughout. Operations 3–5 start from the stored
 ``timeline_features`` (not a re-computed timeline), so their errors do not compound.
 tests/python/test_fixtures_current.py regenerates the fixture and compares (``emdm.fixture_drift``: it must be current).
 """
@@ -38,8 +38,10 @@ import numpy as np
 
 from emdm import paths
 from emdm.fixtures import draw_noise, noise_arrays, write_case
-from emdm.model.schedule import make_schedule
+from emdm.model.open import onnx_step
 from emdm.motion import edit as E
+from emdm.sampler import SamplingSettings
+from emdm.sampler.schedule import make_schedule
 
 PARITY_DIR = paths.FIXTURES_DIR / "parity"
 NAME = "tiny-edit"
@@ -58,8 +60,6 @@ LOOP_LONG = ("h", 102, 34)      # label, seed, the model's window (the 48-frame 
 def tiny_editor(parity_dir: Path = PARITY_DIR, record: list | None = None) -> E.Editor:
     """The tiny step model as an ``Editor`` with one-hot label conditions; ``record`` collects (frames, label, seed)
     of every sampling call."""
-    from emdm.sample import onnx_step
-
     ms = np.fromfile(parity_dir / "tiny.meanstd.f32", "<f4")
     eye = np.eye(len(LABELS), dtype=np.float32)
 
@@ -75,7 +75,7 @@ def tiny_editor(parity_dir: Path = PARITY_DIR, record: list | None = None) -> E.
         return eye[LABELS.index(label)]
 
     return Recording(onnx_step(parity_dir / "tiny-step.onnx"), ms[:263], ms[263:], condition,
-                     steps=STEPS, guidance=GUIDANCE, z_dim=64, objective="ddgan", max_frames=196)
+                     SamplingSettings(method="ddgan", steps=STEPS, guidance=GUIDANCE, z_dim=64), max_frames=196)
 
 
 def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:

@@ -1,4 +1,4 @@
-"""The inpainting parity fixture: the tiny step model sampled by ``emdm.sample.sample_features`` with a known
+"""The inpainting parity fixture: the tiny step model sampled by ``emdm.sampler.sample_features`` with a known
 motion and a keep mask (frames 0..5 of everything, plus the legs on every frame), which the TypeScript sampler
 must reproduce with the same noise (tests/unit/coreMask.test.ts, ≤ 1e-4), and the feature groups' channels,
 which ``src/sampler/mask.ts`` must compute alike:
@@ -20,9 +20,12 @@ import numpy as np
 
 from emdm import paths
 from emdm.fixtures import TINY_COND_DIM, draw_noise, noise_arrays, write_case
-from emdm.model.schedule import make_schedule
+from emdm.model.open import onnx_step
 from emdm.motion.ik_fixture import read_case_array
 from emdm.motion.mask import GROUP_JOINTS, GROUPS, group_channels, keep_mask, parse_keep
+from emdm.sampler import SamplingSettings, sample_features
+from emdm.sampler.schedule import make_schedule
+from emdm.sampler.settings import method_of
 
 PARITY_DIR = paths.FIXTURES_DIR / "parity"
 NAME = "tiny-mask"
@@ -41,8 +44,6 @@ def known_motion(parity_dir: Path = PARITY_DIR) -> np.ndarray:
 
 def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
     """Sample the committed ``tiny-step.onnx`` (in ``parity_dir``) with the mask and write ``tiny-mask.*``."""
-    from emdm.sample import onnx_step, sample_features
-
     step = onnx_step(parity_dir / "tiny-step.onnx")
     known = known_motion(parity_dir)
     keep = keep_mask(FRAMES, [parse_keep(s) for s in SPECS])
@@ -50,8 +51,8 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
     arrays: dict[str, np.ndarray] = {"known": known, "keep": keep, "cond": cond}
     runs = {}
     for name, (prefix, objective, steps, seed) in RUNS.items():
-        x = sample_features(step, cond, FRAMES, steps=steps, guidance=GUIDANCE, seed=seed, objective=objective,
-                            known=known, keep=keep)[0]
+        settings = SamplingSettings(method_of(objective), steps, GUIDANCE, known=known, keep=keep)
+        x = sample_features(step, cond, FRAMES, settings, seed)[0]
         kept = keep.astype(bool)
         if not np.array_equal(x[kept], known[kept]):
             raise AssertionError(f"mask_fixture: {objective} run does not return the known motion on kept entries")
