@@ -238,9 +238,8 @@ def inbetween_range(spec: str) -> tuple[int, int] | None:
     return int(m.group(1)), int(m.group(2))
 
 
-def run_edit(a, step, entry: dict, mean, std, settings: SamplingSettings, frames: int) -> tuple[np.ndarray, np.ndarray]:
+def run_edit(a, model: E.Editor, frames: int) -> tuple[np.ndarray, np.ndarray]:
     """(features, joints) of one motion made by the edit mode (emdm.motion.edit), de-normalised."""
-    model = dataclasses.replace(E.Editor.from_entry(step, entry, mean, std, models_dir=a.models_dir), settings=settings)
     mode = edit_mode(a)
     prompt = a.text if a.text is not None else a.action
     try:
@@ -336,7 +335,8 @@ def run(a: argparse.Namespace) -> int:
         raise SampleError(f"--frames must be in 1..{max_frames}, got {frames}")
     settings = settings_of(a, entry)
     if edit_mode(a):
-        feats, joints = run_edit(a, step, entry, mean, std, settings, frames)
+        editor = E.Editor.from_entry(step, entry, mean, std, models_dir=a.models_dir)
+        feats, joints = run_edit(a, dataclasses.replace(editor, settings=settings), frames)
         return write_motion(a, feats[None], joints[None])
     cond = make_condition(entry["condition"], a.text, a.action, a.uncond, a.models_dir)
     far = a.text and a.model and capabilities.prompt_notice(a.model, cond, a.models_dir)

@@ -160,7 +160,7 @@ def test_a_moved_first_step_coefficient_makes_the_tiny_fixture_stale(tmp_path):
 
 
 def test_a_changed_beta_max_makes_the_ddim_fixture_stale(tmp_path, monkeypatch):
-    """β_max 20 → 20.02 in emdm.sampler.schedule (used by both emdm.sample and the fixture writer)."""
+    """β_max 20 → 20.02 in emdm.sampler.schedule (used by both emdm.sampler and the fixture writer)."""
     defaults = list(schedule_mod.make_schedule.__defaults__)
     defaults[2] = 20.02
     monkeypatch.setattr(schedule_mod.make_schedule, "__defaults__", tuple(defaults))
