@@ -86,10 +86,10 @@ def per_step(step, conds, entry: dict, T: int, a) -> None:
 def interval_table(step, conds, entry: dict, T: int, a) -> None:
     """For each threshold τ on the grid: the share of guidance's effect on the final motion kept."""
     sch = make_schedule(T)
-    guided, plain = bench_settings(entry, T, a.guidance), bench_settings(entry, T, 1.0)
+    everywhere, plain = bench_settings(entry, T, a.guidance), bench_settings(entry, T, 1.0)
     full, none = [], []
     for _, c in conds:
-        full.append(sample_features(step, c, a.frames, guided, a.seed, a.num))
+        full.append(sample_features(step, c, a.frames, everywhere, a.seed, a.num))
         none.append(sample_features(step, c, a.frames, plain, a.seed, a.num))
     effect = [np.linalg.norm(f - n) for f, n in zip(full, none)]
     print(f"  guidance in a limited interval (guided where t > τ), final motion vs guided everywhere, "
@@ -97,7 +97,7 @@ def interval_table(step, conds, entry: dict, T: int, a) -> None:
           f"{sum(effect) / sum(np.linalg.norm(f) for f in full):.3f}:")
     print(f"    {'τ':>8}  guided steps  rows (of {2 * T})  kept (all)  kept (worst condition)")
     for tau in [0.0] + [float(t) for t in sch.time[:-1]]:
-        at_tau = dataclasses.replace(guided, guidance_min_time=tau)
+        at_tau = dataclasses.replace(everywhere, guidance_min_time=tau)
         part = [sample_features(step, c, a.frames, at_tau, a.seed, a.num) for _, c in conds]
         lost = [np.linalg.norm(p - f) for p, f in zip(part, full)]
         guided = int(np.sum(sch.time > tau))
