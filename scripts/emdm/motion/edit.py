@@ -46,6 +46,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from emdm.model.open import quantises_per_call
 from emdm.motion.features import recover_joints
 from emdm.motion.mask import KeepRect, keep_mask
 from emdm.motion.stitch import append_segment, pin_kept_root
@@ -103,8 +104,6 @@ class Editor:
     def open(cls, opened, steps: int | None = None, guidance: float | None = None) -> "Editor":
         """From ``emdm.model.open.open_model(...)``: its step, mean/std and manifest entry (text prompts are encoded
         once each, an action model takes label names or indices)."""
-        from emdm.model.open import quantises_per_call
-
         ed = cls.from_entry(opened.step, opened.meta, opened.mean, opened.std, steps, guidance)
         exact = opened.kind != "shipped" or not quantises_per_call(opened.path)
         return ed if exact else dataclasses.replace(ed, batches_exactly=False)
