@@ -1,5 +1,5 @@
-"""The update rules the sampling loop can run, by ``SamplingSettings.method`` (the TypeScript twin is
-src/sampler/registry.ts). A new sampler is one module with one update function, in the manner of a diffusers
+"""The update rules the sampling loop can run, by ``SamplingSettings.method`` (the TypeScript sampler keeps the same
+names: src/sampler/). A new sampler is one module with one update function, in the manner of a diffusers
 scheduler's ``step()``, plus one line here:
 
     SAMPLERS["x0"] = Sampler(x0_update)
