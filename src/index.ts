@@ -30,6 +30,7 @@ export { alignSegment, appendSegment, headingAt, pinKeptRoot, pinRoot, rootPose 
 export { cleanupFootContacts, contactsFromFeatures, footSkate, plantContacts } from './motion/footContact';
 export { type BvhUnits, bvhFileName, writeBVH } from './export/bvh';
 export { characterToBVH, characterToGLB } from './export/characterGlb';
+export { type JointsDocument, motionToJSON } from './export/jointsJson';
 export { CharacterLoadError, MAX_CHARACTER_BYTES, loadCharacter } from './character/retarget/load';
 export type { CharacterFile, CharacterLoadReason, LoadCharacterOptions, LoadedCharacter } from './character/retarget/load';
 export { MappingError, REQUIRED_JOINTS, autoMap, mappingFromJSON, mappingToJSON, validateMapping } from './character/retarget/mapping';

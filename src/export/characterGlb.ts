@@ -11,10 +11,11 @@
  * extensions it does not know).
  */
 import { Matrix4, type Object3D, Quaternion, Vector3 } from 'three';
-import { type GltfJson, type LoadedCharacter, writeGlb } from '../character/retarget/load';
+import type { LoadedCharacter } from '../character/retarget/load';
 import type { RetargetResult } from '../character/retarget/retarget';
 import { matFromQuat } from '../motion/math3';
 import { type BvhUnits, eulerZXY } from './bvh';
+import { type GltfJson, writeGlb } from './glb';
 
 const FLOAT = 5126;
 

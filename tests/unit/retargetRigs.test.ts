@@ -6,7 +6,8 @@
 import { AnimationMixer, LoopOnce, type AnimationClip, type Object3D, Quaternion, Vector3 } from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { describe, expect, it } from 'vitest';
-import { type GltfJson, loadCharacter, readGlb, withoutTextures, writeGlb } from '../../src/character/retarget/load';
+import { loadCharacter, readGlb, withoutTextures } from '../../src/character/retarget/load';
+import { type GltfJson, writeGlb } from '../../src/export/glb';
 import type { BoneMapping } from '../../src/character/retarget/mapping';
 import { type RetargetMotion, type RetargetResult, retargetMotion } from '../../src/character/retarget/retarget';
 import { characterToBVH, characterToGLB } from '../../src/export/characterGlb';
