@@ -35,13 +35,13 @@ import type { VRM } from '@pixiv/three-vrm';
 import { JOINT_NAMES, type JointName } from '../../skeleton';
 import { type BoneInfo, type BoneMapping, MappingError, autoMap, validateMapping } from './mapping';
 import { bonesOf } from './retarget';
-import { checkDocument, checkJsonSize, checkRestPose, type Refuse } from './check';
+import { type CharacterLoadReason, checkDocument, checkJsonSize, checkRestPose, type Refuse } from './check';
 import { nextTask } from '../../yield';
 import { CHUNK_BIN, CHUNK_JSON, GLB_MAGIC, type GltfJson, writeGlb } from '../../export/glb';
 
 export const MAX_CHARACTER_BYTES = 100 * 1024 * 1024;
 
-export type CharacterLoadReason = 'no-file' | 'too-large' | 'too-complex' | 'corrupt' | 'unsupported' | 'external-resource' | 'no-skin' | 'bad-rig' | 'not-humanoid';
+export type { CharacterLoadReason };
 
 export class CharacterLoadError extends Error {
   constructor(
