@@ -14,7 +14,8 @@ import { isAbort, modelForMode, pageThreads, pageVariant, pickModels } from './u
 import { examplePrompts } from './ui/examples';
 import { CacheControl, FileList } from './ui/files';
 import { ErrorPanel, Notices } from './ui/notices';
-import { failedModel, limitsFor, Session, type Generation, type PageContext, type SessionGenerateOptions } from './ui/session';
+import type { PageContext } from './ui/page-context';
+import { failedModel, limitsFor, Session, type Generation, type SessionGenerateOptions } from './ui/session';
 import { pageFlagNotices, parseState, randomSeed, stateToSearch, unknownParamsNotice, type PageState } from './ui/state';
 import { connectTestApi, installTestApi } from './ui/testapi';
 import { KnowsPanel, markWeakActions } from './ui/knows';

@@ -14,7 +14,8 @@ import {
 import type { PoseTrack } from '../../src/three';
 import { el } from './dom';
 import { isAbort } from './engine';
-import type { Generation, PageContext } from './session';
+import type { PageContext } from './page-context';
+import type { Generation } from './session';
 import { randomSeed, type PageState } from './state';
 import { TIMELINE_PARAM, decodeTimeline, withTimeline } from './timeline-url';
 import './timeline.css';
