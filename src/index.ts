@@ -29,7 +29,7 @@ export { decodeJoints, type DecodeOptions } from './motion/decode';
 export { alignSegment, appendSegment, headingAt, pinKeptRoot, pinRoot, rootPose } from './motion/stitch';
 export { cleanupFootContacts, contactsFromFeatures, footSkate, plantContacts } from './motion/footContact';
 export { type BvhUnits, bvhFileName, writeBVH } from './export/bvh';
-export { characterToBVH, characterToGLB } from './export/characterGlb';
+export { characterToBVH, characterToGLB, fileBoneNames } from './export/characterGlb';
 export { type JointsDocument, motionToJSON } from './export/jointsJson';
 export { CharacterLoadError, MAX_CHARACTER_BYTES, loadCharacter } from './character/retarget/load';
 export type { CharacterFile, CharacterLoadReason, LoadCharacterOptions, LoadedCharacter } from './character/retarget/load';

@@ -74,6 +74,11 @@ export function characterToGLB(ch: Pick<LoadedCharacter, 'json' | 'bin' | 'nodeI
   return writeGlb(json, bin);
 }
 
+/** The name each bone has in the character's file (its glTF node's; three may rename duplicates), for characterToBVH. */
+export function fileBoneNames(ch: Pick<LoadedCharacter, 'json' | 'nodeIndex'>): (o: Object3D) => string {
+  return (o) => ch.json.nodes?.[ch.nodeIndex.get(o) ?? -1]?.name ?? o.name;
+}
+
 const DEG = 180 / Math.PI;
 /** length scale and digits per unit, as writeBVH writes them */
 const UNITS: Record<BvhUnits, [number, number]> = { m: [1, 6], cm: [100, 4] };

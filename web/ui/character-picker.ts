@@ -10,7 +10,7 @@
 // bone-map-editor.ts is the editor and the kept maps.
 import { Group, type Object3D } from 'three';
 import { clone as cloneSkinned } from 'three/addons/utils/SkeletonUtils.js';
-import { type CharacterFile, CharacterLoadError, type LoadedCharacter, loadCharacter, type BoneMapping, MappingError, mappingToJSON, validateMapping, type BvhUnits, bvhFileName, characterToBVH, characterToGLB, type Motion, type JointName, type Skeleton } from '../../src/index';
+import { type CharacterFile, CharacterLoadError, type LoadedCharacter, loadCharacter, type BoneMapping, MappingError, mappingToJSON, validateMapping, type BvhUnits, bvhFileName, characterToBVH, characterToGLB, fileBoneNames, type Motion, type JointName, type Skeleton } from '../../src/index';
 import { BoneMapEditor, saveMap, savedMap } from './bone-map-editor';
 import { type Performer, type RetargetStats, drop, perform, poseAt } from './character-performer';
 import { saveBlob } from './dom';
@@ -318,7 +318,7 @@ export class CharacterPicker {
     } else {
       // the unit the page's BVH download is set to (metres unless chosen otherwise)
       const units: BvhUnits = document.querySelector<HTMLSelectElement>('#dl-bvh-units')?.value === 'cm' ? 'cm' : 'm';
-      const bvh = characterToBVH(s.ch.root, s.result, (o) => s.ch.json.nodes?.[s.ch.nodeIndex.get(o) ?? -1]?.name ?? o.name, units);
+      const bvh = characterToBVH(s.ch.root, s.result, fileBoneNames(s.ch), units);
       saveBlob(new Blob([bvh], { type: 'text/plain' }), bvhFileName(base, units));
     }
   }
