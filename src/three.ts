@@ -1,6 +1,6 @@
 /**
  * The three.js entry of the library (docs/ARCHITECTURE.md "TypeScript library"): the skinned character
- * of the manifest's skeleton, the motion player, and joints → pose track.
+ * of the manifest's skeleton, the motion player, joints → pose track, and its GLB download (motionToGLB).
  *
  * ```ts
  * const character = createCharacter(generator.skeleton);
@@ -22,6 +22,7 @@ export { HEAD_PITCH } from './character/body';
 export { MotionPlayer, checkTrack, samplePose, trackDuration } from './character/player';
 export type { PoseTrack } from './character/player';
 export { buildBones, restPositions } from './character/rig';
+export { motionToGLB, trackToClip } from './export/builtinGlb';
 
 /** A motion with bone rotations already solved (createGenerator's results carry them as `pose`). */
 export type PosedMotion = Motion & { pose?: { rootPos: Float32Array; quats: Float32Array } };

@@ -14,8 +14,9 @@ import { isAbort, modelForMode, pageThreads, pageVariant, pickModels } from './u
 import { examplePrompts } from './ui/examples';
 import { CacheControl, FileList } from './ui/files';
 import { ErrorPanel, Notices } from './ui/notices';
-import { failedModel, limitsFor, Session, type Generation, type PageContext, type SessionGenerateOptions } from './ui/session';
-import { pageFlagNotices, parseState, randomSeed, stateToSearch, unknownParamsNotice, type PageState } from './ui/state';
+import type { PageContext } from './ui/page-context';
+import { failedModel, limitsFor, Session, type Generation, type SessionGenerateOptions } from './ui/session';
+import { pageFlagNotices, parseState, randomSeed, stateToSearch, unknownParamsNotice, type PageState, type StateLimits } from './ui/state';
 import { connectTestApi, installTestApi } from './ui/testapi';
 import { KnowsPanel, markWeakActions } from './ui/knows';
 import { TimelinePanel } from './ui/timeline';
@@ -51,61 +52,11 @@ const { api, finish } = installTestApi({
 });
 
 async function main(): Promise<void> {
-  let manifest: Manifest;
-  try {
-    manifest = await loadManifest(MODELS_URL);
-    api.startup.manifestMs = performance.now();
-  } catch (e) {
-    view.status.show('error', 'Models unavailable');
-    errorPanel.show('The model list could not be loaded', describe(e),
-      'The page needs public/models/manifest.json and the files it lists (run `make demo`).');
-    finish('error', describe(e));
-    return;
-  }
-  const models = pickModels(manifest);
-  const limits = limitsFor(manifest, models);
-  if (!limits) {
-    view.attach(manifest.skeleton);
-    view.status.show('error', 'No motion model');
-    errorPanel.show('No motion model is shipped', 'public/models/manifest.json lists no text or action model.',
-      'Export one with `python -m emdm.export` (see README).');
-    finish('error', 'manifest lists no models');
-    return;
-  }
-  const parsed = parseState(location.search, limits, randomSeed());
-  for (const n of parsed.notices) notices.show('warn', n, 14000);
-  const unknownParams = unknownParamsNotice(location.search);
-  if (unknownParams) notices.show('warn', unknownParams, 14000);
-  for (const n of pageFlagNotices(location.search)) notices.show('warn', n, 14000);
-  const variant = pageVariant(manifest, location.search);
-  if (variant.notice) notices.show('warn', variant.notice, 14000);
-  const threads = pageThreads(location.search);
-  if (threads.notice) notices.show('warn', threads.notice, 14000);
-
-  // ------------------------------------------------------------ session: the models in the worker
-  const session = new Session(manifest, limits, MODELS_URL, parsed.state.backend, {
-    download: (model, loaded, total) => view.status.download(model, loaded, total),
-    fallback: (model, reason) => notices.show('info', `${reason}: ${model} runs on WebAssembly (CPU) instead.`, 12000),
-    file: (e) => {
-      fileList.update(e);
-      if (e.state === 'done' && api.ready) void cacheControl.refresh(); // a model loaded later (compare view)
-    },
-    notice: (kind, text) => notices.show(kind, text, 14000),
-  }, api.counters, variant.variant, threads.threads);
-  session.onLoad = (model, e) => {
-    if (e.phase === 'start') view.status.begin(model);
-    else if (e.phase === 'ready') view.status.end(model, 'ready', view.status.last?.kind === 'ready' ? view.status.last.text : `Ready · ${e.info.backend === 'webgpu' ? 'WebGPU' : 'WASM'}`);
-    else view.status.end(model, 'error', `${model} unavailable`);
-  };
-  void session.engine.client.environment.then((env) => {
-    api.environment = env;
-    if (!env.crossOriginIsolated) {
-      const note = byId('isolation-note');
-      note.textContent = NOT_ISOLATED;
-      note.hidden = false;
-      notices.show('warn', NOT_ISOLATED, 20000);
-    }
-  });
+  const loaded = await loadPageManifest();
+  if (!loaded) return;
+  const { manifest, models, limits } = loaded;
+  const { parsed, variant, threads } = readUrl(manifest, limits);
+  const session = startSession(manifest, limits, parsed.state.backend, variant, threads);
 
   // The first model (and ONNX Runtime) start loading in the worker now, while this thread builds the
   // view: the page is ready sooner on a cold and on a second visit (awaited and reported below).
@@ -120,9 +71,99 @@ async function main(): Promise<void> {
   await Promise.race([session.engine.client.environment.catch(() => undefined), new Promise((r) => setTimeout(r, 1500))]);
   view.attach(manifest.skeleton);
 
-  // ------------------------------------------------------------ controls + URL
+  // ------------------------------------------------------------ controls, and generating as the page does
+  let generate: PageContext['generate'] = () => Promise.reject(new Error('the page is still starting'));
+  const { controls, knows } = buildControls(manifest, models, limits, session, parsed.state, (s) => void generate(s).catch(() => undefined));
+  generate = pageGenerate(session, controls, knows, models);
+
+  // ------------------------------------------------------------ panels and the test API get the page
+  const page: PageContext = { session, view, controls, generate };
+  connectTestApi(api, page);
+  const timeline = new TimelinePanel(page, byId('edit-panel'));
+  api.edit = timeline.testApi();
+
+  // ------------------------------------------------------------ cold start: load the first model
+  const first = modelForMode(models, controls.read().mode) ?? (models.text ?? models.action)!;
+  if (!(await coldStart(session, controls, models, first, earlyLoad && early?.name === first.name ? earlyLoad : null))) return;
+  // Show something right away: the motion the URL (or the defaults) describe.
+  // A link whose timeline was refused generates nothing: its message stays in the panel (not replaced by another motion).
+  if (AUTO_GENERATE && !timeline.linkRefused) void (timeline.restoredFromUrl ? timeline.generateAll() : generate(controls.read())).catch(() => undefined);
+}
+
+type Models = ReturnType<typeof pickModels>;
+
+/** The manifest, its models and their limits; null (the page says why) when there is nothing to run. */
+async function loadPageManifest(): Promise<{ manifest: Manifest; models: Models; limits: StateLimits } | null> {
+  let manifest: Manifest;
+  try {
+    manifest = await loadManifest(MODELS_URL);
+    api.startup.manifestMs = performance.now();
+  } catch (e) {
+    view.status.show('error', 'Models unavailable');
+    errorPanel.show('The model list could not be loaded', describe(e),
+      'The page needs public/models/manifest.json and the files it lists (run `make demo`).');
+    finish('error', describe(e));
+    return null;
+  }
+  const models = pickModels(manifest);
+  const limits = limitsFor(manifest, models);
+  if (!limits) {
+    view.attach(manifest.skeleton);
+    view.status.show('error', 'No motion model');
+    errorPanel.show('No motion model is shipped', 'public/models/manifest.json lists no text or action model.',
+      'Export one with `python -m emdm.export` (see README).');
+    finish('error', 'manifest lists no models');
+    return null;
+  }
+  return { manifest, models, limits };
+}
+
+/** The page's state, model variant and threads from the URL, each problem with it a notice. */
+function readUrl(manifest: Manifest, limits: StateLimits) {
+  const parsed = parseState(location.search, limits, randomSeed());
+  for (const n of parsed.notices) notices.show('warn', n, 14000);
+  const unknownParams = unknownParamsNotice(location.search);
+  if (unknownParams) notices.show('warn', unknownParams, 14000);
+  for (const n of pageFlagNotices(location.search)) notices.show('warn', n, 14000);
+  const variant = pageVariant(manifest, location.search);
+  if (variant.notice) notices.show('warn', variant.notice, 14000);
+  const threads = pageThreads(location.search);
+  if (threads.notice) notices.show('warn', threads.notice, 14000);
+  return { parsed, variant: variant.variant, threads: threads.threads };
+}
+
+/** The session: the models in the worker, its downloads, fallbacks and files shown on the page. */
+function startSession(manifest: Manifest, limits: StateLimits, backend: PageState['backend'], variant: ReturnType<typeof pageVariant>['variant'], threads: ReturnType<typeof pageThreads>['threads']): Session {
+  const session = new Session(manifest, limits, MODELS_URL, backend, {
+    download: (model, loaded, total) => view.status.download(model, loaded, total),
+    fallback: (model, reason) => notices.show('info', `${reason}: ${model} runs on WebAssembly (CPU) instead.`, 12000),
+    file: (e) => {
+      fileList.update(e);
+      if (e.state === 'done' && api.ready) void cacheControl.refresh(); // a model loaded later (compare view)
+    },
+    notice: (kind, text) => notices.show(kind, text, 14000),
+  }, api.counters, variant, threads);
+  session.onLoad = (model, e) => {
+    if (e.phase === 'start') view.status.begin(model);
+    else if (e.phase === 'ready') view.status.end(model, 'ready', view.status.last?.kind === 'ready' ? view.status.last.text : `Ready · ${e.info.backend === 'webgpu' ? 'WebGPU' : 'WASM'}`);
+    else view.status.end(model, 'error', `${model} unavailable`);
+  };
+  void session.engine.client.environment.then((env) => {
+    api.environment = env;
+    if (!env.crossOriginIsolated) {
+      const note = byId('isolation-note');
+      note.textContent = NOT_ISOLATED;
+      note.hidden = false;
+      notices.show('warn', NOT_ISOLATED, 20000);
+    }
+  });
+  return session;
+}
+
+/** The side bar's controls (set to `state`, their changes in the URL), and what the models do well beside them. */
+function buildControls(manifest: Manifest, models: Models, limits: StateLimits, session: Session, state: PageState, generate: (s: PageState) => void) {
   const controls = new Controls(limits, examplePrompts(manifest, models.text?.name ?? null, limits.actions), {
-    generate: () => void generate(controls.read()).catch(() => undefined),
+    generate: () => generate(controls.read()),
     cancel: () => session.engine.cancel(),
     change: (s) => {
       history.replaceState(null, '', stateToSearch(s));
@@ -143,8 +184,20 @@ async function main(): Promise<void> {
       controls.setCompareAvailable(`The diffusion model ${name} failed to load: ${describe(e)}`);
     });
   }
-  controls.set(parsed.state);
-  // what the models do well (capabilities files): the list beside the prompt, the weak actions, the far-prompt notice
+  controls.set(state);
+  const knows = showCapabilities(manifest, models, controls);
+  if (!models.action) controls.setModeAvailable('action', 'No action model is shipped with this demo');
+  if (!models.text) {
+    controls.setModeAvailable('text', 'No text model is shipped with this demo');
+    controls.setModeAvailable('random', 'No text model is shipped with this demo');
+    if (state.mode !== 'action') controls.setMode('action');
+  }
+  history.replaceState(null, '', stateToSearch(controls.read()));
+  return { controls, knows };
+}
+
+/** What the models do well (capabilities files): the list beside the prompt, the weak actions, the far-prompt notice. */
+function showCapabilities(manifest: Manifest, models: Models, controls: Controls): KnowsPanel {
   const knows = new KnowsPanel((text) => controls.usePrompt(text));
   // the capabilities files are verified files like the models: listed with them, and served from the same Cache
   // Storage on a second visit
@@ -158,16 +211,12 @@ async function main(): Promise<void> {
     knows.setCapabilities(t, a);
     markWeakActions(byId('action', HTMLSelectElement), a);
   });
-  if (!models.action) controls.setModeAvailable('action', 'No action model is shipped with this demo');
-  if (!models.text) {
-    controls.setModeAvailable('text', 'No text model is shipped with this demo');
-    controls.setModeAvailable('random', 'No text model is shipped with this demo');
-    if (parsed.state.mode !== 'action') controls.setMode('action');
-  }
-  history.replaceState(null, '', stateToSearch(controls.read()));
+  return knows;
+}
 
-  // ------------------------------------------------------------ generate as the page does (newest request wins)
-  async function generate(s: PageState, o: SessionGenerateOptions = {}): Promise<Generation> {
+/** Generate as the page does (newest request wins): busy controls, progress, previews, the result shown, errors reported. */
+function pageGenerate(session: Session, controls: Controls, knows: KnowsPanel, models: Models): PageContext['generate'] {
+  return async (s: PageState, o: SessionGenerateOptions = {}): Promise<Generation> => {
     const checked = session.check(s, o.model, controls.compareUnavailable(s.mode));
     const watch = !checked.plan && view.showSteps.checked;
     if (!checked.plan) view.resetPreviews();
@@ -202,22 +251,18 @@ async function main(): Promise<void> {
         view.hideProgress();
       }
     }
-  }
+  };
+}
 
-  // ------------------------------------------------------------ panels and the test API get the page
-  const page: PageContext = { session, view, controls, generate };
-  connectTestApi(api, page);
-  const timeline = new TimelinePanel(page, byId('edit-panel'));
-  api.edit = timeline.testApi();
-
-  // ------------------------------------------------------------ cold start: load the first model
-  const first = modelForMode(models, controls.read().mode) ?? (models.text ?? models.action)!;
+/** Load the first model (`early`: its load already under way). False when it failed: the other mode is offered and the page is ready without it. */
+async function coldStart(session: Session, controls: Controls, models: Models, first: NonNullable<Models['text']>, early: Promise<unknown> | null): Promise<boolean> {
   try {
-    await (earlyLoad && early?.name === first.name ? earlyLoad : session.load(first.name));
+    await (early ?? session.load(first.name));
     controls.setReady(true);
     finish('ready');
     fileList.settle();
     void cacheControl.refresh();
+    return true;
   } catch (e) {
     fileList.settle();
     void cacheControl.refresh();
@@ -235,11 +280,8 @@ async function main(): Promise<void> {
     view.status.show('error', `${first.name} unavailable${other ? ` · ${other === models.action ? 'Action' : 'Text'} mode still works` : ''}`);
     controls.setReady(true);
     finish('ready', describe(e));
-    return;
+    return false;
   }
-  // Show something right away: the motion the URL (or the defaults) describe.
-  // A link whose timeline was refused generates nothing: its message stays in the panel (not replaced by another motion).
-  if (AUTO_GENERATE && !timeline.linkRefused) void (timeline.restoredFromUrl ? timeline.generateAll() : generate(controls.read())).catch(() => undefined);
 }
 
 main().catch((e) => {

@@ -23,12 +23,12 @@ from pathlib import Path
 import numpy as np
 
 from emdm import skeleton as sk
-from emdm.mocap.bvh_writer import write_bvh
-from emdm.mocap.glb_writer import write_glb
 from emdm.model.open import ModelError, open_shipped
 from emdm.motion.features import recover_joints
 from emdm.sampler import (MAX_SEED, SampleError, SamplingSettings, check_steps, denormalise, make_condition,
                           sample_features)
+from emdm.writers.bvh import write_bvh
+from emdm.writers.glb import write_glb
 
 DEFAULT_MODEL = "emdm-t2m-web"
 
@@ -45,11 +45,11 @@ class Motion:
         return self.joints.shape[0] / self.fps
 
     def write_bvh(self, path: Path | str, units: str = "m") -> Path:
-        """A BVH file (``emdm.mocap.bvh_writer``; metres, or ``units="cm"``)."""
+        """A BVH file (``emdm.writers.bvh``; metres, or ``units="cm"``)."""
         return write_bvh(self.joints, path, self.fps, units)
 
     def write_glb(self, path: Path | str) -> Path:
-        """A binary glTF 2.0 file: skinned skeleton with one animation (``emdm.mocap.glb_writer``)."""
+        """A binary glTF 2.0 file: skinned skeleton with one animation (``emdm.writers.glb``)."""
         return write_glb(self.joints, path, self.fps)
 
 

@@ -48,7 +48,7 @@ import numpy as np
 from emdm import manifest as mf
 from emdm import paths
 from emdm.eval import capabilities
-from emdm.mocap.bvh_writer import bvh_path, write_bvh
+from emdm.writers.bvh import bvh_path, write_bvh
 from emdm.model.open import ModelError, open_model
 from emdm.motion import edit as E
 from emdm.motion.features import recover_joints

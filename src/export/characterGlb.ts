@@ -11,10 +11,11 @@
  * extensions it does not know).
  */
 import { Matrix4, type Object3D, Quaternion, Vector3 } from 'three';
-import { type GltfJson, type LoadedCharacter, writeGlb } from '../character/retarget/load';
+import type { LoadedCharacter } from '../character/retarget/load';
 import type { RetargetResult } from '../character/retarget/retarget';
 import { matFromQuat } from '../motion/math3';
 import { type BvhUnits, eulerZXY } from './bvh';
+import { type GltfJson, writeGlb } from './glb';
 
 const FLOAT = 5126;
 
@@ -71,6 +72,11 @@ export function characterToGLB(ch: Pick<LoadedCharacter, 'json' | 'bin' | 'nodeI
   }
   json.buffers = [{ byteLength: length }];
   return writeGlb(json, bin);
+}
+
+/** The name each bone has in the character's file (its glTF node's; three may rename duplicates), for characterToBVH. */
+export function fileBoneNames(ch: Pick<LoadedCharacter, 'json' | 'nodeIndex'>): (o: Object3D) => string {
+  return (o) => ch.json.nodes?.[ch.nodeIndex.get(o) ?? -1]?.name ?? o.name;
 }
 
 const DEG = 180 / Math.PI;

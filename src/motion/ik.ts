@@ -105,6 +105,25 @@ export function solveIK(joints: Float32Array, frames: number, skeleton: Skeleton
   }
 }
 
+const X: V3 = [1, 0, 0];
+const Y: V3 = [0, 1, 0];
+
+/** Rest flexion axes of legs and arms: the rest limb's own bend normal when it is visibly bent, else the
+ * anatomical default (knees flex about +X; elbows about −Y (left) / +Y (right) in the T-pose). */
+function restBendAxes(rest: V3[], I: (j: JointName) => number) {
+  const restAxis = (a: JointName, b: JointName, dflt: V3): V3 => {
+    const n = cross(rest[I(a)], rest[I(b)]);
+    const sin = norm(n) / Math.max(norm(rest[I(a)]) * norm(rest[I(b)]), 1e-12);
+    if (sin < 0.03) return dflt;
+    const nh = normalize(n);
+    return dot(nh, dflt) < 0 ? scale(nh, -1) : nh;
+  };
+  return {
+    legAxisRest: { l: restAxis('l_knee', 'l_ankle', X), r: restAxis('r_knee', 'r_ankle', X) },
+    armAxisRest: { l: restAxis('l_elbow', 'l_wrist', [0, -1, 0]), r: restAxis('r_elbow', 'r_wrist', [0, 1, 0]) },
+  };
+}
+
 /** solveIK as a generator that yields (the share of frames solved) after each frame, so a caller can run it in slices (src/character/retarget). */
 export function* solveIKSteps(joints: Float32Array, frames: number, skeleton: SkeletonLike, opts: { adaptOffsets?: boolean } = {}): Generator<number, IKResult, void> {
   const J = skeleton.joints.length;
@@ -113,20 +132,8 @@ export function* solveIKSteps(joints: Float32Array, frames: number, skeleton: Sk
   const par = skeleton.parents;
   const rest = skeleton.offsets.map((o) => v3(o)); // defines the rest frames (rotation = identity)
   const off = opts.adaptOffsets === false || frames === 0 ? rest : adaptedOffsets(joints, frames, skeleton, I); // FK offsets
-  const X: V3 = [1, 0, 0];
-  const Y: V3 = [0, 1, 0];
   const restAcrossHip = sub(rest[I('l_hip')], rest[I('r_hip')]);
-  // Rest flexion axes: the rest limb's own bend normal when it is visibly bent, else the
-  // anatomical default (knees flex about +X; elbows about −Y (left) / +Y (right) in the T-pose).
-  const restAxis = (a: JointName, b: JointName, dflt: V3): V3 => {
-    const n = cross(rest[I(a)], rest[I(b)]);
-    const sin = norm(n) / Math.max(norm(rest[I(a)]) * norm(rest[I(b)]), 1e-12);
-    if (sin < 0.03) return dflt;
-    const nh = normalize(n);
-    return dot(nh, dflt) < 0 ? scale(nh, -1) : nh;
-  };
-  const legAxisRest = { l: restAxis('l_knee', 'l_ankle', X), r: restAxis('r_knee', 'r_ankle', X) };
-  const armAxisRest = { l: restAxis('l_elbow', 'l_wrist', [0, -1, 0]), r: restAxis('r_elbow', 'r_wrist', [0, 1, 0]) };
+  const { legAxisRest, armAxisRest } = restBendAxes(rest, I);
   const rootPos = new Float32Array(frames * 3);
   const quats = new Float32Array(frames * J * 4);
   // previous frame's bend axes in the parent's frame (continuity when a limb is straight)

@@ -6,7 +6,8 @@ import fs from 'node:fs';
 import path from 'node:path';
 import { expect, test, type Page } from '@playwright/test';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
-import { readGlb, writeGlb } from '../../src/character/retarget/load';
+import { readGlb } from '../../src/character/retarget/load';
+import { writeGlb } from '../../src/export/glb';
 import { RIGS, buildRigGlb, withSkin } from '../unit/retargetRigs';
 import { watchExternalRequests, watchPage } from './helpers';
 

@@ -1,4 +1,4 @@
-"""emdm.mocap.glb_writer: the .glb of a generated motion loads in three.js's GLTFLoader (as an app loads it) and its
+"""emdm.writers.glb: the .glb of a generated motion loads in three.js's GLTFLoader (as an app loads it) and its
 animation puts every bone where the rig's forward kinematics puts the joint; the container is valid GLB."""
 
 import json
@@ -12,7 +12,7 @@ import pytest
 
 import emdm
 from emdm import skeleton as sk
-from emdm.mocap.glb_writer import glb_bytes, write_glb
+from emdm.writers.glb import glb_bytes, write_glb
 from emdm.motion.ik import forward_kinematics, solve_ik
 
 CHECK = Path(__file__).with_name("gltf_check.mjs")

@@ -15,7 +15,7 @@ import pytest
 from emdm import skeleton as sk
 from emdm.mocap.bvh import forward_kinematics as bvh_fk
 from emdm.mocap.bvh import parse_bvh_text
-from emdm.mocap.bvh_writer import bvh_path, bvh_text
+from emdm.writers.bvh import bvh_path, bvh_text
 from emdm.motion import ik
 from emdm.motion import ik_fixture
 

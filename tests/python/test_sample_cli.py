@@ -6,7 +6,7 @@ import pytest
 from emdm import skeleton as sk
 from emdm.export import main as export_main
 from emdm.mocap.bvh import forward_kinematics as bvh_fk, read_bvh
-from emdm.mocap.bvh_writer import write_bvh
+from emdm.writers.bvh import write_bvh
 from emdm.motion.ik import forward_kinematics, solve_ik
 from emdm.model.open import onnx_step
 from emdm.sample import main as sample_main

@@ -6,7 +6,8 @@
 // engine or a hang: no call may take a second. Each part runs for a bounded time (~5 s) from a fixed seed (FUZZ_SEED for others), and
 // prints how many inputs it tried and how they ended.
 import { describe, expect, it } from 'vitest';
-import { CharacterLoadError, loadCharacter, readGlb, writeGlb } from '../../src/character/retarget/load';
+import { CharacterLoadError, loadCharacter, readGlb } from '../../src/character/retarget/load';
+import { writeGlb } from '../../src/export/glb';
 import { EditError, planTimeline } from '../../src/edit';
 import { TimelineUrlError, decodeTimeline } from '../../web/ui/timeline-url';
 import { manifestSkeleton } from './coreFixtures';

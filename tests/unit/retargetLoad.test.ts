@@ -1,7 +1,8 @@
 // Loading users' characters (src/character/retarget/load.ts): bad files get a typed error that says what
 // is wrong; nothing outside the given files is fetched; .gltf + .bin + images are packed into one GLB.
 import { describe, expect, it } from 'vitest';
-import { CharacterLoadError, type CharacterFile, MAX_CHARACTER_BYTES, loadCharacter, packDocument, readGlb, writeGlb } from '../../src/character/retarget/load';
+import { CharacterLoadError, type CharacterFile, MAX_CHARACTER_BYTES, loadCharacter, packDocument, readGlb } from '../../src/character/retarget/load';
+import { writeGlb } from '../../src/export/glb';
 import { MAX_BONES, MAX_JSON_BYTES, MAX_NODES } from '../../src/character/retarget/check';
 import { mappingToJSON, mappingFromJSON } from '../../src/character/retarget/mapping';
 import { manifestSkeleton } from './coreFixtures';

@@ -6,10 +6,11 @@
 import { AnimationMixer, LoopOnce, type AnimationClip, type Object3D, Quaternion, Vector3 } from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { describe, expect, it } from 'vitest';
-import { type GltfJson, loadCharacter, readGlb, withoutTextures, writeGlb } from '../../src/character/retarget/load';
+import { loadCharacter, readGlb, withoutTextures } from '../../src/character/retarget/load';
+import { type GltfJson, writeGlb } from '../../src/export/glb';
 import type { BoneMapping } from '../../src/character/retarget/mapping';
 import { type RetargetMotion, type RetargetResult, retargetMotion } from '../../src/character/retarget/retarget';
-import { characterToBVH, characterToGLB } from '../../src/export/characterGlb';
+import { characterToBVH, characterToGLB, fileBoneNames } from '../../src/export/characterGlb';
 import { cleanupFootContacts, contactsFromFeatures, plantContacts } from '../../src/motion/footContact';
 import { restPositions } from '../../src/character/rig';
 import { JOINT_NAMES, type JointName } from '../../src/skeleton';
@@ -213,10 +214,10 @@ async function checkCharacter(label: string, file: string, glb: Uint8Array, unma
         expect(moved, 'the reloaded GLB plays the same motion').toBeLessThan(1e-4);
 
         // the BVH download on the rig's names
-        const bvh = characterToBVH(ch.root, res, (o) => ch.json.nodes[ch.nodeIndex.get(o)!]?.name ?? o.name);
+        const bvh = characterToBVH(ch.root, res, fileBoneNames(ch));
         const lines = bvh.split('\n');
         // metres by default, like writeBVH; centimetres on request: every number ×100 but the angles
-        const cm = characterToBVH(ch.root, res, (o) => ch.json.nodes[ch.nodeIndex.get(o)!]?.name ?? o.name, 'cm').split('\n');
+        const cm = characterToBVH(ch.root, res, fileBoneNames(ch), 'cm').split('\n');
         const off = (l: string[]) => l.find((x) => /^\s+OFFSET/.test(x) && !/OFFSET 0\.0+ 0\.0+ 0\.0+$/.test(x.trim()))!.trim().split(/\s+/).slice(1).map(Number);
         off(cm).forEach((v, k) => expect(v).toBeCloseTo(off(lines)[k] * 100, 2));
         expect(lines[1]).toBe(`ROOT ${ch.json.nodes[ch.nodeIndex.get(res.bones[0])!].name.replace(/\s+/g, '_')}`);

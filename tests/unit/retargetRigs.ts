@@ -4,7 +4,8 @@
 // (Z-up → Y-up rotation, 0.01 scale as Blender's FBX exports have), extra spine, twist and finger
 // bones, and the VRM humanoid extension (0.x and 1.0). One tiny tetrahedron per bone is the mesh.
 import { Matrix4, Object3D, Quaternion, Vector3 } from 'three';
-import { readGlb, writeGlb } from '../../src/character/retarget/load';
+import { readGlb } from '../../src/character/retarget/load';
+import { writeGlb } from '../../src/export/glb';
 import { restPositions } from '../../src/character/rig';
 import type { JointName, SkeletonLike } from '../../src/skeleton';
 

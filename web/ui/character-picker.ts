@@ -6,10 +6,16 @@
 // Retargeting runs in slices (retargetMotionAsync: ~8 ms of work, then the page draws), so a 60 s motion
 // does not freeze the page; a newer motion cancels the one being put on the character (newest wins), and
 // the character plays its previous clip until the new one is ready.
-import { AnimationMixer, Group, LoopOnce, type AnimationAction, type Object3D } from 'three';
+// This file loads and swaps the characters; character-performer.ts puts a motion on one copy, and
+// bone-map-editor.ts is the editor and the kept maps.
+import { Group, type Object3D } from 'three';
 import { clone as cloneSkinned } from 'three/addons/utils/SkeletonUtils.js';
-import { type CharacterFile, CharacterLoadError, type LoadedCharacter, loadCharacter, type BoneInfo, type BoneMapping, MappingError, mappingFromJSON, mappingToJSON, validateMapping, type RetargetResult, retargetMotionAsync, type BvhUnits, bvhFileName, characterToBVH, characterToGLB, contactsFromFeatures, plantContacts, type Motion, JOINT_NAMES, type JointName, type Skeleton } from '../../src/index';
+import { type CharacterFile, CharacterLoadError, type LoadedCharacter, loadCharacter, type BoneMapping, MappingError, mappingToJSON, validateMapping, type BvhUnits, bvhFileName, characterToBVH, characterToGLB, fileBoneNames, type Motion, type JointName, type Skeleton } from '../../src/index';
+import { BoneMapEditor, saveMap, savedMap } from './bone-map-editor';
+import { type Performer, type RetargetStats, drop, perform, poseAt } from './character-performer';
 import { saveBlob } from './dom';
+
+export type { RetargetStats } from './character-performer';
 
 export interface PickerHost {
   /** adds an object to the stage's scene */
@@ -26,18 +32,6 @@ export interface PickerHost {
   changed?(): void;
 }
 
-/** One copy of the visitor's character performing one motion. */
-interface Performer {
-  root: Object3D;
-  holder: Group;
-  mixer: AnimationMixer | null;
-  action: AnimationAction | null;
-  result: RetargetResult | null;
-  /** the retargeting under way (aborted when a newer motion arrives), null when none */
-  job: AbortController | null;
-}
-
-const STORE = 'emdm.boneMap.';
 const ACCEPT = '.glb,.gltf,.vrm,.bin,.png,.jpg,.jpeg,.webp,.ktx2';
 
 interface Shown extends Performer {
@@ -46,16 +40,6 @@ interface Shown extends Performer {
   twin: Performer | null;
   /** what the status line says about it once its motion is on it */
   summary: string;
-}
-
-/** Retargeting runs of this page visit (window.emdmCharacter.retargets). */
-export interface RetargetStats {
-  started: number;
-  finished: number;
-  /** stopped because a newer motion (or another character) came first */
-  cancelled: number;
-  /** the last one that finished: frames, wall time on the page and the slices it was cut into, performance.now() at start/end */
-  last: { frames: number; ms: number; slices: number; start: number; end: number; firstSliceMs: number; longestSliceMs: number } | null;
 }
 
 /** What the page's tests read (window.emdmCharacter). */
@@ -83,13 +67,10 @@ export class CharacterPicker {
   private compareMotion: Motion | null = null;
   private stem = 'emdm';
   private files: CharacterFile[] = [];
-  /** the bones the editor offers (of the last file read, shown or refused) */
-  private editorBones: BoneInfo[] = [];
   private readonly el: HTMLElement;
   private readonly status: HTMLElement;
   private readonly back: HTMLButtonElement;
-  private readonly editor: HTMLDetailsElement;
-  private readonly rows: HTMLElement;
+  private readonly editor: BoneMapEditor;
   private readonly dlGlb: HTMLButtonElement;
   private readonly dlBvh: HTMLButtonElement;
   private readonly stats: RetargetStats = { started: 0, finished: 0, cancelled: 0, last: null };
@@ -127,8 +108,7 @@ export class CharacterPicker {
     const q = <T extends HTMLElement>(id: string) => el.querySelector<T>(`#${id}`)!;
     this.status = q('char-status');
     this.back = q<HTMLButtonElement>('char-builtin');
-    this.editor = q<HTMLDetailsElement>('char-map');
-    this.rows = q('char-map-rows');
+    this.editor = new BoneMapEditor(q<HTMLDetailsElement>('char-map'), q('char-map-rows'));
     this.dlGlb = q<HTMLButtonElement>('dl-char-glb');
     this.dlBvh = q<HTMLButtonElement>('dl-char-bvh');
     const input = q<HTMLInputElement>('char-file');
@@ -177,7 +157,7 @@ export class CharacterPicker {
     const s = this.shown;
     if (!s) return null;
     if (!motion) {
-      if (s.twin) this.drop(s.twin);
+      if (s.twin) drop(s.twin);
       s.twin = null;
       return null;
     }
@@ -193,7 +173,7 @@ export class CharacterPicker {
       s.twin = { root, holder, mixer: null, action: null, result: null, job: null };
     }
     const twin = s.twin;
-    this.perform(twin, motion, s.ch).catch((e) => {
+    perform(twin, motion, s.ch, this.host.skeleton, this.stats).catch((e) => {
       if (this.shown?.twin === twin) this.fail(e);
     });
     return { left: s.holder, right: s.twin.holder };
@@ -208,20 +188,11 @@ export class CharacterPicker {
     this.status.textContent = text;
   }
 
-  private savedMap(name: string): BoneMapping | undefined {
-    try {
-      const s = localStorage.getItem(STORE + name);
-      return s ? mappingFromJSON(s) : undefined;
-    } catch {
-      return undefined;
-    }
-  }
-
   async open(list: File[]): Promise<void> {
     this.say(`Reading ${list.map((f) => f.name).join(', ')}…`);
     try {
       this.files = await Promise.all(list.map(async (f) => ({ name: f.name, data: await f.arrayBuffer() })));
-      await this.load(this.savedMap(this.mainName()));
+      await this.load(savedMap(this.mainName()));
     } catch (e) {
       this.fail(e);
     }
@@ -244,7 +215,7 @@ export class CharacterPicker {
     } catch (e) {
       if (e instanceof CharacterLoadError && e.reason === 'not-humanoid' && e.bones && !mapping && token === this.loads) {
         // offer the editor with what was recognised
-        this.showEditor(e.bones, e.mapping ?? {});
+        this.editor.show(e.bones, e.mapping ?? {});
       }
       throw e;
     }
@@ -260,7 +231,7 @@ export class CharacterPicker {
       this.say(`Putting the motion on ${ch.name}…`);
       this.pending = next;
       try {
-        if (!(await this.perform(next, motion, ch, (f) => this.say(`Putting the motion on ${ch.name}… ${Math.round(f * 100)}%`)))) return;
+        if (!(await perform(next, motion, ch, this.host.skeleton, this.stats, (f) => this.say(`Putting the motion on ${ch.name}… ${Math.round(f * 100)}%`)))) return;
       } finally {
         if (this.pending === next) this.pending = null;
       }
@@ -271,7 +242,7 @@ export class CharacterPicker {
     this.shown = next;
     this.host.builtIn.visible = false;
     this.back.hidden = false;
-    this.showEditor(ch.boneInfos, ch.mapping);
+    this.editor.show(ch.boneInfos, ch.mapping);
     this.say(summary);
     this.dlGlb.disabled = !next.result;
     this.dlBvh.disabled = !next.result;
@@ -288,82 +259,16 @@ export class CharacterPicker {
     this.dlGlb.disabled = true;
     this.dlBvh.disabled = true;
     const name = s.ch.name;
-    const done = await this.perform(s, this.motion, s.ch, (f) => this.say(`Putting the motion on ${name}… ${Math.round(f * 100)}%`));
+    const done = await perform(s, this.motion, s.ch, this.host.skeleton, this.stats, (f) => this.say(`Putting the motion on ${name}… ${Math.round(f * 100)}%`));
     if (!done || this.shown !== s) return;
     this.dlGlb.disabled = false;
     this.dlBvh.disabled = false;
     this.say(s.summary);
   }
 
-  /**
-   * Retarget `m` onto one copy of the character (at rest as loaded; read before the first slice ends) in
-   * slices, then play it on the page's clock. A newer call for the same copy cancels this one: false then.
-   */
-  private async perform(p: Performer, m: Motion, ch: LoadedCharacter, progress?: (fraction: number) => void): Promise<boolean> {
-    p.job?.abort();
-    const job = new AbortController();
-    p.job = job;
-    if (p.root !== ch.root) restLike(p.root, ch.root);
-    // the runs our clean-up pinned (m.joints are the shown, cleaned joints): the character holds the same frames still
-    const contacts = m.features.length === m.frames * 263 ? plantContacts(m.joints, m.frames, contactsFromFeatures(m.features, m.frames), this.host.skeleton) : null;
-    const stats = this.stats;
-    stats.started++;
-    const start = performance.now();
-    let slices = 1;
-    let res: RetargetResult;
-    let firstSliceMs = NaN;
-    let longestSliceMs = 0;
-    try {
-      const running = retargetMotionAsync(p.root, ch.mapping, { joints: m.joints, frames: m.frames, fps: m.fps, contacts }, this.host.skeleton, {
-        signal: job.signal,
-        onProgress: (f, ms) => {
-          slices++;
-          longestSliceMs = Math.max(longestSliceMs, ms);
-          progress?.(f);
-        },
-      });
-      // the first slice (the rest pose read, our IK solved for every frame) ran before retargetMotionAsync returned
-      firstSliceMs = performance.now() - start;
-      res = await running;
-    } catch (e) {
-      if (job.signal.aborted) {
-        stats.cancelled++;
-        return false;
-      }
-      if (p.job === job) p.job = null;
-      throw e;
-    }
-    p.job = null;
-    stats.finished++;
-    const end = performance.now();
-    stats.last = { frames: m.frames, ms: end - start, slices, start, end, firstSliceMs, longestSliceMs };
-    p.mixer?.stopAllAction();
-    p.mixer?.uncacheRoot(p.root);
-    // shown at our size and facing, so the camera that follows our pelvis follows it too
-    p.holder.scale.setScalar(1 / res.scale);
-    p.holder.rotation.y = -res.yaw;
-    p.mixer = new AnimationMixer(p.root);
-    p.action = p.mixer.clipAction(res.clip);
-    p.action.setLoop(LoopOnce, 1);
-    p.action.clampWhenFinished = true;
-    p.action.play();
-    p.result = res;
-    return true;
-  }
-
-  private drop(p: Performer): void {
-    p.job?.abort();
-    p.mixer?.stopAllAction();
-    p.holder.removeFromParent();
-  }
-
   private update(): void {
     const s = this.shown;
-    for (const p of [s, s?.twin]) {
-      if (!p?.mixer || !p.action || !p.result) continue;
-      p.action.time = Math.min(Math.max(this.host.time(), 0), p.result.clip.duration);
-      p.mixer.update(0);
-    }
+    for (const p of [s, s?.twin]) poseAt(p, this.host.time());
   }
 
   useBuiltIn(say = true): void {
@@ -373,8 +278,8 @@ export class CharacterPicker {
     }
     const s = this.shown;
     if (s) {
-      this.drop(s);
-      if (s.twin) this.drop(s.twin);
+      drop(s);
+      if (s.twin) drop(s.twin);
       this.shown = null;
     }
     this.host.builtIn.visible = true;
@@ -382,56 +287,25 @@ export class CharacterPicker {
     this.dlGlb.disabled = true;
     this.dlBvh.disabled = true;
     if (say) {
-      this.editor.hidden = true;
+      this.editor.editor.hidden = true;
       this.say('');
       if (s) this.host.changed?.();
     }
   }
 
-  private showEditor(bones: BoneInfo[], mapping: BoneMapping): void {
-    this.rows.replaceChildren();
-    this.editorBones = bones;
-    const names = editorChoices(bones, mapping);
-    if (names.length < bones.length) {
-      this.rows.append(Object.assign(document.createElement('p'), {
-        className: 'hint', textContent: `The lists offer ${names.length} of its ${bones.length} bones (the mapped ones, then the first in the file).`,
-      }));
-    }
-    for (const j of JOINT_NAMES) {
-      const row = document.createElement('label');
-      row.className = mapping[j] ? 'char-map-row' : 'char-map-row unmapped';
-      const sel = document.createElement('select');
-      sel.dataset.joint = j;
-      sel.append(new Option('(none)', ''));
-      for (const n of names) sel.append(new Option(n, n, false, mapping[j] === n));
-      row.append(document.createTextNode(j), sel);
-      this.rows.append(row);
-    }
-    this.editor.hidden = false;
-    if (JOINT_NAMES.some((j) => !mapping[j])) this.editor.open = true;
-  }
-
-  private editedMap(): BoneMapping {
-    const m: BoneMapping = {};
-    this.rows.querySelectorAll('select').forEach((sel) => {
-      if (sel.value) m[sel.dataset.joint as JointName] = sel.value;
-    });
-    return m;
-  }
-
   private async applyEditor(): Promise<void> {
-    const m = this.editedMap();
+    const m = this.editor.edited();
     try {
-      validateMapping(m, this.editorBones);
+      validateMapping(m, this.editor.bones);
       await this.load(m);
-      localStorage.setItem(STORE + this.mainName(), mappingToJSON(m));
+      saveMap(this.mainName(), m);
     } catch (e) {
       this.fail(e);
     }
   }
 
   private exportMap(): void {
-    const m = this.editedMap();
+    const m = this.editor.edited();
     saveBlob(new Blob([mappingToJSON(m)], { type: 'application/json' }), `${this.mainName().replace(/\.[^.]+$/, '') || 'character'}.bonemap.json`);
   }
 
@@ -444,7 +318,7 @@ export class CharacterPicker {
     } else {
       // the unit the page's BVH download is set to (metres unless chosen otherwise)
       const units: BvhUnits = document.querySelector<HTMLSelectElement>('#dl-bvh-units')?.value === 'cm' ? 'cm' : 'm';
-      const bvh = characterToBVH(s.ch.root, s.result, (o) => s.ch.json.nodes?.[s.ch.nodeIndex.get(o) ?? -1]?.name ?? o.name, units);
+      const bvh = characterToBVH(s.ch.root, s.result, fileBoneNames(s.ch), units);
       saveBlob(new Blob([bvh], { type: 'text/plain' }), bvhFileName(base, units));
     }
   }
@@ -502,31 +376,4 @@ export class CharacterPicker {
   get element(): HTMLElement {
     return this.el;
   }
-}
-
-/** The most bones each of the editor's 22 lists offers (22 × 100 000 options froze the page for a minute). */
-export const MAX_EDITOR_BONES = 300;
-
-/** The bone names the editor offers: the mapped ones first, then the file's order, at most MAX_EDITOR_BONES. */
-export function editorChoices(bones: readonly BoneInfo[], mapping: BoneMapping): string[] {
-  const names = new Set(Object.values(mapping).filter((n): n is string => typeof n === 'string' && bones.some((b) => b.name === n)));
-  for (const b of bones) {
-    if (names.size >= MAX_EDITOR_BONES) break;
-    names.add(b.name);
-  }
-  return [...names];
-}
-
-/** Put every node under `copy` (a SkeletonUtils clone) at the transform of the same node under `original` (at rest). */
-function restLike(copy: Object3D, original: Object3D): void {
-  const a: Object3D[] = [];
-  const b: Object3D[] = [];
-  original.traverse((o) => a.push(o));
-  copy.traverse((o) => b.push(o));
-  a.forEach((o, i) => {
-    b[i]?.position.copy(o.position);
-    b[i]?.quaternion.copy(o.quaternion);
-    b[i]?.scale.copy(o.scale);
-  });
-  copy.updateMatrixWorld(true);
 }

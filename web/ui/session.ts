@@ -14,9 +14,7 @@ import { compareStepChoices, planCompare, type ComparePlan } from './compare';
 import { Engine, modelForMode, pickModels, type LoadEvents } from './engine';
 import { examplePrompts } from './examples';
 import { framesFor, type BackendChoice, type PageState, type StateLimits } from './state';
-import { emptyCounters, type Counters } from './testapi';
-import type { Controls } from './controls';
-import type { View } from './view';
+import { emptyCounters, type Counters } from './counters';
 
 /** One model's finished motion, solved for the character. */
 export interface Produced {
@@ -242,18 +240,4 @@ export class Session {
 /** The model a failed Session.generate was running ('' when unknown). */
 export function failedModel(e: unknown): string {
   return (e as { failedModel?: string } | null)?.failedModel ?? '';
-}
-
-/**
- * What the page hands to every panel (web/main.ts builds it): the session that generates, the view
- * that shows, the side-bar controls, and `generate`, which runs a request as the Generate button does
- * (busy button, progress, status line, caption, URL, errors reported; newest request wins) and shows
- * the result. A new panel takes this in its constructor, e.g. `new TimelinePanel(page)`, and calls
- * `page.generate(state, { extra: { known } })` or `page.view.play(track)`.
- */
-export interface PageContext {
-  session: Session;
-  view: View;
-  controls: Controls;
-  generate(state: PageState, o?: SessionGenerateOptions): Promise<Generation>;
 }

@@ -1,6 +1,8 @@
 // `window.emdm`: the page's test API (used by the Playwright suites and by anyone scripting the demo).
+import { type Counters, emptyCounters } from './counters';
+import type { PageContext } from './page-context';
+import type { Produced } from './session';
 import type { EditTestApi } from './timeline';
-import type { PageContext, Produced } from './session';
 import { MAX_GUIDANCE, MAX_SECONDS, MAX_SEED, MIN_GUIDANCE, MIN_SECONDS, stepChoices, type Mode, type PageState, type StateLimits } from './state';
 
 export interface GenerateRequest {
@@ -60,21 +62,6 @@ export interface CompareInfo {
   split: boolean;
 }
 
-export interface Counters {
-  /** generations requested (UI or API) */
-  requests: number;
-  /** generations that finished and are on screen */
-  generations: number;
-  /** generations cancelled because a newer one started */
-  cancelled: number;
-  /** generations that failed (bad model output, load errors) */
-  errors: number;
-  /** ONNX step-model calls of finished generations (a guided step batches both passes in one call) */
-  modelCalls: number;
-  /** denoising steps run, including those of cancelled generations */
-  stepsRun: number;
-}
-
 export interface EmdmTestApi {
   ready: boolean;
   state: 'loading' | 'ready' | 'error';
@@ -126,10 +113,6 @@ declare global {
   interface Window {
     emdm: EmdmTestApi;
   }
-}
-
-export function emptyCounters(): Counters {
-  return { requests: 0, generations: 0, cancelled: 0, errors: 0, modelCalls: 0, stepsRun: 0 };
 }
 
 // ---------------------------------------------------------------- request validation (pure)

@@ -9,36 +9,20 @@
 // The panel builds its DOM inside one container (#edit-panel in index.html) and styles it in timeline.css.
 import {
   EditError, MAX_TIMELINE_SECONDS, bodyPartEdit, decodeJoints, inBetween, makeLoop, planTimeline, recoverJoints,
-  type EditCondition, type EditGenerate, type EditMotion, type GenerateResult, type KeptPart, type RemoteResult, type Timeline, type TimelineSegment, type WirePose, type WireBeginOptions,
+  type EditCondition, type EditMotion, type KeptPart, type Timeline, type TimelineSegment,
 } from '../../src/index';
-import type { PoseTrack } from '../../src/three';
 import { el } from './dom';
-import { isAbort } from './engine';
-import type { Generation, PageContext } from './session';
-import { randomSeed, type PageState } from './state';
+import type { PageContext } from './page-context';
+import { randomSeed } from './state';
+import { type EditJob, type EditKind, type EditSummary, type RequestPanel, type Shown, runEditRequest } from './timeline-request';
+import { TimelineRows, button } from './timeline-rows';
 import { TIMELINE_PARAM, decodeTimeline, withTimeline } from './timeline-url';
 import './timeline.css';
 
+export type { EditSummary } from './timeline-request';
+
 /** Read before the page rewrites its URL (web/main.ts replaces it with the controls' state on start). */
 const INITIAL = new URLSearchParams(location.search);
-
-/** What the test API reports about the panel's last result. */
-export interface EditSummary {
-  kind: 'timeline' | 'inbetween' | 'body' | 'loop';
-  frames: number;
-  fps: number;
-  /** timeline: the first frame of each segment */
-  starts?: number[];
-  /** wall time of the whole request on the page, ms */
-  ms: number;
-  /** model calls (one per denoising step and window) */
-  windows: number;
-  /** where `ms` went, ms: the worker's text encoding, denoising steps and decoding (summed over the windows), the
-   * windows' early steps begun together (a timeline), the worker's own edit work (a timeline: seam easing,
-   * stitching, decoding), the round trips beyond them (messages, copies, queueing), this thread's edit work (an
-   * edit's easing and decoding; nothing else runs meanwhile), the IK solve (worker) and showing the result */
-  parts: { encodeMs: number; stepMs: number; decodeMs: number; beginMs: number; workerEditMs: number; roundTripMs: number; mainMs: number; ikMs: number; showMs: number; windowStepMs: number[]; windowFrames: number[] };
-}
 
 /** The panel's hooks for Playwright (window.emdm.edit). */
 export interface EditTestApi {
@@ -58,23 +42,13 @@ export interface EditTestApi {
   lastLoopFull(): { frames: number; joints: number[] } | null;
 }
 
-interface Row {
-  li: HTMLLIElement;
-  kind: HTMLSelectElement;
-  prompt: HTMLInputElement;
-  seconds: HTMLInputElement;
-  seed: number;
-}
-
 const PROMPT = '';
 
-export class TimelinePanel {
-  private readonly list = el('ol', 'tl-list');
-  private readonly total = el('span', 'tl-total');
+export class TimelinePanel implements RequestPanel {
   /** each mode's message (errors) and progress line, shown next to that mode's controls */
-  private readonly msgs: Record<EditSummary['kind'], HTMLElement> = { timeline: el('p', 'tl-message'), inbetween: el('p', 'tl-message'), body: el('p', 'tl-message'), loop: el('p', 'tl-message') };
-  private readonly busy: Record<EditSummary['kind'], HTMLElement> = { timeline: el('p', 'tl-progress'), inbetween: el('p', 'tl-progress'), body: el('p', 'tl-progress'), loop: el('p', 'tl-progress') };
-  private readonly rows: Row[] = [];
+  private readonly msgs: Record<EditKind, HTMLElement> = { timeline: el('p', 'tl-message'), inbetween: el('p', 'tl-message'), body: el('p', 'tl-message'), loop: el('p', 'tl-message') };
+  private readonly busy: Record<EditKind, HTMLElement> = { timeline: el('p', 'tl-progress'), inbetween: el('p', 'tl-progress'), body: el('p', 'tl-progress'), loop: el('p', 'tl-progress') };
+  private readonly rows: TimelineRows;
   /** the last generated timeline (its segments are reused when regenerating a later one) and the steps/guidance it ran with */
   private timeline: Timeline | null = null;
   private timelineSettings = '';
@@ -83,10 +57,15 @@ export class TimelinePanel {
   /** the last motion this panel showed, with raw decoded joints, and its condition (null: several) */
   private current: EditMotion | null = null;
   private currentCondition: EditCondition | null = null;
-  private readonly actions: readonly string[];
+  readonly actions: readonly string[];
 
-  constructor(private readonly page: PageContext, container: HTMLElement) {
+  constructor(readonly page: PageContext, container: HTMLElement) {
     this.actions = page.session.limits.actions;
+    this.rows = new TimelineRows(this.actions, {
+      generate: () => void this.generateAll().catch(() => undefined),
+      regenerate: (i) => void this.regenerate(i).catch(() => undefined),
+      refuse: (text) => this.say(text),
+    });
     const details = el('details', 'tl-panel');
     const summary = el('summary', undefined, 'Timeline & editing');
     const body = el('div', 'tl-body');
@@ -95,25 +74,25 @@ export class TimelinePanel {
 
     // ---- timeline
     const intro = el('p', 'tl-hint', `Chain prompts up to ${MAX_TIMELINE_SECONDS} s: each segment continues from the last second of the one before.`);
-    const add = this.button('Add segment', 'ghost', () => this.addRow({ prompt: PROMPT, seconds: 4, seed: randomSeed() }, true));
-    const genAll = this.button('Generate timeline', 'primary tl-generate', () => void this.generateAll().catch(() => undefined));
+    const add = button('Add segment', 'ghost', () => this.rows.add({ prompt: PROMPT, seconds: 4, seed: randomSeed() }, true));
+    const genAll = button('Generate timeline', 'primary tl-generate', () => void this.generateAll().catch(() => undefined));
     const bar = el('div', 'tl-row-actions');
-    bar.append(add, this.total);
-    for (const k of Object.keys(this.msgs) as EditSummary['kind'][]) {
+    bar.append(add, this.rows.total);
+    for (const k of Object.keys(this.msgs) as EditKind[]) {
       this.msgs[k].setAttribute('role', 'alert');
       this.msgs[k].hidden = true;
       this.busy[k].setAttribute('aria-live', 'polite');
       this.busy[k].hidden = true;
     }
-    body.append(el('h2', undefined, 'Timeline'), intro, this.list, bar, genAll, this.busy.timeline, this.msgs.timeline);
+    body.append(el('h2', undefined, 'Timeline'), intro, this.rows.list, bar, genAll, this.busy.timeline, this.msgs.timeline);
 
     // ---- edits of the motion on screen
-    const ibPrompt = this.input('tl-ib-prompt', 'New middle (prompt)', 'a person jumps up');
-    const ibFirst = this.seconds('tl-ib-first', 'Keep the first seconds', 1);
-    const ibLast = this.seconds('tl-ib-last', 'Keep the last seconds', 1);
+    const ibPrompt = input('tl-ib-prompt', 'New middle (prompt)', 'a person jumps up');
+    const ibFirst = secondsInput('tl-ib-first', 'Keep the first seconds', 1);
+    const ibLast = secondsInput('tl-ib-last', 'Keep the last seconds', 1);
     const ibKeep = el('span', 'tl-check');
     ibKeep.append(document.createTextNode('keep first '), ibFirst, document.createTextNode(' s, last '), ibLast, document.createTextNode(' s'));
-    const ibGo = this.button('Regenerate the middle', 'ghost', () => void this.inBetween(ibPrompt.value, Number(ibFirst.value), Number(ibLast.value)).catch(() => undefined));
+    const ibGo = button('Regenerate the middle', 'ghost', () => void this.inBetween(ibPrompt.value, Number(ibFirst.value), Number(ibLast.value)).catch(() => undefined));
     const bodyKeep = el('select');
     bodyKeep.id = 'tl-body-keep';
     bodyKeep.setAttribute('aria-label', 'Which part to keep');
@@ -122,20 +101,20 @@ export class TimelinePanel {
       o.value = v;
       bodyKeep.append(o);
     }
-    const bodyPrompt = this.input('tl-body-prompt', 'New part (prompt)', 'a person waves with both hands');
-    const bodyGo = this.button('Edit body part', 'ghost', () => void this.bodyEdit(bodyKeep.value as KeptPart, bodyPrompt.value).catch(() => undefined));
+    const bodyPrompt = input('tl-body-prompt', 'New part (prompt)', 'a person waves with both hands');
+    const bodyGo = button('Edit body part', 'ghost', () => void this.bodyEdit(bodyKeep.value as KeptPart, bodyPrompt.value).catch(() => undefined));
     const inPlace = el('input');
     inPlace.type = 'checkbox';
     inPlace.id = 'tl-loop-in-place';
     const inPlaceLabel = el('label', 'tl-check');
     inPlaceLabel.append(inPlace, document.createTextNode(' in place (no travel)'));
-    const loopGo = this.button('Make it loop', 'ghost', () => void this.loop(inPlace.checked).catch(() => undefined));
+    const loopGo = button('Make it loop', 'ghost', () => void this.loop(inPlace.checked).catch(() => undefined));
     body.append(
       el('h2', undefined, 'Edit the motion on screen'),
       el('p', 'tl-hint', 'Works on a motion of one model window (up to 9.8 s).'),
-      this.group('In-between: keep the start and the end', ibKeep, ibPrompt, ibGo, this.busy.inbetween, this.msgs.inbetween),
-      this.group('Body part', bodyKeep, bodyPrompt, bodyGo, this.busy.body, this.msgs.body),
-      this.group('Loop: last pose = first pose', inPlaceLabel, loopGo, this.busy.loop, this.msgs.loop),
+      group('In-between: keep the start and the end', ibKeep, ibPrompt, ibGo, this.busy.inbetween, this.msgs.inbetween),
+      group('Body part', bodyKeep, bodyPrompt, bodyGo, this.busy.body, this.msgs.body),
+      group('Loop: last pose = first pose', inPlaceLabel, loopGo, this.busy.loop, this.msgs.loop),
     );
 
     // ---- restore from the URL (a shared link), else one example row
@@ -149,9 +128,9 @@ export class TimelinePanel {
         refused = e instanceof Error ? e.message : String(e);
       }
     }
-    for (const s of restored ?? [{ prompt: 'a person walks forward', seconds: 4, seed: randomSeed() }, { prompt: 'a person waves with the right hand', seconds: 3, seed: randomSeed() }]) this.addRow(s);
+    for (const s of restored ?? [{ prompt: 'a person walks forward', seconds: 4, seed: randomSeed() }, { prompt: 'a person waves with the right hand', seconds: 3, seed: randomSeed() }]) this.rows.add(s);
     if (tl !== null) details.open = true;
-    this.refreshTotal();
+    this.rows.refreshTotal();
     this.restored = restored !== null;
     this.linkRefused = refused;
     if (refused) this.say(refused);
@@ -169,135 +148,24 @@ export class TimelinePanel {
     return this.restored;
   }
 
-  // ------------------------------------------------------------ rows
-  private addRow(s: TimelineSegment, focus = false): void {
-    const li = el('li', 'tl-seg');
-    const kind = el('select', 'tl-kind');
-    const p = el('option', undefined, 'Prompt');
-    p.value = '';
-    kind.append(p);
-    for (const a of this.actions) {
-      const o = el('option', undefined, a.replace(/[_-]+/g, ' '));
-      o.value = a;
-      kind.append(o);
-    }
-    kind.value = s.action !== undefined ? String(s.action) : '';
-    const prompt = el('input', 'tl-prompt');
-    prompt.type = 'text';
-    prompt.value = s.prompt ?? '';
-    prompt.placeholder = 'what the character does';
-    const seconds = el('input', 'tl-seconds');
-    seconds.type = 'number';
-    seconds.min = '0';
-    seconds.max = String(MAX_TIMELINE_SECONDS);
-    seconds.step = '0.1';
-    seconds.value = String(s.seconds);
-    const row: Row = { li, kind, prompt, seconds, seed: s.seed >>> 0 };
-    const up = this.button('↑', 'icon', () => this.move(row, -1));
-    const down = this.button('↓', 'icon', () => this.move(row, 1));
-    const again = this.button('↻', 'icon', () => void this.regenerate(this.rows.indexOf(row)).catch(() => undefined));
-    const remove = this.button('✕', 'icon', () => this.remove(row));
-    const unit = el('span', 'tl-unit', 's');
-    // the prompt first (its own line), then prompt-or-action, seconds and the buttons: the Tab order is the reading order;
-    // the buttons wrap to a line of their own where the selector's longest label and the seconds leave them no room
-    const buttons = el('span', 'tl-seg-buttons');
-    buttons.append(up, down, again, remove);
-    const controls = el('div', 'tl-seg-controls');
-    controls.append(kind, seconds, unit, buttons);
-    li.append(el('span', 'tl-num'), prompt, controls);
-    const sync = () => {
-      prompt.disabled = kind.value !== '';
-      this.refreshTotal();
-    };
-    kind.addEventListener('change', sync);
-    seconds.addEventListener('input', () => this.refreshTotal());
-    prompt.addEventListener('keydown', (e) => {
-      if (e.key === 'Enter') void this.generateAll().catch(() => undefined);
-    });
-    this.rows.push(row);
-    this.list.append(li);
-    sync();
-    this.relabel();
-    if (focus) prompt.focus();
-  }
-
-  private move(row: Row, d: number): void {
-    const i = this.rows.indexOf(row);
-    const j = i + d;
-    if (j < 0 || j >= this.rows.length) return;
-    this.rows.splice(i, 1);
-    this.rows.splice(j, 0, row);
-    this.list.replaceChildren(...this.rows.map((r) => r.li));
-    this.relabel();
-    (d < 0 ? row.li.querySelector<HTMLButtonElement>('button[data-k="↑"]') : row.li.querySelector<HTMLButtonElement>('button[data-k="↓"]'))?.focus();
-  }
-
-  private remove(row: Row): void {
-    if (this.rows.length === 1) {
-      this.say('A timeline needs at least one segment.');
-      return;
-    }
-    const i = this.rows.indexOf(row);
-    this.rows.splice(i, 1);
-    row.li.remove();
-    this.relabel();
-    this.refreshTotal();
-    this.rows[Math.min(i, this.rows.length - 1)].prompt.focus();
-  }
-
-  /** Numbers and accessible names follow the order. */
-  private relabel(): void {
-    this.rows.forEach((r, i) => {
-      const n = i + 1;
-      r.li.querySelector('.tl-num')!.textContent = `${n}`;
-      r.kind.setAttribute('aria-label', `Segment ${n}: prompt or action`);
-      r.prompt.setAttribute('aria-label', `Segment ${n} prompt`);
-      r.seconds.setAttribute('aria-label', `Segment ${n} seconds`);
-      for (const b of r.li.querySelectorAll<HTMLButtonElement>('button')) {
-        const k = b.dataset.k;
-        const what = k === '↑' ? 'Move up' : k === '↓' ? 'Move down' : k === '↻' ? 'Regenerate (new take; keeps the segments before it)' : 'Remove';
-        b.setAttribute('aria-label', `Segment ${n}: ${what}`);
-        b.title = what;
-      }
-      r.li.classList.remove('invalid');
-      r.li.removeAttribute('aria-invalid');
-    });
-  }
-
-  private refreshTotal(): void {
-    const s = this.segments().reduce((a, x) => a + (Number.isFinite(x.seconds) ? x.seconds : 0), 0);
-    this.total.textContent = `${Number(s.toFixed(2))} s of ${MAX_TIMELINE_SECONDS} s`;
-    this.total.classList.toggle('over', s > MAX_TIMELINE_SECONDS);
-  }
-
   /** The list as segments (what planTimeline checks). */
   segments(): TimelineSegment[] {
-    return this.rows.map((r) => {
-      const seconds = r.seconds.value.trim() === '' ? NaN : Number(r.seconds.value);
-      return r.kind.value ? { action: r.kind.value, seconds, seed: r.seed } : { prompt: r.prompt.value, seconds, seed: r.seed };
-    });
+    return this.rows.segments();
   }
 
   setSegments(segs: TimelineSegment[]): void {
-    this.rows.length = 0;
-    this.list.replaceChildren();
-    for (const s of segs) this.addRow(s);
-    this.refreshTotal();
+    this.rows.setSegments(segs);
   }
 
   // ------------------------------------------------------------ messages
   /** Say `text` next to `kind`'s controls (and clear every other mode's message), marking `segment`'s row. */
-  private say(text: string, segment: number | null = null, kind: EditSummary['kind'] = 'timeline'): void {
+  say(text: string, segment: number | null = null, kind: EditKind = 'timeline'): void {
     for (const [k, m] of Object.entries(this.msgs)) {
       m.textContent = k === kind ? text : '';
       m.hidden = k !== kind || !text;
     }
     if (text) this.msgs[kind].scrollIntoView?.({ block: 'nearest' });
-    this.rows.forEach((r, i) => {
-      r.li.classList.toggle('invalid', i === segment);
-      if (i === segment) r.li.setAttribute('aria-invalid', 'true');
-      else r.li.removeAttribute('aria-invalid');
-    });
+    this.rows.mark(segment);
   }
 
   /** The message shown in the panel ('' when none). */
@@ -306,7 +174,7 @@ export class TimelinePanel {
   }
 
   /** The progress line next to `kind`'s controls ('' hides it). */
-  private working(kind: EditSummary['kind'], text: string): void {
+  working(kind: EditKind, text: string): void {
     this.busy[kind].textContent = text;
     this.busy[kind].hidden = !text;
   }
@@ -316,146 +184,26 @@ export class TimelinePanel {
     return { fps: this.page.session.limits.fps, maxFrames: this.page.session.limits.maxFrames };
   }
 
-  /** A window's condition, frames and seed with the page's steps and guidance, as the worker takes them. */
-  private wire(r: EditCondition & { frames: number; seed: number }, state: PageState): Pick<WireBeginOptions, 'condition' | 'frames' | 'steps' | 'guidance' | 'seed'> {
-    const label = r.action !== undefined ? this.actions.indexOf(String(r.action)) : -1;
-    return {
-      condition: r.action !== undefined ? { type: 'action', label } : { type: 'text', text: r.prompt ?? '' },
-      frames: r.frames, steps: state.steps, guidance: state.guidance, seed: r.seed,
-    };
-  }
-
   /** The page's model for a condition (text → the text model, action → the action model). */
-  private modelFor(c: EditCondition): string {
+  modelFor(c: EditCondition): string {
     const m = c.action !== undefined ? this.page.session.models.action : this.page.session.models.text;
     if (!m) throw new EditError(c.action !== undefined ? 'no action model is shipped with this demo' : 'no text model is shipped with this demo: pick an action');
     return m.name;
   }
 
-  /**
-   * Run `job` as the page's newest request (cancelling a running one), with progress, the busy button and
-   * errors said in the panel; the result is shown on the character.
-   */
-  private async request(kind: EditSummary['kind'], job: (gen: EditGenerate, signal: AbortSignal, calls: Calls) => Promise<Shown>): Promise<EditSummary> {
-    const { session, view, controls } = this.page;
-    const state = controls.read();
-    const t0 = performance.now();
-    this.say('', null, kind);
-    for (const k of Object.keys(this.busy) as EditSummary['kind'][]) this.working(k, '');
-    this.working(kind, 'Starting…');
-    controls.setBusy(true);
-    view.showProgress(0, 'Starting…');
-    session.counters.requests++;
-    try {
-      let genMs = 0;
-      let jobMs = 0;
-      const calls: Calls = {
-        n: 0, results: [], progress: (f) => f, text: (d, t) => `Denoising step ${d} / ${t}`,
-        beginText: (w, d, t) => `${w} window${w === 1 ? '' : 's'} together: step ${d} / ${t}`,
-        step: (d, t, together) => {
-          if (!together) session.counters.stepsRun++;
-          const text = together ? calls.beginText(together, d, t) : calls.text(d, t);
-          view.showProgress(calls.progress(d / t), text);
-          this.working(kind, `${text} (${Math.round(100 * calls.progress(d / t))} %)`);
-        },
-        worker: null,
-      };
-      const shown = await session.engine.run(async (signal) => {
-        const gen: EditGenerate = async (r) => {
-          const g0 = performance.now();
-          const model = this.modelFor(r);
-          await session.load(model);
-          // through the engine: the file the page's own generations run (the manifest's default variant, e.g. int8);
-          // no pose track per window (the stitched motion is solved once, below)
-          const res: RemoteResult = await session.engine.generate(model, {
-            pose: false, ...this.wire(r, state), signal,
-            // copies: the client transfers these buffers to the worker, and src/edit.ts reads `keep` again after
-            ...(r.known ? { known: { ...r.known, features: r.known.features.slice(), keep: r.known.keep.slice() } } : {}),
-            ...(r.resume ? { resume: r.resume } : {}),
-            onStep: (d, t) => calls.step(d, t, 0),
-          });
-          calls.n++;
-          calls.results.push({ ...res, frames: res.motion.frames });
-          genMs += performance.now() - g0;
-          return { frames: res.motion.frames, fps: res.motion.fps, features: res.motion.features, joints: res.motion.joints };
-        };
-        const j0 = performance.now();
-        const out = await job(gen, signal, calls);
-        jobMs = performance.now() - j0;
-        return out;
-      });
-      const s0 = performance.now();
-      const track = shown.pose ? this.track(shown.pose, shown.motion) : await this.solve(shown.display, shown.motion);
-      const s1 = performance.now();
-      this.show(state, shown, track, s1 - t0);
-      const s2 = performance.now();
-      session.counters.generations++;
-      const sum = (f: (r: Run) => number) => shown.results.reduce((a, r) => a + f(r), 0);
-      const windowsMs = sum((r) => r.timings.totalMs);
-      // a timeline ran whole in the worker (calls.worker); an edit's window came back here to be eased and decoded
-      const w = calls.worker;
-      const parts = {
-        encodeMs: sum((r) => r.timings.encodeMs), stepMs: sum((r) => r.timings.stepMs.reduce((a, b) => a + b, 0)), decodeMs: sum((r) => r.timings.decodeMs),
-        beginMs: w?.beginMs ?? 0, workerEditMs: w ? w.totalMs - w.beginMs - windowsMs : 0,
-        roundTripMs: w ? w.requestMs - w.totalMs : genMs - windowsMs, mainMs: jobMs - (w ? w.requestMs : genMs),
-        ikMs: shown.pose ? shown.pose.ikMs : s1 - s0, showMs: s2 - s1,
-        windowStepMs: shown.results.map((r) => r.timings.stepMs.reduce((a, b) => a + b, 0)), windowFrames: shown.results.map((r) => r.frames),
-      };
-      return { kind, frames: shown.motion.frames, fps: shown.motion.fps, starts: shown.starts, ms: performance.now() - t0, windows: shown.windows, parts };
-    } catch (e) {
-      if (isAbort(e)) session.counters.cancelled++;
-      else {
-        session.counters.errors++;
-        this.say(e instanceof EditError || e instanceof Error ? e.message : String(e), e instanceof EditError ? e.segment : null, kind);
-      }
-      throw e;
-    } finally {
-      this.working(kind, '');
-      if (!session.busy) {
-        controls.setBusy(false);
-        view.hideProgress();
-      }
-    }
+  private request(kind: EditKind, job: EditJob): Promise<EditSummary> {
+    return runEditRequest(this, kind, job);
   }
 
-  /** The pose track of bone rotations the worker solved with the motion. */
-  private track(p: WirePose, m: EditMotion): PoseTrack {
-    return { frames: m.frames, fps: m.fps, joints: this.page.session.manifest.skeleton.joints.length, rootPos: p.rootPos, quats: p.quats };
-  }
-
-  /** Bone rotations (the worker's IK) for the joints shown. */
-  private async solve(joints: Float32Array, m: EditMotion): Promise<PoseTrack> {
-    const p = await this.page.session.engine.client.solve(joints, m.frames);
-    return { frames: m.frames, fps: m.fps, joints: this.page.session.manifest.skeleton.joints.length, rootPos: p.rootPos, quats: p.quats };
+  /** The result of a request is on screen: later edits start from its motion. */
+  showed(s: Shown): void {
+    this.current = s.motion;
+    this.currentCondition = s.condition;
   }
 
   /** The page's decoding of joints made here (as generate() does for one motion: σ = 1 frame smoothing, feet on the floor). */
   private decode(features: Float32Array, frames: number): Float32Array {
     return decodeJoints(features, frames, this.page.session.manifest.skeleton, { smooth: true, footCleanup: true });
-  }
-
-  private show(state: PageState, s: Shown, track: PoseTrack, ms: number): void {
-    // the timings of everything this request generated (nothing, when an unchanged timeline is shown again)
-    const results = s.results;
-    const first = results[0];
-    const sum = (f: (r: Run) => number) => results.reduce((a, r) => a + f(r), 0);
-    const result: GenerateResult = {
-      motion: { frames: s.motion.frames, fps: s.motion.fps, joints: s.display, features: s.motion.features },
-      timings: {
-        encodeMs: sum((r) => r.timings.encodeMs), stepMs: results.flatMap((r) => r.timings.stepMs), decodeMs: sum((r) => r.timings.decodeMs),
-        totalMs: ms, backend: first?.timings.backend ?? (this.page.session.backend === 'webgpu' ? 'webgpu' : 'wasm'), threads: first?.timings.threads ?? 0,
-      },
-      modelCalls: sum((r) => r.modelCalls), sampler: first?.sampler ?? 'ddgan', steps: first?.steps ?? state.steps,
-    };
-    const g: Generation = {
-      state: { ...state, seconds: s.motion.frames / s.motion.fps, compare: false, seed: s.seed },
-      label: s.label, plan: null,
-      main: { model: s.model, result, track, ikMs: 0 },
-      ddim: null,
-    };
-    this.page.view.show(g);
-    this.current = s.motion;
-    this.currentCondition = s.condition;
   }
 
   /** The motion the edit tools start from: the one on screen (the page's or this panel's). */
@@ -527,7 +275,7 @@ export class TimelinePanel {
 
   async regenerate(i: number): Promise<EditSummary> {
     if (!(i >= 0 && i < this.rows.length)) throw new RangeError(`regenerate: segment ${i + 1} outside 1…${this.rows.length}`);
-    this.rows[i].seed = randomSeed();
+    this.rows.reseed(i);
     return this.generateAll(i);
   }
 
@@ -579,43 +327,6 @@ export class TimelinePanel {
     });
   }
 
-  // ------------------------------------------------------------ small DOM helpers
-  private button(text: string, cls: string, on: () => void): HTMLButtonElement {
-    const b = el('button', cls, text);
-    b.type = 'button';
-    b.dataset.k = text;
-    b.addEventListener('click', on);
-    return b;
-  }
-
-  /** A prompt box holding an example (a value, not only a grey placeholder: a visitor can run the tool at once). */
-  private input(id: string, label: string, example: string): HTMLInputElement {
-    const i = el('input');
-    i.type = 'text';
-    i.id = id;
-    i.value = example;
-    i.placeholder = example;
-    i.setAttribute('aria-label', label);
-    return i;
-  }
-
-  private seconds(id: string, label: string, value: number): HTMLInputElement {
-    const i = el('input', 'tl-seconds');
-    i.type = 'number';
-    i.id = id;
-    i.min = '0.05';
-    i.step = '0.05';
-    i.value = String(value);
-    i.setAttribute('aria-label', label);
-    return i;
-  }
-
-  private group(title: string, ...children: HTMLElement[]): HTMLElement {
-    const f = el('fieldset', 'tl-tool');
-    f.append(el('legend', undefined, title), ...children);
-    return f;
-  }
-
   /** window.emdm.edit */
   testApi(): EditTestApi {
     return {
@@ -640,36 +351,31 @@ export class TimelinePanel {
   }
 }
 
-/** What a mode hands back to be shown. */
-interface Shown {
-  /** the motion as src/edit.ts made it (raw decoded joints: what later edits start from) */
-  motion: EditMotion;
-  /** the joints shown and exported (smoothed, feet cleaned up as the page does) */
-  display: Float32Array;
-  starts?: number[];
-  windows: number;
-  results: Run[];
-  /** bone rotations of `display`, when the worker solved them with the motion (a timeline) */
-  pose?: WirePose;
-  label: string;
-  model: string;
-  seed: number;
-  condition: EditCondition | null;
+// ---------------------------------------------------------------- small DOM helpers
+/** A prompt box holding an example (a value, not only a grey placeholder: a visitor can run the tool at once). */
+function input(id: string, label: string, example: string): HTMLInputElement {
+  const i = el('input');
+  i.type = 'text';
+  i.id = id;
+  i.value = example;
+  i.placeholder = example;
+  i.setAttribute('aria-label', label);
+  return i;
 }
 
-/** What one window's generation took (a GenerateResult without its motion). */
-type Run = Pick<GenerateResult, 'timings' | 'modelCalls' | 'sampler' | 'steps'> & { frames: number };
+function secondsInput(id: string, label: string, value: number): HTMLInputElement {
+  const i = el('input', 'tl-seconds');
+  i.type = 'number';
+  i.id = id;
+  i.min = '0.05';
+  i.step = '0.05';
+  i.value = String(value);
+  i.setAttribute('aria-label', label);
+  return i;
+}
 
-/** The generations of one request, and how its progress and label read (a timeline sets them per window). */
-interface Calls {
-  n: number;
-  results: Run[];
-  progress(f: number): number;
-  text(done: number, total: number): string;
-  /** while `windows` windows are begun together (a timeline) */
-  beginText(windows: number, done: number, total: number): string;
-  /** a denoising step: progress bar and line (`together` windows begun at once, or 0: one window) */
-  step(done: number, total: number, together: number): void;
-  /** a timeline run whole in the worker: the request's time here, the worker's, and its windows begun together */
-  worker: { requestMs: number; totalMs: number; beginMs: number } | null;
+function group(title: string, ...children: HTMLElement[]): HTMLElement {
+  const f = el('fieldset', 'tl-tool');
+  f.append(el('legend', undefined, title), ...children);
+  return f;
 }

@@ -7,11 +7,11 @@
 // own); the character on screen is `view.character` (the visitor's own, once dropped, is swapped in by
 // web/ui/character-picker.ts through `view.picker`).
 import { type Bone, MeshStandardMaterial, Quaternion, Vector3 } from 'three';
-import { HEAD_PITCH, applyPose, createCharacter, MotionPlayer, type PoseTrack } from '../../src/three';
-import { ModelFileError, NonFiniteMotionError, type GenerateResult, type Manifest, type WireStepPreview } from '../../src/index';
+import { HEAD_PITCH, applyPose, createCharacter, MotionPlayer, motionToGLB, type PoseTrack } from '../../src/three';
+import { ModelFileError, motionToJSON, NonFiniteMotionError, type GenerateResult, type Manifest, type WireStepPreview } from '../../src/index';
 import { CharacterPicker } from './character-picker';
 import { byId, formatBytes, formatMs, saveBlob } from './dom';
-import { fileStem, motionToBVH, motionToGLB, motionToJSON } from './downloads';
+import { fileStem, motionToBVH } from './downloads';
 import type { ErrorPanel, Notices } from './notices';
 import { PlaybackBar } from './playback';
 import type { Generation, Produced } from './session';

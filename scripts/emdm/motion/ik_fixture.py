@@ -1,5 +1,5 @@
 """The IK parity fixture: joint positions → root, local rotations and offsets by ``emdm.motion.ik.solve_ik``,
-and the BVH (in centimetres) ``emdm.mocap.bvh_writer`` makes of one of them, which the page's ``solveIK`` / ``writeBVH`` must
+and the BVH (in centimetres) ``emdm.writers.bvh`` makes of one of them, which the page's ``solveIK`` / ``writeBVH`` must
 reproduce (tests/unit/coreIk.test.ts) and Python's must still give (tests/python/test_motion_ik.py):
 
     .venv/bin/python -m emdm.motion.ik_fixture        # writes tests/fixtures/parity/ik.{json,bin,bvh}
@@ -27,7 +27,7 @@ import numpy as np
 from emdm import paths
 from emdm import skeleton as sk
 from emdm.fixtures import write_case
-from emdm.mocap.bvh_writer import bvh_text
+from emdm.writers.bvh import bvh_text
 from emdm.motion.ik import forward_kinematics, quaternions, solve_ik
 
 PARITY_DIR = paths.FIXTURES_DIR / "parity"

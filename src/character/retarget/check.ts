@@ -13,7 +13,6 @@
  */
 import type { Object3D } from 'three';
 import { Vector3 } from 'three';
-import type { CharacterLoadReason } from './load';
 
 /** The glTF JSON read (text .gltf, or a GLB's JSON chunk); embedded data: URIs count. Larger: refused before decoding. */
 export const MAX_JSON_BYTES = 16 * 1024 * 1024;
@@ -30,7 +29,11 @@ export const MAX_TRANSFORM = 1e6;
 /** The farthest a bone may lie from the origin at rest, in the file's units (after every parent's transform). */
 export const MAX_REST_EXTENT = 1e7;
 
-/** The error loadCharacter throws (passed in: this module does not import load.ts's values, so no import cycle). */
+/** Why loadCharacter refused a file (CharacterLoadError.reason; declared here, where most are decided, so that
+ * load.ts imports this module and not the other way round). */
+export type CharacterLoadReason = 'no-file' | 'too-large' | 'too-complex' | 'corrupt' | 'unsupported' | 'external-resource' | 'no-skin' | 'bad-rig' | 'not-humanoid';
+
+/** The error loadCharacter throws (passed in: this module does not import load.ts, so no import cycle). */
 export type Refuse = (reason: CharacterLoadReason, message: string) => Error;
 
 export function checkJsonSize(bytes: number, refuse: Refuse): void {

@@ -12,7 +12,7 @@
  *   buffer or image URI is accepted only as a data: URI or as the name of one of the given files;
  *   anything else (http:, file:, blob:, an absolute path, a file that was not given) is refused with
  *   reason 'external-resource'. The packed document (`json`, `bin`) is what export/characterGlb.ts
- *   writes back, with the animation added.
+ *   writes back (through export/glb.ts's writeGlb), with the animation added.
  * - Errors are CharacterLoadError with a `reason`: 'no-file', 'too-large' (> 100 MB in all, or a glTF JSON over
  *   16 MB), 'too-complex' (over 5 000 nodes, 2 000 bones or 20 000 entries of a list: src/character/retarget/check.ts),
  *   'bad-rig' (a node transform that is not finite or beyond ±1e6, bones at rest beyond 1e7 or all at one point),
@@ -35,12 +35,13 @@ import type { VRM } from '@pixiv/three-vrm';
 import { JOINT_NAMES, type JointName } from '../../skeleton';
 import { type BoneInfo, type BoneMapping, MappingError, autoMap, validateMapping } from './mapping';
 import { bonesOf } from './retarget';
-import { checkDocument, checkJsonSize, checkRestPose, type Refuse } from './check';
+import { type CharacterLoadReason, checkDocument, checkJsonSize, checkRestPose, type Refuse } from './check';
 import { nextTask } from '../../yield';
+import { CHUNK_BIN, CHUNK_JSON, GLB_MAGIC, type GltfJson, writeGlb } from '../../export/glb';
 
 export const MAX_CHARACTER_BYTES = 100 * 1024 * 1024;
 
-export type CharacterLoadReason = 'no-file' | 'too-large' | 'too-complex' | 'corrupt' | 'unsupported' | 'external-resource' | 'no-skin' | 'bad-rig' | 'not-humanoid';
+export type { CharacterLoadReason };
 
 export class CharacterLoadError extends Error {
   constructor(
@@ -59,10 +60,6 @@ export interface CharacterFile {
   name: string;
   data: ArrayBuffer | Uint8Array;
 }
-
-/** The glTF JSON, loosely typed (only what we read or rewrite). */
-// eslint-disable-next-line @typescript-eslint/no-explicit-any
-export type GltfJson = Record<string, any>;
 
 export interface LoadedCharacter {
   /** the main file's name */
@@ -100,9 +97,6 @@ export interface LoadCharacterOptions {
 }
 
 const MAIN = /\.(glb|vrm|gltf)$/i;
-const GLB_MAGIC = 0x46546c67;
-const CHUNK_JSON = 0x4e4f534a;
-const CHUNK_BIN = 0x004e4942;
 const NEEDS_DECODER: Record<string, string> = {
   KHR_draco_mesh_compression: 'Draco-compressed meshes',
   EXT_meshopt_compression: 'meshopt-compressed buffers',
@@ -269,29 +263,6 @@ export async function packDocument(json: GltfJson, glbBin: Uint8Array | null, fi
   doc.buffers = length ? [{ byteLength: length }] : [];
   if (!length) delete doc.buffers;
   return { json: doc, bin };
-}
-
-/** A binary glTF of a JSON document and its BIN buffer. */
-export function writeGlb(json: GltfJson, bin: Uint8Array): Uint8Array {
-  const text = new TextEncoder().encode(JSON.stringify(json));
-  const jsonLen = Math.ceil(text.byteLength / 4) * 4;
-  const binLen = Math.ceil(bin.byteLength / 4) * 4;
-  const total = 12 + 8 + jsonLen + (binLen ? 8 + binLen : 0);
-  const out = new Uint8Array(total);
-  const dv = new DataView(out.buffer);
-  dv.setUint32(0, GLB_MAGIC, true);
-  dv.setUint32(4, 2, true);
-  dv.setUint32(8, total, true);
-  dv.setUint32(12, jsonLen, true);
-  dv.setUint32(16, CHUNK_JSON, true);
-  out.set(text, 20);
-  out.fill(0x20, 20 + text.byteLength, 20 + jsonLen);
-  if (binLen) {
-    dv.setUint32(20 + jsonLen, binLen, true);
-    dv.setUint32(24 + jsonLen, CHUNK_BIN, true);
-    out.set(bin, 28 + jsonLen);
-  }
-  return out;
 }
 
 /** The JSON given to the loader when textures are not decoded (no DOM, e.g. Node): materials keep their factors. */

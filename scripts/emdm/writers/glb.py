@@ -1,9 +1,9 @@
 """Write joint motions as a binary glTF 2.0 file (.glb): a skinned skeleton with one animation.
 
-    from emdm.mocap.glb_writer import write_glb
+    from emdm.writers.glb import write_glb
     write_glb(joints, "out/walk.glb")          # joints (frames, 22, 3) metres, 20 fps
 
-The rig is the BVH writer's (``emdm.mocap.bvh_writer``): the reference skeleton at the offsets ``solve_ik`` adapts to
+The rig is the BVH writer's (``emdm.writers.bvh``): the reference skeleton at the offsets ``solve_ik`` adapts to
 the motion, one node per joint named as ``emdm.skeleton.JOINT_NAMES``, rest rotations identity, Y up, metres. The
 animation ("motion") has the pelvis's translation and every joint's rotation (unit quaternions x, y, z, w, LINEAR)
 at each frame's time (frame / fps), so evaluating it reproduces the BVH file's poses. glTF skins a mesh, not bare
@@ -101,6 +101,7 @@ def glb_bytes(joints: np.ndarray, fps: float = sk.FPS) -> bytes:
         nodes.append(node)
     nodes.append({"name": "body", "mesh": 0, "skin": 0})
     doc = {
+        # the name this writer first had: kept, so that files stay byte for byte what they were
         "asset": {"version": "2.0", "generator": "emdm.mocap.glb_writer"},
         "scene": 0,
         "scenes": [{"nodes": [0, sk.NUM_JOINTS]}],
