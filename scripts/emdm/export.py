@@ -243,6 +243,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--variants", default="int8,fp16", help="comma list of int8, fp16 (empty for none)")
     p.add_argument("--tolerance", type=float, default=1e-4)
     p.add_argument("--no-manifest", action="store_true")
+    p.add_argument("--guidance", type=float, default=None, metavar="W",
+                   help="the entry's guidance: classifier-free guidance scale the sampler uses unless asked otherwise "
+                        "(choose it with the realism and coverage benchmarks' --guidance; default: keep the manifest's, "
+                        "else 2.5)")
     p.add_argument("--guidance-min-time", type=float, default=None, metavar="T",
                    help="the entry's guidanceMinTime: guide only steps whose time is above T (choose T from "
                         "`python -m emdm.model.bench_steps --interval`; 0 = every step; default: keep the manifest's)")
@@ -288,6 +292,8 @@ def run(a: argparse.Namespace) -> int:
     if unknown:
         raise ExportError(f"--variants: unknown {', '.join(map(repr, unknown))}; use a comma list of "
                           f"{', '.join(VARIANT_MAKERS)} (empty for none)")
+    if a.guidance is not None and not (np.isfinite(a.guidance) and 0 <= a.guidance <= 20):
+        raise ExportError(f"--guidance must be a finite scale in 0..20 (1 = plain conditional), got {a.guidance:g}")
     g = a.guidance_min_time
     if g is not None and not (np.isfinite(g) and g >= 0):
         raise ExportError(f"--guidance-min-time must be a finite time ≥ 0 (0 = guide every step), got {g:g}")
@@ -361,11 +367,15 @@ def make_files(a: argparse.Namespace, G: Generator, meta: dict, summary: dict, o
 
 
 def write_entry(a: argparse.Namespace, out: Path, meta: dict, summary: dict, files: dict, extra: dict) -> None:
-    """The manifest entry models.<name> (keeping the earlier entry's guidanceMinTime, x0Smoothing, defaultVariant
+    """The manifest entry models.<name> (keeping the earlier entry's guidance, guidanceMinTime, x0Smoothing, defaultVariant
     unless given)."""
     from emdm import manifest as mf
 
     var_err = extra.get("variantRelErr", {})
+    w = a.guidance
+    if w is None:        # a re-export keeps the guidance chosen for this model
+        w = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("guidance", 2.5)
+    extra["guidance"] = float(w)
     gmin = a.guidance_min_time
     if gmin is None:     # a re-export keeps the threshold chosen for this model
         gmin = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("guidanceMinTime", 0.0)

@@ -170,3 +170,18 @@ def test_an_unreadable_manifest_in_out_is_one_line(checkpoint, tmp_path, capsys,
     assert export_main(["--ckpt", str(checkpoint), "--name", "m", "--out", str(tmp_path), "--variants", ""]) == 2
     assert re.search(expected, _one_error_line(capsys))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["manifest.json"]
+
+def test_guidance_is_written_and_kept_by_a_re_export(checkpoint, tmp_path, capsys):
+    def entry():
+        return json.loads((tmp_path / "manifest.json").read_text())["models"]["m"]
+
+    base = ["--ckpt", str(checkpoint), "--name", "m", "--out", str(tmp_path), "--variants", ""]
+    assert export_main(base) == 0                            # a first export: the default scale
+    assert entry()["guidance"] == 2.5
+    assert export_main(base + ["--guidance", "1.5"]) == 0
+    assert entry()["guidance"] == 1.5
+    assert export_main(base) == 0                            # a re-export keeps the chosen scale
+    assert entry()["guidance"] == 1.5
+    assert export_main(base + ["--guidance", "inf"]) == 2
+    assert "--guidance must be a finite scale in 0..20" in capsys.readouterr().err
+    assert entry()["guidance"] == 1.5                        # nothing written on bad input
