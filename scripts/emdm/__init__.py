@@ -16,7 +16,7 @@ def __getattr__(name: str):
     # emdm.generate / emdm.Motion load emdm.generation on first use: importing it here would import emdm.sample
     # (and the modules it uses) before `python -m emdm.sample` runs it as __main__, a second copy runpy warns about.
     if name in ("generate", "Motion"):
-        from emdm import generation
+        from emdm import generation  # lazy: `import emdm` must not import emdm.sample (see above)
 
         return getattr(generation, name)
     raise AttributeError(f"module 'emdm' has no attribute {name!r}")

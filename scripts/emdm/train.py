@@ -33,6 +33,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from emdm import paths
 from emdm.checkpoints import (CheckpointError, TRAIN_KEYS, atomic_save, check_same_model, dataset_identity,
                               first_non_finite, load_file, load_state_dict, load_weights_file, save_weights_file)
 from emdm.data.dataset import (BucketBatcher, DatasetError, DeviceClips, action_shares, caption_table,
@@ -306,7 +307,6 @@ class Trainer:
 
     def load_data(self) -> None:
         a = self.args
-        from emdm import paths
         self.data_dir = Path(a.data or paths.DATASET_DIR)
         self.data_id = dataset_identity(self.data_dir, a.split)
         self.ms = load_split(self.data_dir, a.split, min_frames=a.min_frames, limit=a.limit,

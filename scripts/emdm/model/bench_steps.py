@@ -25,7 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
+from emdm import manifest as mf
 from emdm.model.schedule import make_schedule
+from emdm.paths import MODELS_DIR
+from emdm.text import encode_texts
 
 PROMPTS = ["a person kicks", "a person bows", "a person squats", "a person walks forward"]
 
@@ -44,8 +47,6 @@ def conditions(entry: dict, prompts: list[str] | None) -> list[tuple[str, np.nda
 
     spec = entry["condition"]
     if spec["type"] == "text":
-        from emdm.text import encode_texts
-
         prompts = prompts or PROMPTS
         emb = np.asarray(encode_texts(prompts, encoder_id=spec["encoder"], batch_size=1), np.float32)
         return list(zip(prompts, emb))
@@ -109,8 +110,6 @@ def sample_features(*args, **kw):
 
 
 def main(argv=None) -> int:
-    from emdm import manifest as mf
-    from emdm.paths import MODELS_DIR
     from emdm.sample import onnx_step
 
     ap = argparse.ArgumentParser(prog="python -m emdm.model.bench_steps", description=__doc__.split("\n\n")[0])
