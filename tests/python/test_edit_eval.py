@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from emdm.eval import editing as ev
-from emdm.eval.report import RESULTS_DIR, load_results
+from emdm.eval.report import load_results
+from emdm.eval.results import RESULTS_DIR
 from emdm.motion.features import recover_joints, rot_y
 from emdm.motion.ik_fixture import read_case_array
 from emdm.motion.mask_fixture import PARITY_DIR

@@ -42,8 +42,18 @@ from pathlib import Path
 
 import numpy as np
 
+from emdm import manifest as mf
+from emdm.eval.coverage import Benchmark, CoverageError, PROMPTS_FILE, load_prompts
 from emdm.eval.plausibility import CONTACT_HEIGHT, FLIP_M, FOOT_JOINTS, flip_share, flips
-from emdm.paths import DATASET_DIR, RUNS_DIR, display_path
+from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, evaluator_info, hardware, write_result
+from emdm.manifest import ManifestError
+from emdm.model.open import ModelError, open_model
+from emdm.motion import edit as E
+from emdm.motion.edit import EditError, Editor, joint_acceleration, segment_frames
+from emdm.motion.features import heading_angles, recover_joints, recover_root, rot_y
+from emdm.motion.stitch import align_segment, append_segment
+from emdm.outdir import OutputRefused, check_writable
+from emdm.paths import DATASET_DIR, RUNS_DIR, display_path, MODELS_DIR
 
 FPS = 20
 ACTIONS = ("walk", "raise-both-hands", "walk-backward", "walk-turn-left", "climb", "lie-down")
@@ -66,7 +76,6 @@ class EditingError(ValueError):
 def acceleration(joints: np.ndarray) -> np.ndarray:
     """(F,) per frame t = 1..F−2 (0 at the ends): max over joints of |J[t+1] − 2J[t] + J[t−1]|·fps², m/s² (the
     measure the timeline's seam easing keeps to: ``emdm.motion.edit.joint_acceleration``)."""
-    from emdm.motion.edit import joint_acceleration
     return joint_acceleration(joints, FPS)
 
 
@@ -141,8 +150,6 @@ def skate_figure(sk: dict) -> float | None:
 
 def root_steps(joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(F−1,) root x/z step (m) and |heading change| (rad) from frame t to t+1."""
-    from emdm.motion.features import heading_angles
-
     j = np.asarray(joints, np.float64)
     step = np.linalg.norm(np.diff(j[:, 0, [0, 2]], axis=0), axis=1)
     turn = np.abs(np.angle(np.exp(1j * np.diff(heading_angles(j)))))
@@ -158,8 +165,6 @@ def seam_root(joints: np.ndarray, seams) -> list[dict]:
     step itself and the heading change from s−1 to s over their p95 (``step_ratio``, ``turn_ratio``) are kept as
     figures: they are not jumps, a walk that turns on through a seam at its own rate is a large step or turn there,
     and real clips reach 1.8× on them at their middle frame."""
-    from emdm.motion.features import heading_angles
-
     step, turn = root_steps(joints)
     away = _away(len(step), seams, 1)
     ps, pt = np.percentile(step[away], 95), np.percentile(turn[away], 95)
@@ -175,16 +180,12 @@ def seam_root(joints: np.ndarray, seams) -> list[dict]:
 
 def pose(joints: np.ndarray) -> np.ndarray:
     """Joints relative to the root's x/z, turned to face +Z (heading from hips and shoulders): the pose alone."""
-    from emdm.motion.features import heading_angles, rot_y
-
     j = np.asarray(joints, np.float64)
     return rot_y(-heading_angles(j)[:, None], j - j[:, :1] * np.array([1.0, 0.0, 1.0]))
 
 
 def root_frame(features: np.ndarray, joints: np.ndarray) -> np.ndarray:
     """Joints relative to the root, in the root's own frame (the integrated heading of ``recover_root``)."""
-    from emdm.motion.features import recover_root, rot_y
-
     theta, root = recover_root(features)
     j = np.asarray(joints, np.float64)
     return rot_y(-theta[:, None], j - root[:, None] * np.array([1.0, 0.0, 1.0]))
@@ -227,8 +228,6 @@ class Recorder:
     def __init__(self, editor):
         from dataclasses import fields, replace
 
-        from emdm.motion import edit as E
-
         rec = self
         self.windows: list[np.ndarray] = []
         self.seconds: list[float] = []
@@ -267,9 +266,6 @@ class Recorder:
 def uneased_joints(model, tl, windows) -> np.ndarray:
     """The timeline's joints stitched from its windows as sampled, before ``ease_seams`` (an ablation: the same
     windows, each continuing the eased sequence before it)."""
-    from emdm.motion.features import recover_joints
-    from emdm.motion.stitch import append_segment
-
     joints = recover_joints(model.denormalise(windows[0]))
     for k in range(1, len(tl.frames)):
         joints = append_segment(joints, recover_joints(model.denormalise(windows[k])), min(tl.overlap, tl.starts[k]))
@@ -278,9 +274,6 @@ def uneased_joints(model, tl, windows) -> np.ndarray:
 
 def overlap_error_mm(model, tl, windows) -> float:
     """Max distance (mm) of each window's aligned overlap frames from the previous segment's last ones."""
-    from emdm.motion.features import recover_joints
-    from emdm.motion.stitch import align_segment
-
     worst = 0.0
     for k in range(1, len(tl.frames)):
         s = tl.starts[k]
@@ -292,10 +285,6 @@ def overlap_error_mm(model, tl, windows) -> float:
 
 
 def measure(model, bench, a, log=print) -> dict:
-    from emdm.eval.coverage import load_prompts
-    from emdm.motion import edit as E
-    from emdm.motion.features import recover_joints
-
     labels = bench.labels
     missing = [x for x in a.actions if x not in labels]
     if missing:
@@ -491,16 +480,10 @@ def timed_editor(a, threads: int):
     """The Editor the time bar runs: the shipped file of ``a.variant`` through ONNX Runtime on ``threads`` threads, or
     (``a.ckpt``) those PyTorch weights on ``a.device`` with the shipped entry's sampling settings (guidance, where
     it stops, x̂0 smoothing), so the same steps run on either."""
-    from emdm.model.open import open_model
-    from emdm.motion import edit as E
-
     if a.ckpt is None:
         variant = page_variant(a.model, a.models_dir) if a.variant == "page" else a.variant
         return E.Editor.open(open_model(a.model, models_dir=a.models_dir, threads=threads, variant=variant), steps=a.steps)
     import torch
-
-    from emdm import manifest as mf
-    from emdm.paths import MODELS_DIR
 
     torch.set_num_threads(threads)
     entry = mf.load(Path(a.models_dir or MODELS_DIR))["models"].get(a.model)
@@ -518,8 +501,6 @@ def time_ratio(a, threads: int, orders: list[list[str]], frames: int, log=print)
     timelines of ``orders``' prompts (windows begun together, as the page) and single motions, interleaved after a
     warm-up, medians. One call of several windows' rows costs less than its parts only where the runtime has threads
     to spare (or a GPU)."""
-    from emdm.motion import edit as E
-
     model = timed_editor(a, threads)
     for p in {p for o in orders for p in o}:
         model.condition(p)
@@ -542,8 +523,6 @@ def time_ratio(a, threads: int, orders: list[list[str]], frames: int, log=print)
 
 def time_orders(a) -> list[list[str]]:
     """``--time-only``'s timelines: the prompts of ``a.actions`` in ``a.time_timelines`` random orders (``orders``)."""
-    from emdm.eval.coverage import load_prompts
-
     plain = {x: p[0] for x, p in load_prompts(a.prompts, list(a.actions)).items()}
     return [[plain[x] for x in o] for o in orders(list(a.actions), a.time_timelines, a.seed)]
 
@@ -583,9 +562,6 @@ def time_bar(t: dict) -> tuple[bool, str]:
 def page_variant(model: str, models_dir: Path | None) -> str | None:
     """The file the page runs for a shipped model: its entry's ``defaultVariant`` (None: the fp32 file, also when the
     manifest cannot be read, which ``open_model`` then reports)."""
-    from emdm import manifest as mf
-    from emdm.paths import MODELS_DIR
-
     try:
         return mf.load(Path(models_dir or MODELS_DIR))["models"].get(model, {}).get("defaultVariant")
     except mf.ManifestError:
@@ -593,15 +569,6 @@ def page_variant(model: str, models_dir: Path | None) -> str | None:
 
 
 def run(a) -> Path:
-    from emdm.eval.coverage import Benchmark
-    from emdm.eval.evaluate import _evaluator_info, dataset_info, hardware, write_result
-    from emdm.eval.report import SCHEMA
-    from emdm.model.open import open_model
-    from emdm.motion.edit import Editor
-    from emdm.outdir import check_writable
-
-    from emdm.eval.report import RESULTS_DIR
-
     out = check_writable(a.out or (RESULTS_DIR / "json" / f"editing-{a.model}{f'-seed{a.seed}' if a.seed else ''}.json"))
     t0, load0 = time.time(), os.getloadavg()[0]
     variant = page_variant(a.model, a.models_dir) if a.variant == "page" else a.variant
@@ -611,7 +578,7 @@ def run(a) -> Path:
     m = measure(model, bench, a)
     result = {"schema": SCHEMA, "task": "editing", "name": a.model, "variant": opened.variant, "steps": a.steps,
               "guidance": model.guidance, "guidance_min_time": model.guidance_min_time, "x0_smoothing": model.x0_smoothing,
-              "seed": a.seed, **m, "bars": bars(m), "classifier": _evaluator_info(bench.classifier, a.classifier),
+              "seed": a.seed, **m, "bars": bars(m), "classifier": evaluator_info(bench.classifier, a.classifier),
               "classifier_real_macro": bench.real.get("macro_accuracy"),
               "dataset": dataset_info(Path(a.dataset), a.split), "hardware": hardware(), "threads": a.threads,
               "seconds": round(time.time() - t0, 1), "load_avg_1min_start": load0, "load_avg_1min_end": os.getloadavg()[0],
@@ -623,11 +590,6 @@ def run_time_only(a) -> Path:
     """``--time-only``: the time bar alone (no dataset, classifier or quality measures), at each of ``--time-threads``;
     with ``--ckpt`` the PyTorch weights on ``--device`` (a GPU), the runtime the issue's bar is out of reach without
     on these CPUs. Writes ``editing-time-<model>-<runtime>.json`` (task ``editing-time``)."""
-    from emdm.eval.evaluate import write_result
-    from emdm.eval.report import RESULTS_DIR, SCHEMA
-    from emdm.motion.edit import segment_frames
-    from emdm.outdir import check_writable
-
     runtime = (f"pytorch-{a.device.split(':')[0]}" if a.ckpt is not None
                else f"onnxruntime-cpu-{page_variant(a.model, a.models_dir) if a.variant == 'page' else a.variant}")
     out = check_writable(a.out or (RESULTS_DIR / "json" / f"editing-time-{a.model}-{runtime}.json"))
@@ -646,13 +608,9 @@ def run_time_only(a) -> Path:
 
 
 def machine_name() -> str:
-    """``emdm.eval.evaluate.hardware()`` without its torch thread count (a time row names its own threads); the GPU,
-    when there is one, stays."""
-    import re
-
-    from emdm.eval.evaluate import hardware
-
-    return re.sub(r" \(\d+ torch thread\(s\)\)", "", hardware())
+    """``hardware()`` without its torch thread count (a time row names its own threads); the GPU, when there is one,
+    stays."""
+    return hardware(torch_threads=False)
 
 
 PAGE_KEYS = ("reps", "singleMs", "timelineMs", "steps", "environment", "load", "timelineWindowFrames")
@@ -663,10 +621,6 @@ def import_page(a) -> Path:
     timeline-time.json) as an ``editing-time`` result (runtime ``page-<backend>-<file>``) for RESULTS.md. Import it on
     the machine that measured it (its hardware is read here)."""
     import json
-
-    from emdm.eval.evaluate import write_result
-    from emdm.eval.report import RESULTS_DIR, SCHEMA
-    from emdm.outdir import check_writable
 
     path = Path(a.import_page)
     try:
@@ -890,8 +844,6 @@ def _uneased(s: dict) -> str:
 # ----------------------------------------------------------------------------------------------- CLI
 
 def build_parser() -> argparse.ArgumentParser:
-    from emdm.eval.coverage import PROMPTS_FILE
-
     ap = argparse.ArgumentParser(prog="python -m emdm.eval.editing", description=__doc__.split("\n\n")[0])
     ap.add_argument("--model", default="emdm-t2m-web", help="a shipped text model of public/models/manifest.json")
     ap.add_argument("--models-dir", type=Path, default=None)
@@ -928,12 +880,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     import torch
-
-    from emdm.eval.coverage import CoverageError
-    from emdm.model.open import ModelError
-    from emdm.motion.edit import EditError
-    from emdm.manifest import ManifestError
-    from emdm.outdir import OutputRefused
 
     a = build_parser().parse_args(argv)
     torch.set_num_threads(a.threads)

@@ -28,6 +28,7 @@ import numpy as np
 from emdm import manifest as mf
 from emdm import paths
 from emdm import skeleton as sk
+from emdm.motion.features import recover_joints
 
 MODELS_MD = paths.REPO_ROOT / "docs" / "MODELS.md"
 BONES_JSON = paths.REPO_ROOT / "docs" / "results" / "json" / "models-bones.json"
@@ -74,7 +75,6 @@ def bone_errors(joints: np.ndarray) -> np.ndarray:
 def measure_file(entry: dict, onnx: Path) -> dict:
     """Worst bone (median over frames, worst over conditions and seeds) and the mean over bones of each bone's
     worst, for one ONNX file."""
-    from emdm.motion.features import recover_joints
     from emdm.sample import denormalise, onnx_step, read_meanstd, sample_features
 
     step = onnx_step(onnx, threads=1)

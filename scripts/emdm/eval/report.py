@@ -40,12 +40,13 @@ from pathlib import Path
 import numpy as np
 
 from emdm.eval.coverage import COVERED
+from emdm.eval.editing import section as editing_section, time_section
 from emdm.eval.metrics import mean_ci95
+from emdm.eval import markdown as md, realism
+from emdm.eval.poses import BONE_TOL, FLOOR_TOL, LEG_TOL, section as poses_section
+from emdm.eval.realism import plot as plot_realism
+from emdm.eval.results import RESULTS_DIR, RESULTS_MD, SCHEMA
 from emdm.paths import REPO_ROOT
-
-RESULTS_DIR = REPO_ROOT / "docs" / "results"
-RESULTS_MD = REPO_ROOT / "docs" / "RESULTS.md"
-SCHEMA = 1
 
 VARIANT_LABEL = {
     "real": "Real motion",
@@ -126,12 +127,6 @@ def _sort_key(r: dict):
     return (VARIANT_ORDER.index(v) if v in VARIANT_ORDER else 99, _steps(r) or 0, r["name"])
 
 
-def _table(header: list[str], rows: list[list[str]]) -> str:
-    lines = ["| " + " | ".join(header) + " |", "|" + "|".join(" --- " for _ in header) + "|"]
-    lines += ["| " + " | ".join(row) + " |" for row in rows]
-    return "\n".join(lines)
-
-
 def _method_cells(r: dict) -> list[str]:
     info = r["info"]
     steps = _steps(r)
@@ -145,7 +140,7 @@ def text_table(results: list[dict]) -> str:
         rows.append(_method_cells(r) + [fmt(m.get("top1")), fmt(m.get("top2")), fmt(m.get("top3")),
                                          fmt(m.get("fid")), fmt(m.get("mm_dist")), fmt(m.get("diversity")),
                                          fmt(m.get("multimodality")), str(r.get("repeats", len(m.get("top1", []))))])
-    return _table(["Method", "Steps", "Clips", "Train steps", "R-prec top-1 ↑", "top-2 ↑", "top-3 ↑", "FID ↓",
+    return md.table(["Method", "Steps", "Clips", "Train steps", "R-prec top-1 ↑", "top-2 ↑", "top-3 ↑", "FID ↓",
                    "MM-Dist ↓", "Diversity →", "MModality ↑", "Repeats"], rows)
 
 
@@ -155,7 +150,7 @@ def action_table(results: list[dict]) -> str:
         m = r["metrics"]
         rows.append(_method_cells(r) + [fmt(m.get("accuracy")), fmt(m.get("fid")), fmt(m.get("diversity")),
                                          fmt(m.get("multimodality")), str(r.get("repeats", len(m.get("accuracy", []))))])
-    return _table(["Method", "Steps", "Clips", "Train steps", "Accuracy ↑", "FID ↓", "Diversity →", "Multimodality →",
+    return md.table(["Method", "Steps", "Clips", "Train steps", "Accuracy ↑", "FID ↓", "Diversity →", "Multimodality →",
                    "Repeats"], rows)
 
 
@@ -172,7 +167,7 @@ def plausibility_table(results: list[dict]) -> str:
         rows.append([r["name"], r["task"], "–" if _steps(r) is None else str(_steps(r)), str(n),
                      fmt(p.get("penetration_mm"), 1), fmt(p.get("floating_mm"), 1), fmt(p.get("skate_cm_s"), 1),
                      fmt(p.get("skate_ratio"), 3), fmt(p.get("phys_err_mm"), 1)])
-    return _table(["Method", "Task", "Steps", "Motions", "Penetrate (mm) ↓", "Float (mm) ↓", "Skate (cm/s) ↓",
+    return md.table(["Method", "Task", "Steps", "Motions", "Penetrate (mm) ↓", "Float (mm) ↓", "Skate (cm/s) ↓",
                    "Skate ratio ↓", "Phys-Err (mm) ↓"], rows)
 
 
@@ -215,7 +210,7 @@ def timing_table(results: list[dict]) -> tuple[str, list[str]]:
                 ratios.append(f"{runtime}, {threads} thread(s): diffusion + DDIM at {f['steps']} steps takes "
                               f"{f['ms_per_frame'] / ref['ms_per_frame']:.1f}× the time per frame of EMDM at "
                               f"{ref['steps']} steps ({f['ms_per_frame']:.3f} vs {ref['ms_per_frame']:.3f} ms).")
-    table = _table(["Runtime", "Method", "Steps", "Threads", "Frames", "ms / motion", "ms / frame", "× EMDM", "Runs",
+    table = md.table(["Runtime", "Method", "Steps", "Threads", "Frames", "ms / motion", "ms / frame", "× EMDM", "Runs",
                     "Hardware"], rows)
     return table, ratios
 
@@ -256,7 +251,7 @@ def coverage_section(r: dict, plot: str | None) -> list[str]:
     if all("flip_share" in x for x in runs) and "flip_share" in real:
         rows.append(["**frames with a one-frame flip** (a joint > 10 cm out and back)", "", f"{real['flip_share']:.2%}"] +
                     [f"{x['flip_share']:.1%}" for x in runs])
-    out += [_table(header, rows), ""]
+    out += [md.table(header, rows), ""]
     if few:
         out += ["Too few real test clips to judge the classifier on (listed, not dropped; their generated rates are "
                 "in the table): " + ", ".join(f"{a} ({n})" for a, n in few.items()) + ".", ""]
@@ -467,7 +462,7 @@ def models_table(results: list[dict]) -> str:
                      "continued" if "cont" in Path(str(where)).stem else ""])
     if not rows:
         return ""
-    return _table(["Task", "Variant", "Weights", "Train steps", "Train wall (min)", "Device", ""], rows)
+    return md.table(["Task", "Variant", "Weights", "Train steps", "Train wall (min)", "Device", ""], rows)
 
 
 def headlines(results: list[dict]) -> list[str]:
@@ -531,8 +526,6 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
             out += coverage_section(r, plots.get("coverage:" + r["_file"]))
     real = sorted((r for r in results if r["task"] == "realism"), key=lambda r: r["name"])
     if real:
-        from emdm.eval import realism
-
         out += ["## Realism per action: speed, jitter, ground, and a second judge of meaning (issue 28)", "",
                 "`python -m emdm.eval.realism` generates the coverage benchmark's motions and sets each action's against "
                 "its real test clips: root speed, per-frame joint steps, airborne frames, and a kinematic rule per action "
@@ -543,8 +536,6 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
         out += realism.rules_section(real[-1])
     edits = [r for r in results if r["task"] == "editing"]
     if edits:
-        from emdm.eval.editing import section as editing_section, time_section
-
         out += ["## Beyond one prompt: timelines, in-betweening, body-part edits, loops (issue 14)", "",
                 "`python -m emdm.eval.editing` makes 3-segment timelines, in-betweens, body-part edits and loops with "
                 "`emdm.motion.edit` (the algorithms the page runs, parity-tested against `src/edit.ts`) and measures "
@@ -554,8 +545,6 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
         out += time_section([r for r in results if r["task"] == "editing-time"])
     grids = sorted((r for r in results if r["task"] == "poses"), key=lambda r: r["name"])
     if grids:
-        from emdm.eval.poses import BONE_TOL, FLOOR_TOL, LEG_TOL, section as poses_section
-
         out += ["## Impossible poses over the page's settings (issue 12)", "",
                 "`python -m emdm.eval.poses` samples every step count × guidance (1, 2.5, 6: the page's slider range) × "
                 "length (2, 6, 9.8 s) and flags a frame as impossible when a bone is more than "
@@ -639,8 +628,6 @@ def main(argv: list[str] | None = None) -> int:
         plots["time"] = rel((a.results / "time_vs_steps.png").resolve())
     for r in results:
         if r["task"] == "realism":
-            from emdm.eval.realism import plot as plot_realism
-
             png = a.results / (Path(r["_file"]).stem + ".png")
             if plot_realism(r, png):
                 plots["realism:" + r["_file"]] = rel(png.resolve())

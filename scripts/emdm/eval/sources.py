@@ -19,6 +19,7 @@ import numpy as np
 from emdm.eval.data import TEXT_ENCODER
 from emdm.eval.protocol import Conditions
 from emdm.model.open import DEFAULT_GUIDANCE, OpenedModel, open_model
+from emdm.text import encode_texts
 
 
 def variant_of(meta: dict) -> str:
@@ -132,7 +133,6 @@ class ModelSource:
             if encoder != TEXT_ENCODER or cond.text_emb is None:   # the model reads another encoder's vectors
                 if cond.texts is None:
                     raise ValueError(f"{who}: model conditions on {encoder!r}; the captions' text is needed")
-                from emdm.text import encode_texts
 
                 return np.asarray(encode_texts(cond.texts, encoder_id=encoder), np.float32)
             if cond.text_emb.shape[1] != spec["dim"]:
