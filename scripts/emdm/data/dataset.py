@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from emdm import manifest
-from emdm.text import encode_texts
+from emdm import text as text_encoders      # .encode_texts looked up at each call: tests replace it
 
 FPS = 20
 MAX_FRAMES = 196
@@ -203,7 +203,7 @@ def cached_text_embeddings(captions: list[str], encoder_id: str, cache_dir: Path
             return emb
 
     # batch_size 1: exactly what the browser computes (int8 dynamic quantisation scales per call)
-    emb = np.asarray(encode_texts(captions, encoder_id=encoder_id, batch_size=1), dtype=np.float32)
+    emb = np.asarray(text_encoders.encode_texts(captions, encoder_id=encoder_id, batch_size=1), dtype=np.float32)
     if emb.shape[0] != len(captions):
         raise RuntimeError(f"text encoder {encoder_id}: {emb.shape[0]} embeddings for {len(captions)} captions")
     cache_dir.mkdir(parents=True, exist_ok=True)

@@ -36,7 +36,7 @@ from emdm.eval.coverage import COVERED, PROMPTS_FILE, CoverageError, chips, load
 from emdm.eval.results import RESULTS_DIR
 from emdm.outdir import OutputRefused, check_writable
 from emdm.paths import DATASET_DIR, display_path
-from emdm.text import encode_texts
+from emdm import text as text_encoders      # .encode_texts looked up at each call: tests replace it
 
 SCHEMA = 1
 CAPTIONS = 16          # training captions per covered action kept as anchors
@@ -257,7 +257,7 @@ def main(argv: list[str] | None = None) -> int:
         covered = {r for r in next(r for r in coverage["runs"] if r["steps"] == coverage.get("default_steps", 10))["covered"]}
         captions = training_captions(a.dataset, covered, a.captions) if text else {}
         enc_id = entry["condition"].get("encoder", "")
-        caps = build(coverage, prompts, captions, lambda ts: encode_texts(ts, enc_id, models_dir=a.models_dir),
+        caps = build(coverage, prompts, captions, lambda ts: text_encoders.encode_texts(ts, enc_id, models_dir=a.models_dir),
                      encoder_info(manifest, enc_id) if text else {})
         out = a.models_dir / file_name(a.model)
         write(caps, out)

@@ -28,7 +28,7 @@ import numpy as np
 from emdm import manifest as mf
 from emdm.model.schedule import make_schedule
 from emdm.paths import MODELS_DIR
-from emdm.text import encode_texts
+from emdm import text as text_encoders      # .encode_texts looked up at each call: tests replace it
 
 PROMPTS = ["a person kicks", "a person bows", "a person squats", "a person walks forward"]
 
@@ -48,7 +48,7 @@ def conditions(entry: dict, prompts: list[str] | None) -> list[tuple[str, np.nda
     spec = entry["condition"]
     if spec["type"] == "text":
         prompts = prompts or PROMPTS
-        emb = np.asarray(encode_texts(prompts, encoder_id=spec["encoder"], batch_size=1), np.float32)
+        emb = np.asarray(text_encoders.encode_texts(prompts, encoder_id=spec["encoder"], batch_size=1), np.float32)
         return list(zip(prompts, emb))
     labels = prompts or list(spec["labels"])
     return [(lab, make_condition(spec, None, lab, False)) for lab in labels]
