@@ -45,8 +45,8 @@ class Import:
     comment: str         # the "# lazy:" reason found for it, "" when none
 
 
-def module_name(path: Path) -> str:
-    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+def module_name(path: Path, root: Path = ROOT) -> str:
+    parts = list(path.relative_to(root).with_suffix("").parts)
     if parts[-1] == "__init__":
         parts.pop()
     return ".".join(parts)
@@ -56,8 +56,8 @@ def source_files(root: Path = ROOT) -> list[Path]:
     return sorted(p for p in (root / PACKAGE).rglob("*.py") if "__pycache__" not in p.parts)
 
 
-def _modules(files: list[Path]) -> set[str]:
-    return {module_name(p) for p in files}
+def _modules(files: list[Path], root: Path = ROOT) -> set[str]:
+    return {module_name(p, root) for p in files}
 
 
 def _resolve(node: ast.Import | ast.ImportFrom, here: str, is_package: bool, modules: set[str]) -> list[tuple[str, tuple[str, ...]]]:
@@ -98,13 +98,13 @@ def _lazy_reason(lines: list[str], node: ast.stmt, import_lines: set[int]) -> st
     return ""
 
 
-def imports_of(path: Path, modules: set[str]) -> list[Import]:
+def imports_of(path: Path, modules: set[str], root: Path = ROOT) -> list[Import]:
     text = path.read_text(encoding="utf-8")
     lines = text.splitlines()
     tree = ast.parse(text, filename=str(path))
-    here = module_name(path)
+    here = module_name(path, root)
     is_package = path.name == "__init__.py"
-    rel = path.relative_to(ROOT).as_posix()
+    rel = path.relative_to(root).as_posix()
     found: list[tuple[ast.stmt, bool]] = []
 
     def visit(node: ast.AST, in_function: bool) -> None:
@@ -126,8 +126,8 @@ def imports_of(path: Path, modules: set[str]) -> list[Import]:
 
 def all_imports(root: Path = ROOT) -> list[Import]:
     files = source_files(root)
-    modules = _modules(files)
-    return [imp for p in files for imp in imports_of(p, modules)]
+    modules = _modules(files, root)
+    return [imp for p in files for imp in imports_of(p, modules, root)]
 
 
 def _pending(imp: Import) -> bool:
@@ -196,7 +196,7 @@ def long_files(root: Path = ROOT) -> list[str]:
     for p in source_files(root):
         n = len(p.read_text(encoding="utf-8").splitlines())
         if n > MAX_FILE_LINES:
-            out.append(f"{p.relative_to(ROOT).as_posix()}: {n} lines (at most {MAX_FILE_LINES})")
+            out.append(f"{p.relative_to(root).as_posix()}: {n} lines (at most {MAX_FILE_LINES})")
     return out
 
 
@@ -212,7 +212,7 @@ def long_functions(root: Path = ROOT) -> list[str]:
             first = min([node.lineno] + [d.lineno for d in node.decorator_list])
             above = lines[first - 2] if first >= 2 else ""
             if n > MAX_FUNCTION_LINES and "# long:" not in above:
-                out.append(f"{p.relative_to(ROOT).as_posix()}:{node.lineno} {node.name}: {n} lines (at most "
+                out.append(f"{p.relative_to(root).as_posix()}:{node.lineno} {node.name}: {n} lines (at most "
                            f"{MAX_FUNCTION_LINES}, or a '# long: <reason>' comment on the line above its def)")
     return out
 
@@ -248,6 +248,50 @@ def test_no_source_file_over_the_limit():
 def test_no_function_over_the_limit_without_a_reason():
     bad = [f for f in long_functions() if f.split(":")[0] not in _pending_files()]
     assert not bad, "\n".join(bad)
+
+
+# ---- the checks themselves, on a small tree (each finds what it is for, and passes what it should) -------------------
+
+def _tree(tmp_path: Path, files: dict[str, str]) -> Path:
+    for rel, text in files.items():
+        f = tmp_path / PACKAGE / rel
+        f.parent.mkdir(parents=True, exist_ok=True)
+        f.write_text(text)
+    return tmp_path
+
+
+def test_a_cycle_through_a_lazy_import_is_found(tmp_path):
+    root = _tree(tmp_path, {"__init__.py": "", "a.py": "from emdm.b import g\n",
+                            "b.py": "def g():\n    from emdm import a  # lazy: hides the cycle\n    return a\n",
+                            "c.py": "from emdm import a\n"})
+    assert import_cycles(all_imports(root)) == [["emdm.a", "emdm.b"]]
+    (root / PACKAGE / "b.py").write_text("def g():\n    return 1\n")
+    assert import_cycles(all_imports(root)) == []
+
+
+def test_a_lazy_emdm_import_needs_its_reason(tmp_path):
+    root = _tree(tmp_path, {"__init__.py": "", "a.py": "X = 1\n", "_p.py": "",
+                            "b.py": "import json\n\n\ndef f():\n    import numpy\n    from emdm.a import X\n    return X\n",
+                            "c.py": "def f():\n    # lazy: torch, which a numpy-only path must not load\n"
+                                    "    import json\n    from emdm.a import X\n    return X\n",
+                            "d.py": "def f():\n    from emdm.a import X  # lazy: optional\n    return X\n"})
+    assert unexplained_lazy_imports(all_imports(root)) == [
+        "emdm/b.py:6 imports emdm.a inside a function without a '# lazy: <reason>' comment"]
+
+
+def test_a_private_name_from_another_module_is_found(tmp_path):
+    root = _tree(tmp_path, {"__init__.py": "", "a.py": "_x = 1\ny = 2\n", "b.py": "from emdm.a import _x, y\n",
+                            "c.py": "from emdm.a import y\n"})
+    assert private_imports(all_imports(root)) == ["emdm/b.py:1 imports _x (private to emdm.a)"]
+
+
+def test_long_files_and_functions_are_found_unless_explained(tmp_path):
+    body = "".join(f"    x{i} = {i}\n" for i in range(MAX_FUNCTION_LINES))
+    root = _tree(tmp_path, {"__init__.py": "", "f.py": "def long():\n" + body,
+                            "g.py": "# long: one table, row by row\ndef long():\n" + body,
+                            "h.py": "def short():\n    return 1\n" + "\n" * MAX_FILE_LINES})
+    assert [f.split(" ")[0] for f in long_functions(root)] == ["emdm/f.py:1"]
+    assert [f.split(":")[0] for f in long_files(root)] == ["emdm/h.py"]
 
 
 if __name__ == "__main__":
