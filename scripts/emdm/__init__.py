@@ -13,10 +13,10 @@ __all__ = ["Motion", "generate", "__version__"]
 
 
 def __getattr__(name: str):
-    # emdm.generate / emdm.Motion load emdm.generation on first use: importing it here would import emdm.sample
-    # (and the modules it uses) before `python -m emdm.sample` runs it as __main__, a second copy runpy warns about.
+    # emdm.generate / emdm.Motion load emdm.generation on first use: `import emdm` (every console script and
+    # `python -m emdm.*` runs it) stays free of onnxruntime, the text encoders and the sampler until they are asked for.
     if name in ("generate", "Motion"):
-        from emdm import generation
+        from emdm import generation  # lazy: `import emdm` stays light (see above)
 
         return getattr(generation, name)
     raise AttributeError(f"module 'emdm' has no attribute {name!r}")

@@ -27,10 +27,14 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from emdm import manifest as mf
+from emdm import paths
 from emdm.checkpoints import first_non_finite, save_weights_file
+from emdm.manifest import ManifestError
 from emdm.model.generator import Generator
 from emdm.model.open import INPUTS, ModelError, load_generator as open_generator, ort_session
 from emdm.sampler.schedule import DEFAULT_STEPS, make_schedule
+from emdm.outdir import OutputRefused, check_writable
 
 PARITY_CASES = ((1, 1), (1, 60), (2, 17), (3, 120), (2, 196))
 NAME = re.compile(r"[A-Za-z0-9._-]{1,100}")     # a model id: a file stem in --out and the manifest key
@@ -233,8 +237,6 @@ def manifest_entry(name: str, meta: dict, summary: dict, files: dict[str, str], 
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from emdm import paths
-
     p = argparse.ArgumentParser(prog="python -m emdm.export", description=__doc__.split("\n\n")[0])
     p.add_argument("--ckpt", type=Path, required=True)
     p.add_argument("--name", required=True, help="model name, e.g. emdm-t2m-web (file stem and manifest key)")
@@ -269,9 +271,6 @@ VARIANT_MAKERS = {"int8": make_int8, "fp16": make_fp16}
 
 def main(argv: list[str] | None = None) -> int:
     """The CLI: an unusable --ckpt, --out or --variants is one line naming it, exit status 2."""
-    from emdm.manifest import ManifestError
-    from emdm.outdir import OutputRefused
-
     a = build_parser().parse_args(argv)
     try:
         return run(a)
@@ -281,9 +280,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def run(a: argparse.Namespace) -> int:
-    from emdm import manifest as mf
-    from emdm.outdir import check_writable
-
     variants = [s.strip() for s in a.variants.split(",") if s.strip()]
     unknown = [v for v in variants if v not in VARIANT_MAKERS]
     check_name(a.name)
@@ -369,8 +365,6 @@ def make_files(a: argparse.Namespace, G: Generator, meta: dict, summary: dict, o
 def write_entry(a: argparse.Namespace, out: Path, meta: dict, summary: dict, files: dict, extra: dict) -> None:
     """The manifest entry models.<name> (keeping the earlier entry's guidance, guidanceMinTime, x0Smoothing, defaultVariant
     unless given)."""
-    from emdm import manifest as mf
-
     var_err = extra.get("variantRelErr", {})
     w = a.guidance
     if w is None:        # a re-export keeps the guidance chosen for this model

@@ -44,6 +44,12 @@ from emdm.model.open import onnx_step
 from emdm.sampler import SamplingSettings, sample_features
 from emdm.sampler.schedule import make_schedule
 from emdm.sampler.settings import method_of
+from emdm.mocap.jointmap import load_joint_map
+from emdm.mocap.load import load_bvh_clip
+from emdm.motion.features import extract_features, recover_joints
+from emdm.motion.retarget import normalize_clip, prepare_take
+from emdm.motion.smooth import smooth_pose
+from emdm.text.minilm import MiniLMEncoder
 
 PARITY_DIR = paths.FIXTURES_DIR / "parity"
 FRAMES = 40          # fixture motion length (the models take any L <= 196)
@@ -118,8 +124,6 @@ def reference_sample(sess, x_T: np.ndarray, zs: list[np.ndarray], epss: list[np.
         else:
             x0 = run_step(sess, x, z[None], cond[None], np.array([t], np.float32))
         if x0_smoothing > 0 and k > 0:
-            from emdm.motion.smooth import smooth_pose
-
             x0 = smooth_pose(x0, x0_smoothing)
         if objective == "diffusion":
             if k == 0:
@@ -302,10 +306,6 @@ def real_clip_features(max_frames: int = 120) -> tuple[np.ndarray, str]:
     raw = paths.DATA_DIR / "raw" / RAW_CLIP
     if not raw.is_file():
         raise FileNotFoundError(f"{vec_dir}: no prepared clips and {raw} absent; run `python -m emdm.data.prepare` first")
-    from emdm.mocap.jointmap import load_joint_map
-    from emdm.mocap.load import load_bvh_clip
-    from emdm.motion.features import extract_features
-    from emdm.motion.retarget import normalize_clip, prepare_take
 
     clip = load_bvh_clip(raw, load_joint_map("bandai"))
     joints = normalize_clip(prepare_take(clip.joints, clip.fps))[: max_frames + 1]
@@ -313,8 +313,6 @@ def real_clip_features(max_frames: int = 120) -> tuple[np.ndarray, str]:
 
 
 def make_recover(out_dir: Path) -> dict[str, Any]:
-    from emdm.motion.features import recover_joints
-
     feats, source = real_clip_features()
     joints = recover_joints(feats)
     write_case(out_dir, "recover", {"source": source, "frames": int(feats.shape[0])},
@@ -337,8 +335,6 @@ def condition_vector(name: str, entry: dict[str, Any], manifest: dict[str, Any],
     enc = manifest.get("textEncoders", {}).get(cond.get("encoder", ""))
     if enc and enc.get("kind") == "minilm":
         try:
-            from emdm.text.minilm import MiniLMEncoder
-
             v = MiniLMEncoder(models_dir / enc["dir"]).encode([prompt])[0].astype(np.float32)
             if v.shape == (dim,):
                 return v, f"text {prompt!r} ({enc['kind']})"
@@ -349,8 +345,6 @@ def condition_vector(name: str, entry: dict[str, Any], manifest: dict[str, Any],
 
 
 def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[str, Any], models_dir: Path) -> dict[str, Any]:
-    from emdm.motion.features import recover_joints
-
     onnx_rel = entry["onnx"]
     onnx_path = models_dir / onnx_rel
     meta_file = manifest["files"].get(onnx_rel)

@@ -16,6 +16,8 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from emdm import skeleton as sk
+
 SCHEMA_VERSION = 1
 REPO_ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_MODELS_DIR = REPO_ROOT / "public" / "models"
@@ -45,8 +47,6 @@ def sha256_file(path: Path | str) -> str:
 
 def skeleton_entry() -> dict[str, Any]:
     """The reference skeleton and motion format, as both runtimes need them."""
-    from emdm import skeleton as sk
-
     return {
         "joints": list(sk.JOINT_NAMES),
         "parents": [int(p) for p in sk.PARENTS],

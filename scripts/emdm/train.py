@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import csv
 import math
-import os
 import sys
 import time
 from pathlib import Path
@@ -33,99 +32,23 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from emdm import paths
 from emdm.checkpoints import (CheckpointError, TRAIN_KEYS, atomic_save, check_same_model, dataset_identity,
                               first_non_finite, load_file, load_state_dict, load_weights_file, save_weights_file)
 from emdm.data.dataset import (BucketBatcher, DatasetError, DeviceClips, action_shares, caption_table,
                                cached_text_embeddings, crop_plan, load_split)
+from emdm.distributed import Dist
 from emdm.model.discriminator import Discriminator
 from emdm.model.generator import Generator, count_parameters
 from emdm.model.objectives import GanWeights, Geo, Nets, ScheduleTables, ddgan_step, diffusion_step
 from emdm.sampler.schedule import SUPPORTED_STEPS
+from emdm.train_log import LOG_FIELDS, NonFiniteLoss, StepLog, truncate_log
+from emdm.train_options import build_parser
 
 __all__ = ["main", "build_parser", "Trainer", "cosine_lr", "save_weights_file", "atomic_save"]   # save_weights_file: re-exported
 
-LOG_FIELDS = ["step", "epoch", "wall_s", "sec_per_step", "lr_g", "lr_d", "loss_d", "d_real", "d_fake", "r1",
-              "loss_g", "g_adv", "recon", "pos", "vel", "foot", "bone"]
-# loss terms in the order a step computes them (the first non-finite one is the cause; later ones follow from it)
-LOSS_TERMS = ["d_real", "r1", "d_fake", "loss_d", "g_adv", "recon", "pos", "vel", "foot", "bone", "loss_g"]
 DEFAULT_LR_G = {"text": 2e-5, "action": 3e-5}
 REFERENCE_BATCH = 64               # the batch the default learning rates were tuned for (--lr-scale)
-
-
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m emdm.train", description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--data", type=Path, default=None, help="HumanML3D-layout dataset folder (default: emdm.paths.DATASET_DIR)")
-    p.add_argument("--split", default="train")
-    p.add_argument("--task", choices=["text", "action"], default="text")
-    p.add_argument("--encoder", default="all-MiniLM-L6-v2", help="text encoder id (emdm.text)")
-    p.add_argument("--out", type=Path, required=True, help="run folder (checkpoint, log, text-embedding cache)")
-    p.add_argument("--preset", default="web", help="generator preset: web | paper | tiny")
-    p.add_argument("--objective", choices=["ddgan", "diffusion"], default="ddgan")
-    p.add_argument("--steps", type=int, default=20000, help="total optimisation steps (cosine LR horizon)")
-    p.add_argument("--batch", type=int, default=64, help="batch per process")
-    p.add_argument("--lr-g", type=float, default=None, help="generator LR at batch 64 (default 2e-5 text, 3e-5 action)")
-    p.add_argument("--lr-d", type=float, default=1.25e-4, help="discriminator LR at batch 64")
-    p.add_argument("--lr-scale", choices=["none", "sqrt", "linear"], default="none",
-                   help="scale --lr-g/--lr-d by (global batch / 64)^½ or ^1 (global batch = --batch × processes)")
-    p.add_argument("--lr-min", type=float, default=1e-5, help="cosine decay floor")
-    p.add_argument("--warmup", type=int, default=0, help="linear LR warm-up steps")
-    p.add_argument("--betas", type=float, nargs=2, default=(0.5, 0.9))
-    p.add_argument("--ema", type=float, default=0.9999)
-    p.add_argument("--ema-warmup", action=argparse.BooleanOptionalAction, default=True,
-                   help="use decay min(ema, (1+n)/(10+n)) so short runs do not keep the initial weights")
-    p.add_argument("--geo-weight", type=float, default=100.0, help="R: weight of L_geo in the G loss (0 = naive DDGAN)")
-    p.add_argument("--lambda-geo", type=float, default=1.0, help="λ: weight of the joint terms inside L_geo")
-    p.add_argument("--w-pos", type=float, default=1.0)
-    p.add_argument("--w-vel", type=float, default=1.0)
-    p.add_argument("--w-foot", type=float, default=1.0)
-    p.add_argument("--w-bone", type=float, default=0.0,
-                   help="weight of L_bone, the squared relative bone-length error (not in the paper: 0 = its recipe)")
-    p.add_argument("--adv-weight", type=float, default=1.0, help="weight of the G adversarial term")
-    p.add_argument("--r1-gamma", type=float, default=0.02)
-    p.add_argument("--r1-every", type=int, default=15)
-    p.add_argument("--d-cond", action=argparse.BooleanOptionalAction, default=True, help="condition D on c")
-    p.add_argument("--d-width", type=int, default=1024, help="D's first hidden width (released: 1024)")
-    p.add_argument("--cond-drop", type=float, default=0.1, help="probability of the zero (unconditional) condition")
-    p.add_argument("--supported-steps", default=",".join(map(str, SUPPORTED_STEPS)))
-    p.add_argument("--time-draw", choices=["steps", "pairs"], default="steps",
-                   help="DDGAN training times: 'steps' draws T uniformly from --supported-steps then k (most samples "
-                        "at t = 1 and at each T's last step), 'pairs' every (T, k) equally (more at 10 steps' t = 0.9..0.7)")
-    p.add_argument("--min-frames", type=int, default=40)
-    p.add_argument("--random-crop", type=float, default=0.0,
-                   help="probability of training on a random sub-window (≥ --min-frames) of a clip; teaches short "
-                        "lengths and saves compute")
-    p.add_argument("--crop-min", type=int, default=40, help="shortest random sub-window (frames)")
-    p.add_argument("--balance-alpha", type=float, default=1.0,
-                   help="draw clips by action with P(action) ∝ n_action^α (1 = every clip equally often, as before; "
-                        "0 = every action equally often); clips without an action form one group")
-    p.add_argument("--limit", type=int, default=None, help="use at most this many clips (smoke tests)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--threads", type=int, default=None, help="torch CPU threads per process")
-    p.add_argument("--device", default=None, help="cpu | cuda (default: cuda when available)")
-    p.add_argument("--amp", choices=["off", "bf16"], default="off", help="bfloat16 autocast of G and D (losses in float32)")
-    p.add_argument("--compile", action="store_true", help="torch.compile G and D (the R1 steps run D eagerly)")
-    p.add_argument("--log-every", type=int, default=10)
-    p.add_argument("--ckpt-every", type=int, default=0, help="also checkpoint every N steps (0 = off)")
-    p.add_argument("--ckpt-minutes", type=float, default=5.0, help="checkpoint every M minutes of wall time")
-    p.add_argument("--time-limit-min", type=float, default=None, help="checkpoint and stop after M minutes")
-    p.add_argument("--stop-at", type=int, default=None, help="checkpoint and stop at this step (testing resume)")
-    p.add_argument("--no-resume", action="store_true", help="start fresh even if <out>/ckpt.pt exists")
-    p.add_argument("--allow-other-data", action="store_true",
-                   help="resume <out>/ckpt.pt even though it was trained on another dataset than --data")
-    p.add_argument("--init-weights", type=Path, default=None,
-                   help="start G (and its EMA) from a --weights-out file of an earlier run of the same model; "
-                        "D and the optimisers start fresh. Its steps are recorded as the run's 'init' in meta")
-    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=True, help="tqdm progress bar")
-    p.add_argument("--weights-out", type=Path, default=None,
-                   help="at the end also write the EMA generator alone (+ meta) to this file: what export, sample "
-                        "and the evaluation read, ~1/50 of ckpt.pt (D and the optimisers stay out)")
-    p.add_argument("--weights-minutes", type=float, default=None, metavar="M",
-                   help="also write --weights-out every M minutes of wall time while training (a run cut short, "
-                        "e.g. at the end of a GPU lease, still leaves its latest weights; 0 = at every log step)")
-    p.add_argument("--weights-dtype", choices=["float32", "float16"], default="float32",
-                   help="storage type of --weights-out (float16 halves it again; loaded back as float32)")
-    return p
 
 
 # ---------------------------------------------------------------------------------------------- helpers
@@ -142,133 +65,6 @@ def cosine_lr(step: int, total: int, base: float, floor: float, warmup: int = 0)
 def lr_factor(rule: str, global_batch: int) -> float:
     r = global_batch / REFERENCE_BATCH
     return {"none": 1.0, "sqrt": math.sqrt(r), "linear": r}[rule]
-
-
-def truncate_log(path: Path, step: int) -> int:
-    """Drop the rows of log.csv written after ``step`` (a run killed after its last checkpoint logged them; the resumed
-    run logs those steps again); returns how many. Rewritten atomically."""
-    with open(path, newline="") as f:
-        rows = list(csv.reader(f))
-    if not rows:
-        return 0
-
-    def after(r: list[str]) -> bool:
-        try:
-            return int(float(r[0])) > step
-        except (ValueError, IndexError):
-            return False
-    keep = [rows[0]] + [r for r in rows[1:] if not after(r)]
-    dropped = len(rows) - len(keep)
-    if dropped:
-        tmp = path.with_name(path.name + ".tmp")
-        with open(tmp, "w", newline="") as f:
-            csv.writer(f).writerows(keep)
-        os.replace(tmp, path)
-    return dropped
-
-
-class NonFiniteLoss(RuntimeError):
-    """A loss term became NaN/inf; the message names the step and the term (one line)."""
-
-
-class Dist:
-    """torchrun environment (rank/world) and a gradient all-reduce (average) for plain modules."""
-
-    def __init__(self, device: torch.device):
-        self.device = device                  # collectives on this device's tensors (gloo: CPU, nccl: CUDA)
-        self.world = int(os.environ.get("WORLD_SIZE", "1"))
-        self.rank = int(os.environ.get("RANK", "0"))
-        if self.world > 1 and not torch.distributed.is_initialized():
-            backend = "nccl" if device.type == "cuda" else "gloo"
-            torch.distributed.init_process_group(backend)
-
-    @property
-    def main(self) -> bool:
-        return self.rank == 0
-
-    def average_grads(self, module: torch.nn.Module) -> None:
-        if self.world == 1:
-            return
-        grads = [p.grad for p in module.parameters() if p.grad is not None]
-        flat = torch.cat([g.reshape(-1) for g in grads])
-        torch.distributed.all_reduce(flat)
-        flat /= self.world
-        off = 0
-        for g in grads:
-            n = g.numel()
-            g.copy_(flat[off:off + n].view_as(g))
-            off += n
-
-    def all_reduce(self, t: torch.Tensor, op=None) -> torch.Tensor:
-        if self.world > 1:
-            torch.distributed.all_reduce(t, op=op or torch.distributed.ReduceOp.SUM)
-        return t
-
-    def mean_scalars(self, values: dict[str, float]) -> dict[str, float]:
-        if self.world == 1:
-            return values
-        keys = sorted(values)
-        t = self.all_reduce(torch.tensor([values[k] for k in keys], dtype=torch.float64, device=self.device)).tolist()
-        return {k: float(v) / self.world for k, v in zip(keys, t)}
-
-    def gather(self, obj):
-        if self.world == 1:
-            return [obj]
-        out = [None] * self.world
-        torch.distributed.all_gather_object(out, obj)
-        return out
-
-    def barrier(self) -> None:
-        if self.world > 1:
-            torch.distributed.barrier()
-
-    def close(self) -> None:
-        if self.world > 1 and torch.distributed.is_initialized():
-            torch.distributed.destroy_process_group()
-
-
-class StepLog:
-    """Loss terms summed on the device, read back once per log; plus, per term, the first step whose value was
-    not finite (-1 = none so far), updated on the device every step without a host synchronisation."""
-
-    def __init__(self, device: torch.device):
-        self.keys = LOSS_TERMS
-        self.device = device
-        self.sums = torch.zeros(len(self.keys), dtype=torch.float64, device=device)
-        self.counts = [0] * len(self.keys)
-        self.first_bad = torch.full((len(self.keys),), -1, dtype=torch.int64, device=device)
-        self._idx: dict[tuple[str, ...], torch.Tensor] = {}
-
-    def add(self, step: int, logs: dict[str, torch.Tensor]) -> None:
-        names = tuple(k for k in self.keys if k in logs)
-        if names not in self._idx:
-            self._idx[names] = torch.tensor([self.keys.index(k) for k in names], device=self.device)
-        idx = self._idx[names]
-        vals = torch.stack([logs[k].float() for k in names])
-        self.sums.index_add_(0, idx, vals.double())
-        fb = self.first_bad[idx]
-        self.first_bad[idx] = torch.where(~torch.isfinite(vals) & (fb < 0), step, fb)
-        for k in names:
-            self.counts[self.keys.index(k)] += 1
-
-    def means(self) -> dict[str, float]:
-        sums = self.sums.tolist()                     # the one host sync of a log interval
-        out = {k: s / c for k, s, c in zip(self.keys, sums, self.counts) if c}
-        self.sums.zero_()
-        self.counts = [0] * len(self.keys)
-        return out
-
-    def first_non_finite(self, dist: Dist) -> tuple[int, list[str]] | None:
-        """(step, terms bad at that step in computation order) over all ranks, or None."""
-        big = torch.iinfo(torch.int64).max
-        fb = torch.where(self.first_bad < 0, big, self.first_bad)
-        if dist.world > 1:                            # gloo on CPU tensors, nccl on CUDA ones: both match the device
-            dist.all_reduce(fb, torch.distributed.ReduceOp.MIN)
-        vals = fb.tolist()
-        step = min(vals)
-        if step == big:
-            return None
-        return int(step), [k for k, v in zip(self.keys, vals) if v == step]
 
 
 # ---------------------------------------------------------------------------------------------- trainer
@@ -306,7 +102,6 @@ class Trainer:
 
     def load_data(self) -> None:
         a = self.args
-        from emdm import paths
         self.data_dir = Path(a.data or paths.DATASET_DIR)
         self.data_id = dataset_identity(self.data_dir, a.split)
         self.ms = load_split(self.data_dir, a.split, min_frames=a.min_frames, limit=a.limit,

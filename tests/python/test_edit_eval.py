@@ -9,7 +9,11 @@ import numpy as np
 import pytest
 
 from emdm.eval import editing as ev
-from emdm.eval.report import RESULTS_DIR, load_results
+from emdm.eval import editing_measures as em
+from emdm.eval import editing_run, editing_section
+from emdm.eval.plausibility import FLIP_M, flips
+from emdm.eval.report import load_results
+from emdm.eval.results import RESULTS_DIR
 from emdm.motion.features import recover_joints, rot_y
 from emdm.motion.ik_fixture import read_case_array
 from emdm.motion.mask_fixture import PARITY_DIR
@@ -21,28 +25,28 @@ def clip():
 
 
 def test_a_continuous_clip_has_no_seam_and_a_planted_jump_is_one(clip):
-    assert ev.seam_acceleration(clip, [60])[0] < 1.5
+    assert em.seam_acceleration(clip, [60])[0] < 1.5
     jumped = clip.copy()
     jumped[60:, 20] += [0.3, 0.0, 0.0]                           # the left wrist 30 cm off from frame 60 on (the
     # clip is lively: its 95th percentile is 68 m/s², i.e. a 17 cm kink in one frame)
-    assert ev.seam_acceleration(jumped, [60])[0] > 1.5
-    assert ev.seam_acceleration(jumped, [30])[0] < 1.5           # elsewhere it is ordinary
-    a = ev.acceleration(clip)
+    assert em.seam_acceleration(jumped, [60])[0] > 1.5
+    assert em.seam_acceleration(jumped, [30])[0] < 1.5           # elsewhere it is ordinary
+    a = em.acceleration(clip)
     assert a.shape == (120,) and a[0] == a[-1] == 0 and (a[1:-1] > 0).all()
 
 
 def test_root_jumps_at_a_seam_are_found(clip):
-    r = ev.seam_root(clip, [60])[0]
+    r = em.seam_root(clip, [60])[0]
     assert r["step_ratio"] < 1.5 and r["turn_ratio"] < 1.5
     assert r["jump_ratio"] < 1.5 and r["turn_jump_ratio"] < 1.5
     moved = clip.copy()
     moved[60:, :, 0] += 0.3
-    r = ev.seam_root(moved, [60])[0]
+    r = em.seam_root(moved, [60])[0]
     assert r["step_ratio"] > 1.5 and r["jump_ratio"] > 1.5
     turned = clip.copy()
     pelvis = turned[60, 0] * [1, 0, 1]
     turned[60:] = rot_y(np.full((60, 1), 1.2), turned[60:] - pelvis) + pelvis   # 69°; the clip turns ≤ 30° a frame (p95)
-    r = ev.seam_root(turned, [60])[0]
+    r = em.seam_root(turned, [60])[0]
     assert r["turn_ratio"] > 1.5 and r["turn_jump_ratio"] > 1.5
 
 
@@ -60,15 +64,15 @@ def test_a_steady_turn_through_a_seam_is_not_a_jump():
     body[:, 1], body[:, 2] = [0.1, -0.1, 0.0], [-0.1, -0.1, 0.0]         # hips: the heading's across-vector
     body[:, 16], body[:, 17] = [0.2, 0.4, 0.0], [-0.2, 0.4, 0.0]          # shoulders
     joints = rot_y(theta[:, None], body) + root[:, None] + [0.0, 0.9, 0.0]
-    r = ev.seam_root(joints, [60])[0]
+    r = em.seam_root(joints, [60])[0]
     assert r["turn_ratio"] > 1.5                                       # a large turn for this walk ...
     assert r["turn_jump_ratio"] < 1.5 and r["jump_ratio"] < 1.5        # ... but no jump
     kinked = joints.copy()                                             # the same walk turned 17° at once at the seam
     kinked[60:] = rot_y(np.full((f - 60, 1), 0.3), kinked[60:] - root[60] * [1, 0, 1]) + root[60] * [1, 0, 1]
-    assert ev.seam_root(kinked, [60])[0]["turn_jump_ratio"] > 1.5
+    assert em.seam_root(kinked, [60])[0]["turn_jump_ratio"] > 1.5
     slid = joints.copy()                                               # or slid 10 cm sideways at once
     slid[60:, :, 0] += 0.1
-    assert ev.seam_root(slid, [60])[0]["jump_ratio"] > 1.5
+    assert em.seam_root(slid, [60])[0]["jump_ratio"] > 1.5
 
 
 def test_foot_skate_near_seams_against_the_rest():
@@ -79,10 +83,10 @@ def test_foot_skate_near_seams_against_the_rest():
     joints[:, 10:12, 0] = np.arange(f)[:, None] * 0.001            # sliding 2 cm/s
     joints[20:, 10:12, 0] += np.arange(f - 20)[:, None] * 0.004    # faster from the seam on: 10 cm/s
     joints[26:, 10:12, 0] = joints[26, 10:12, 0]                   # then still
-    s = ev.seam_skate([(joints, [20])])
+    s = em.seam_skate([(joints, [20])])
     assert s["seam_pairs"] == 2 * 7 and s["within_pairs"] == 2 * (f - 1 - 7)
     assert s["seam_cm_s"] > 4 and s["ratio"] > 1.2
-    assert ev.seam_skate([(joints, [5])])["ratio"] < 1.0
+    assert em.seam_skate([(joints, [5])])["ratio"] < 1.0
     assert s["matched_ratio"] > 1.2 and s["before_ratio"] < s["matched_ratio"]
 
 
@@ -101,25 +105,25 @@ def test_seam_skate_matched_weighs_each_seam_against_the_segments_it_joins():
     down_at_seam = np.r_[20:40]                                     # the fast one is in contact around its seam
     down_all = np.r_[0:60]
     runs = [timeline(0.10, 30, down_at_seam), timeline(0.02, 30, down_all)]
-    s = ev.seam_skate(runs)
+    s = em.seam_skate(runs)
     assert s["ratio"] > 1.5 and s["matched_ratio"] == pytest.approx(1.0)
     j, seams = timeline(0.02, 30, down_all)
     j[30:, 10:12, 0] += np.minimum(np.arange(30), 3)[:, None] * 0.01    # 1 cm a frame more for 3 frames past the seam
-    worse = ev.seam_skate([runs[0], (j, seams)])
+    worse = em.seam_skate([runs[0], (j, seams)])
     assert worse["matched_ratio"] > 1.2 and worse["before_ratio"] == pytest.approx(1.0)
 
 
 def test_a_one_frame_flip_is_found_and_a_step_is_not():
     f = read_case_array(PARITY_DIR, "recover", "features").astype(np.float64)      # (120, 263), real
-    assert ev.flips(f).max() < ev.FLIP_M
+    assert flips(f).max() < FLIP_M
     flipped = f.copy()
     flipped[50, 4 + 3 * 19 + 1] -= 0.5                           # the left wrist (joint 20) 50 cm down for one frame
-    fl = ev.flips(flipped)
+    fl = flips(flipped)
     assert fl[50] > 0.45 and np.argmax(fl) == 50
-    assert ev.seam_flips(flipped, [52, 60]) == [fl[50], pytest.approx(ev.flips(f)[57:63].max())]
+    assert em.seam_flips(flipped, [52, 60]) == [fl[50], pytest.approx(flips(f)[57:63].max())]
     stepped = f.copy()
     stepped[50:, 4 + 3 * 19 + 1] -= 0.5                          # 50 cm down from frame 50 on: a step, not a flip
-    assert ev.flips(stepped).max() < ev.FLIP_M
+    assert flips(stepped).max() < FLIP_M
     # the share of frames with a flip, pooled over motions (the coverage benchmark's temporal-coherence row)
     from emdm.eval.plausibility import flip_share
 
@@ -131,8 +135,8 @@ def test_a_one_frame_flip_is_found_and_a_step_is_not():
 
 def test_pose_ignores_where_the_body_stands_and_faces(clip):
     moved = rot_y(np.full((120, 1), 1.1), clip) + [2.0, 0.0, -3.0]
-    assert np.abs(ev.pose(moved) - ev.pose(clip)).max() < 1e-9
-    assert np.abs(ev.pose(clip[:1]) - ev.pose(clip[60:61])).max() > 0.05
+    assert np.abs(em.pose(moved) - em.pose(clip)).max() < 1e-9
+    assert np.abs(em.pose(clip[:1]) - em.pose(clip[60:61])).max() > 0.05
 
 
 @pytest.mark.parametrize("args, says", [
@@ -151,11 +155,11 @@ def test_the_committed_result_claims_only_what_its_figures_say(tmp_path, name):
     if not path.is_file():
         pytest.skip(f"{path} not measured yet (python -m emdm.eval.editing)")
     r = json.loads(path.read_text())
-    assert r["bars"] == ev.bars(r)                                # every met/not met follows from the figures
+    assert r["bars"] == em.bars(r)                                # every met/not met follows from the figures
     (tmp_path / path.name).write_text(path.read_text())
     loaded = load_results(tmp_path)
     assert [x["task"] for x in loaded] == ["editing"]             # emdm.eval.report reads it
-    text = "\n".join(ev.section(loaded[0]))
+    text = "\n".join(editing_section.section(loaded[0]))
     assert f"`docs/results/json/{name}`" in text and (f"seed {r['seed']})" in text) == bool(r["seed"])
     assert text.count("**met**") == sum(b["met"] for b in r["bars"].values())
     assert text.count("**not met**") == sum(not b["met"] for b in r["bars"].values())
@@ -169,20 +173,20 @@ def test_semantics_and_root_are_judged_on_their_bar_figures():
     r = json.loads(path.read_text())
     sem, seams = r["semantics"], r["seams"]
     sem.update(ratio=0.5, ratio_after_transition=0.8)                 # read after the first second, at the bar: met
-    assert ev.bars(r)["semantics"]["met"]
+    assert em.bars(r)["semantics"]["met"]
     sem.update(ratio=1.0, ratio_after_transition=0.79)
-    assert not ev.bars(r)["semantics"]["met"]
+    assert not em.bars(r)["semantics"]["met"]
     seams["root_within_bar"] = seams["count"] - 1                      # one seam whose root jumps
-    assert not ev.bars(r)["seam_root"]["met"]
+    assert not em.bars(r)["seam_root"]["met"]
 
 
 def test_the_time_bar_is_met_only_when_met_at_every_thread_count_and_names_each():
     t = {"ratio_of_medians": 3.3, "work_ratio": 3.13, "by_threads": {"1": {"ratio": 3.2}, "2": {"ratio": 2.86}}}
-    met, figure = ev.time_bar(t)
+    met, figure = em.time_bar(t)
     assert not met and figure == "3.20× on 1 thread, 2.86× on 2 threads (the model's work 3.13×)"
     t["by_threads"]["1"]["ratio"] = 2.99
-    assert ev.time_bar(t)[0]
-    assert ev.time_bar({"ratio_of_medians": 2.9}) == (True, "2.90×")          # a result without the thread sweep
+    assert em.time_bar(t)[0]
+    assert em.time_bar({"ratio_of_medians": 2.9}) == (True, "2.90×")          # a result without the thread sweep
 
 
 def test_time_only_times_pytorch_weights_with_the_shipped_settings_and_the_report_shows_it(tmp_path, capsys):
@@ -203,16 +207,16 @@ def test_time_only_times_pytorch_weights_with_the_shipped_settings_and_the_repor
     assert r["task"] == "editing-time" and r["runtime"] == "pytorch-cpu" and r["steps"] == 2
     assert run["timelines"] == 1 and run["timeline_s"] > run["single_s"] > 0
     assert run["ratio"] == pytest.approx(run["timeline_s"] / run["single_s"])
-    assert r["bars"]["time"] == {"met": run["ratio"] <= ev.BARS["time_ratio"], "figure": f"{run['ratio']:.2f}× on 1 thread"}
+    assert r["bars"]["time"] == {"met": run["ratio"] <= em.BARS["time_ratio"], "figure": f"{run['ratio']:.2f}× on 1 thread"}
     loaded = load_results(tmp_path)
     assert [x["task"] for x in loaded] == ["editing-time"]
-    rows = "\n".join(ev.time_section(loaded))
+    rows = "\n".join(editing_section.time_section(loaded))
     assert f"**{run['ratio']:.2f}×** on 1 torch CPU thread" in rows and f"`{out.name}`" in rows
     assert rows.count("**met**") + rows.count("**not met**") == 1
 
     # the editor the time bar runs samples as the manifest says, not with a checkpoint's defaults
     import argparse
-    ed = ev.timed_editor(argparse.Namespace(ckpt=weights, device="cpu", model="emdm-t2m-web", models_dir=None, steps=2), 1)
+    ed = editing_run.timed_editor(argparse.Namespace(ckpt=weights, device="cpu", model="emdm-t2m-web", models_dir=None, steps=2), 1)
     s = ed.settings
     assert (s.guidance, s.guidance_min_time, s.x0_smoothing, s.steps) == (
         entry["guidance"], entry["guidanceMinTime"], entry["x0Smoothing"], 2)
@@ -250,7 +254,7 @@ def test_the_page_benchmark_imports_as_a_time_row(tmp_path, capsys):
     assert r["task"] == "editing-time" and r["runtime"].startswith("page-wasm-") and r["steps"] == 10
     assert (run["timelines"], run["timeline_s"], run["single_s"], run["ratio"]) == (7, 1.68, 0.6, pytest.approx(2.8))
     assert r["bars"]["time"] == {"met": True, "figure": "2.80× on 1 thread"}
-    rows = "\n".join(ev.time_section(load_results(out.parent)))
+    rows = "\n".join(editing_section.time_section(load_results(out.parent)))
     assert "**2.80×** on 1 WASM thread (1.68 s vs 0.60 s, 7 each, load 3.5)" in rows and "**met**" in rows
 
     page["timelineMs"] = 1860.0
@@ -264,7 +268,7 @@ def test_the_page_benchmark_imports_as_a_time_row(tmp_path, capsys):
     assert ev.main(["--import-page", str(src), "--out", str(gpu)]) == 0
     g = json.loads(gpu.read_text())
     assert g["runtime"].startswith("page-webgpu-") and g["bars"]["time"] == {"met": True, "figure": "2.00× on webgpu"}
-    assert "| **2.00×** (1.20 s vs 0.60 s, 7 each, load 3.5) |" in "\n".join(ev.time_section(load_results(gpu.parent)))
+    assert "| **2.00×** (1.20 s vs 0.60 s, 7 each, load 3.5) |" in "\n".join(editing_section.time_section(load_results(gpu.parent)))
 
     del page["timelineMs"]
     src.write_text(json.dumps(page))

@@ -9,7 +9,7 @@ import pytest
 from emdm import manifest as mf
 from emdm.eval import capabilities as C
 from emdm.eval.coverage import PROMPTS_FILE, load_prompts, normalise, read_result
-from emdm.eval.report import RESULTS_DIR
+from emdm.eval.results import RESULTS_DIR
 from emdm.sample import main as sample_main
 from emdm.text import encode_texts
 

@@ -21,6 +21,9 @@ from pathlib import Path
 
 import numpy as np
 
+from emdm import manifest
+from emdm import text as text_encoders      # .encode_texts looked up at each call: tests replace it
+
 FPS = 20
 MAX_FRAMES = 196
 FEATURE_DIM = 263
@@ -183,8 +186,6 @@ def caption_table(ms: MotionSet) -> tuple[list[str], list[np.ndarray]]:
 
 def _encoder_file_sha256(encoder_id: str) -> str:
     """sha256 of the encoder's ONNX file as listed in the shipped manifest ('' if it is not listed)."""
-    from emdm import manifest
-
     m = manifest.load(missing_ok=True)
     onnx = m.get("textEncoders", {}).get(encoder_id, {}).get("onnx")
     return m.get("files", {}).get(onnx, {}).get("sha256", "") if onnx else ""
@@ -200,10 +201,9 @@ def cached_text_embeddings(captions: list[str], encoder_id: str, cache_dir: Path
         emb = np.load(path)
         if emb.shape[0] == len(captions):
             return emb
-    from emdm.text import encode_texts
 
     # batch_size 1: exactly what the browser computes (int8 dynamic quantisation scales per call)
-    emb = np.asarray(encode_texts(captions, encoder_id=encoder_id, batch_size=1), dtype=np.float32)
+    emb = np.asarray(text_encoders.encode_texts(captions, encoder_id=encoder_id, batch_size=1), dtype=np.float32)
     if emb.shape[0] != len(captions):
         raise RuntimeError(f"text encoder {encoder_id}: {emb.shape[0]} embeddings for {len(captions)} captions")
     cache_dir.mkdir(parents=True, exist_ok=True)

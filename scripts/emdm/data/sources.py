@@ -26,6 +26,7 @@ from pathlib import Path
 
 from emdm.data import actions, captions
 from emdm.mocap.errors import MocapFormatError
+from emdm.mocap.load import find_asf
 
 
 @dataclass
@@ -155,8 +156,6 @@ def cmu_jobs(root: Path, n_captions: int = 4) -> list[Job]:
 
 
 def user_jobs(root: Path, joint_map: str, amc_fps: float = 120.0, n_captions: int = 4) -> list[Job]:
-    from emdm.mocap.load import find_asf
-
     root = Path(root)
     files = sorted(p for p in root.rglob("*") if p.suffix.lower() in (".bvh", ".amc"))
     if not files:

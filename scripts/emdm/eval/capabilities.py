@@ -29,8 +29,14 @@ from typing import Callable
 
 import numpy as np
 
+from emdm import manifest as mf
+from emdm import paths
+from emdm.data.dataset import parse_text_file
 from emdm.eval.coverage import COVERED, PROMPTS_FILE, CoverageError, chips, load_prompts, normalise, read_result
+from emdm.eval.results import RESULTS_DIR
+from emdm.outdir import OutputRefused, check_writable
 from emdm.paths import DATASET_DIR, display_path
+from emdm import text as text_encoders      # .encode_texts looked up at each call: tests replace it
 
 SCHEMA = 1
 CAPTIONS = 16          # training captions per covered action kept as anchors
@@ -127,8 +133,6 @@ def actions_table(coverage: dict, prompts: dict[str, list[str]] | None) -> tuple
 
 def training_captions(dataset: Path, actions: set[str], per_action: int = CAPTIONS) -> dict[str, list[str]]:
     """Up to ``per_action`` distinct train-split captions per action (evenly spread over the sorted list)."""
-    from emdm.data.dataset import parse_text_file
-
     meta = Path(dataset) / "metadata.csv"
     if not meta.is_file():
         raise CoverageError(f"{meta}: missing; pass --dataset (the prepared dataset the model was trained on)")
@@ -195,9 +199,6 @@ def encoder_info(manifest: dict, encoder_id: str) -> dict:
 
 def load(model: str, models_dir: Path | str | None = None) -> dict | None:
     """The shipped capabilities file of ``model`` (None when there is none, or it was built for another encoder file)."""
-    from emdm import manifest as mf
-    from emdm import paths
-
     models_dir = paths.models_dir(models_dir)       # the argument, $EMDM_MODELS_DIR or public/models
     path = models_dir / file_name(model)
     if not path.is_file():
@@ -217,8 +218,6 @@ def prompt_notice(model: str, emb: np.ndarray, models_dir: Path | str | None = N
 
 
 def write(caps: dict, path: Path) -> None:
-    from emdm.outdir import check_writable
-
     check_writable(path)
     tmp = path.with_name(f".{path.name}.tmp")
     tmp.write_text(json.dumps(caps, indent=1, ensure_ascii=False) + "\n")
@@ -227,8 +226,6 @@ def write(caps: dict, path: Path) -> None:
 
 def register(model: str, rel: str, models_dir: Path) -> None:
     """List the file under the model's manifest entry (``capabilities`` and ``files``), so the page verifies it."""
-    from emdm import manifest as mf
-
     m = mf.load(models_dir)
     entry = m["models"][model]
     entry["capabilities"] = rel
@@ -237,11 +234,6 @@ def register(model: str, rel: str, models_dir: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from emdm import manifest as mf
-    from emdm.eval.report import RESULTS_DIR
-    from emdm.outdir import OutputRefused
-    from emdm.text import encode_texts
-
     ap = argparse.ArgumentParser(prog="python -m emdm.eval.capabilities", description=__doc__.split("\n\n")[0])
     ap.add_argument("--model", required=True, help="a shipped model with a coverage result")
     ap.add_argument("--coverage", type=Path, default=None, help="default docs/results/json/coverage-<model>.json")
@@ -265,7 +257,7 @@ def main(argv: list[str] | None = None) -> int:
         covered = {r for r in next(r for r in coverage["runs"] if r["steps"] == coverage.get("default_steps", 10))["covered"]}
         captions = training_captions(a.dataset, covered, a.captions) if text else {}
         enc_id = entry["condition"].get("encoder", "")
-        caps = build(coverage, prompts, captions, lambda ts: encode_texts(ts, enc_id, models_dir=a.models_dir),
+        caps = build(coverage, prompts, captions, lambda ts: text_encoders.encode_texts(ts, enc_id, models_dir=a.models_dir),
                      encoder_info(manifest, enc_id) if text else {})
         out = a.models_dir / file_name(a.model)
         write(caps, out)

@@ -36,6 +36,14 @@ from pathlib import Path
 
 import numpy as np
 
+from emdm.data.dataset import DatasetError, cached_text_embeddings, parse_text_file
+from emdm.eval import data as evdata
+from emdm.eval import evaluators as E
+from emdm.eval.protocol import Conditions, sample_lengths
+from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, evaluator_info, hardware, slug, write_result
+from emdm.eval.sources import ModelSource
+from emdm.model.open import ModelError, open_model
+from emdm.outdir import OutputRefused, check_writable
 from emdm.paths import DATASET_DIR, RUNS_DIR, display_path
 from emdm.eval.plausibility import flip_share
 
@@ -80,8 +88,6 @@ def load_prompts(path: Path | str, labels: list[str]) -> dict[str, list[str]]:
 
 def dataset_captions(root: Path | str) -> dict[str, str]:
     """normalised caption → the caption file it occurs in, over every clip of the dataset."""
-    from emdm.data.dataset import parse_text_file
-
     out: dict[str, str] = {}
     for f in sorted((Path(root) / "texts").glob("*.txt")):
         for caption, _, _ in parse_text_file(f):
@@ -164,9 +170,6 @@ class Benchmark:
 
     def __init__(self, dataset: Path, split: str, classifier: Path, prompts_file: Path, seeds: int, seed: int = 0,
                  min_clips: int = MIN_CLIPS, log=print):
-        from emdm.eval import data as evdata
-        from emdm.eval import evaluators as E
-
         self.test = evdata.load_split(dataset, split, require_action=True)
         self.labels = list(self.test.action_labels)
         if not self.labels:
@@ -191,14 +194,10 @@ class Benchmark:
             f"too few clips: {self.real['too_few']} ({time.time() - t0:.0f} s)")
 
     def predict(self, motions) -> np.ndarray:
-        from emdm.eval import evaluators as E
-
         return np.argmax(E.classify(self.classifier, motions)[0], axis=1)
 
     def conditions(self, source):
         """The motions to make: Conditions (one row per motion), the action id and prompt of each row."""
-        from emdm.eval.protocol import Conditions, sample_lengths
-
         rows_action, rows_prompt, lengths = [], [], []
         prompts = load_prompts(self.prompts_file, self.labels) if source.task == "text" else None
         for i, a in enumerate(self.labels):
@@ -210,9 +209,6 @@ class Benchmark:
         lengths = np.minimum(np.concatenate(lengths), source.max_frames)
         action = np.array(rows_action)
         if source.task == "text":
-            from emdm.data.dataset import cached_text_embeddings
-            from emdm.eval import data as evdata
-
             uniq = list(dict.fromkeys(rows_prompt))
             emb = cached_text_embeddings(uniq, evdata.TEXT_ENCODER, os.environ.get("EMDM_EVAL_CACHE") or evdata.CACHE_DIR)
             index = {p: k for k, p in enumerate(uniq)}
@@ -260,9 +256,6 @@ def _key(a, guidance: float, guidance_min_time: float = 0.0, x0_smoothing: float
 
 
 def default_out(a) -> Path:
-    from emdm.eval.evaluate import slug
-    from emdm.eval.report import RESULTS_DIR
-
     name = a.name or a.model or slug(Path(a.ckpt).parent.name, Path(a.ckpt).stem)
     return RESULTS_DIR / "json" / f"coverage-{slug(name)}{'' if a.variant in (None, 'fp32') else '-' + a.variant}.json"
 
@@ -279,12 +272,6 @@ def read_result(path: Path) -> dict | None:
 
 
 def run(a) -> Path:
-    from emdm.eval.evaluate import _evaluator_info, dataset_info, hardware, write_result
-    from emdm.eval.report import SCHEMA
-    from emdm.eval.sources import ModelSource
-    from emdm.model.open import open_model
-    from emdm.outdir import check_writable
-
     out = check_writable(a.out or default_out(a))          # before anything is measured
     opened = open_model(a.ckpt if a.ckpt is not None else a.model, models_dir=a.models_dir, variant=a.variant,
                         device=a.device, threads=a.threads)  # once, for every step count
@@ -310,7 +297,7 @@ def run(a) -> Path:
                   "kind": "model", "condition": src.task, "info": info, "key": key, "default_steps": default_steps,
                   "labels": bench.labels, "real": bench.real, "thresholds": {"covered": COVERED, "chip": CHIP},
                   "dataset": dataset_info(Path(a.dataset), a.split), "hardware": hardware(),
-                  "classifier": _evaluator_info(bench.classifier, a.classifier),
+                  "classifier": evaluator_info(bench.classifier, a.classifier),
                   "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
                   "runs": [runs[s] for s in sorted(runs)]}
         if src.task == "text" and default_steps in runs:
@@ -364,10 +351,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     import torch
-
-    from emdm.data.dataset import DatasetError
-    from emdm.model.open import ModelError
-    from emdm.outdir import OutputRefused
 
     a = build_parser().parse_args(argv)
     torch.set_num_threads(a.threads)

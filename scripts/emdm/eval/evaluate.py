@@ -15,8 +15,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
-import re
 import sys
 import time
 from datetime import datetime, timezone
@@ -25,65 +23,17 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from emdm import manifest as mf
+from emdm.data.dataset import cached_text_embeddings
 from emdm.eval import data as evdata
 from emdm.eval import evaluators as E
 from emdm.eval.protocol import Conditions, RealSource, evaluate_action, evaluate_text
-from emdm.eval.report import RESULTS_DIR, SCHEMA
+from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, evaluator_info, hardware, slug, write_result
+from emdm.eval.sources import ModelSource, variant_of
+from emdm.manifest import ManifestError
+from emdm.model.open import ModelError, is_checkpoint, open_model
 from emdm.outdir import OutputRefused, check_writable
-from emdm.paths import DATASET_DIR, RUNS_DIR, display_path
-
-
-def hardware() -> str:
-    cpu = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    gpu = f", GPU {torch.cuda.get_device_name(0)}" if torch.cuda.is_available() else ""
-    return f"{cpu}, {os.cpu_count()} cores shared ({torch.get_num_threads()} torch thread(s)){gpu}"
-
-
-def dataset_info(root: Path, split: str) -> dict:
-    counts = {}
-    for s in ("train", "val", "test"):
-        f = root / f"{s}.txt"
-        if f.exists():
-            counts[s] = sum(1 for line in f.read_text().splitlines() if line.strip())
-    desc = ", ".join(f"{v} {k}" for k, v in counts.items()) + " clip ids"
-    meta = root / "metadata.csv"
-    if meta.exists():
-        import csv
-
-        with open(meta, newline="") as fh:
-            sources = sorted({row.get("source", "?") for row in csv.DictReader(fh)})
-        desc += f"; sources: {', '.join(sources)}"
-    return {"name": root.name, "split": split, "description": desc, "ids": counts}
-
-
-def slug(*parts) -> str:
-    return re.sub(r"[^a-z0-9]+", "-", "-".join(str(p) for p in parts if p is not None).lower()).strip("-")
-
-
-def write_result(result: dict, out: Path) -> Path:
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_suffix(".tmp")
-    tmp.write_text(json.dumps(result, indent=1))
-    tmp.replace(out)
-    return out
-
-
-def _evaluator_info(model, path: Path) -> dict:
-    meta = getattr(model, "meta", {})
-    final = meta.get("final", {})
-    val = ", ".join(f"{k[4:]} {v:.3f}" for k, v in final.items() if k.startswith("val_"))
-    return {"path": display_path(path), "train_items": meta.get("train_items"), "minutes": meta.get("minutes"),
-            "epochs_run": meta.get("epochs_run"), "config": meta.get("config"), "final": final,
-            "summary": f"{type(model).__name__} (hidden {model.config['hidden']}) trained on "
-                       f"{meta.get('train_items', '?')} train clips for {meta.get('epochs_run', '?')} epochs "
-                       f"({meta.get('minutes', 0) or 0:.1f} min{'; val ' + val if val else ''})"}
+from emdm.paths import DATASET_DIR, RUNS_DIR, display_path, MODELS_DIR
 
 
 class EvaluateError(ValueError):
@@ -103,8 +53,6 @@ def run_quality(a) -> Path:
         check_writable(a.out)                             # before anything is measured
     source = None
     if a.source != "real":
-        from emdm.eval.sources import ModelSource
-
         source = ModelSource(ckpt=a.ckpt, model=a.model, onnx_variant=a.variant, models_dir=a.models_dir, steps=a.steps, guidance=a.guidance,
                              guidance_min_time=a.guidance_min_time, x0_smoothing=a.x0_smoothing, batch_size=a.batch, threads=a.threads, device=a.device, name=a.name or "")
         if source.task != a.task:
@@ -129,15 +77,12 @@ def run_quality(a) -> Path:
     result = {"schema": SCHEMA, "name": source.name, "kind": source.kind, "info": source.info,
               "dataset": dataset_info(Path(a.dataset), a.split), "hardware": hardware(),
               "load_avg_1min_end": os.getloadavg()[0],
-              "evaluator": _evaluator_info(ev, path), "minutes": (time.time() - t0) / 60,
+              "evaluator": evaluator_info(ev, path), "minutes": (time.time() - t0) / 60,
               "created": datetime.now(timezone.utc).isoformat(timespec="seconds"), **res}
     return write_result(result, out)
 
 
 def run_timing(a) -> Path:
-    from emdm.eval.sources import ModelSource
-    from emdm.model.open import is_checkpoint, open_model
-
     out = check_writable(a.out or RESULTS_DIR / "json" / f"timing-{a.runtime}.json")
     rows = []
     load_before = os.getloadavg()[0]
@@ -150,8 +95,6 @@ def run_timing(a) -> Path:
         for T in [int(s) for s in steps.split(",")]:
             src = ModelSource(opened=opened, steps=T, guidance=a.guidance, batch_size=1, threads=a.threads, device=a.device)
             if src.task == "text":
-                from emdm.data.dataset import cached_text_embeddings
-
                 emb = cached_text_embeddings([a.prompt], evdata.TEXT_ENCODER, os.environ.get("EMDM_EVAL_CACHE") or evdata.CACHE_DIR)
                 cond = Conditions(lengths=np.array([a.frames]), text_emb=emb)
             else:
@@ -181,10 +124,6 @@ def import_bench(a) -> Path:
     adds ``source`` and ``loadAverage`` [start, end]) into timing JSON: runtime ``browser-wasm``
     (Chromium rows) or ``node-wasm``; the variant of each model comes from its manifest entry's
     objective and training flags."""
-    from emdm import manifest as mf
-    from emdm.eval.sources import variant_of
-    from emdm.paths import MODELS_DIR
-
     src = Path(a.bench)
     try:
         bench = json.loads(src.read_text())
@@ -289,9 +228,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """The CLI: an unusable model, evaluator checkpoint or --out is one line naming it, exit status 2."""
-    from emdm.manifest import ManifestError
-    from emdm.model.open import ModelError
-
     a = build_parser().parse_args(argv)
     torch.set_num_threads(a.threads)
     try:

@@ -39,7 +39,10 @@ from torch import nn
 from torch.nn import functional as F
 from torch.nn.utils.rnn import pack_padded_sequence
 
+from emdm.checkpoints import torch_load
+from emdm.eval import data as evdata
 from emdm.eval import metrics as M
+from emdm.paths import DATASET_DIR, RUNS_DIR
 
 FEATURE_DIM = 263
 INPUT_DIM = 259           # features without the 4 foot-contact channels
@@ -348,7 +351,6 @@ def load(path: Path | str, kind: str | None = None) -> MatchingModel | ActionCla
         raise FileNotFoundError(f"{path}: evaluator checkpoint not found; train it with "
                                 f"`python -m emdm.eval.evaluators {kind or 'matcher'} --out {path}`")
     try:                                     # tensors and plain values only: a checkpoint cannot run code
-        from emdm.checkpoints import torch_load
 
         ck = torch_load(path)
     except Exception as e:  # noqa: BLE001 - re-raised as one line naming the file
@@ -372,9 +374,6 @@ def load(path: Path | str, kind: str | None = None) -> MatchingModel | ActionCla
 # ----------------------------------------------------------------------------- CLI
 
 def _main(argv: list[str] | None = None) -> int:
-    from emdm.eval import data as evdata
-    from emdm.paths import DATASET_DIR, RUNS_DIR
-
     ap = argparse.ArgumentParser(prog="python -m emdm.eval.evaluators", description=__doc__.split("\n\n")[0])
     ap.add_argument("kind", choices=["matcher", "classifier"])
     ap.add_argument("--dataset", type=Path, default=DATASET_DIR)

@@ -30,6 +30,7 @@ from emdm import paths
 from emdm import skeleton as sk
 from emdm.model.open import onnx_step, read_meanstd
 from emdm.sampler import SamplingSettings, denormalise, make_condition, sample_features
+from emdm.motion.features import recover_joints
 
 MODELS_MD = paths.REPO_ROOT / "docs" / "MODELS.md"
 BONES_JSON = paths.REPO_ROOT / "docs" / "results" / "json" / "models-bones.json"
@@ -74,7 +75,6 @@ def bone_errors(joints: np.ndarray) -> np.ndarray:
 def measure_file(entry: dict, onnx: Path) -> dict:
     """Worst bone (median over frames, worst over conditions and seeds) and the mean over bones of each bone's
     worst, for one ONNX file."""
-    from emdm.motion.features import recover_joints
 
     step = onnx_step(onnx, threads=1)
     mean, std = read_meanstd(paths.MODELS_DIR / entry["meanStd"])

@@ -43,6 +43,10 @@ import numpy as np
 
 from emdm import skeleton as sk
 from emdm.sampler import SampleError, SamplingSettings, make_condition, sample_features
+from emdm.eval.results import RESULTS_DIR, hardware, slug
+from emdm.model.open import ModelError, open_model
+from emdm.motion.features import recover_joints
+from emdm.outdir import OutputRefused, check_writable
 
 BONE_TOL = 0.30
 LEG_TOL = 1.15
@@ -141,7 +145,6 @@ def run_grid(opened, steps: list[int], guidance: list[float], seconds: list[floa
     """Sample every (steps, guidance, seconds) setting for every condition and ``seeds`` seeds; one row each.
     ``guidance_min_time``: guide only steps above it (None: the model's manifest guidanceMinTime, else 0);
     ``x0_smoothing``: σ of x̂_0's smoothing along time (None: the manifest's x0Smoothing, else 0)."""
-    from emdm.motion.features import recover_joints
 
     meta = opened.meta
     supported = meta.get("supportedSteps")
@@ -177,9 +180,6 @@ def run_grid(opened, steps: list[int], guidance: list[float], seconds: list[floa
 
 
 def default_json(ref, variant: str | None) -> Path:
-    from emdm.eval.evaluate import slug
-    from emdm.eval.report import RESULTS_DIR
-
     name = Path(ref).parent.name if isinstance(ref, Path) else str(ref)
     return RESULTS_DIR / "json" / f"poses-{slug(name)}{'' if variant in (None, 'fp32') else '-' + variant}.json"
 
@@ -230,8 +230,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from emdm.model.open import ModelError, open_model
-    from emdm.outdir import OutputRefused, check_writable
 
     a = build_parser().parse_args(argv)
     try:
@@ -253,7 +251,6 @@ def main(argv: list[str] | None = None) -> int:
           f"no impossible pose in {len(rows)} settings")
     if out:
         tmp = out.with_suffix(out.suffix + ".tmp")
-        from emdm.eval.evaluate import hardware
 
         tmp.write_text(json.dumps({"schema": 1, "task": "poses", "name": str(ref), "model": str(ref), "hardware": hardware(),
                                    "variant": a.variant or "fp32", "seeds": a.seeds, "conditions": [c for c, _ in conds],

@@ -40,9 +40,13 @@ from emdm.eval import coverage as C
 from emdm.eval import kinematics as K
 from emdm.eval.plausibility import batch_plausibility, flip_share
 from emdm.eval.poses import check_frames
-from emdm.eval.report import RESULTS_DIR, SCHEMA, _table
+from emdm.eval import markdown as md
+from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, evaluator_info, hardware, slug, write_result
+from emdm.eval.sources import ModelSource
+from emdm.model.open import ModelError, open_model
 from emdm.motion.decode import decode_joints
 from emdm.motion.features import recover_joints
+from emdm.outdir import OutputRefused, check_writable
 from emdm.paths import DATASET_DIR, RUNS_DIR, display_path
 
 SPEED_SLACK = 1.15        # a motion's speed is in range within [p5 / this, p95 × this] of its action's real clips
@@ -157,7 +161,6 @@ def measure(labels, action, joints, real: dict | None = None) -> dict:
 # ----------------------------------------------------------------------------- the run
 
 def default_out(a) -> Path:
-    from emdm.eval.evaluate import slug
 
     sigma = "" if a.x0_smoothing is None else f"-x0s{a.x0_smoothing:g}"
     model = a.model or slug(Path(a.ckpt).parent.name, Path(a.ckpt).stem)
@@ -180,11 +183,6 @@ def real_row(bench, labels) -> tuple[dict, dict]:
 
 
 def run(a) -> Path:
-    from emdm.eval.evaluate import _evaluator_info, dataset_info, hardware, write_result
-    from emdm.eval.sources import ModelSource
-    from emdm.model.open import open_model
-    from emdm.outdir import check_writable
-
     t_start = time.time()
     out = check_writable(a.out or default_out(a))
     opened = open_model(a.ckpt if a.ckpt is not None else a.model, models_dir=a.models_dir, variant=a.variant,
@@ -223,7 +221,7 @@ def run(a) -> Path:
                         for act, v in validation.items()},
               "judged": K.judged(validation), "bar": K.BAR, "min_clips": K.MIN_CLIPS, "speed_slack": SPEED_SLACK,
               "dataset": dataset_info(Path(a.dataset), a.split), "hardware": hardware(),
-              "classifier": _evaluator_info(bench.classifier, a.classifier),
+              "classifier": evaluator_info(bench.classifier, a.classifier),
               "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     write_result(result, out)
     g = gen["all"]
@@ -271,9 +269,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     import torch
-
-    from emdm.model.open import ModelError
-    from emdm.outdir import OutputRefused
 
     a = build_parser().parse_args(argv)
     torch.set_num_threads(a.threads)
@@ -326,7 +321,7 @@ def section(r: dict, plot: str | None = None) -> list[str]:
             f"{ref['max_step_all']:.3f} m over the real test clips of all actions. *Airborne*: frames with both feet "
             f"higher than {100 * K.AIRBORNE:.0f} cm. *Kinematic rule*: share passing the action's rule (table below); "
             f"*classifier*: share the action classifier names as the action.", "",
-            _table(header, rows), "",
+            md.table(header, rows), "",
             f"All motions: penetration {gen['all']['penetration_mm']:.1f} mm (real {real['all']['penetration_mm']:.1f}), "
             f"floating {gen['all']['floating_mm']:.1f} mm (real {real['all']['floating_mm']:.1f}), foot skate "
             f"{gen['all']['skate_cm_s']:.1f} cm/s (real {real['all']['skate_cm_s']:.1f}), median largest bone-length error "
@@ -348,7 +343,7 @@ def rules_section(r: dict) -> list[str]:
     return ["### Kinematic rules (`emdm/eval/kinematics.py`)", "",
             f"Each rule's thresholds were read off the train split; an action is judged when its rule passes ≥ "
             f"{r['bar']:.0%} of its real test clips, of which it needs at least {r.get('min_clips', 3)}. *False pass*: share of the other actions' test clips that pass it.", "",
-            _table(["Action", "Rule", "Own train clips", "Own test clips", "False pass", "Most confused with", "Judged"], rows), "",
+            md.table(["Action", "Rule", "Own train clips", "Own test clips", "False pass", "Most confused with", "Judged"], rows), "",
             "No rule: " + ", ".join(none) + ".", ""]
 
 
@@ -371,7 +366,7 @@ def comparison(results: list[dict]) -> list[str]:
         rows.append([a] + cells)
     return ["### Side by side", "", "Per action: speed ÷ real · motions with a joint step over the real maximum (of all actions' clips / of the "
             "action's own) · "
-            "kinematic rule (n/j: not judged) · classifier.", "", _table(header, rows), ""]
+            "kinematic rule (n/j: not judged) · classifier.", "", md.table(header, rows), ""]
 
 
 def plot(r: dict, path: Path) -> bool:

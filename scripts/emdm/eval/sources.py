@@ -22,6 +22,7 @@ from emdm.eval.protocol import Conditions
 from emdm.model.open import DEFAULT_GUIDANCE, OpenedModel, open_model
 from emdm.sampler import SamplingSettings, sample_features
 from emdm.sampler.settings import method_of
+from emdm import text as text_encoders      # .encode_texts looked up at each call: tests replace it
 
 
 def variant_of(meta: dict) -> str:
@@ -137,9 +138,8 @@ class ModelSource:
             if encoder != TEXT_ENCODER or cond.text_emb is None:   # the model reads another encoder's vectors
                 if cond.texts is None:
                     raise ValueError(f"{who}: model conditions on {encoder!r}; the captions' text is needed")
-                from emdm.text import encode_texts
 
-                return np.asarray(encode_texts(cond.texts, encoder_id=encoder), np.float32)
+                return np.asarray(text_encoders.encode_texts(cond.texts, encoder_id=encoder), np.float32)
             if cond.text_emb.shape[1] != spec["dim"]:
                 raise ValueError(f"{who}: model expects {spec['dim']}-d text embeddings "
                                  f"({spec.get('encoder')}), got {cond.text_emb.shape[1]}")

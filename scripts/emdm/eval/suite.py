@@ -19,11 +19,10 @@ import sys
 from pathlib import Path
 
 from emdm.eval import evaluate, report
+from emdm.model.open import is_checkpoint
 
 
 def _where(model: str) -> list[str]:
-    from emdm.model.open import is_checkpoint
-
     return ["--ckpt", model] if is_checkpoint(model) else ["--model", model]
 
 

@@ -29,6 +29,9 @@ import numpy as np
 from emdm.model.open import onnx_step
 from emdm.sampler import SamplingSettings, make_condition, sample_features
 from emdm.sampler.schedule import make_schedule
+from emdm import manifest as mf
+from emdm.paths import MODELS_DIR
+from emdm import text as text_encoders      # .encode_texts looked up at each call: tests replace it
 
 PROMPTS = ["a person kicks", "a person bows", "a person squats", "a person walks forward"]
 
@@ -45,10 +48,8 @@ def conditions(entry: dict, prompts: list[str] | None) -> list[tuple[str, np.nda
     """(name, condition vector) per prompt (text model) or action label (action model)."""
     spec = entry["condition"]
     if spec["type"] == "text":
-        from emdm.text import encode_texts
-
         prompts = prompts or PROMPTS
-        emb = np.asarray(encode_texts(prompts, encoder_id=spec["encoder"], batch_size=1), np.float32)
+        emb = np.asarray(text_encoders.encode_texts(prompts, encoder_id=spec["encoder"], batch_size=1), np.float32)
         return list(zip(prompts, emb))
     labels = prompts or list(spec["labels"])
     return [(lab, make_condition(spec, None, lab, False)) for lab in labels]
@@ -106,8 +107,6 @@ def interval_table(step, conds, entry: dict, T: int, a) -> None:
 
 
 def main(argv=None) -> int:
-    from emdm import manifest as mf
-    from emdm.paths import MODELS_DIR
 
     ap = argparse.ArgumentParser(prog="python -m emdm.model.bench_steps", description=__doc__.split("\n\n")[0])
     ap.add_argument("--model", nargs="+", default=["emdm-t2m-web"])

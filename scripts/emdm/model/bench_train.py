@@ -28,13 +28,12 @@ from pathlib import Path
 import numpy as np
 
 from emdm import paths
+from emdm.motion.features import extract_features
+from emdm.motion.synthetic import synthetic_walk
 
 
 def write_synthetic(root: Path, n: int, seed: int = 0) -> Path:
     """A HumanML3D-layout folder of ``n`` synthetic walks (real 263-d features), two actions, two captions each."""
-    from emdm.motion.features import extract_features
-    from emdm.motion.synthetic import synthetic_walk
-
     rng = np.random.default_rng(seed)
     (root / "new_joint_vecs").mkdir(parents=True, exist_ok=True)
     (root / "texts").mkdir(exist_ok=True)

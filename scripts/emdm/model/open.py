@@ -30,6 +30,10 @@ from typing import Any, Callable
 
 import numpy as np
 
+from emdm import manifest as mf
+from emdm import paths
+from emdm.paths import display_path
+
 StepFn = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 INPUTS = ["x_t", "z", "cond", "t", "mask"]     # the ONNX step model's inputs; its output is "x0"
@@ -110,6 +114,7 @@ def read_meanstd(path: Path | str) -> tuple[np.ndarray, np.ndarray]:
 def load_generator(path: Path | str, weights: str = "G_ema"):
     """(generator in eval mode with the chosen weights, the checkpoint's meta, summary {steps, wall_s, losses})
     from an emdm.train checkpoint or --weights-out file, read with weights_only=True."""
+    # lazy: torch; opening a shipped ONNX model needs numpy and onnxruntime only
     from emdm.checkpoints import CheckpointError, load_file, load_state_dict
     from emdm.model.generator import Generator
 
@@ -156,8 +161,6 @@ def variant_file(entry: dict, name: str, variant: str | None) -> str:
 def verified_file(manifest: dict, models_dir: Path, rel: str, what: str, field: str = "files") -> Path:
     """``models_dir / rel`` if it lies inside ``models_dir`` (``field``: the manifest field naming it), the manifest
     lists it under ``files`` and it has that size and sha256."""
-    from emdm import manifest as mf
-
     try:
         path = mf.file_path(models_dir, rel, field)      # relative, and inside models_dir once links are resolved
     except mf.ManifestError as e:
@@ -234,8 +237,6 @@ def is_checkpoint(ref: str | Path) -> bool:
 
 
 def open_checkpoint(path: Path | str, *, device: str = "cpu", weights: str = "G_ema") -> OpenedModel:
-    from emdm.paths import display_path
-
     path = Path(path)
     G, meta, summary = load_generator(path, weights)
     missing = [k for k in ("task", "condition", "mean", "std") if k not in meta]
@@ -257,9 +258,6 @@ def open_checkpoint(path: Path | str, *, device: str = "cpu", weights: str = "G_
 
 def open_shipped(name: str, *, models_dir: Path | str | None = None, variant: str | None = None,
                  threads: int = 1) -> OpenedModel:
-    from emdm import manifest as mf
-    from emdm import paths
-
     try:
         models_dir = paths.require_models_dir(models_dir)
         man = mf.load(models_dir)

@@ -54,7 +54,7 @@ LOCAL_VEL = slice(193, 259)
 CONTACTS = slice(259, 263)
 
 
-def _check_joints(joints: np.ndarray, name: str = "joints") -> np.ndarray:
+def check_joints(joints: np.ndarray, name: str = "joints") -> np.ndarray:
     j = np.asarray(joints, dtype=np.float64)
     if j.ndim != 3 or j.shape[1:] != (sk.NUM_JOINTS, 3):
         raise ValueError(f"{name}: expected shape (frames, 22, 3), got {j.shape}")
@@ -72,7 +72,7 @@ def rot_y(angle: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 def heading_angles(joints: np.ndarray) -> np.ndarray:
     """theta (F,): the angle about +Y that turns +Z into each frame's forward direction."""
-    j = _check_joints(joints)
+    j = check_joints(joints)
     across = (j[:, sk.R_HIP] - j[:, sk.L_HIP]) + (j[:, sk.R_SHOULDER] - j[:, sk.L_SHOULDER])
     # forward = cross(up, across) = (across.z, 0, -across.x)
     fx, fz = across[:, 2], -across[:, 0]
@@ -85,7 +85,7 @@ def _wrap(a: np.ndarray) -> np.ndarray:
 
 def foot_contacts(joints: np.ndarray, threshold: float = CONTACT_THRESHOLD) -> np.ndarray:
     """(F-1, 4) float contacts for l_ankle, l_foot, r_ankle, r_foot (squared step < threshold)."""
-    j = _check_joints(joints)
+    j = check_joints(joints)
     step = j[1:, sk.FOOT_JOINTS] - j[:-1, sk.FOOT_JOINTS]
     return ((step ** 2).sum(-1) < threshold).astype(np.float64)
 
@@ -118,7 +118,7 @@ def local_rotations(joints: np.ndarray) -> np.ndarray:
     The rotation stored for joint b turns the reference bone parent(b)->b (REFERENCE_OFFSETS[b])
     into the observed bone direction, relative to the previous bone of its kinematic chain (the
     first bone of a chain from the pelvis is relative to the heading rotation Ry(theta))."""
-    j = _check_joints(joints)
+    j = check_joints(joints)
     F = j.shape[0]
     glob = np.zeros((F, sk.NUM_JOINTS, 3, 3))
     theta = heading_angles(j)
@@ -143,7 +143,7 @@ def local_rotations(joints: np.ndarray) -> np.ndarray:
 
 def extract_features(joints: np.ndarray) -> np.ndarray:
     """(F, 22, 3) joint positions (metres, Y up, floor y = 0) -> (F-1, 263) float32 features."""
-    j = _check_joints(joints)
+    j = check_joints(joints)
     F = j.shape[0]
     if F < 2:
         raise ValueError(f"joints: need at least 2 frames to compute features, got {F}")

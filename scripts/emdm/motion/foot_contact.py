@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from emdm import skeleton as sk
+
 
 def contacts_from_features(features: np.ndarray) -> np.ndarray:
     """The 4 contact channels of de-normalised features (frames, dim) → (frames, 4)."""
@@ -47,8 +49,6 @@ def plant_runs(joints: np.ndarray, contacts: np.ndarray, threshold: float = FOOT
                gap: int = FOOT_CLEANUP["gap"], max_drift: float = FOOT_CLEANUP["max_drift"], foot_joints=None) -> list:
     """Per foot joint (l_ankle, l_foot, r_ankle, r_foot), the contact runs the clean-up pins: (first, last, mean
     position) — footContact.ts ``plantRuns``."""
-    from emdm import skeleton as sk
-
     out = []
     for c, j in enumerate(sk.FOOT_JOINTS if foot_joints is None else foot_joints):
         rs = []

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from emdm.motion.features import _check_joints, heading_angles, recover_root, rot_y
+from emdm.motion.features import check_joints, heading_angles, recover_root, rot_y
 
 
 def align_segment(prev: np.ndarray, nxt: np.ndarray, overlap: int) -> np.ndarray:
     """``nxt`` (F, 22, 3) turned about +Y and shifted in x/z onto ``prev``'s last frame (see the module doc)."""
-    p, n = _check_joints(prev, "prev"), _check_joints(nxt, "next")
+    p, n = check_joints(prev, "prev"), check_joints(nxt, "next")
     if not isinstance(overlap, (int, np.integer)) or not 1 <= overlap <= min(len(p), len(n)):
         raise ValueError(f"align_segment: overlap must be an integer in 1..{min(len(p), len(n))} (frames of next "
                          f"that repeat prev's last frames), got {overlap!r}")

@@ -18,6 +18,9 @@ from typing import Protocol
 
 import numpy as np
 
+from emdm import manifest as mf
+from emdm import paths
+from emdm.text.clip import ClipTextEncoder
 from emdm.text.minilm import MiniLMEncoder, TextEncoderError
 
 DEFAULT_ENCODER = "all-MiniLM-L6-v2"
@@ -60,16 +63,11 @@ def load_encoder(encoder_id: str = DEFAULT_ENCODER, *, models_dir: Path | str | 
     ``clip-vit-b32`` / a manifest entry of kind ``clip``: CLIP's text tower via transformers from
     ``model_dir`` (a local folder with weights) or the Hub id ``openai/clip-vit-base-patch32``.
     """
-    from emdm import manifest as mf
-    from emdm import paths
-
     given, models_dir = models_dir, paths.models_dir(models_dir)      # an argument, $EMDM_MODELS_DIR or public/models
     key = (encoder_id, str(model_dir or models_dir))
     if key in _CACHE:
         return _CACHE[key]
     if encoder_id == CLIP_ENCODER or encoder_id.startswith("clip"):
-        from emdm.text.clip import ClipTextEncoder
-
         enc: TextEncoder = ClipTextEncoder(model_dir or "openai/clip-vit-base-patch32", encoder_id=encoder_id)
     elif model_dir is not None:
         enc = MiniLMEncoder(model_dir, encoder_id=encoder_id)

@@ -22,7 +22,9 @@ from pathlib import Path
 import numpy as np
 
 from emdm import manifest as mf
+from emdm.text.minilm import MiniLMEncoder
 from emdm.text.pooling import l2_normalize, mean_pool
+from emdm.text.quantize import quantize_weights_int8
 
 ENCODER_ID = "all-MiniLM-L6-v2"
 MAX_TOKENS = 128          # the tokenizer.json the package ships truncates at 128
@@ -85,8 +87,6 @@ def quantize(fp32: Path, out: Path, mode: str = "weights") -> str:
     """int8 file at ``out``; returns a description for the manifest."""
     out.parent.mkdir(parents=True, exist_ok=True)
     if mode == "weights":
-        from emdm.text.quantize import quantize_weights_int8
-
         counts = quantize_weights_int8(fp32, out)
         return (f"int8 weights, one scale per output channel / embedding row, float32 compute "
                 f"({counts['MatMul']} MatMul, {counts['Gather']} Gather; emdm.text.quantize)")
@@ -163,7 +163,6 @@ def main(argv: list[str] | None = None) -> int:
         export_fp32(src, fp32)
         print(f"export_minilm: quantising to int8 ({args.quant}) ...", flush=True)
         quant = quantize(fp32, out / ONNX_REL, args.quant)
-    from emdm.text.minilm import MiniLMEncoder
 
     enc = MiniLMEncoder(out)
     got = enc.encode(CHECK_SENTENCES)

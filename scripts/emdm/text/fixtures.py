@@ -18,6 +18,8 @@ import json
 from pathlib import Path
 
 from emdm import paths
+from emdm.text import load_encoder
+from emdm.text.clip import ClipTokenizer, emdm_clip_ids
 
 FIXTURE_DIR = paths.FIXTURES_DIR / "text"
 MINILM_FIXTURE = FIXTURE_DIR / "minilm_vectors.json"
@@ -58,8 +60,6 @@ CLIP_PROMPTS = [
 
 
 def minilm_fixture() -> dict:
-    from emdm.text import load_encoder
-
     enc = load_encoder("all-MiniLM-L6-v2")
     vecs = enc.encode(MINILM_PROMPTS)
     tokens = [enc.token_ids(p) for p in MINILM_PROMPTS]
@@ -76,8 +76,6 @@ def minilm_fixture() -> dict:
 
 
 def clip_fixture(tokenizer_dir: Path | None = None) -> dict:
-    from emdm.text.clip import ClipTokenizer, emdm_clip_ids
-
     tok = ClipTokenizer(tokenizer_dir or paths.shared_file("clip-vit-base-patch32"))
     raw = [tok.ids(p) for p in CLIP_PROMPTS]
     return {
