@@ -91,13 +91,14 @@ def load_results(json_dir: Path | str) -> list[dict]:
         if r.get("schema") != SCHEMA:
             raise ReportError(f"{path}: field 'schema' is {r.get('schema')!r}, expected {SCHEMA}")
         task = r.get("task")
-        if task not in ("text", "action", "timing", "coverage", "editing", "editing-time", "poses", "realism"):
+        if task not in ("text", "action", "timing", "coverage", "editing", "editing-time", "poses", "realism", "seams"):
             raise ReportError(f"{path}: field 'task' is {task!r}, expected 'text', 'action', 'timing', 'coverage', "
-                              f"'editing', 'editing-time', 'poses' or 'realism'")
+                              f"'editing', 'editing-time', 'poses', 'realism' or 'seams'")
         need = {"timing": ("rows", "runtime"), "coverage": ("name", "labels", "real", "runs"), "poses": ("name", "rows"),
                 "realism": ("name", "labels", "real", "generated", "rules", "judged"),
                 "editing": ("name", "seams", "semantics", "kept", "loops", "time", "bars"),
-                "editing-time": ("name", "runtime", "hardware", "steps", "time", "bars")}.get(
+                "editing-time": ("name", "runtime", "hardware", "steps", "time", "bars"),
+                "seams": ("name", "figures", "rows", "bars")}.get(
             task, ("name", "kind", "info", "metrics"))
         for k in need:
             if k not in r:
@@ -552,6 +553,20 @@ def render(results: list[dict], plots: dict[str, str]) -> str:
         for r in sorted(edits, key=lambda r: (r["name"], r.get("seed", 0))):
             out += editing_section(r)
         out += time_section([r for r in results if r["task"] == "editing-time"])
+    seams = [r for r in results if r["task"] == "seams"]
+    if seams:
+        from emdm.eval.seams import section as seams_section
+
+        out += ["## Seams and loops (issue 33)", "",
+                "`python -m emdm.eval.seams` makes timelines (walk → wave both hands → bow over 8 seeds, and 50 prompt "
+                "changes drawn from the coverage prompts) and loops of \"a person walks\" (8 seeds, travelling and in "
+                "place) with `emdm.motion.edit` on the page's emdm-t2m-web file, decoded as the page shows them "
+                "(`emdm.motion.decode`), and sets each seam's joint acceleration and joint step against the 95th "
+                "percentile elsewhere in its timeline, and each loop's wrap against its largest in-loop step. "
+                "`-before`: the code before the loop decode (`decode_joints(loop=True)`) and the seam velocity "
+                "(`SEAM_BLEND_VELOCITY`) fixes. A loop re-generates all but its ends, so its gait against the plain "
+                "walk varies with the seed either way; in place keeps the gait of the same loop travelling.", ""]
+        out += seams_section(seams)
     grids = sorted((r for r in results if r["task"] == "poses"), key=lambda r: r["name"])
     if grids:
         from emdm.eval.poses import BONE_TOL, FLOOR_TOL, LEG_TOL, section as poses_section

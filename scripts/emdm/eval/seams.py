@@ -2,7 +2,8 @@
 ``emdm.motion.edit`` and loops with and without "in place", on a shipped model (the page's file) and decoded as the
 page shows them (``emdm.motion.decode.decode_joints``: σ = 1 smoothing, feet cleaned up).
 
-    nice python -m emdm.eval.seams --data /path/to/dataset       # about 2 minutes on 2 cores; figures printed
+    nice python -m emdm.eval.seams                 # about 2.5 minutes on 2 cores; figures printed, JSON written
+    python -m emdm.eval.report                     # RESULTS.md's "Seams and loops" section
 
 What is measured (20 fps, metres):
 
@@ -26,6 +27,7 @@ Writes ``docs/results/json/seams-<model>.json`` (schema 1, task ``seams``).
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from datetime import datetime, timezone
@@ -36,6 +38,7 @@ import numpy as np
 from emdm.motion import edit as E
 from emdm.motion.decode import decode_joints
 from emdm.motion.features import heading_angles
+from emdm.outdir import OutputRefused
 
 FPS = 20
 SHOWCASE = ("a person walks", "a person waves both hands", "a person bows")
@@ -132,9 +135,6 @@ def measure_loops(model, seeds, seconds: float) -> list[dict]:
             rows.append({"seed": seed, "in_place": in_place, "plain": before, "loop": g,
                          "stride_ratio": g["stride"] / before["stride"], "lift_ratio": g["lift"] / before["lift"],
                          "wrap": wrap_step(clip), "largest_step": float(joint_steps(clip).max())})
-            if in_place:     # what "in place" itself does: against the same loop travelling
-                rows[-1].update(stride_vs_travelling=g["stride"] / rows[-2]["loop"]["stride"],
-                                lift_vs_travelling=g["lift"] / rows[-2]["loop"]["lift"])
     return rows
 
 
@@ -156,10 +156,11 @@ def figures(seams: list[dict], showcase: list[dict], loops: list[dict]) -> dict:
             "gait_within_bar": sum(abs(r["stride_ratio"] - 1) <= BARS["gait"] and abs(r["lift_ratio"] - 1) <= BARS["gait"]
                                    for r in rs),
             "wrap_within_bar": sum(r["wrap"] <= r["largest_step"] for r in rs), "n": len(rs)}
-    rs = [r for r in loops if r["in_place"]]
-    out["in_place_vs_travelling"] = {k: summary([r[k] for r in rs]) for k in ("stride_vs_travelling", "lift_vs_travelling")}
-    out["in_place_vs_travelling"]["within_bar"] = sum(
-        abs(r["stride_vs_travelling"] - 1) <= BARS["gait"] and abs(r["lift_vs_travelling"] - 1) <= BARS["gait"] for r in rs)
+    # what "in place" itself changes: each in-place loop against the same seed's loop travelling
+    moving = {r["seed"]: r["loop"] for r in loops if not r["in_place"]}
+    vs = [{k: r["loop"][k] / moving[r["seed"]][k] for k in ("stride", "lift")} for r in loops if r["in_place"]]
+    out["in_place_vs_travelling"] = {f"{k}_ratio": summary([v[k] for v in vs]) for k in ("stride", "lift")}
+    out["in_place_vs_travelling"]["within_bar"] = sum(all(abs(v[k] - 1) <= BARS["gait"] for k in v) for v in vs)
     return out
 
 
@@ -180,16 +181,33 @@ def report(fig: dict, log=print) -> None:
             f"{l['wrap_m']['median']:.3f} m (max {l['wrap_m']['max']:.3f}) vs largest in-loop step {l['largest_step_m']['median']:.3f} m, "
             f"wrap ≤ largest: {l['wrap_within_bar']} of {l['n']}")
     v = fig["in_place_vs_travelling"]
-    log(f"in place against the same loop travelling: stride × {min_max_of(v['stride_vs_travelling'])}, lift × "
-        f"{min_max_of(v['lift_vs_travelling'])}; within 30 %: {v['within_bar']}")
-
-
-def min_max_of(v: dict) -> str:
-    return f"{v['min']:.2f}–{v['max']:.2f}"
+    log(f"in place against the same loop travelling: stride × {min_max(v, 'stride')}, lift × {min_max(v, 'lift')}; "
+        f"within 30 %: {v['within_bar']} of {v['stride_ratio']['n']}")
 
 
 def min_max(l: dict, what: str) -> str:
     return f"{l[what + '_ratio']['min']:.2f}–{l[what + '_ratio']['max']:.2f}"
+
+
+def section(rs: list[dict]) -> list[str]:
+    """docs/RESULTS.md's "Seams and loops" rows, one per result file (``emdm.eval.report``)."""
+    rows = []
+    for r in sorted(rs, key=lambda r: (r["name"], r["_file"])):
+        f = r["figures"]
+        s, sc, ip = f["seams"], f["showcase_first_seam"], f["in_place_vs_travelling"]
+        wrap = lambda l: f"{l['wrap_within_bar']}/{l['n']} (max {l['wrap_m']['max']:.2f} m)"   # noqa: E731
+        rows.append([f"`{r['_file']}`", f"{s['within_bar']}/{s['acc_ratio']['n']} (max {s['acc_ratio']['max']:.2f}×)",
+                     f"{s['step_ratio']['max']:.2f}×",
+                     f"{sc['step']['max']:.2f} m (p95 {sc['step_p95']['median']:.2f} m); {f['showcase']['within_bar']}/"
+                     f"{f['showcase']['acc_ratio']['n']}", wrap(f["loop"]), wrap(f["loop_in_place"]),
+                     f"{ip['stride_ratio']['min']:.2f}–{ip['stride_ratio']['max']:.2f} / "
+                     f"{ip['lift_ratio']['min']:.2f}–{ip['lift_ratio']['max']:.2f}",
+                     f"{f['loop']['gait_within_bar']}/{f['loop']['n']}, {f['loop_in_place']['gait_within_bar']}/"
+                     f"{f['loop_in_place']['n']}"])
+    head = ["Result", "Prompt-change seams: accel ≤ 1.5× p95", "largest seam step / p95",
+            "walk → wave → bow: largest first-seam step; seams ≤ 1.5×", "Loop wrap ≤ largest step",
+            "In place: wrap ≤ largest step", "In place vs travelling: stride / lift", "Loop gait within 30 % of the plain walk"]
+    return ["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)] + ["| " + " | ".join(c) + " |" for c in rows] + [""]
 
 
 def run(a, log=print) -> Path:
@@ -199,7 +217,6 @@ def run(a, log=print) -> Path:
     from emdm.eval.report import RESULTS_DIR, SCHEMA
     from emdm.model.open import open_model
     from emdm.outdir import check_writable
-    import json
 
     out = check_writable(a.out or (RESULTS_DIR / "json" / f"seams-{a.model}{'-' + a.tag if a.tag else ''}.json"))
     try:
@@ -238,7 +255,6 @@ def parse_args(argv=None):
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--tag", default="", help="a suffix of the result file's name (e.g. before)")
     p.add_argument("--out", type=Path, default=None)
-    p.add_argument("--data", type=Path, default=None, help="accepted for the benchmarks' common command line; unused")
     a = p.parse_args(argv)
     for name in ("changes", "seeds", "threads"):
         if getattr(a, name) < 1:
@@ -252,7 +268,7 @@ def main(argv=None) -> int:
     a = parse_args(argv)
     try:
         out = run(a)
-    except (SeamsError, E.EditError) as e:
+    except (SeamsError, E.EditError, OutputRefused) as e:
         print(f"emdm.eval.seams: {e}", file=sys.stderr)
         return 2
     print(f"wrote {out}")
