@@ -55,7 +55,7 @@ import { AbortError } from './sampler/sampler';
 import type { SampleState } from './generate';
 
 export {
-  SEAM_BLEND_EXTRA, SEAM_BLEND_TAU, SEAM_EASE_ACCEL, SEAM_EASE_ACCEL_MIN, SEAM_EASE_FRAMES, easeSeams, seamAccel, seamBlendFrames, seamEaseFrames,
+  SEAM_BLEND_EXTRA, SEAM_BLEND_TAU, SEAM_BLEND_VELOCITY, SEAM_EASE_ACCEL, SEAM_EASE_ACCEL_MIN, SEAM_EASE_FRAMES, easeSeams, seamAccel, seamBlendFrames, seamEaseFrames,
 } from './motion/seams';
 
 const D = 263;

@@ -13,6 +13,9 @@ export const SEAM_EASE_FRAMES = 10;
 export const SEAM_EASE_ACCEL = 20; // the median real test clip's 95th percentile of joint acceleration
 /** The cross-fade into the generated frames lasts this many frames longer than the offset's fade (`easeSeams`). */
 export const SEAM_BLEND_EXTRA = 4;
+/** The velocity a seam's cross-fade continues is the kept side's mean over up to this many steps (`easeSeams`; over
+ * one, a foot's one-frame jitter at a walk's end was carried on: python -m emdm.eval.seams). */
+export const SEAM_BLEND_VELOCITY = 3;
 /** The lower bound of a timeline seam's easing acceleration, m/s² (`seamAccel`). */
 export const SEAM_EASE_ACCEL_MIN = 5;
 /** Frames: the kept side's velocity, continued into the cross-fade, decays with this time constant (or a longer one
@@ -90,13 +93,25 @@ export function seamBlendFrames(r: number, accel = SEAM_EASE_ACCEL, fps = 20): n
  * made the 1.5 m one a 0.5 s fall, 2× the timeline's 95th percentile at the seam; a long fade is a blend the action
  * classifier reads as another action: the trade-off is measured in the Python twin's doc). Then each seam is
  * cross-faded from the kept side's motion continued, c_i = k + v·τ·(1 − exp(−(i+1)/τ)) (k the kept frame at the
- * seam, v = k − the kept frame beyond it, or 0; τ = max(SEAM_BLEND_TAU, r(v)·fps²/accel), r the largest joint
+ * seam, v its mean velocity over the up to SEAM_BLEND_VELOCITY kept frames beyond it (`keptBack`), or 0; τ = max(SEAM_BLEND_TAU, r(v)·fps²/accel), r the largest joint
  * distance: stopping a fast kept side stays within accel), into the eased frames: f[s+i] ← (1 − β_i)·c_i +
  * β_i·f[s+i], β_i = (1 − cos(π(i+1)/(b+1)))/2, b = min(m + SEAM_BLEND_EXTRA, e − s), left seam then right (mirrored):
  * the offset fixes where the first generated frame is, the cross-fade damps the model's own fast first frames
  * (raised hands dropped in two frames: 13× the 95th percentile). Foot contacts [259:263] stay; frames kept in part
  * (body-part edits) are left alone.
  */
+/** The farthest frame k0 + step·q, q = 1…SEAM_BLEND_VELOCITY, with every frame from k0 to it kept (−1: k0 + step is
+ * not kept): the kept side's velocity at a seam is (f[k0] − f[k]) / q (Python `_kept_back`). */
+function keptBack(kept: boolean[], k0: number, step: number): number {
+  let k = -1;
+  for (let q = 1; q <= SEAM_BLEND_VELOCITY; q++) {
+    const t = k0 + step * q;
+    if (t < 0 || t >= kept.length || !kept[t]) break;
+    k = t;
+  }
+  return k;
+}
+
 export function easeSeams(features: ArrayLike<number>, frames: number, keep: ArrayLike<number>, ease = SEAM_EASE_FRAMES, dim = D, accel = SEAM_EASE_ACCEL): Float32Array {
   if (features.length !== frames * dim || keep.length !== frames * dim) {
     throw new RangeError(`easeSeams: features (${features.length}) and keep (${keep.length}) must both hold frames (${frames}) × ${dim} values`);
@@ -116,7 +131,7 @@ export function easeSeams(features: ArrayLike<number>, frames: number, keep: Arr
   }
   const row = (t: number) => f.subarray(t * dim, (t + 1) * dim);
   const adds: { t: number; w: number; o: Float64Array }[] = [];
-  /** cross-fades, in order: kept frame k0 at the seam, k1 beyond it (or −1), the first generated row `at` and the
+  /** cross-fades, in order: kept frame k0 at the seam, k1 the farthest of up to SEAM_BLEND_VELOCITY kept frames beyond it (or −1), the first generated row `at` and the
    * direction `step` from the seam out, the fade's frames b and the most the run allows */
   const blends: { k0: number; k1: number; at: number; step: number; b: number; most: number }[] = [];
   const offset = (base: Float64Array, sign: number, terms: [Float64Array, Float64Array][], to: Float64Array) => {
@@ -149,7 +164,7 @@ export function easeSeams(features: ArrayLike<number>, frames: number, keep: Arr
       const o = offset(row(s - 1), 1, terms, row(s));
       const { w, b } = fade(o);
       w.forEach((wi, i) => adds.push({ t: s + i, w: wi, o }));
-      blends.push({ k0: s - 1, k1: beyond, at: s, step: 1, b, most: e - s });
+      blends.push({ k0: s - 1, k1: keptBack(kept, s - 1, -1), at: s, step: 1, b, most: e - s });
     }
     if (e < frames && kept[e]) {
       const beyond = e + 1 < frames && kept[e + 1] ? e + 1 : -1;
@@ -159,7 +174,7 @@ export function easeSeams(features: ArrayLike<number>, frames: number, keep: Arr
       const o = offset(row(e), -1, terms, row(e - 1));
       const { w, b } = fade(o);
       w.forEach((wi, i) => adds.push({ t: e - 1 - i, w: wi, o }));
-      blends.push({ k0: e, k1: beyond, at: e - 1, step: -1, b, most: e - s });
+      blends.push({ k0: e, k1: keptBack(kept, e, 1), at: e - 1, step: -1, b, most: e - s });
     }
   }
   for (const { t, w, o } of adds) {
@@ -169,7 +184,7 @@ export function easeSeams(features: ArrayLike<number>, frames: number, keep: Arr
     // the kept side's motion continued, row i from the seam out: its velocity v decays at a rate (peak |v|/τ·fps²)
     // within accel
     const vel = new Float64Array(dim);
-    if (k1 >= 0) for (let c = 0; c < dim; c++) vel[c] = f[k0 * dim + c] - f[k1 * dim + c];
+    if (k1 >= 0) for (let c = 0; c < dim; c++) vel[c] = (f[k0 * dim + c] - f[k1 * dim + c]) / Math.abs(k0 - k1);
     const tau = Math.max(SEAM_BLEND_TAU, (reach(vel) * 20 * 20) / accel); // fps 20, as seamBlendFrames
     const gone = (i: number) => tau * (1 - Math.exp(-(i + 1) / tau)); // row i: k0 + v·gone(i)
     // longer where the model's first frames leave the continued motion further than the fade's b can take

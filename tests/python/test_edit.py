@@ -143,6 +143,25 @@ def test_a_fast_swing_in_the_first_generated_frames_is_damped_by_the_cross_fade(
     assert np.allclose(g[20 + o + E.SEAM_BLEND_EXTRA:], f[20 + o + E.SEAM_BLEND_EXTRA:])    # the model's pose after it
 
 
+def test_a_one_frame_jitter_at_the_end_of_the_kept_frames_is_not_carried_on_past_the_seam():
+    """A generated walk's foot can jump 0.45 m between two frames (its jitter); when that is the kept side's last step,
+    the cross-fade continued it: the foot slid on 0.4 m a frame and 2 m in 6 frames after a walk → wave seam. The
+    kept side's velocity is its mean over its last SEAM_BLEND_VELOCITY steps, so the jitter is carried a third as far."""
+    n = 60
+    f = np.zeros((n, 263), np.float32)
+    f[:, 3] = 0.9
+    f[:, 4:67] = 0.2                                                    # a still pose, kept 0..19, generated 20..
+    f[19, 4:67:3] += 0.45                                               # the last kept frame: every joint 0.45 m in x
+    keep = np.zeros((n, 263), np.float32)
+    keep[:20] = 1
+    g = E.ease_seams(f, keep)
+    assert np.array_equal(g[:20], f[:20])
+    x = g[:, 4]                                                         # a joint's x, root-relative, metres
+    travel = np.abs(x[20:] - x[19]).max()                               # how far past the jittered frame it goes
+    steps = np.abs(np.diff(x[19:]))
+    assert travel < 0.7 and steps.max() < 0.2, (travel, steps.max())    # carried on with one step's velocity: 1.5 m, 0.42
+
+
 def test_a_large_jump_at_a_seam_is_eased_over_more_frames_so_the_fade_stays_within_its_acceleration():
     """The model may jump straight to the new prompt's pose (lie-down after standing: root height 0.89 → 0.08 m in
     one frame); fading that over the fixed 10 frames made a 0.5 s fall. The fade's length grows with the jump so its

@@ -4,9 +4,10 @@ parity fixture tests/fixtures/parity/decode.* is checked from the TypeScript sid
 import numpy as np
 
 from emdm import skeleton as sk
+from emdm.eval.seams import joint_steps, wrap_step
 from emdm.motion import decode_fixture
 from emdm.motion.decode import decode_joints
-from emdm.motion.features import recover_joints
+from emdm.motion.features import recover_joints, recover_root, rot_y
 from emdm.motion.foot_contact import cleanup_foot_contacts, plant_runs
 from emdm.motion.ik_fixture import read_case_array
 
@@ -75,3 +76,22 @@ def test_a_sliding_contact_is_not_pinned_and_flicker_is_joined():
     joints[:, 7, 2] = joints[:, 10, 2] = 0.001 * f               # a plant that creeps 1 mm a frame: one run, pinned
     (s, e, _), = plant_runs(joints, contacts)[0]
     assert (s, e) == (5, 24)
+
+
+def test_a_loop_is_decoded_as_it_plays_across_its_wrap():
+    """A looping clip (loop=True) is smoothed and cleaned up across the wrap: decoded, it equals the middle of the
+    clip played three times over (set back to the origin), and the step from its last frame to its first is no
+    larger than a step inside it. Decoded alone (the old way), the generated walk's ends were smoothed apart."""
+    walk = decode_fixture.committed_features()["generated"]
+    clip = walk[:30]                     # a walk cut anywhere: the wrap is a jump, as an unfinished loop's
+    n = len(clip)
+    bare = decode_joints(clip, smooth=False, foot_cleanup=False, loop=True)
+    np.testing.assert_allclose(bare, recover_joints(clip), atol=1e-5)      # starts where the clip alone does
+    theta, root = recover_root(np.concatenate([clip] * 3))           # the second time round starts here
+    three = decode_joints(np.concatenate([clip] * 3), smooth=True, foot_cleanup=False)[n:2 * n]
+    three = rot_y(-theta[n], three - root[n] * [1, 0, 1])
+    looped = decode_joints(clip, smooth=True, foot_cleanup=False, loop=True)
+    np.testing.assert_allclose(looped, three, atol=1e-4)
+    alone = decode_joints(clip, smooth=True, foot_cleanup=False)
+    assert wrap_step(looped) < 0.8 * wrap_step(alone)
+    assert wrap_step(looped) <= joint_steps(looped).max()

@@ -8,7 +8,7 @@ describe("the page's decoding is Python's (emdm.motion.decode, fixture tests/fix
   const fx = loadCase('decode');
   const sk = manifestSkeleton();
   const cases = fx.meta.cases as Record<string, { frames: number }>;
-  const modes = fx.meta.modes as Record<string, { smooth: boolean; footCleanup: boolean }>;
+  const modes = fx.meta.modes as Record<string, { smooth: boolean; footCleanup: boolean; loop?: boolean }>;
   for (const [name, { frames }] of Object.entries(cases)) {
     for (const [mode, o] of Object.entries(modes)) {
       it(`${name}, ${mode}: decodeJoints within 1e-5 m of decode_joints`, () => {

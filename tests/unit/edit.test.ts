@@ -258,6 +258,30 @@ describe('easeSeams', () => {
     expect(seamEaseFrames(small)).toBe(SEAM_EASE_FRAMES);
   });
 
+  it('a one-frame jitter at the end of the kept frames is not carried on past the seam (the kept side\'s mean velocity)', () => {
+    // a still pose kept on frames 0…19 whose last frame jumps 0.45 m (a generated walk's foot jitter), generated 20…;
+    // continued with its last step's velocity the joint slid on 0.42 m a frame, 1.5 m in all (Python twin's test)
+    const n = 60;
+    const f = new Float32Array(n * D);
+    const keep = new Float32Array(n * D);
+    for (let t = 0; t < n; t++) {
+      f[t * D + 3] = 0.9;
+      for (let c = 4; c < 67; c++) f[t * D + c] = 0.2;
+      if (t < 20) keep.fill(1, t * D, (t + 1) * D);
+    }
+    for (let c = 4; c < 67; c += 3) f[19 * D + c] += 0.45;
+    const g = easeSeams(f, n, keep);
+    expect(Array.from(g.subarray(0, 20 * D))).toEqual(Array.from(f.subarray(0, 20 * D)));
+    let travel = 0;
+    let step = 0;
+    for (let t = 20; t < n; t++) {
+      travel = Math.max(travel, Math.abs(g[t * D + 4] - g[19 * D + 4]));
+      step = Math.max(step, Math.abs(g[t * D + 4] - g[(t - 1) * D + 4]));
+    }
+    expect(travel).toBeLessThan(0.7);
+    expect(step).toBeLessThan(0.2);
+  });
+
   it('a timeline eases each seam at the seamAccel of the window before it: after a calm window, a drop in the first frames gets a longer cross-fade', async () => {
     // window 1: standing, one joint swaying (≈ 6 m/s²); window 2: its model frames hold two frames past the seam, then drop 0.9 m
     const calls: EditRequest[] = [];

@@ -7,7 +7,7 @@ import os from 'node:os';
 import path from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import {
-  type EditBegin, type EditBeginRequest, type EditGenerate, type EditRequest, type TimelineSegment, LOOP_END_FRAMES, OVERLAP_FRAMES, SEAM_BLEND_EXTRA, SEAM_BLEND_TAU, SEAM_EASE_ACCEL,
+  type EditBegin, type EditBeginRequest, type EditGenerate, type EditRequest, type TimelineSegment, LOOP_END_FRAMES, OVERLAP_FRAMES, SEAM_BLEND_EXTRA, SEAM_BLEND_TAU, SEAM_BLEND_VELOCITY, SEAM_EASE_ACCEL,
   SEAM_EASE_ACCEL_MIN, SEAM_EASE_FRAMES, TIMELINE_KEEP_FROM, bodyPartEdit, easeSeams, generateTimeline, inBetween, makeLoop, seamAccel,
 } from '../../src/edit';
 import { type Generator, openModel } from '../../src/generate';
@@ -76,7 +76,7 @@ describe('src/edit.ts = emdm.motion.edit (tiny-edit fixture)', () => {
   it('uses the same constants: overlap, loop ends, seam fade and cross-fade, the timeline windows\' keepFromTime', () => {
     expect(fx.meta).toMatchObject({
       overlap: OVERLAP_FRAMES, loopEnds: LOOP_END_FRAMES, seamEase: SEAM_EASE_FRAMES, seamAccel: SEAM_EASE_ACCEL,
-      seamBlendExtra: SEAM_BLEND_EXTRA, seamBlendTau: SEAM_BLEND_TAU, seamAccelMin: SEAM_EASE_ACCEL_MIN, timelineKeepFrom: TIMELINE_KEEP_FROM,
+      seamBlendExtra: SEAM_BLEND_EXTRA, seamBlendTau: SEAM_BLEND_TAU, seamBlendVelocity: SEAM_BLEND_VELOCITY, seamAccelMin: SEAM_EASE_ACCEL_MIN, timelineKeepFrom: TIMELINE_KEEP_FROM,
     });
   });
 

@@ -202,8 +202,8 @@ export class TimelinePanel implements RequestPanel {
   }
 
   /** The page's decoding of joints made here (as generate() does for one motion: σ = 1 frame smoothing, feet on the floor). */
-  private decode(features: Float32Array, frames: number): Float32Array {
-    return decodeJoints(features, frames, this.page.session.manifest.skeleton, { smooth: true, footCleanup: true });
+  private decode(features: Float32Array, frames: number, loop = false): Float32Array {
+    return decodeJoints(features, frames, this.page.session.manifest.skeleton, { smooth: true, footCleanup: true, loop });
   }
 
   /** The motion the edit tools start from: the one on screen (the page's or this panel's). */
@@ -321,7 +321,7 @@ export class TimelinePanel implements RequestPanel {
       this.lastLoop = r.full;
       const what = condition.action !== undefined ? String(condition.action) : (condition.prompt ?? '').trim();
       return {
-        motion: r.clip, display: this.decode(r.clip.features, r.clip.frames), windows: 1, results: calls.results,
+        motion: r.clip, display: this.decode(r.clip.features, r.clip.frames, true), windows: 1, results: calls.results,
         label: `${what} (loop${inPlace ? ', in place' : ''})`, model: this.modelFor(condition), seed, condition,
       };
     });

@@ -37,7 +37,7 @@ import os
 import sys
 from pathlib import Path
 
-from emdm.eval import editing_section, poses, realism
+from emdm.eval import editing_section, poses, realism, seams
 from emdm.eval.report_plots import plot_coverage, plot_fid_vs_steps, plot_time_vs_steps
 from emdm.eval.report_tables import (
     VARIANT_LABEL, ReportError, action_table, clips_per_row, coverage_section, headlines, models_table,
@@ -75,13 +75,14 @@ def load_results(json_dir: Path | str) -> list[dict]:
         if r.get("schema") != SCHEMA:
             raise ReportError(f"{path}: field 'schema' is {r.get('schema')!r}, expected {SCHEMA}")
         task = r.get("task")
-        if task not in ("text", "action", "timing", "coverage", "editing", "editing-time", "poses", "realism"):
+        if task not in ("text", "action", "timing", "coverage", "editing", "editing-time", "poses", "realism", "seams"):
             raise ReportError(f"{path}: field 'task' is {task!r}, expected 'text', 'action', 'timing', 'coverage', "
-                              f"'editing', 'editing-time', 'poses' or 'realism'")
+                              f"'editing', 'editing-time', 'poses', 'realism' or 'seams'")
         need = {"timing": ("rows", "runtime"), "coverage": ("name", "labels", "real", "runs"), "poses": ("name", "rows"),
                 "realism": ("name", "labels", "real", "generated", "rules", "judged"),
                 "editing": ("name", "seams", "semantics", "kept", "loops", "time", "bars"),
-                "editing-time": ("name", "runtime", "hardware", "steps", "time", "bars")}.get(
+                "editing-time": ("name", "runtime", "hardware", "steps", "time", "bars"),
+                "seams": ("name", "figures", "rows", "bars")}.get(
             task, ("name", "kind", "info", "metrics"))
         for k in need:
             if k not in r:
@@ -209,6 +210,18 @@ def _benchmarks(results: list[dict], plots: dict[str, str]) -> list[str]:
         for r in sorted(edits, key=lambda r: (r["name"], r.get("seed", 0))):
             out += editing_section.section(r)
         out += editing_section.time_section([r for r in results if r["task"] == "editing-time"])
+    seam_runs = [r for r in results if r["task"] == "seams"]
+    if seam_runs:
+        out += ["## Seams and loops (issue 33)", "",
+                "`python -m emdm.eval.seams` makes timelines (walk → wave both hands → bow over 8 seeds, and 50 prompt "
+                "changes drawn from the coverage prompts) and loops of \"a person walks\" (8 seeds, travelling and in "
+                "place) with `emdm.motion.edit` on the page's emdm-t2m-web file, decoded as the page shows them "
+                "(`emdm.motion.decode`), and sets each seam's joint acceleration and joint step against the 95th "
+                "percentile elsewhere in its timeline, and each loop's wrap against its largest in-loop step. "
+                "`-before`: the code before the loop decode (`decode_joints(loop=True)`) and the seam velocity "
+                "(`SEAM_BLEND_VELOCITY`) fixes. A loop re-generates all but its ends, so its gait against the plain "
+                "walk varies with the seed either way; in place keeps the gait of the same loop travelling.", ""]
+        out += seams.section(seam_runs)
     grids = sorted((r for r in results if r["task"] == "poses"), key=lambda r: r["name"])
     if grids:
         out += ["## Impossible poses over the page's settings (issue 12)", "",

@@ -28,7 +28,8 @@ from emdm.motion.ik_fixture import read_case_array
 
 PARITY_DIR = paths.FIXTURES_DIR / "parity"
 NAME = "decode"
-MODES = {"smooth": (True, False), "cleanup": (False, True), "both": (True, True)}
+MODES = {"smooth": (True, False, False), "cleanup": (False, True, False), "both": (True, True, False),
+         "loop": (True, True, True)}            # (smooth, foot clean-up, a looping clip)
 
 
 def case_features() -> dict[str, np.ndarray]:
@@ -53,10 +54,11 @@ def build(features: dict[str, np.ndarray] | None = None) -> tuple[dict, dict[str
     arrays, cases = {}, {}
     for name, feats in (case_features() if features is None else features).items():
         arrays[f"{name}_features"] = feats
-        for mode, (smooth, cleanup) in MODES.items():
-            arrays[f"{name}_{mode}"] = decode_joints(feats, smooth=smooth, foot_cleanup=cleanup)
+        for mode, (smooth, cleanup, loop) in MODES.items():
+            arrays[f"{name}_{mode}"] = decode_joints(feats, smooth=smooth, foot_cleanup=cleanup, loop=loop)
         cases[name] = {"frames": int(feats.shape[0])}
-    return {"cases": cases, "modes": {m: {"smooth": s, "footCleanup": c} for m, (s, c) in MODES.items()}}, arrays
+    modes = {m: {"smooth": s, "footCleanup": c, **({"loop": True} if lp else {})} for m, (s, c, lp) in MODES.items()}
+    return {"cases": cases, "modes": modes}, arrays
 
 
 def main() -> int:

@@ -66,6 +66,9 @@ SEAM_EASE = 10             # M: the fewest generated frames over which a seam's 
 SEAM_ACCEL = 20.0          # A: the easing's peak joint acceleration, m/s² (a larger jump is eased over more frames)
 SEAM_BLEND_EXTRA = 4       # the cross-fade into the generated frames lasts this many frames longer than the offset's fade
 SEAM_BLEND_TAU = 3.0       # frames: the kept side's velocity, continued into the cross-fade, decays with this time constant
+SEAM_BLEND_VELOCITY = 3    # frames: the velocity the cross-fade continues is the kept side's mean over up to this many
+#                            steps (over one, a foot's one-frame jitter of 0.45 m at a walk's end was carried on: it slid
+#                            2 m in 6 frames and 0.19 m under the floor after a walk → wave seam; python -m emdm.eval.seams)
 #                            (or a longer one, where a fast kept side would stop faster than the seam's accel)
 # A timeline seam's easing keeps its peak joint acceleration within the 95th percentile of the window before it
 # (``seam_accel``), between these bounds, m/s²: a calm motion is not ended by a fade faster than anything in it.
@@ -363,8 +366,8 @@ def ease_seams(features: np.ndarray, keep: np.ndarray, ease: int = SEAM_EASE, ac
     Then each seam is cross-faded: the offset fixes where the first generated frame is, not how the model moves next,
     and its first frames can swing a limb through a metre in two frames (a timeline's raised hands dropped to the
     sides: 216 m/s² at the frame after the seam, 13× the timeline's 95th percentile, with x̂0 smoothed). The kept side's
-    motion continued, c_i = k + v·τ·(1 − exp(−(i+1)/τ)) (k the kept frame next to the seam, v its velocity from the
-    kept frame before it, 0 without one; τ = max(``SEAM_BLEND_TAU``, ``_reach``(v)·fps²/``accel``) frames, so that
+    motion continued, c_i = k + v·τ·(1 − exp(−(i+1)/τ)) (k the kept frame next to the seam, v its mean velocity over
+    the up to ``SEAM_BLEND_VELOCITY`` kept frames before it, 0 without one; τ = max(``SEAM_BLEND_TAU``, ``_reach``(v)·fps²/``accel``) frames, so that
     stopping the kept side's motion, peak |v|/τ·fps², stays within accel), is blended into the eased frames:
     f[s+i] ← (1 − β_i)·c_i + β_i·f[s+i], β_i = (1 − cos(π(i+1)/(b+1)))/2, over b = min(m + ``SEAM_BLEND_EXTRA``, e − s)
     frames (mirrored on the right, after the left). A jump in the generated frames is scaled down by the β of where
@@ -399,18 +402,18 @@ def ease_seams(features: np.ndarray, keep: np.ndarray, ease: int = SEAM_EASE, ac
             v += [f[s + 1] - f[s]] if s + 1 < e else []
             o, w, b = fade(f[s - 1] + (np.mean(v, 0) if v else 0) - f[s])
             offsets += [(s + i, w[i] * o) for i in range(len(w))]
-            blends.append((s - 1, beyond, s, 1, b, e - s))
+            blends.append((s - 1, _kept_back(kept, s - 1, -1), s, 1, b, e - s))
         if e < n and kept[e]:
             beyond = e + 1 if e + 1 < n and kept[e + 1] else None
             v = [f[beyond] - f[e]] if beyond is not None else []
             v += [f[e - 1] - f[e - 2]] if e - 2 >= s else []
             o, w, b = fade(f[e] - (np.mean(v, 0) if v else 0) - f[e - 1])
             offsets += [(e - 1 - i, w[i] * o) for i in range(len(w))]
-            blends.append((e, beyond, e - 1, -1, b, e - s))
+            blends.append((e, _kept_back(kept, e, 1), e - 1, -1, b, e - s))
     for row, o in offsets:
         f[row] += o
     for k0, k1, at, step, b, most in blends:     # in order: a run's left seam, then its right one
-        v = f[k0] - f[k1] if k1 is not None else np.zeros(f.shape[1])
+        v = (f[k0] - f[k1]) / abs(k0 - k1) if k1 is not None else np.zeros(f.shape[1])
         i = np.arange(most, dtype=np.float64)[:, None]
         # the kept side continued, its velocity v decaying at a rate (peak |v|/τ·fps²) within accel
         tau = max(SEAM_BLEND_TAU, _reach(v) * FPS**2 / accel)
@@ -423,6 +426,18 @@ def ease_seams(features: np.ndarray, keep: np.ndarray, ease: int = SEAM_EASE, ac
         blended[:, CONTACTS] = f[rows][:, CONTACTS]
         f[rows] = blended
     return f.astype(np.float32)
+
+
+def _kept_back(kept: np.ndarray, k0: int, step: int) -> int | None:
+    """The farthest frame k0 + step·q, q = 1..``SEAM_BLEND_VELOCITY``, with every frame from k0 to it kept (None: k0 + step
+    is not kept): the kept side's velocity at a seam is (f[k0] − f[k]) / q."""
+    k = None
+    for q in range(1, SEAM_BLEND_VELOCITY + 1):
+        t = k0 + step * q
+        if not 0 <= t < len(kept) or not kept[t]:
+            break
+        k = t
+    return k
 
 
 # ----------------------------------------------------------------------------------------------- timeline

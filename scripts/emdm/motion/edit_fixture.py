@@ -124,7 +124,8 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
         "objective": "ddgan", "steps": STEPS, "guidance": GUIDANCE, "zDim": 64, "featureDim": 263, "fps": E.FPS,
         "maxFrames": 196, "overlap": E.OVERLAP, "loopEnds": E.LOOP_ENDS,
         "seamEase": E.SEAM_EASE, "seamAccel": E.SEAM_ACCEL, "seamBlendExtra": E.SEAM_BLEND_EXTRA,
-        "seamBlendTau": E.SEAM_BLEND_TAU, "seamAccelMin": E.SEAM_ACCEL_MIN, "timelineKeepFrom": E.TIMELINE_KEEP_FROM,
+        "seamBlendTau": E.SEAM_BLEND_TAU, "seamBlendVelocity": E.SEAM_BLEND_VELOCITY, "seamAccelMin": E.SEAM_ACCEL_MIN,
+        "timelineKeepFrom": E.TIMELINE_KEEP_FROM,
         "ops": {
             "timeline": {"segments": [seg(s) for s in SEGMENTS], "frames": list(tl.frames), "starts": tl.starts,
                          "total": n},
