@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from emdm.eval.plausibility import CONTACT_HEIGHT, FOOT_JOINTS, flips
-from emdm.motion.edit import joint_acceleration
+from emdm.motion.seams import joint_acceleration
 from emdm.motion.features import heading_angles, recover_root, rot_y
 
 FPS = 20
