@@ -23,11 +23,6 @@ PACKAGE = "emdm"
 MAX_FILE_LINES = 500
 MAX_FUNCTION_LINES = 120
 
-# ---- PENDING_PYSAMPLER: the lead empties this at the merge of issue 31 -----------------------------------------------
-# The sampler's own helper (branch pysampler) rewrites these files and every line that imports emdm.sample; until its
-# branch lands they keep their lazy imports. Files are paths under scripts/; "emdm.sample" exempts imports OF it.
-PENDING_PYSAMPLER: frozenset[str] = frozenset()
-# ----------------------------------------------------------------------------------------------------------------------
 
 
 @dataclass(frozen=True)
@@ -126,17 +121,12 @@ def all_imports(root: Path = ROOT) -> list[Import]:
     return [imp for p in files for imp in imports_of(p, modules, root)]
 
 
-def _pending(imp: Import) -> bool:
-    return imp.in_function and (imp.path in PENDING_PYSAMPLER or imp.target in PENDING_PYSAMPLER)
-
-
 def import_cycles(imports: list[Import]) -> list[list[str]]:
     """Strongly connected components of more than one module (Tarjan), each sorted."""
     graph: dict[str, set[str]] = {}
     for imp in imports:
-        if not _pending(imp):
-            graph.setdefault(imp.source, set()).add(imp.target)
-            graph.setdefault(imp.target, set())
+        graph.setdefault(imp.source, set()).add(imp.target)
+        graph.setdefault(imp.target, set())
     index: dict[str, int] = {}
     low: dict[str, int] = {}
     stack: list[str] = []
@@ -174,12 +164,12 @@ def import_cycles(imports: list[Import]) -> list[list[str]]:
 def cycle_edges(imports: list[Import], cycle: list[str]) -> list[str]:
     members = set(cycle)
     return sorted({f"{i.path}:{i.line} {i.source} -> {i.target}" for i in imports
-                   if i.source in members and i.target in members and not _pending(i)})
+                   if i.source in members and i.target in members})
 
 
 def unexplained_lazy_imports(imports: list[Import]) -> list[str]:
     return sorted({f"{i.path}:{i.line} imports {i.target} inside a function without a '# lazy: <reason>' comment"
-                   for i in imports if i.in_function and not i.comment and not _pending(i)})
+                   for i in imports if i.in_function and not i.comment})
 
 
 def private_imports(imports: list[Import]) -> list[str]:
@@ -213,10 +203,6 @@ def long_functions(root: Path = ROOT) -> list[str]:
     return out
 
 
-def _pending_files() -> set[str]:
-    return {p for p in PENDING_PYSAMPLER if p.endswith(".py")}
-
-
 # ---- the tests ---------------------------------------------------------------------------------------------------------
 
 def test_no_import_cycle():
@@ -237,12 +223,12 @@ def test_no_module_imports_a_private_name():
 
 
 def test_no_source_file_over_the_limit():
-    bad = [f for f in long_files() if f.split(":")[0] not in _pending_files()]
+    bad = [f for f in long_files()]
     assert not bad, "\n".join(bad)
 
 
 def test_no_function_over_the_limit_without_a_reason():
-    bad = [f for f in long_functions() if f.split(":")[0] not in _pending_files()]
+    bad = [f for f in long_functions()]
     assert not bad, "\n".join(bad)
 
 
