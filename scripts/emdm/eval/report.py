@@ -219,7 +219,9 @@ def _benchmarks(results: list[dict], plots: dict[str, str]) -> list[str]:
                 "(`emdm.motion.decode`), and sets each seam's joint acceleration and joint step against the 95th "
                 "percentile elsewhere in its timeline, and each loop's wrap against its largest in-loop step. "
                 "`-before`: the code before the loop decode (`decode_joints(loop=True)`) and the seam velocity "
-                "(`SEAM_BLEND_VELOCITY`) fixes. A loop re-generates all but its ends, so its gait against the plain "
+                "(`SEAM_BLEND_VELOCITY`) fixes; `-oldmodel`: the fixes on the text model before its first GPU slice (the "
+                "shipped one squats and lies down where that one did not, and two of its prompt changes into those "
+                "ease faster than the calm timeline around them). A loop re-generates all but its ends, so its gait against the plain "
                 "walk varies with the seed either way; in place keeps the gait of the same loop travelling.", ""]
         out += seams.section(seam_runs)
     grids = sorted((r for r in results if r["task"] == "poses"), key=lambda r: r["name"])
