@@ -16,7 +16,7 @@ import { type Backend, type OrtSession, getSession } from './runtime/ort';
 import { IncompatibleModelError, stepFunction } from './runtime/stepModel';
 import { together } from './sampler/lockstep';
 import { type RandomState, SeededRandom } from './sampler/rng';
-import { type NoiseSource, type SampleOptions, type SamplerChoice, type SamplerName, type StepFn, sample } from './sampler/sampler';
+import { type NoiseSource, type SampleOptions, type SamplerName, type StepFn, sample } from './sampler/sampler';
 import type { KnownMotion } from './sampler/mask';
 import { ddimScheduleFor, scheduleFor } from './sampler/schedule';
 import { type TextEncoder, createTextEncoder } from './text';
@@ -357,7 +357,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
       throw new RangeError(`generate: frames must be an integer in 1…${entry.maxFrames}, got ${o.frames}`);
     }
     if (!Number.isFinite(o.guidance) || o.guidance < 0) throw new RangeError(`generate: guidance must be a finite number ≥ 0, got ${o.guidance}`);
-    const choice: SamplerChoice = samplerName === 'ddim'
+    const choice = samplerName === 'ddim'
       ? { method: 'ddim', schedule: ddimScheduleFor(entry, o.steps, model) }
       : { method: 'ddgan', schedule: scheduleFor(entry, o.steps, model) };
     const resume = 'resume' in o ? o.resume : undefined;

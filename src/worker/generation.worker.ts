@@ -48,7 +48,7 @@ function needHost(): GenerationHost {
   return host;
 }
 
-function infoOf(model: string, g: { backend: 'webgpu' | 'wasm'; threads: number; sampler: 'ddgan' | 'ddim'; batchesExactly?: boolean }): ModelInfo {
+function infoOf(model: string, g: Pick<ModelInfo, 'backend' | 'threads' | 'sampler' | 'batchesExactly'>): ModelInfo {
   return { model, backend: g.backend, threads: g.threads, sampler: g.sampler, ...(g.batchesExactly !== undefined ? { batchesExactly: g.batchesExactly } : {}) };
 }
 

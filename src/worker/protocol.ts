@@ -11,6 +11,7 @@ import type { TimelineRequest, TimelineResult } from './host';
 import type { Manifest } from '../manifest';
 import type { BackendRequest } from '../runtime/ort';
 import type { KnownMotion } from '../sampler/mask';
+import type { SamplerName } from '../sampler/settings';
 
 export type { FileEvent };
 
@@ -105,7 +106,7 @@ export interface ModelInfo {
   model: string;
   backend: 'webgpu' | 'wasm';
   threads: number;
-  sampler: 'ddgan' | 'ddim';
+  sampler: SamplerName;
   /** Generator.batchesExactly (absent in the answer to dispose) */
   batchesExactly?: boolean;
 }
