@@ -21,6 +21,7 @@ import { type Manifest, chooseVariant, loadManifest } from './manifest';
 import type { Motion } from './motion/types';
 import { type BeginRequest, type MotionRequest, beginByModel, modelFor, resolveRequest, wireBegin } from './requests';
 import type { Backend, BackendRequest } from './runtime/ort';
+import type { SamplingSettings } from './sampler/settings';
 import type { Skeleton } from './skeleton';
 import { GenerationClient, type ClientEvents } from './worker/client';
 import type { TimelineRequest, TimelineResult, WindowRun } from './worker/host';
@@ -70,13 +71,10 @@ export interface GeneratedMotion extends Motion {
   promptCheck?: GenerateResult['promptCheck'];
 }
 
-/** Options of MotionGenerator.timeline. */
-export interface TimelineCallOptions {
+/** Options of MotionGenerator.timeline; `steps` and `guidance` (SamplingSettings) are every window's (default: the models' manifest defaults). */
+export interface TimelineCallOptions extends Partial<Pick<SamplingSettings, 'steps' | 'guidance'>> {
   /** an earlier result: its segments equal to the new list's first ones are reused as they were (the rest continue from them) */
   previous?: GeneratedTimeline | null;
-  /** denoising steps and guidance of every window (default: the models' manifest defaults) */
-  steps?: number;
-  guidance?: number;
   signal?: AbortSignal;
   /** before each window: its segment, windows done and to do */
   onWindow?: (segment: number, done: number, total: number) => void;

@@ -16,9 +16,10 @@ import { type Backend, type OrtSession, getSession } from './runtime/ort';
 import { IncompatibleModelError, stepFunction } from './runtime/stepModel';
 import { together } from './sampler/lockstep';
 import { type RandomState, SeededRandom } from './sampler/rng';
-import { type NoiseSource, type SampleOptions, type SamplerName, type StepFn, sample } from './sampler/sampler';
+import { type NoiseSource, type SampleOptions, type StepFn, sample } from './sampler/sampler';
+import type { SamplerName, SamplingSettings } from './sampler/settings';
 import type { KnownMotion } from './sampler/mask';
-import { ddimScheduleFor, scheduleFor } from './sampler/schedule';
+import { scheduleFor } from './sampler/schedule';
 import { type TextEncoder, createTextEncoder } from './text';
 
 export type Condition =
@@ -28,24 +29,11 @@ export type Condition =
   /** a ready condition vector (e.g. an embedding computed elsewhere); zero = unconditional */
   | { type: 'vector'; vector: Float32Array };
 
-export interface GenerateOptions {
+/** One generation on one model: what to generate, its SamplingSettings (steps and guidance given; `method`, `guidanceMinTime` and `x0Smoothing` default to the model's), and how to report. */
+export interface GenerateOptions extends SamplingSettings {
   condition: Condition;
   /** motion length in frames at 20 fps (1 … maxFrames) */
   frames: number;
-  /** denoising steps: one of the model's supportedSteps */
-  steps: number;
-  /** classifier-free guidance scale (1 = off) */
-  guidance: number;
-  /**
-   * guide only the steps whose time is above this (guidance in a limited interval; the other steps run one
-   * batch row). Default: the model's manifest `guidanceMinTime`, else 0 = every step.
-   */
-  guidanceMinTime?: number;
-  /**
-   * smooth x̂0 along time (Gaussian, σ frames) at every denoising step but the last, so the motion stays coherent
-   * from step to step. Default: the model's manifest `x0Smoothing`, else 0 = off.
-   */
-  x0Smoothing?: number;
   /** uint32 seed: the same seed gives bit-identical output in Node and the browser (same backend) */
   seed: number;
   signal?: AbortSignal;
@@ -96,7 +84,7 @@ export interface GenerateResult {
   modelCalls: number;
   /** steps that ran the unconditional batch row too (guidance; only those above guidanceMinTime) */
   guidedSteps?: number;
-  /** the sampler that ran: 'ddgan' (EMDM posterior, objective "ddgan") or 'ddim' (η = 0, objective "diffusion") */
+  /** the sampler that ran (`method`): 'ddgan' (EMDM posterior, objective "ddgan") or 'ddim' (η = 0, objective "diffusion") */
   sampler: SamplerName;
   /** denoising steps run */
   steps: number;
@@ -357,9 +345,8 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
       throw new RangeError(`generate: frames must be an integer in 1…${entry.maxFrames}, got ${o.frames}`);
     }
     if (!Number.isFinite(o.guidance) || o.guidance < 0) throw new RangeError(`generate: guidance must be a finite number ≥ 0, got ${o.guidance}`);
-    const choice = samplerName === 'ddim'
-      ? { method: 'ddim', schedule: ddimScheduleFor(entry, o.steps, model) }
-      : { method: 'ddgan', schedule: scheduleFor(entry, o.steps, model) };
+    const method = o.method ?? samplerName;
+    const schedule = scheduleFor(entry, o.steps, model, method);
     const resume = 'resume' in o ? o.resume : undefined;
     if (resume && (resume.frames !== o.frames || resume.steps !== o.steps)) {
       throw new RangeError(`generate: resume is a state of ${resume.frames} frames and ${resume.steps} steps; this request asks for ${o.frames} frames and ${o.steps} steps (resume with the options it was begun with)`);
@@ -371,7 +358,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     return {
       prompt, ...(check ? { check } : {}),
       options: {
-        ...choice, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance,
+        method, schedule, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance,
         guidanceMinTime: o.guidanceMinTime ?? entry.guidanceMinTime ?? 0, x0Smoothing: o.x0Smoothing ?? entry.x0Smoothing ?? 0, signal: o.signal, onStep: o.onStep,
         ...(o.known ? { ...(known ? { known } : {}), keep: o.known.keep, keepFromTime: o.known.fromTime } : {}),
         ...(resume ? { resume: { x: resume.x, next: resume.next } } : {}),

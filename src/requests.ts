@@ -7,9 +7,11 @@
 import type { SampleState } from './generate';
 import type { Manifest, ModelEntry } from './manifest';
 import type { KnownMotion } from './sampler/mask';
+import type { SamplingSettings } from './sampler/settings';
 import type { WireBeginOptions, WireGenerateOptions } from './worker/protocol';
 
-export interface MotionRequest {
+/** A request: what to generate, and how to sample it (SamplingSettings, each field defaulting to the model's manifest entry). */
+export interface MotionRequest extends Partial<SamplingSettings> {
   /** text prompt (text model) */
   prompt?: string;
   /** action label: its index or its name in the action model's labels */
@@ -19,14 +21,6 @@ export interface MotionRequest {
   /** length in seconds (default: the model's longest, maxFrames / fps); `frames` wins when given */
   seconds?: number;
   frames?: number;
-  /** denoising steps (default: the model's defaultSteps) */
-  steps?: number;
-  /** classifier-free guidance scale (default: the model's guidance) */
-  guidance?: number;
-  /** guide only the denoising steps whose time is above this, one batch row below (default: the model's guidanceMinTime, else every step) */
-  guidanceMinTime?: number;
-  /** smooth x̂0 along time (σ frames) at every denoising step but the last (default: the model's x0Smoothing, else off) */
-  x0Smoothing?: number;
   /** uint32 seed: the same seed gives the same motion on the same backend (default: random) */
   seed?: number;
   smooth?: boolean;
@@ -89,13 +83,20 @@ export function resolveRequest(manifest: Manifest, req: MotionRequest): { model:
   return {
     model,
     options: {
-      condition, frames, steps: req.steps ?? entry.defaultSteps, guidance: req.guidance ?? entry.guidance,
-      ...(req.guidanceMinTime !== undefined ? { guidanceMinTime: req.guidanceMinTime } : {}),
-      ...(req.x0Smoothing !== undefined ? { x0Smoothing: req.x0Smoothing } : {}),
+      condition, frames, ...settingsOf(req, entry),
       seed: req.seed ?? randomSeed(), smooth: req.smooth, footCleanup: req.footCleanup,
       ...(req.known ? { known: { ...req.known, features: Float32Array.from(req.known.features), keep: Float32Array.from(req.known.keep) } } : {}),
       ...(req.resume ? { resume: req.resume } : {}),
     },
+  };
+}
+
+/** A request's SamplingSettings with the manifest's steps and guidance filled in (the rest, when absent, openModel's defaults). */
+function settingsOf(req: Partial<SamplingSettings>, entry: ModelEntry): SamplingSettings {
+  const { method, steps = entry.defaultSteps, guidance = entry.guidance, guidanceMinTime, x0Smoothing } = req;
+  return {
+    ...(method !== undefined ? { method } : {}), steps, guidance,
+    ...(guidanceMinTime !== undefined ? { guidanceMinTime } : {}), ...(x0Smoothing !== undefined ? { x0Smoothing } : {}),
   };
 }
 

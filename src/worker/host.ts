@@ -13,6 +13,7 @@ import { type Manifest, chooseVariant } from '../manifest';
 import { decodeJoints } from '../motion/decode';
 import { beginByModel, modelFor, resolveRequest, wireBegin } from '../requests';
 import { type BackendRequest, loadMark, preloadWasmRuntime } from '../runtime/ort';
+import type { SamplingSettings } from '../sampler/settings';
 import { createTextEncoder, type TextEncoder } from '../text';
 
 export interface HostEvents {
@@ -28,11 +29,9 @@ export interface HostOptions {
 }
 
 /** A timeline to generate where the models are (GenerationHost.timeline; the worker's `timeline` message). */
-export interface TimelineRequest {
+/** `steps` and `guidance` (SamplingSettings): every window's (default: each model's manifest defaults). */
+export interface TimelineRequest extends Partial<Pick<SamplingSettings, 'steps' | 'guidance'>> {
   segments: TimelineSegment[];
-  /** denoising steps and guidance of every window (default: each model's manifest defaults) */
-  steps?: number;
-  guidance?: number;
   /** the model of the prompt segments and of the action segments (default: the manifest's EMDM text / action model) */
   models?: { text?: string; action?: string };
   /** an earlier result's `timeline`: its segments equal to the new list's first ones are reused as they were */

@@ -6,11 +6,10 @@
  * buffers (no copy).
  */
 import type { FileEvent } from '../cache/modelCache';
-import type { Condition, GenerateResult, SampleState } from '../generate';
+import type { BeginOptions, GenerateOptions, GenerateResult, SampleState } from '../generate';
 import type { TimelineRequest, TimelineResult } from './host';
 import type { Manifest } from '../manifest';
 import type { BackendRequest } from '../runtime/ort';
-import type { KnownMotion } from '../sampler/mask';
 import type { SamplerName } from '../sampler/settings';
 
 export type { FileEvent };
@@ -28,19 +27,8 @@ export interface WorkerInit {
   cache?: boolean;
 }
 
-/** The options of one generation as they cross to the worker (no signal, no callbacks, no noise source). */
-export interface WireGenerateOptions {
-  condition: Condition;
-  frames: number;
-  steps: number;
-  guidance: number;
-  /** guide only steps whose time is above this (GenerateOptions.guidanceMinTime; default the manifest's) */
-  guidanceMinTime?: number;
-  /** σ (frames) of x̂0's smoothing along time (GenerateOptions.x0Smoothing; default the manifest's) */
-  x0Smoothing?: number;
-  seed: number;
-  smooth?: boolean;
-  footCleanup?: boolean;
+/** The options of one generation as they cross to the worker: GenerateOptions without its signal, callbacks and noise source. */
+export type WireGenerateOptions = Omit<GenerateOptions, 'signal' | 'onStep' | 'onPreview' | 'noise'> & {
   /** also solve the joints into bone rotations (IK) in the worker: the result carries `pose` */
   pose?: boolean;
   /**
@@ -48,21 +36,10 @@ export interface WireGenerateOptions {
    * when `pose` is asked) as a `step-preview` message. Off by default; the result is the same either way.
    */
   previewSteps?: boolean;
-  /**
-   * Inpainting (GenerateOptions.known): a known motion's de-normalised features (frames × featureDim, like
-   * `Motion.features` of an earlier result) and the 0/1 `keep` mask (`keepMask`) of the entries to keep.
-   * Both are copied to the worker (not transferred: the sender keeps its arrays). `fromTime`: the sampler's keepFromTime.
-   */
-  known?: KnownMotion;
-  /** finish a generation `begin` stopped (GenerateOptions.resume; the same options it was begun with) */
-  resume?: SampleState;
-}
-
-/** A request of `begin` as it crosses (BeginOptions): one generation's options, stopped before the first step with t ≤ stopAt. */
-export type WireBeginOptions = Omit<WireGenerateOptions, 'known' | 'resume' | 'pose' | 'previewSteps'> & {
-  stopAt: number;
-  known?: Omit<KnownMotion, 'features'> & { features?: Float32Array };
 };
+
+/** A request of `begin` as it crosses: BeginOptions without its signal, callbacks and noise source. */
+export type WireBeginOptions = Omit<BeginOptions, 'signal' | 'onStep' | 'noise'>;
 
 export type ToWorker =
   | { type: 'init'; init: WorkerInit }
