@@ -175,7 +175,7 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
   }
 
   // in-process: loaded on demand, so a page that uses the worker does not carry the sampler and ORT glue
-  const [{ GenerationHost }, { solveIK }] = await Promise.all([import('./worker/host'), import('./motion/ik')]);
+  const { GenerationHost } = await import('./worker/host');
   const host = new GenerationHost({ manifest, baseUrl, backend, threads: opts.threads }, {
     download: (m, l, t) => events.download?.(m, l, t),
     fallback: (m, r) => events.fallback?.(m, r),
@@ -189,15 +189,13 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
     },
     async generate(req) {
       const { model, options } = resolveRequest(manifest, req);
-      const { gen, result } = await host.generate(model, { ...options, signal: req.signal, onStep: req.onStep }, variantOf(model));
-      const ik = solveIK(result.motion.joints, result.motion.frames, manifest.skeleton);
-      return motionOf(model, options, result, gen.backend, { rootPos: ik.rootPos, quats: ik.quats });
+      const { gen, result, pose } = await host.generate(model, { ...options, signal: req.signal, onStep: req.onStep }, variantOf(model), true);
+      return motionOf(model, options, result, gen.backend, pose!);
     },
     begin: (reqs, signal) => beginByModel(reqs, (r) => modelFor(manifest, r), async (model, rs) => (await host.begin(model, rs.map((r) => ({ ...wireBegin(manifest, r), signal })), variantOf(model))).states),
     async timeline(segments, o = {}) {
-      const r = await host.timeline(timelineRequest(segments, o), { signal: o.signal, onWindow: o.onWindow, onStep: o.onStep });
-      const ik = solveIK(r.display, r.timeline.frames, manifest.skeleton);
-      return timelineOf(r, { rootPos: ik.rootPos, quats: ik.quats });
+      const r = await host.timeline(timelineRequest(segments, o), { signal: o.signal, onWindow: o.onWindow, onStep: o.onStep }, true);
+      return timelineOf(r, r.pose!);
     },
     dispose: () => host.dispose(),
   };

@@ -11,6 +11,7 @@ import { type EditBegin, type EditCondition, EditError, type EditGenerate, type 
 import type { BeginOptions, GenerateOptions, GenerateResult, Generator, SampleState } from '../generate';
 import { type Manifest, chooseVariant } from '../manifest';
 import { decodeJoints } from '../motion/decode';
+import { type MotionPose, solvePose } from '../motion/ik';
 import { beginByModel, modelFor, resolveRequest, wireBegin } from '../requests';
 import { type BackendRequest, loadMark, preloadWasmRuntime } from '../runtime/ort';
 import type { SamplingSettings } from '../sampler/settings';
@@ -103,10 +104,19 @@ export class GenerationHost {
     return g;
   }
 
-  /** Generate with a model; a WebGPU failure reloads the model on WASM (said with a fallback event) and runs again. */
-  async generate(model: string, o: GenerateOptions, variant?: string): Promise<{ gen: Generator; result: GenerateResult }> {
+  /**
+   * Generate with a model; a WebGPU failure reloads the model on WASM (said with a fallback event) and runs again.
+   * `pose`: also solve the motion's bone rotations (IK, `this.pose`).
+   */
+  async generate(model: string, o: GenerateOptions, variant?: string, pose = false): Promise<{ gen: Generator; result: GenerateResult; pose?: MotionPose }> {
     const gen = await this.load(model, variant);
-    return runWithFallback(gen, o, () => this.reloadOnWasm(model, variant), (reason) => this.events.fallback(model, reason));
+    const r = await runWithFallback(gen, o, () => this.reloadOnWasm(model, variant), (reason) => this.events.fallback(model, reason));
+    return pose ? { ...r, pose: this.pose(r.result.motion.joints, r.result.motion.frames) } : r;
+  }
+
+  /** Bone rotations (IK) of frames × 22 × 3 joints: every result's pose, step preview's and solve request's, in the worker and in-process. */
+  pose(joints: Float32Array, frames: number): MotionPose {
+    return solvePose(joints, frames, this.opts.manifest.skeleton);
   }
 
   /** Start several generations together (Generator.begin), with the same WebGPU → WASM fallback. */
@@ -120,8 +130,9 @@ export class GenerationHost {
    * A whole timeline (src/edit.ts's generateTimeline with this host's generate and begin): every window, its seam
    * easing and the stitching run here, so a page's worker answers one request per timeline. Each window is the
    * request createGenerator would make of it (resolveRequest): the same motion as generateTimeline elsewhere.
+   * `pose`: also solve the shown joints' bone rotations (IK, `this.pose`).
    */
-  async timeline(req: TimelineRequest, hooks: TimelineHooks = {}): Promise<TimelineResult> {
+  async timeline(req: TimelineRequest, hooks: TimelineHooks = {}, pose = false): Promise<TimelineResult & { pose?: MotionPose }> {
     const t0 = performance.now();
     const manifest = this.opts.manifest;
     const { signal } = hooks;
@@ -167,7 +178,8 @@ export class GenerationHost {
     };
     const timeline = await generateTimeline(req.segments, gen, limits, { previous: req.previous, signal, begin, onWindow: hooks.onWindow });
     const display = decodeJoints(timeline.features, timeline.frames, manifest.skeleton, { smooth: true, footCleanup: true });
-    return { timeline, display, windows, beginMs, totalMs: performance.now() - t0 };
+    const result: TimelineResult = { timeline, display, windows, beginMs, totalMs: performance.now() - t0 };
+    return pose ? { ...result, pose: this.pose(display, timeline.frames) } : result;
   }
 
   private reloadOnWasm(model: string, variant: string | undefined): Promise<Generator> {

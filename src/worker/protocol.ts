@@ -9,6 +9,7 @@ import type { FileEvent } from '../cache/modelCache';
 import type { BeginOptions, GenerateOptions, GenerateResult, SampleState } from '../generate';
 import type { TimelineRequest, TimelineResult } from './host';
 import type { Manifest } from '../manifest';
+import type { MotionPose } from '../motion/ik';
 import type { BackendRequest } from '../runtime/ort';
 import type { SamplerName } from '../sampler/settings';
 
@@ -58,12 +59,8 @@ export type ToWorker =
   | { type: 'cancel'; id: number }
   | { type: 'dispose'; id: number };
 
-/** Root positions and joint rotations for the character, solved by IK in the worker. */
-export interface WirePose {
-  rootPos: Float32Array;
-  quats: Float32Array;
-  ikMs: number;
-}
+/** Root positions and joint rotations for the character, solved by IK in the worker (GenerationHost.pose). */
+export type WirePose = MotionPose;
 
 /** One step's prediction x̂0, decoded and solved by the same code as the result (transferred buffers). */
 export interface WireStepPreview {
