@@ -13,10 +13,10 @@
  * - Where it runs: in the generation worker (src/worker) by default where a page can start one, so the
  *   page's thread only renders; in-process (`{worker: false}`, and always in Node). Both run
  *   GenerationHost, whose backend choice and fallbacks (WebGPU missing or failing → WASM, at load and
- *   while generating) are src/backends.ts's; the results are bit-identical on the same backend.
+ *   while generating) are src/loadModel.ts's; the results are bit-identical on the same backend.
  */
 import type { Timeline, TimelineSegment } from './edit';
-import type { GenerateResult, SampleState } from './generate';
+import type { GenerateResult, SampleState } from './openModel';
 import { type Manifest, chooseVariant, loadManifest } from './manifest';
 import type { Motion } from './motion/types';
 import { type BeginRequest, type MotionRequest, beginByModel, modelFor, resolveRequest, wireBegin } from './requests';
@@ -24,7 +24,7 @@ import type { Backend, BackendRequest } from './runtime/ort';
 import type { SamplingSettings } from './sampler/settings';
 import type { Skeleton } from './skeleton';
 import { GenerationClient, type ClientEvents } from './worker/client';
-import type { TimelineRequest, TimelineResult, WindowRun } from './worker/host';
+import type { TimelineRequest, TimelineResult, WindowRun } from './worker/generationHost';
 import type { WireGenerateOptions } from './worker/protocol';
 
 export { beginByModel, modelFor, resolveRequest } from './requests';
@@ -175,7 +175,7 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
   }
 
   // in-process: loaded on demand, so a page that uses the worker does not carry the sampler and ORT glue
-  const { GenerationHost } = await import('./worker/host');
+  const { GenerationHost } = await import('./worker/generationHost');
   const host = new GenerationHost({ manifest, baseUrl, backend, threads: opts.threads }, {
     download: (m, l, t) => events.download?.(m, l, t),
     fallback: (m, r) => events.fallback?.(m, r),

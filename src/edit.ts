@@ -51,7 +51,7 @@ import { recoverJoints } from './motion/recover';
 import { appendSegment, pinKeptRoot } from './motion/stitch';
 import { keepMask, type FeatureGroup, type KnownMotion } from './sampler/mask';
 import { AbortError } from './sampler/sampler';
-import type { SampleState } from './generate';
+import type { SampleState } from './openModel';
 
 const D = 263;
 /** Frames each timeline window repeats from the one before (1 s at 20 fps). */

@@ -2,14 +2,14 @@
 export { beginByModel, createGenerator, modelFor, resolveRequest } from './createGenerator';
 export type { BeginRequest, CreateGeneratorOptions, GeneratedMotion, GeneratedTimeline, MotionGenerator, MotionRequest, TimelineCallOptions } from './createGenerator';
 // one model on one backend, and the backend choice / fallback (used by createGenerator's host)
-export { openModel } from './generate';
-export type { BeginOptions, Condition, GenerateOptions, GenerateResult, Generator, GeneratorOptions, Motion, SampleState, StepPreview } from './generate';
-export { loadModel, runWithFallback, withFallback } from './backends';
-export type { LoadModelOptions } from './backends';
+export { openModel } from './openModel';
+export type { BeginOptions, Condition, GenerateOptions, GenerateResult, Generator, GeneratorOptions, Motion, SampleState, StepPreview } from './openModel';
+export { loadModel, runWithFallback, withFallback } from './loadModel';
+export type { LoadModelOptions } from './loadModel';
 // the generation worker's page side (createGenerator uses it; the demo page drives it directly)
 export { GenerationClient } from './worker/client';
 export type { ClientEvents, FileEvent, GenerationClientOptions, ModelInfo, RemoteGenerateOptions, RemoteResult, RemoteTimelineOptions, RemoteTimelineResult, WirePose, WireStepPreview, WorkerEnvironment } from './worker/client';
-export type { TimelineHooks, TimelineRequest, TimelineResult, WindowRun } from './worker/host';
+export type { TimelineHooks, TimelineRequest, TimelineResult, WindowRun } from './worker/generationHost';
 export type { WireBeginOptions } from './worker/protocol';
 export { clearModelCache, modelCacheUsage, useModelCache } from './cache/modelCache';
 export { capabilitiesFile, checkPrompt, loadCapabilities, validateCapabilities } from './capabilities';

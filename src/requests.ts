@@ -4,7 +4,7 @@
  * `wireBegin`), with the manifest's defaults filled in. createGenerator, the generation worker's timeline
  * (GenerationHost.timeline) and the demo page share them, so a request means the same wherever it runs.
  */
-import type { SampleState } from './generate';
+import type { SampleState } from './openModel';
 import type { Manifest, ModelEntry } from './manifest';
 import type { KnownMotion } from './sampler/mask';
 import type { SamplingSettings } from './sampler/settings';

@@ -9,11 +9,11 @@
  */
 import { EditError } from '../edit';
 import { NonFiniteMotionError } from '../errors';
-import type { GenerateOptions, Motion } from '../generate';
+import type { GenerateOptions, Motion } from '../openModel';
 import { ModelFileError } from '../manifest';
 import { defaultThreads } from '../runtime/ort';
 import { useModelCache } from '../cache/modelCache';
-import { GenerationHost } from './host';
+import { GenerationHost } from './generationHost';
 import type { FromWorker, ModelInfo, ToWorker, WireError, WirePose, WireStepPreview } from './protocol';
 
 interface WorkerScope {

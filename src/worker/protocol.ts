@@ -6,8 +6,8 @@
  * buffers (no copy).
  */
 import type { FileEvent } from '../cache/modelCache';
-import type { BeginOptions, GenerateOptions, GenerateResult, SampleState } from '../generate';
-import type { TimelineRequest, TimelineResult } from './host';
+import type { BeginOptions, GenerateOptions, GenerateResult, SampleState } from '../openModel';
+import type { TimelineRequest, TimelineResult } from './generationHost';
 import type { Manifest } from '../manifest';
 import type { MotionPose } from '../motion/ik';
 import type { BackendRequest } from '../runtime/ort';

@@ -5,7 +5,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
-import { openModel } from '../../src/generate';
+import { openModel } from '../../src/openModel';
 import { assertFinite, NonFiniteMotionError } from '../../src/index';
 import { ModelFileError, loadManifest, validateManifest } from '../../src/manifest';
 import { getSession } from '../../src/runtime/ort';

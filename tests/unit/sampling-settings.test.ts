@@ -6,7 +6,7 @@ import os from 'node:os';
 import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
 import { createGenerator } from '../../src/createGenerator';
-import { openModel } from '../../src/generate';
+import { openModel } from '../../src/openModel';
 import { loadManifest } from '../../src/manifest';
 import { resolveRequest } from '../../src/requests';
 import { tinyModels } from './coreFixtures';

@@ -1,7 +1,7 @@
 // The page's generation session: the manifest's models, what they allow (StateLimits), and the
 // generation worker behind web/ui/engine.ts. It turns a PageState into motions (newest request wins)
 // and counts what ran; it never touches the DOM. Backend choice and the WebGPU → WASM fallback are not
-// here: they live in the worker (src/backends.ts); the session only passes the page's `backend` on.
+// here: they live in the worker (src/loadModel.ts); the session only passes the page's `backend` on.
 //
 // A panel that generates calls `session.generate(state, { extra })`: `extra` goes to the worker's
 // generate as is (e.g. `known: { features, keep }` for in-betweening), `hooks` receive progress and

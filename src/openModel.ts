@@ -2,7 +2,7 @@
  * openModel: one model on one backend — text / action / nothing → 3-D motion. Wires the manifest
  * (verified downloads), the text encoder, the ONNX step model (src/runtime), the sampler (src/sampler)
  * and decoding (src/motion). Which backend, and falling back from WebGPU to WASM, is decided in ONE
- * place, src/backends.ts (loadModel, runWithFallback), which the library's entry createGenerator
+ * place, src/loadModel.ts (loadModel, runWithFallback), which the library's entry createGenerator
  * (src/createGenerator.ts) runs through.
  */
 import { type PromptCheck, type Capabilities, checkPrompt, loadCapabilities } from './capabilities';
@@ -149,7 +149,7 @@ export interface GeneratorOptions {
   manifest: Manifest;
   baseUrl: string;
   model: string;
-  /** the backend to open the model on (default 'wasm'); choosing and falling back: src/backends.ts */
+  /** the backend to open the model on (default 'wasm'); choosing and falling back: src/loadModel.ts */
   backend?: Backend;
   threads?: number;
   /** a variant key of the model entry (e.g. 'int8') instead of the fp32 `onnx` file */
@@ -201,7 +201,7 @@ export function quantisesPerCall(onnx: ArrayBuffer | Uint8Array): boolean {
 /**
  * Open a model on exactly `opts.backend`. Fails with ModelFileError when a file is missing, corrupt or
  * does not fit the manifest; a WebGPU session that cannot run fails with a plain Error (a backend
- * problem: src/backends.ts then opens WASM).
+ * problem: src/loadModel.ts then opens WASM).
  */
 export async function openModel(opts: GeneratorOptions): Promise<Generator> {
   const { manifest, baseUrl, model } = opts;
@@ -257,7 +257,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
 
   const batchesExactly = !quantisesPerCall(bytes);
   const backend: Backend = opts.backend ?? 'wasm';
-  if (backend !== 'wasm' && backend !== 'webgpu') throw new RangeError(`openModel: backend must be 'wasm' or 'webgpu', got ${JSON.stringify(backend)} (choosing one: loadModel in src/backends.ts)`);
+  if (backend !== 'wasm' && backend !== 'webgpu') throw new RangeError(`openModel: backend must be 'wasm' or 'webgpu', got ${JSON.stringify(backend)} (choosing one: loadModel in src/loadModel.ts)`);
   const { session, step } = await open(backend);
 
   let encoder: Promise<TextEncoder> | null = opts.textEncoder ? Promise.resolve(opts.textEncoder) : null;

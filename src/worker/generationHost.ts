@@ -2,13 +2,13 @@
  * The generation worker's state, without the messaging: the generators it has loaded (lazily, once
  * each) and the text encoders they share. The backend choice with its fallbacks (WebGPU missing or
  * failing at load → WASM, WebGPU failing while generating → reload on WASM and run again) is
- * src/backends.ts's; events say what happened (downloads, fallbacks) so the page can tell the user.
+ * src/loadModel.ts's; events say what happened (downloads, fallbacks) so the page can tell the user.
  * Runs wherever createGenerator (src/createGenerator.ts) runs it: the worker in the browser, or
  * in-process (Node, `{worker: false}`).
  */
-import { loadModel, runWithFallback, withFallback } from '../backends';
+import { loadModel, runWithFallback, withFallback } from '../loadModel';
 import { type EditBegin, type EditCondition, EditError, type EditGenerate, type EditLimits, type Timeline, type TimelineSegment, generateTimeline } from '../edit';
-import type { BeginOptions, GenerateOptions, GenerateResult, Generator, SampleState } from '../generate';
+import type { BeginOptions, GenerateOptions, GenerateResult, Generator, SampleState } from '../openModel';
 import { type Manifest, chooseVariant } from '../manifest';
 import { decodeJoints } from '../motion/decode';
 import { type MotionPose, solvePose } from '../motion/ik';
