@@ -1,7 +1,13 @@
 // Core harness page: runs the TypeScript core in the browser exactly as in Node, for the
 // determinism spec (tests/e2e/core-determinism.spec.ts) and the browser benchmark
 // (scripts/bench/core-bench.mjs). Exposes window.coreHarness; no UI.
-import { loadModel, type Generator, type GenerateOptions, type Manifest, loadManifest, sha256Hex, createTextEncoder, SeededRandom, GenerationClient } from '../../src/index';
+import { type Manifest, loadManifest } from '../../src/index';
+import { loadModel } from '../../src/loadModel';
+import { sha256Hex } from '../../src/manifest';
+import type { Generator, GenerateOptions } from '../../src/openModel';
+import { SeededRandom } from '../../src/sampler/rng';
+import { createTextEncoder } from '../../src/text';
+import { GenerationClient } from '../../src/worker/client';
 import type { SamplingSettings } from '../../src/sampler/settings';
 import { buildTinyManifest } from '../../tests/fixtures/parity/tinyManifest';
 import tinyMeanStdUrl from '../../tests/fixtures/parity/tiny.meanstd.f32?url&no-inline';

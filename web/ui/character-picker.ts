@@ -8,7 +8,8 @@
 // the character plays its previous clip until the new one is ready.
 import { AnimationMixer, Group, LoopOnce, type AnimationAction, type Object3D } from 'three';
 import { clone as cloneSkinned } from 'three/addons/utils/SkeletonUtils.js';
-import { type CharacterFile, CharacterLoadError, type LoadedCharacter, loadCharacter, type BoneInfo, type BoneMapping, MappingError, mappingFromJSON, mappingToJSON, validateMapping, type RetargetResult, retargetMotionAsync, type BvhUnits, bvhFileName, characterToBVH, characterToGLB, contactsFromFeatures, plantContacts, type Motion, JOINT_NAMES, type JointName, type Skeleton } from '../../src/index';
+import { type CharacterFile, CharacterLoadError, type LoadedCharacter, loadCharacter, type BoneInfo, type BoneMapping, MappingError, mappingFromJSON, mappingToJSON, validateMapping, type RetargetResult, retargetMotionAsync, type BvhUnits, bvhFileName, characterToBVH, characterToGLB, type Motion, JOINT_NAMES, type JointName, type Skeleton } from '../../src/index';
+import { contactsFromFeatures, plantContacts } from '../../src/motion/footContact';
 import { saveBlob } from './dom';
 
 export interface PickerHost {

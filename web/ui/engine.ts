@@ -5,7 +5,10 @@
 // where src/loadModel.ts decides, in one place for the page and the library (createGenerator). Which file of a
 // model runs (fp32 or a variant such as int8) is the manifest's chooseVariant: the entry's defaultVariant
 // unless the page asks for another (URL `variant=fp32`).
-import { type Manifest, type ModelEntry, GenerationClient, chooseVariant, type ClientEvents, type ModelInfo, type RemoteGenerateOptions, type RemoteResult, type RemoteTimelineOptions, type RemoteTimelineResult, type TimelineRequest } from '../../src/index';
+import { type Manifest, type ModelEntry } from '../../src/index';
+import { chooseVariant } from '../../src/manifest';
+import { GenerationClient, type ClientEvents, type ModelInfo, type RemoteGenerateOptions, type RemoteResult, type RemoteTimelineOptions, type RemoteTimelineResult } from '../../src/worker/client';
+import type { TimelineRequest } from '../../src/worker/generationHost';
 import type { BackendChoice, Mode } from './state';
 
 export interface ModelChoice {

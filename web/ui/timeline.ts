@@ -7,10 +7,13 @@
 // timeline is one request: its windows, seam easing, stitching, decoding and IK all run in the worker
 // (GenerationHost.timeline); the edits send their one window and decode here.
 // The panel builds its DOM inside one container (#edit-panel in index.html) and styles it in timeline.css.
-import {
-  EditError, MAX_TIMELINE_SECONDS, bodyPartEdit, decodeJoints, inBetween, makeLoop, planTimeline, recoverJoints,
-  type EditCondition, type EditGenerate, type EditMotion, type GenerateResult, type KeptPart, type RemoteResult, type Timeline, type TimelineSegment, type WirePose, type WireBeginOptions,
-} from '../../src/index';
+import { EditError, MAX_TIMELINE_SECONDS, bodyPartEdit, inBetween, makeLoop, type EditCondition, type EditGenerate, type EditMotion, type KeptPart, type Timeline, type TimelineSegment } from '../../src/index';
+import { planTimeline } from '../../src/edit';
+import { decodeJoints } from '../../src/motion/decode';
+import { recoverJoints } from '../../src/motion/recover';
+import type { GenerateResult } from '../../src/openModel';
+import type { RemoteResult, WirePose } from '../../src/worker/client';
+import type { WireBeginOptions } from '../../src/worker/protocol';
 import type { PoseTrack } from '../../src/three';
 import { el } from './dom';
 import { isAbort } from './engine';
