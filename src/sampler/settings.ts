@@ -35,6 +35,3 @@ export interface SamplingSettings {
    */
   x0Smoothing?: number;
 }
-
-/** The settings fields, for code that splits a request into its settings and the rest. */
-export const SAMPLING_SETTINGS_KEYS = ['method', 'steps', 'guidance', 'guidanceMinTime', 'x0Smoothing'] as const satisfies readonly (keyof SamplingSettings)[];
