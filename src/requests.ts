@@ -4,11 +4,10 @@
  * `wireBegin`), with the manifest's defaults filled in. createGenerator, the generation worker's timeline
  * (GenerationHost.timeline) and the demo page share them, so a request means the same wherever it runs.
  */
-import type { SampleState } from './openModel';
+import type { BeginOptions, GenerateOptions, SampleState } from './openModel';
 import type { Manifest, ModelEntry } from './manifest';
 import type { KnownMotion } from './sampler/mask';
 import type { SamplingSettings } from './sampler/settings';
-import type { WireBeginOptions, WireGenerateOptions } from './worker/protocol';
 
 /** A request: what to generate, and how to sample it (SamplingSettings, each field defaulting to the model's manifest entry). */
 export interface MotionRequest extends Partial<SamplingSettings> {
@@ -44,6 +43,20 @@ export interface MotionRequest extends Partial<SamplingSettings> {
  * denoising step with t ≤ `stopAt`; `keep` (with `keepFromTime`) marks what it will keep once `known` is given.
  */
 export type BeginRequest = Omit<MotionRequest, 'known' | 'resume' | 'onStep' | 'signal'> & { stopAt: number; keep?: Float32Array; keepFromTime?: number };
+
+/** The options of one generation as they cross to the worker (src/worker/protocol.ts): GenerateOptions without its signal, callbacks and noise source. */
+export type WireGenerateOptions = Omit<GenerateOptions, 'signal' | 'onStep' | 'onPreview' | 'noise'> & {
+  /** also solve the joints into bone rotations (IK) in the worker: the result carries `pose` */
+  pose?: boolean;
+  /**
+   * Watch it denoise: after each step, send its prediction x̂0 decoded to joints (and solved to a pose
+   * when `pose` is asked) as a `step-preview` message. Off by default; the result is the same either way.
+   */
+  previewSteps?: boolean;
+};
+
+/** A request of `begin` as it crosses: BeginOptions without its signal, callbacks and noise source. */
+export type WireBeginOptions = Omit<BeginOptions, 'signal' | 'onStep' | 'noise'>;
 
 /** The model a request runs on: `model`, else the manifest's EMDM model for the task (text for a prompt or nothing). */
 export function modelFor(manifest: Manifest, req: Pick<MotionRequest, 'model' | 'action'>): string {

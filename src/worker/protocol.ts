@@ -6,7 +6,8 @@
  * buffers (no copy).
  */
 import type { FileEvent } from '../cache/modelCache';
-import type { BeginOptions, GenerateOptions, GenerateResult, SampleState } from '../openModel';
+import type { GenerateResult, SampleState } from '../openModel';
+import type { WireBeginOptions, WireGenerateOptions } from '../requests';
 import type { TimelineRequest, TimelineResult } from './generationHost';
 import type { Manifest } from '../manifest';
 import type { MotionPose } from '../motion/ik';
@@ -28,19 +29,7 @@ export interface WorkerInit {
   cache?: boolean;
 }
 
-/** The options of one generation as they cross to the worker: GenerateOptions without its signal, callbacks and noise source. */
-export type WireGenerateOptions = Omit<GenerateOptions, 'signal' | 'onStep' | 'onPreview' | 'noise'> & {
-  /** also solve the joints into bone rotations (IK) in the worker: the result carries `pose` */
-  pose?: boolean;
-  /**
-   * Watch it denoise: after each step, send its prediction x̂0 decoded to joints (and solved to a pose
-   * when `pose` is asked) as a `step-preview` message. Off by default; the result is the same either way.
-   */
-  previewSteps?: boolean;
-};
-
-/** A request of `begin` as it crosses: BeginOptions without its signal, callbacks and noise source. */
-export type WireBeginOptions = Omit<BeginOptions, 'signal' | 'onStep' | 'noise'>;
+export type { WireBeginOptions, WireGenerateOptions } from '../requests';
 
 export type ToWorker =
   | { type: 'init'; init: WorkerInit }
