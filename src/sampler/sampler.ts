@@ -192,6 +192,8 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     if (!b) rowBuffers.set(key, (b = stepBuffers(B, frames, frames * D, zDim, cond)));
     return b;
   };
+  // x̂0 of a step whose output is combined (guidance) or changed (the kept part): one buffer for the run
+  const x0buf = new Float32Array(n);
   const stepMs: number[] = [];
   let modelCalls = 0;
   let guidedSteps = 0;
@@ -223,7 +225,7 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     if (guidedK) guidedSteps++;
     checkLength(out, inputs.batch * nk, `model output x0 at step ${k}`);
     // x̂0 smoothed along time at every step but the last (x0Smoothing), before the kept part is replaced
-    const smoothed = xs > 0 && k > 0 ? smoothPose(guidedK ? guidedX0(out, nk, s) : out, L - f0, xs) : null;
+    const smoothed = xs > 0 && k > 0 ? smoothPose(guidedK ? guidedX0(out, nk, s, x0buf) : out, L - f0, xs) : null;
     /** what onX0 sees: all L frames (the lead frames sitting out shown as their known motion) */
     const fullX0 = (x0: ArrayLike<number>): Float32Array => {
       const a = new Float32Array(n);
@@ -231,7 +233,7 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
       a.set(x0, f0 * D);
       return a;
     };
-    const x0 = smoothed ?? (guidedK ? guidedX0(out, nk, s) : kept ? Float32Array.from(out) : out);
+    const x0 = smoothed ?? (guidedK ? guidedX0(out, nk, s, x0buf) : kept ? copyInto(x0buf, out) : out);
     if (kept) replaceKnown(x0, kept);
     const x0copy = o.onX0 ? fullX0(x0) : null;
     rule.update(xk, x0, k, schedule, { eps: () => drawEps(o.noise, n, k).subarray(f0 * D) });
@@ -298,9 +300,16 @@ function replaceKnown(x0: Float32Array, c: Constraint): void {
   for (let i = 0; i < x0.length; i++) if (c.keep[i]) x0[i] = c.known![i];
 }
 
+/** `from` copied into the start of `into` (the step model's output stays as it came). */
+function copyInto(into: Float32Array, from: Float32Array): Float32Array {
+  const x0 = into.subarray(0, from.length);
+  x0.set(from);
+  return x0;
+}
+
 /** x0 = x0_u + s·(x0_c − x0_u) from a batched [cond, uncond] output, rounded to float32 like Python. */
-function guidedX0(out: Float32Array, n: number, s: number): Float32Array {
-  const x0 = new Float32Array(n);
+function guidedX0(out: Float32Array, n: number, s: number, into: Float32Array): Float32Array {
+  const x0 = into.subarray(0, n);
   for (let i = 0; i < n; i++) x0[i] = Math.fround(out[n + i] + Math.fround(s * Math.fround(out[i] - out[n + i])));
   return x0;
 }
