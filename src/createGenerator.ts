@@ -27,7 +27,6 @@ import { GenerationClient, type ClientEvents } from './worker/client';
 import type { TimelineRequest, TimelineResult, WindowRun } from './worker/generationHost';
 import type { WireGenerateOptions } from './worker/protocol';
 
-export { beginByModel, modelFor, resolveRequest } from './requests';
 export type { BeginRequest, MotionRequest } from './requests';
 
 export interface CreateGeneratorOptions {
