@@ -13,20 +13,20 @@
  * - Where it runs: in the generation worker (src/worker) by default where a page can start one, so the
  *   page's thread only renders; in-process (`{worker: false}`, and always in Node). Both run
  *   GenerationHost, whose backend choice and fallbacks (WebGPU missing or failing → WASM, at load and
- *   while generating) are src/backends.ts's; the results are bit-identical on the same backend.
+ *   while generating) are src/loadModel.ts's; the results are bit-identical on the same backend.
  */
 import type { Timeline, TimelineSegment } from './edit';
-import type { GenerateResult, SampleState } from './generate';
+import type { GenerateResult, SampleState } from './openModel';
 import { type Manifest, chooseVariant, loadManifest } from './manifest';
 import type { Motion } from './motion/types';
 import { type BeginRequest, type MotionRequest, beginByModel, modelFor, resolveRequest, wireBegin } from './requests';
 import type { Backend, BackendRequest } from './runtime/ort';
+import type { SamplingSettings } from './sampler/settings';
 import type { Skeleton } from './skeleton';
 import { GenerationClient, type ClientEvents } from './worker/client';
-import type { TimelineRequest, TimelineResult, WindowRun } from './worker/host';
+import type { TimelineRequest, TimelineResult, WindowRun } from './worker/generationHost';
 import type { WireGenerateOptions } from './worker/protocol';
 
-export { beginByModel, modelFor, resolveRequest } from './requests';
 export type { BeginRequest, MotionRequest } from './requests';
 
 export interface CreateGeneratorOptions {
@@ -70,13 +70,10 @@ export interface GeneratedMotion extends Motion {
   promptCheck?: GenerateResult['promptCheck'];
 }
 
-/** Options of MotionGenerator.timeline. */
-export interface TimelineCallOptions {
+/** Options of MotionGenerator.timeline; `steps` and `guidance` (SamplingSettings) are every window's (default: the models' manifest defaults). */
+export interface TimelineCallOptions extends Partial<Pick<SamplingSettings, 'steps' | 'guidance'>> {
   /** an earlier result: its segments equal to the new list's first ones are reused as they were (the rest continue from them) */
   previous?: GeneratedTimeline | null;
-  /** denoising steps and guidance of every window (default: the models' manifest defaults) */
-  steps?: number;
-  guidance?: number;
   signal?: AbortSignal;
   /** before each window: its segment, windows done and to do */
   onWindow?: (segment: number, done: number, total: number) => void;
@@ -177,7 +174,7 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
   }
 
   // in-process: loaded on demand, so a page that uses the worker does not carry the sampler and ORT glue
-  const [{ GenerationHost }, { solveIK }] = await Promise.all([import('./worker/host'), import('./motion/ik')]);
+  const { GenerationHost } = await import('./worker/generationHost');
   const host = new GenerationHost({ manifest, baseUrl, backend, threads: opts.threads }, {
     download: (m, l, t) => events.download?.(m, l, t),
     fallback: (m, r) => events.fallback?.(m, r),
@@ -191,15 +188,13 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
     },
     async generate(req) {
       const { model, options } = resolveRequest(manifest, req);
-      const { gen, result } = await host.generate(model, { ...options, signal: req.signal, onStep: req.onStep }, variantOf(model));
-      const ik = solveIK(result.motion.joints, result.motion.frames, manifest.skeleton);
-      return motionOf(model, options, result, gen.backend, { rootPos: ik.rootPos, quats: ik.quats });
+      const { gen, result, pose } = await host.generate(model, { ...options, signal: req.signal, onStep: req.onStep }, variantOf(model), true);
+      return motionOf(model, options, result, gen.backend, pose!);
     },
     begin: (reqs, signal) => beginByModel(reqs, (r) => modelFor(manifest, r), async (model, rs) => (await host.begin(model, rs.map((r) => ({ ...wireBegin(manifest, r), signal })), variantOf(model))).states),
     async timeline(segments, o = {}) {
-      const r = await host.timeline(timelineRequest(segments, o), { signal: o.signal, onWindow: o.onWindow, onStep: o.onStep });
-      const ik = solveIK(r.display, r.timeline.frames, manifest.skeleton);
-      return timelineOf(r, { rootPos: ik.rootPos, quats: ik.quats });
+      const r = await host.timeline(timelineRequest(segments, o), { signal: o.signal, onWindow: o.onWindow, onStep: o.onStep }, true);
+      return timelineOf(r, r.pose!);
     },
     dispose: () => host.dispose(),
   };

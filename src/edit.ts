@@ -52,7 +52,7 @@ import { SEAM_EASE_FRAMES, easeSeams, seamAccel } from './motion/seams';
 import { appendSegment, pinKeptRoot } from './motion/stitch';
 import { keepMask, type FeatureGroup, type KnownMotion } from './sampler/mask';
 import { AbortError } from './sampler/sampler';
-import type { SampleState } from './generate';
+import type { SampleState } from './openModel';
 
 export {
   SEAM_BLEND_EXTRA, SEAM_BLEND_TAU, SEAM_BLEND_VELOCITY, SEAM_EASE_ACCEL, SEAM_EASE_ACCEL_MIN, SEAM_EASE_FRAMES, easeSeams, seamAccel, seamBlendFrames, seamEaseFrames,

@@ -1,57 +1,56 @@
-// Public surface of the EMDM-in-the-browser library (docs/ARCHITECTURE.md "TypeScript library").
-export { beginByModel, createGenerator, modelFor, resolveRequest } from './createGenerator';
+/**
+ * emdm-web, the library's public surface (docs/ARCHITECTURE.md "TypeScript library"): text / action → 3-D human
+ * motion, edits of it, and its export and retargeting.
+ *
+ * ```ts
+ * import { createGenerator, writeBVH } from 'emdm-web';
+ * const generator = await createGenerator();                  // <BASE_URL>models/, in a Web Worker, WebGPU → WASM
+ * const motion = await generator.generate({ prompt: 'a person walks forward', seconds: 4 });
+ * const bvh = writeBVH(motion, generator.skeleton);            // motion.joints, motion.pose: play it with 'emdm-web/three'
+ * ```
+ *
+ * The three.js character and player are the second entry, 'emdm-web/three' (src/three.ts). Nothing else under
+ * src/ is part of the package's API: the generation worker's protocol, one-model generators (openModel, loadModel),
+ * the backend fallback, the sampler's update rules and the motion math are internals that the demo page (web/) and
+ * the tests import by path, and that may change in any release.
+ */
+
+// ── the generator: createGenerator and what its calls take and give ─────────────────────────────────────────────
+export { createGenerator } from './createGenerator';
 export type { BeginRequest, CreateGeneratorOptions, GeneratedMotion, GeneratedTimeline, MotionGenerator, MotionRequest, TimelineCallOptions } from './createGenerator';
-// one model on one backend, and the backend choice / fallback (used by createGenerator's host)
-export { openModel } from './generate';
-export type { BeginOptions, Condition, GenerateOptions, GenerateResult, Generator, GeneratorOptions, Motion, SampleState, StepPreview } from './generate';
-export { loadModel, runWithFallback, withFallback } from './backends';
-export type { LoadModelOptions } from './backends';
-// the generation worker's page side (createGenerator uses it; the demo page drives it directly)
-export { GenerationClient } from './worker/client';
-export type { ClientEvents, FileEvent, GenerationClientOptions, ModelInfo, RemoteGenerateOptions, RemoteResult, RemoteTimelineOptions, RemoteTimelineResult, WirePose, WireStepPreview, WorkerEnvironment } from './worker/client';
-export type { TimelineHooks, TimelineRequest, TimelineResult, WindowRun } from './worker/host';
-export type { WireBeginOptions } from './worker/protocol';
-export { clearModelCache, modelCacheUsage, useModelCache } from './cache/modelCache';
-export { capabilitiesFile, checkPrompt, loadCapabilities, validateCapabilities } from './capabilities';
-export type { ActionCapability, Capabilities, PromptCheck } from './capabilities';
-export { loadManifest, fetchVerified, ModelFileError, sha256Hex, chooseVariant, stepFileOf } from './manifest';
-export { assertFinite, NonFiniteMotionError } from './errors';
+export type { SamplerName, SamplingSettings } from './sampler/settings';
+export type { Motion } from './motion/types';
+export type { SampleState } from './openModel';
+export type { WindowRun } from './worker/generationHost';
+export type { PromptCheck } from './capabilities';
+export type { Backend, BackendRequest } from './runtime/ort';
+/** the models folder's manifest (createGenerator loads it, or takes one) and the error a bad model file raises */
+export { ModelFileError, loadManifest } from './manifest';
 export type { Manifest, ModelEntry } from './manifest';
-export { JOINT_NAMES, PARENTS, KINEMATIC_CHAINS, SkeletonFormatError, checkSkeleton, standardJoints } from './skeleton';
+/** errors a generation rejects with: cancelled (AbortSignal), or NaN / ±Infinity in the model's output */
+export { AbortError } from './sampler/sampler';
+export { NonFiniteMotionError } from './errors';
+/** the verified model files kept in Cache Storage between visits (the worker's cache, `cache: true`) */
+export { clearModelCache, modelCacheUsage } from './cache/modelCache';
+/** the 22 SMPL-order joints every motion uses (`generator.skeleton` holds their rest offsets) */
+export { JOINT_NAMES, KINEMATIC_CHAINS, PARENTS } from './skeleton';
 export type { JointName, Skeleton, SkeletonLike } from './skeleton';
-export { createTextEncoder } from './text';
-export type { TextEncoder } from './text';
-export { solveIK, forwardKinematics } from './motion/ik';
-export type { IKResult } from './motion/ik';
-export { recoverJoints, denormalize } from './motion/recover';
-export { smoothJoints } from './motion/smooth';
-export { decodeJoints, type DecodeOptions } from './motion/decode';
-export { alignSegment, appendSegment, headingAt, pinKeptRoot, pinRoot, rootPose } from './motion/stitch';
-export { cleanupFootContacts, contactsFromFeatures, footSkate, plantContacts } from './motion/footContact';
+
+// ── edits: timelines, in-betweening, body-part edits and loops (inpainting with `known`, `keepMask`) ────────────
+export { EditError, LOOP_END_FRAMES, MAX_TIMELINE_SECONDS, bodyPartEdit, generateTimeline, inBetween, makeLoop, withNewSeed } from './edit';
+export type { EditBegin, EditBeginRequest, EditCondition, EditGenerate, EditLimits, EditMotion, EditRequest, KeptPart, LoopResult, SegmentResult, Timeline, TimelineOptions, TimelineSegment } from './edit';
+export { FEATURE_GROUPS, KeepSpecError, keepMask, parseKeep } from './sampler/mask';
+export type { FeatureGroup, KeepRect, KnownMotion } from './sampler/mask';
+
+// ── exporters: BVH of the built-in skeleton, BVH and GLB of a user's character ───────────────────────────────────
 export { type BvhUnits, bvhFileName, writeBVH } from './export/bvh';
 export { characterToBVH, characterToGLB, fileBoneNames } from './export/characterGlb';
 export { type JointsDocument, motionToJSON } from './export/jointsJson';
+
+// ── a user's character: load a glTF/VRM/FBX file, map its bones, retarget a motion onto it ─────────────────────
 export { CharacterLoadError, MAX_CHARACTER_BYTES, loadCharacter } from './character/retarget/load';
 export type { CharacterFile, CharacterLoadReason, LoadCharacterOptions, LoadedCharacter } from './character/retarget/load';
 export { MappingError, REQUIRED_JOINTS, autoMap, mappingFromJSON, mappingToJSON, validateMapping } from './character/retarget/mapping';
 export type { AutoMapResult, BoneInfo, BoneMapping } from './character/retarget/mapping';
 export { retargetMotion, retargetMotionAsync } from './character/retarget/retarget';
 export type { RetargetMotion, RetargetOptions, RetargetResult, RetargetSliceOptions } from './character/retarget/retarget';
-export { SeededRandom } from './sampler/rng';
-export type { RandomState } from './sampler/rng';
-export { lockstep, together } from './sampler/lockstep';
-export { computeSchedule, ddimScheduleFor, scheduleFor } from './sampler/schedule';
-export type { DdimSchedule, Schedule } from './sampler/schedule';
-export { ddimUpdate } from './sampler/ddim';
-export { AbortError } from './sampler/sampler';
-// beyond one prompt: timelines, in-betweening, body-part edits and loops (inpainting with known/keep)
-export {
-  EditError, LOOP_END_FRAMES, MAX_TIMELINE_SECONDS, OVERLAP_FRAMES, TIMELINE_KEEP_FROM, bodyPartEdit, generateTimeline, inBetween, keptSegments, makeLoop,
-  planTimeline, stitchTimeline, withNewSeed,
-} from './edit';
-export type { EditBegin, EditBeginRequest, EditCondition, EditGenerate, EditLimits, EditMotion, EditRequest, KeptPart, LoopResult, SegmentResult, Timeline, TimelineOptions, TimelinePlan, TimelineSegment } from './edit';
-export { FEATURE_GROUPS, GROUP_JOINTS, KeepSpecError, groupChannels, keepMask, parseKeep } from './sampler/mask';
-export type { FeatureGroup, KeepRect, KnownMotion } from './sampler/mask';
-export type { NoiseSource, SamplerName } from './sampler/sampler';
-export { webgpuAvailable } from './runtime/ort';
-export type { Backend, BackendRequest } from './runtime/ort';

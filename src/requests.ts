@@ -4,12 +4,13 @@
  * `wireBegin`), with the manifest's defaults filled in. createGenerator, the generation worker's timeline
  * (GenerationHost.timeline) and the demo page share them, so a request means the same wherever it runs.
  */
-import type { SampleState } from './generate';
+import type { BeginOptions, GenerateOptions, SampleState } from './openModel';
 import type { Manifest, ModelEntry } from './manifest';
 import type { KnownMotion } from './sampler/mask';
-import type { WireBeginOptions, WireGenerateOptions } from './worker/protocol';
+import type { SamplingSettings } from './sampler/settings';
 
-export interface MotionRequest {
+/** A request: what to generate, and how to sample it (SamplingSettings, each field defaulting to the model's manifest entry). */
+export interface MotionRequest extends Partial<SamplingSettings> {
   /** text prompt (text model) */
   prompt?: string;
   /** action label: its index or its name in the action model's labels */
@@ -19,14 +20,6 @@ export interface MotionRequest {
   /** length in seconds (default: the model's longest, maxFrames / fps); `frames` wins when given */
   seconds?: number;
   frames?: number;
-  /** denoising steps (default: the model's defaultSteps) */
-  steps?: number;
-  /** classifier-free guidance scale (default: the model's guidance) */
-  guidance?: number;
-  /** guide only the denoising steps whose time is above this, one batch row below (default: the model's guidanceMinTime, else every step) */
-  guidanceMinTime?: number;
-  /** smooth x̂0 along time (σ frames) at every denoising step but the last (default: the model's x0Smoothing, else off) */
-  x0Smoothing?: number;
   /** uint32 seed: the same seed gives the same motion on the same backend (default: random) */
   seed?: number;
   smooth?: boolean;
@@ -50,6 +43,20 @@ export interface MotionRequest {
  * denoising step with t ≤ `stopAt`; `keep` (with `keepFromTime`) marks what it will keep once `known` is given.
  */
 export type BeginRequest = Omit<MotionRequest, 'known' | 'resume' | 'onStep' | 'signal'> & { stopAt: number; keep?: Float32Array; keepFromTime?: number };
+
+/** The options of one generation as they cross to the worker (src/worker/protocol.ts): GenerateOptions without its signal, callbacks and noise source. */
+export type WireGenerateOptions = Omit<GenerateOptions, 'signal' | 'onStep' | 'onPreview' | 'noise'> & {
+  /** also solve the joints into bone rotations (IK) in the worker: the result carries `pose` */
+  pose?: boolean;
+  /**
+   * Watch it denoise: after each step, send its prediction x̂0 decoded to joints (and solved to a pose
+   * when `pose` is asked) as a `step-preview` message. Off by default; the result is the same either way.
+   */
+  previewSteps?: boolean;
+};
+
+/** A request of `begin` as it crosses: BeginOptions without its signal, callbacks and noise source. */
+export type WireBeginOptions = Omit<BeginOptions, 'signal' | 'onStep' | 'noise'>;
 
 /** The model a request runs on: `model`, else the manifest's EMDM model for the task (text for a prompt or nothing). */
 export function modelFor(manifest: Manifest, req: Pick<MotionRequest, 'model' | 'action'>): string {
@@ -89,13 +96,20 @@ export function resolveRequest(manifest: Manifest, req: MotionRequest): { model:
   return {
     model,
     options: {
-      condition, frames, steps: req.steps ?? entry.defaultSteps, guidance: req.guidance ?? entry.guidance,
-      ...(req.guidanceMinTime !== undefined ? { guidanceMinTime: req.guidanceMinTime } : {}),
-      ...(req.x0Smoothing !== undefined ? { x0Smoothing: req.x0Smoothing } : {}),
+      condition, frames, ...settingsOf(req, entry),
       seed: req.seed ?? randomSeed(), smooth: req.smooth, footCleanup: req.footCleanup,
       ...(req.known ? { known: { ...req.known, features: Float32Array.from(req.known.features), keep: Float32Array.from(req.known.keep) } } : {}),
       ...(req.resume ? { resume: req.resume } : {}),
     },
+  };
+}
+
+/** A request's SamplingSettings with the manifest's steps and guidance filled in (the rest, when absent, openModel's defaults). */
+function settingsOf(req: Partial<SamplingSettings>, entry: ModelEntry): SamplingSettings {
+  const { method, steps = entry.defaultSteps, guidance = entry.guidance, guidanceMinTime, x0Smoothing } = req;
+  return {
+    ...(method !== undefined ? { method } : {}), steps, guidance,
+    ...(guidanceMinTime !== undefined ? { guidanceMinTime } : {}), ...(x0Smoothing !== undefined ? { x0Smoothing } : {}),
   };
 }
 

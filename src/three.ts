@@ -12,7 +12,7 @@
 import { Box3, type PerspectiveCamera, Vector3 } from 'three';
 import { applyPose, type Character, createCharacter as createSkinnedCharacter } from './character/character';
 import { MotionPlayer, type PoseTrack } from './character/player';
-import { solveIK } from './motion/ik';
+import { solvePose } from './motion/ik';
 import type { Motion } from './motion/types';
 import type { SkeletonLike } from './skeleton';
 
@@ -29,7 +29,7 @@ export type PosedMotion = Motion & { pose?: { rootPos: Float32Array; quats: Floa
 
 /** The pose track of a motion: its `pose` when it has one, else the joints solved into rotations (IK). */
 export function poseTrack(motion: PosedMotion, skeleton: SkeletonLike): PoseTrack {
-  const pose = motion.pose ?? solveIK(motion.joints, motion.frames, skeleton);
+  const pose = motion.pose ?? solvePose(motion.joints, motion.frames, skeleton);
   return { frames: motion.frames, fps: motion.fps, joints: skeleton.joints.length, rootPos: pose.rootPos, quats: pose.quats };
 }
 

@@ -6,7 +6,9 @@
 //   - the controls (web/ui/controls.ts) and their URL form (web/ui/state.ts);
 //   - the test API (web/ui/testapi.ts, window.emdm).
 // A new panel gets `page` (PageContext: session, view, controls, generate) — see the end of main().
-import { clearModelCache, loadCapabilities, loadManifest, ModelFileError, modelCacheUsage, useModelCache, type Manifest } from '../src/index';
+import { clearModelCache, loadManifest, ModelFileError, modelCacheUsage, type Manifest } from '../src/index';
+import { useModelCache } from '../src/cache/modelCache';
+import { loadCapabilities } from '../src/capabilities';
 import { compareNote } from './ui/compare';
 import { Controls } from './ui/controls';
 import { byId } from './ui/dom';

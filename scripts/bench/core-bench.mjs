@@ -45,7 +45,7 @@ function conditionFor(entry) {
 async function nodeWorker() {
   const threads = Number(opt('threads', '1'));
   await withLibrary(async (load) => {
-    const { openModel } = await load('src/generate.ts');
+    const { openModel } = await load('src/openModel.ts');
     const { loadManifest } = await load('src/manifest.ts');
     const { computeSchedule } = await load('src/sampler/schedule.ts');
     const out = [];

@@ -20,7 +20,7 @@ const reps = Number(opt('reps', '7'));
 
 async function one(threads, variant) {
   return withLibrary(async (load) => {
-    const { openModel } = await load('src/generate.ts');
+    const { openModel } = await load('src/openModel.ts');
     const { loadManifest } = await load('src/manifest.ts');
     const { generateTimeline } = await load('src/edit.ts');
     const { SeededRandom } = await load('src/sampler/rng.ts');

@@ -124,6 +124,24 @@ function restBendAxes(rest: V3[], I: (j: JointName) => number) {
   };
 }
 
+/** A motion's pose as results carry it: the root's position and every joint's local rotation, and the ms the solve took. */
+export interface MotionPose {
+  rootPos: Float32Array; // frames × 3
+  quats: Float32Array; // frames × 22 × 4, xyzw
+  ikMs: number;
+}
+
+/**
+ * The pose of frames × 22 × 3 joints (solveIK): the one place a generated motion's joints become bone rotations —
+ * the generation host's results in the worker and in-process alike (GenerationHost.pose) and a motion without a
+ * pose played by src/three.ts.
+ */
+export function solvePose(joints: Float32Array, frames: number, skeleton: SkeletonLike): MotionPose {
+  const t0 = performance.now();
+  const ik = solveIK(joints, frames, skeleton);
+  return { rootPos: ik.rootPos, quats: ik.quats, ikMs: performance.now() - t0 };
+}
+
 /** solveIK as a generator that yields (the share of frames solved) after each frame, so a caller can run it in slices (src/character/retarget). */
 export function* solveIKSteps(joints: Float32Array, frames: number, skeleton: SkeletonLike, opts: { adaptOffsets?: boolean } = {}): Generator<number, IKResult, void> {
   const J = skeleton.joints.length;

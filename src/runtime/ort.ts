@@ -13,7 +13,7 @@
  *   is counted in the download progress, checked, and kept in Cache Storage for the next visit
  *   (src/cache/modelCache.ts); ORT gets the bytes as `env.wasm.wasmBinary`. WebGPU via
  *   `onnxruntime-web/webgpu` when `navigator.gpu` gives an adapter (which backend, and falling back
- *   from WebGPU to WASM, is decided in src/backends.ts only).
+ *   from WebGPU to WASM, is decided in src/loadModel.ts only).
  * - ORT's wasm flags (thread count, paths) are global and fixed by the first session: a later
  *   request for a different thread count fails loudly instead of silently running with another.
  * - Sessions are cached by (key, backend), so every generator for the same model file reuses one.

@@ -10,6 +10,7 @@
  * emdm.sample.sample_features, so the two agree to the last bit or two.
  */
 import type { DdimSchedule } from './schedule';
+import type { SamplerRule } from './update';
 
 const f = Math.fround;
 
@@ -30,3 +31,6 @@ export function ddimUpdate(x: Float32Array, x0: ArrayLike<number>, k: number, s:
     x[i] = f(f(a * x0[i]) + f(sd * eps));
   }
 }
+
+/** z is drawn (the draw order stays the DDGAN one) but fed as zeros; no ε. */
+export const ddim: SamplerRule = { name: 'ddim', update: ddimUpdate, reads: { time: 'steps', aCum: 'steps+1', sCum: 'steps+1' }, usesZ: false };

@@ -1,14 +1,19 @@
 /**
  * The sampler loop (docs/ARCHITECTURE.md "Sampling" and "DDIM sampling"), independent of ONNX: the
- * step model is a function, the noise a source, so tests can run it with fixture noise. Two update
- * rules share the loop: the few-step DDGAN posterior (fresh z and ε every step) for EMDM models and
- * deterministic DDIM (z drawn then zeroed, no ε) for the plain diffusion baseline. With `known` and
- * `keep` (src/sampler/mask.ts) the loop inpaints: docs/ARCHITECTURE.md "Sampling with constraints".
+ * step model is a function, the noise a source, so tests can run it with fixture noise. The update rule is
+ * the registry's (src/sampler/registry.ts: `settings.method`): the few-step DDGAN posterior (fresh z and ε every
+ * step, ddgan.ts) for EMDM models and deterministic DDIM (z drawn then zeroed, no ε, ddim.ts) for the plain
+ * diffusion baseline. With `known` and `keep` (src/sampler/mask.ts) the loop inpaints: docs/ARCHITECTURE.md
+ * "Sampling with constraints".
  */
 import { MAX_STEPS, MAX_X0_SMOOTHING } from '../manifest';
 import { smoothPose } from '../motion/smooth';
-import { ddimUpdate } from './ddim';
+import { samplerRule } from './registry';
 import type { Schedule } from './schedule';
+import type { SamplerName, SamplingSettings } from './settings';
+import type { SamplerRule } from './update';
+
+export type { SamplerName, SamplingSettings };
 
 /** One call of the denoising step model: inputs in the ONNX contract layout, returns x0 [B, L, D]. */
 export interface StepInputs {
@@ -34,12 +39,13 @@ export class AbortError extends Error {
   }
 }
 
-/** Which update rule runs: the DDGAN posterior ('ddgan', the default) or DDIM (η = 0, 'ddim'). */
-export type SamplerName = 'ddgan' | 'ddim';
-/** The update rule and the schedule it reads (one Schedule object holds both rules' coefficients). */
-export type SamplerChoice = { method?: SamplerName; schedule: Schedule };
-
-export type SampleOptions = SamplerChoice & {
+/**
+ * One sampling run: the request's SamplingSettings as they came (`method` default 'ddgan'; the step count is the
+ * schedule's, made for `steps` by scheduleFor), the step model, the noise, the shapes and the inpainting data.
+ */
+export interface SampleOptions extends Omit<SamplingSettings, 'steps'> {
+  /** the schedule of the settings' `steps` (one object holds every rule's coefficients: scheduleFor / computeSchedule) */
+  schedule: Schedule;
   step: StepFn;
   noise: NoiseSource;
   frames: number;
@@ -47,24 +53,6 @@ export type SampleOptions = SamplerChoice & {
   zDim: number;
   /** condition vector [C]; a zero vector means unconditional */
   cond: Float32Array;
-  /** classifier-free guidance scale; 1 (or an all-zero cond) = a single conditional pass */
-  guidance: number;
-  /**
-   * Guidance in a limited interval (Kynkäänniemi et al. 2024; the manifest's `guidanceMinTime`): the
-   * unconditional row runs only at steps whose time `schedule.time[k]` is above this; the other steps are one
-   * conditional row (x̂0 = x̂0(c)), half the work. Absent or 0: every step is guided. The random draws do not
-   * depend on it (z is drawn once per step for both rows), so only the unguided steps' x̂0 changes.
-   */
-  guidanceMinTime?: number;
-  /**
-   * Smoothing x̂0 along time (the manifest's `x0Smoothing`, σ in frames; docs/ARCHITECTURE.md "Sampling"): at every
-   * step but the last, after guidance and before the kept part is replaced, x̂0's pose channels (root-relative
-   * positions and rotations, `POSE_CHANNELS`) are filtered along frames with `smoothJoints`' Gaussian (`smoothPose`) —
-   * what is re-noised for the next step is then one coherent pose sequence rather than per-frame phase choices; the
-   * root, velocity and contact channels stay the model's (smoothing them made the sampler choose faster motion).
-   * The last x̂0 (the result) is the model's own. Absent or 0: off, bit for bit; the random draws do not depend on it.
-   */
-  x0Smoothing?: number;
   /**
    * Inpainting: a known motion [L, D] in NORMALISED feature space and a 0/1 mask [L, D] (`keepMask`) of its
    * entries to keep. x_T's kept part becomes aCum[T]·known + sCum[T]·x_T and x̂0's kept part is replaced by
@@ -107,7 +95,7 @@ export type SampleOptions = SamplerChoice & {
    */
   onX0?: (x0: Float32Array, done: number, total: number) => void;
   now?: () => number;
-};
+}
 
 export interface SampleResult {
   /** final x_0 in normalised feature space [L, D]; with `next`, the state x before step `next` */
@@ -118,7 +106,7 @@ export interface SampleResult {
   modelCalls: number;
   /** steps that ran the unconditional row too (2 batch rows); the others ran 1 */
   guidedSteps: number;
-  /** the update rule that ran */
+  /** the update rule that ran (`settings.method`) */
   sampler: SamplerName;
 }
 
@@ -130,17 +118,15 @@ function throwIfAborted(signal: AbortSignal | undefined, done: number, total: nu
   }
 }
 
-/** The coefficients `method` reads must be there, sized for the schedule's step count. */
-function checkSchedule(s: Schedule, method: SamplerName): void {
+/** The coefficients the rule reads must be there, sized for the schedule's step count. */
+function checkSchedule(s: Schedule, rule: SamplerRule): void {
   const T = s?.steps;
   if (!Number.isInteger(T) || T < 1 || T > MAX_STEPS) throw new Error(`sampler: schedule.steps must be an integer in 1…${MAX_STEPS}, got ${T} (see scheduleFor / computeSchedule)`);
-  const want: [keyof Schedule, number][] = method === 'ddim'
-    ? [['time', T], ['aCum', T + 1], ['sCum', T + 1]]
-    : [['time', T], ['coef1', T], ['coef2', T], ['sigma', T]];
-  for (const [key, n] of want) {
+  for (const [key, size] of Object.entries(rule.reads) as [keyof Schedule, 'steps' | 'steps+1'][]) {
+    const n = size === 'steps' ? T : T + 1;
     const v = s[key] as ArrayLike<number> | undefined;
     if (v?.length !== n) {
-      throw new Error(`sampler: method '${method}' needs schedule.${key} of ${n} values for ${T} steps, got ${v?.length ?? 'none'} (see scheduleFor / computeSchedule)`);
+      throw new Error(`sampler: method '${rule.name}' needs schedule.${key} of ${n} values for ${T} steps, got ${v?.length ?? 'none'} (see scheduleFor / computeSchedule)`);
     }
   }
 }
@@ -152,8 +138,8 @@ function checkLength(a: Float32Array, n: number, what: string): void {
 /** Run T denoising steps from x_T ~ N(0, I); returns x_0 (normalised features). */
 export async function sample(o: SampleOptions): Promise<SampleResult> {
   const { schedule, frames: L, featureDim: D, zDim, cond } = o;
-  const ddim = o.method === 'ddim';
-  checkSchedule(schedule, ddim ? 'ddim' : 'ddgan');
+  const rule = samplerRule(o.method ?? 'ddgan');
+  checkSchedule(schedule, rule);
   const now = o.now ?? (() => performance.now());
   if (!Number.isInteger(L) || L < 1) throw new RangeError(`sampler: frames must be a positive integer, got ${L}`);
   if (!Number.isFinite(o.guidance)) throw new RangeError(`sampler: guidance must be a finite number, got ${o.guidance}`);
@@ -206,6 +192,8 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     if (!b) rowBuffers.set(key, (b = stepBuffers(B, frames, frames * D, zDim, cond)));
     return b;
   };
+  // x̂0 of a step whose output is combined (guidance) or changed (the kept part): one buffer for the run
+  const x0buf = new Float32Array(n);
   const stepMs: number[] = [];
   let modelCalls = 0;
   let guidedSteps = 0;
@@ -213,10 +201,10 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
   for (let k = start; k > stop; k--) {
     throwIfAborted(o.signal, schedule.steps - 1 - k, schedule.steps);
     const t0 = now();
-    // z is drawn at every step even for DDIM (then zeroed), so the draw order is the same for both
+    // z is drawn at every step even for a rule that feeds zeros (DDIM), so the draw order is every rule's
     const drawn = o.noise.normals(zDim, 'z', k);
     checkLength(drawn, zDim, `z noise at step ${k}`);
-    const z = ddim ? new Float32Array(zDim) : drawn;
+    const z = rule.usesZ ? drawn : new Float32Array(zDim);
     const guidedK = guided && schedule.time[k] > gMin;
     const kept = keptAt(k);
     // the kept part enters x where it is first imposed: all of it at the first step (x_T's), or the lead frames
@@ -237,7 +225,7 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     if (guidedK) guidedSteps++;
     checkLength(out, inputs.batch * nk, `model output x0 at step ${k}`);
     // x̂0 smoothed along time at every step but the last (x0Smoothing), before the kept part is replaced
-    const smoothed = xs > 0 && k > 0 ? smoothPose(guidedK ? guidedX0(out, nk, s) : out, L - f0, xs) : null;
+    const smoothed = xs > 0 && k > 0 ? smoothPose(guidedK ? guidedX0(out, nk, s, x0buf) : out, L - f0, xs) : null;
     /** what onX0 sees: all L frames (the lead frames sitting out shown as their known motion) */
     const fullX0 = (x0: ArrayLike<number>): Float32Array => {
       const a = new Float32Array(n);
@@ -245,37 +233,22 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
       a.set(x0, f0 * D);
       return a;
     };
-    if (ddim) {
-      const x0 = smoothed ?? (guidedK ? guidedX0(out, nk, s) : kept ? Float32Array.from(out) : out);
-      if (kept) replaceKnown(x0, kept);
-      const x0copy = o.onX0 ? fullX0(x0) : null;
-      ddimUpdate(xk, x0, k, schedule);
-      stepMs.push(now() - t0);
-      if (x0copy) o.onX0!(x0copy, schedule.steps - k, schedule.steps);
-      o.onStep?.(schedule.steps - k, schedule.steps);
-      continue;
-    }
-    const c1 = schedule.coef1[k];
-    const c2 = schedule.coef2[k];
-    const sig = schedule.sigma[k];
-    const eps = sig !== 0 ? o.noise.normals(n, 'eps', k) : null;
-    if (eps) checkLength(eps, n, `ε noise at step ${k}`);
-    const x0s = o.onX0 ? new Float32Array(nk) : null;
-    const off = f0 * D;
-    for (let i = 0; i < nk; i++) {
-      // guided: x0 = x0_u + s·(x0_c − x0_u), rounded to float32 like the Python reference
-      let x0 = smoothed ? smoothed[i] : guidedK ? Math.fround(out[nk + i] + Math.fround(s * Math.fround(out[i] - out[nk + i]))) : out[i];
-      if (kept && kept.keep[i]) x0 = kept.known![i];
-      if (x0s) x0s[i] = x0;
-      let v = c1 * x0 + c2 * x[off + i];
-      if (eps) v += sig * eps[off + i];
-      x[off + i] = v;
-    }
+    const x0 = smoothed ?? (guidedK ? guidedX0(out, nk, s, x0buf) : kept ? copyInto(x0buf, out) : out);
+    if (kept) replaceKnown(x0, kept);
+    const x0copy = o.onX0 ? fullX0(x0) : null;
+    rule.update(xk, x0, k, schedule, { eps: () => drawEps(o.noise, n, k).subarray(f0 * D) });
     stepMs.push(now() - t0);
-    if (x0s) o.onX0!(fullX0(x0s), schedule.steps - k, schedule.steps);
+    if (x0copy) o.onX0!(x0copy, schedule.steps - k, schedule.steps);
     o.onStep?.(schedule.steps - k, schedule.steps);
   }
-  return { x, ...(stop >= 0 ? { next: stop } : {}), stepMs, modelCalls, guidedSteps, sampler: ddim ? 'ddim' : 'ddgan' };
+  return { x, ...(stop >= 0 ? { next: stop } : {}), stepMs, modelCalls, guidedSteps, sampler: rule.name };
+}
+
+/** ε of step k for all n values (frames sitting out included: the draws do not depend on who sits out), checked. */
+function drawEps(noise: NoiseSource, n: number, k: number): Float32Array {
+  const eps = noise.normals(n, 'eps', k);
+  checkLength(eps, n, `ε noise at step ${k}`);
+  return eps;
 }
 
 /** Step inputs for `B` rows of `L` frames: cond in row 0 (row 1, when there, stays zero: unconditional), mask all 1. */
@@ -327,9 +300,16 @@ function replaceKnown(x0: Float32Array, c: Constraint): void {
   for (let i = 0; i < x0.length; i++) if (c.keep[i]) x0[i] = c.known![i];
 }
 
+/** `from` copied into the start of `into` (the step model's output stays as it came). */
+function copyInto(into: Float32Array, from: Float32Array): Float32Array {
+  const x0 = into.subarray(0, from.length);
+  x0.set(from);
+  return x0;
+}
+
 /** x0 = x0_u + s·(x0_c − x0_u) from a batched [cond, uncond] output, rounded to float32 like Python. */
-function guidedX0(out: Float32Array, n: number, s: number): Float32Array {
-  const x0 = new Float32Array(n);
+function guidedX0(out: Float32Array, n: number, s: number, into: Float32Array): Float32Array {
+  const x0 = into.subarray(0, n);
   for (let i = 0; i < n; i++) x0[i] = Math.fround(out[n + i] + Math.fround(s * Math.fround(out[i] - out[n + i])));
   return x0;
 }

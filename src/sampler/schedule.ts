@@ -17,7 +17,7 @@
  * the manifest's time grid is the one they were computed for.
  */
 
-import type { SamplerName } from './sampler';
+import type { SamplerName } from './settings';
 
 export interface Schedule {
   /** number of denoising steps T */

@@ -5,7 +5,7 @@
  * const manifest = await loadManifest('/models/');
  * const client = new GenerationClient({ manifest, baseUrl: '/models/' });
  * const r = await client.generate('emdm-t2m-web', { condition: { type: 'text', text: 'a person waves' }, frames: 120, steps: 4, guidance: 2.5, seed: 1 });
- * r.motion.joints; // frames × 22 × 3, bit-identical to openModel(...).generate() (src/generate.ts) on the same backend
+ * r.motion.joints; // frames × 22 × 3, bit-identical to openModel(...).generate() (src/openModel.ts) on the same backend
  * ```
  *
  * One worker per client holds the models, the text encoder and ORT; requests travel as messages
@@ -15,11 +15,11 @@
 import type { FileEvent } from '../cache/modelCache';
 import { EditError } from '../edit';
 import { NonFiniteMotionError } from '../errors';
-import type { GenerateResult, SampleState } from '../generate';
+import type { GenerateResult, SampleState } from '../openModel';
 import { ModelFileError, type Manifest, type ModelFileErrorReason } from '../manifest';
 import type { BackendRequest } from '../runtime/ort';
 import { AbortError } from '../sampler/sampler';
-import type { TimelineRequest, TimelineResult } from './host';
+import type { TimelineRequest, TimelineResult } from './generationHost';
 import type { FromWorker, ModelInfo, ToWorker, WireError, WireBeginOptions, WireGenerateOptions, WirePose, WireStepPreview } from './protocol';
 
 export type { FileEvent, ModelInfo, WireGenerateOptions, WirePose, WireStepPreview };

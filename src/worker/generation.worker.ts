@@ -9,12 +9,11 @@
  */
 import { EditError } from '../edit';
 import { NonFiniteMotionError } from '../errors';
-import type { GenerateOptions, Motion } from '../generate';
+import type { GenerateOptions, Motion } from '../openModel';
 import { ModelFileError } from '../manifest';
-import { solveIK } from '../motion/ik';
 import { defaultThreads } from '../runtime/ort';
 import { useModelCache } from '../cache/modelCache';
-import { GenerationHost } from './host';
+import { GenerationHost } from './generationHost';
 import type { FromWorker, ModelInfo, ToWorker, WireError, WirePose, WireStepPreview } from './protocol';
 
 interface WorkerScope {
@@ -48,7 +47,7 @@ function needHost(): GenerationHost {
   return host;
 }
 
-function infoOf(model: string, g: { backend: 'webgpu' | 'wasm'; threads: number; sampler: 'ddgan' | 'ddim'; batchesExactly?: boolean }): ModelInfo {
+function infoOf(model: string, g: Pick<ModelInfo, 'backend' | 'threads' | 'sampler' | 'batchesExactly'>): ModelInfo {
   return { model, backend: g.backend, threads: g.threads, sampler: g.sampler, ...(g.batchesExactly !== undefined ? { batchesExactly: g.batchesExactly } : {}) };
 }
 
@@ -57,13 +56,6 @@ function buffersOf(...arrays: Array<Float32Array | undefined>): ArrayBuffer[] {
   const set = new Set<ArrayBuffer>();
   for (const a of arrays) if (a && a.buffer instanceof ArrayBuffer) set.add(a.buffer);
   return [...set];
-}
-
-/** Bone rotations (IK) of frames × 22 × 3 joints, with the time the solve took. */
-function poseOf(joints: Float32Array, frames: number): WirePose {
-  const t0 = performance.now();
-  const ik = solveIK(joints, frames, needHost().manifest.skeleton);
-  return { rootPos: ik.rootPos, quats: ik.quats, ikMs: performance.now() - t0 };
 }
 
 /** Run request `id`'s job with a signal a `cancel` message aborts; a failure is answered as its `error`. */
@@ -107,7 +99,7 @@ async function handle(msg: ToWorker): Promise<void> {
       return cancellable(msg.id, async (signal) => {
         const h = needHost();
         const { pose: wantPose, previewSteps, ...wire } = msg.options;
-        const solve = (m: Motion): WirePose => poseOf(m.joints, m.frames);
+        const solve = (m: Motion): WirePose => h.pose(m.joints, m.frames);
         const o: GenerateOptions = { ...wire, signal, onStep: (done, total) => post({ type: 'step', id: msg.id, done, total }) };
         if (previewSteps) {
           // each step's x̂0, decoded by generate() like the result and solved here like the result
@@ -121,8 +113,7 @@ async function handle(msg: ToWorker): Promise<void> {
             post({ type: 'step-preview', id: msg.id, preview }, buffersOf(p.motion.joints, ppose?.rootPos, ppose?.quats));
           };
         }
-        const { gen, result } = await h.generate(msg.model, o, msg.variant);
-        const pose = wantPose ? solve(result.motion) : undefined;
+        const { gen, result, pose } = await h.generate(msg.model, o, msg.variant, wantPose);
         const transfer = buffersOf(result.motion.joints, result.motion.features, pose?.rootPos, pose?.quats);
         post({ type: 'result', id: msg.id, info: infoOf(msg.model, gen), result, pose }, transfer);
       });
@@ -135,19 +126,18 @@ async function handle(msg: ToWorker): Promise<void> {
       });
     case 'timeline':
       return cancellable(msg.id, async (signal) => {
-        const result = await needHost().timeline(msg.request, {
+        const { pose, ...result } = await needHost().timeline(msg.request, {
           signal,
           onWindow: (segment, done, total) => post({ type: 'timeline-window', id: msg.id, segment, done, total }),
           onStep: (done, total, together) => post({ type: 'step', id: msg.id, done, total, together }),
-        });
-        const pose = msg.pose ? poseOf(result.display, result.timeline.frames) : undefined;
+        }, msg.pose);
         const t = result.timeline;
         const windows = t.segments.flatMap((s) => s.windows.flatMap((w) => [w.features, w.joints]));
         post({ type: 'timeline-result', id: msg.id, result, pose }, buffersOf(t.features, t.joints, result.display, ...windows, pose?.rootPos, pose?.quats));
       });
     case 'solve': {
       try {
-        const pose = poseOf(msg.joints, msg.frames);
+        const pose = needHost().pose(msg.joints, msg.frames);
         post({ type: 'solved', id: msg.id, pose }, buffersOf(pose.rootPos, pose.quats));
       } catch (e) {
         post({ type: 'error', id: msg.id, error: wireError(e) });

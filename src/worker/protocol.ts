@@ -6,11 +6,13 @@
  * buffers (no copy).
  */
 import type { FileEvent } from '../cache/modelCache';
-import type { Condition, GenerateResult, SampleState } from '../generate';
-import type { TimelineRequest, TimelineResult } from './host';
+import type { GenerateResult, SampleState } from '../openModel';
+import type { WireBeginOptions, WireGenerateOptions } from '../requests';
+import type { TimelineRequest, TimelineResult } from './generationHost';
 import type { Manifest } from '../manifest';
+import type { MotionPose } from '../motion/ik';
 import type { BackendRequest } from '../runtime/ort';
-import type { KnownMotion } from '../sampler/mask';
+import type { SamplerName } from '../sampler/settings';
 
 export type { FileEvent };
 
@@ -27,41 +29,7 @@ export interface WorkerInit {
   cache?: boolean;
 }
 
-/** The options of one generation as they cross to the worker (no signal, no callbacks, no noise source). */
-export interface WireGenerateOptions {
-  condition: Condition;
-  frames: number;
-  steps: number;
-  guidance: number;
-  /** guide only steps whose time is above this (GenerateOptions.guidanceMinTime; default the manifest's) */
-  guidanceMinTime?: number;
-  /** σ (frames) of x̂0's smoothing along time (GenerateOptions.x0Smoothing; default the manifest's) */
-  x0Smoothing?: number;
-  seed: number;
-  smooth?: boolean;
-  footCleanup?: boolean;
-  /** also solve the joints into bone rotations (IK) in the worker: the result carries `pose` */
-  pose?: boolean;
-  /**
-   * Watch it denoise: after each step, send its prediction x̂0 decoded to joints (and solved to a pose
-   * when `pose` is asked) as a `step-preview` message. Off by default; the result is the same either way.
-   */
-  previewSteps?: boolean;
-  /**
-   * Inpainting (GenerateOptions.known): a known motion's de-normalised features (frames × featureDim, like
-   * `Motion.features` of an earlier result) and the 0/1 `keep` mask (`keepMask`) of the entries to keep.
-   * Both are copied to the worker (not transferred: the sender keeps its arrays). `fromTime`: the sampler's keepFromTime.
-   */
-  known?: KnownMotion;
-  /** finish a generation `begin` stopped (GenerateOptions.resume; the same options it was begun with) */
-  resume?: SampleState;
-}
-
-/** A request of `begin` as it crosses (BeginOptions): one generation's options, stopped before the first step with t ≤ stopAt. */
-export type WireBeginOptions = Omit<WireGenerateOptions, 'known' | 'resume' | 'pose' | 'previewSteps'> & {
-  stopAt: number;
-  known?: Omit<KnownMotion, 'features'> & { features?: Float32Array };
-};
+export type { WireBeginOptions, WireGenerateOptions } from '../requests';
 
 export type ToWorker =
   | { type: 'init'; init: WorkerInit }
@@ -80,12 +48,8 @@ export type ToWorker =
   | { type: 'cancel'; id: number }
   | { type: 'dispose'; id: number };
 
-/** Root positions and joint rotations for the character, solved by IK in the worker. */
-export interface WirePose {
-  rootPos: Float32Array;
-  quats: Float32Array;
-  ikMs: number;
-}
+/** Root positions and joint rotations for the character, solved by IK in the worker (GenerationHost.pose). */
+export type WirePose = MotionPose;
 
 /** One step's prediction x̂0, decoded and solved by the same code as the result (transferred buffers). */
 export interface WireStepPreview {
@@ -105,7 +69,7 @@ export interface ModelInfo {
   model: string;
   backend: 'webgpu' | 'wasm';
   threads: number;
-  sampler: 'ddgan' | 'ddim';
+  sampler: SamplerName;
   /** Generator.batchesExactly (absent in the answer to dispose) */
   batchesExactly?: boolean;
 }

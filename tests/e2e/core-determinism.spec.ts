@@ -9,7 +9,7 @@ import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import crypto from 'node:crypto';
 import { expect, test, type Page } from '@playwright/test';
-import { openModel, type GenerateOptions } from '../../src/generate';
+import { openModel, type GenerateOptions } from '../../src/openModel';
 import { type Manifest, loadManifest } from '../../src/manifest';
 import { SeededRandom } from '../../src/sampler/rng';
 import { buildTinyManifest } from '../fixtures/parity/tinyManifest';

@@ -10,7 +10,7 @@ import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { expect, test, type Page } from '@playwright/test';
-import { openModel, type GenerateOptions } from '../../src/generate';
+import { openModel, type GenerateOptions } from '../../src/openModel';
 import { chooseVariant, loadManifest } from '../../src/manifest';
 import { probeResponsiveness, watchPage } from './helpers';
 

@@ -4,7 +4,7 @@ import { beforeAll, describe, expect, test } from 'vitest';
 import fs from 'node:fs';
 import path from 'node:path';
 import { type Capabilities, checkPrompt, loadCapabilities, validateCapabilities } from '../../src/capabilities';
-import { openModel } from '../../src/generate';
+import { openModel } from '../../src/openModel';
 import { type Manifest, ModelFileError, loadManifest } from '../../src/manifest';
 import { createTextEncoder, type TextEncoder } from '../../src/text';
 

@@ -6,7 +6,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
-import { openModel } from '../../src/generate';
+import { openModel } from '../../src/openModel';
 import type { Manifest } from '../../src/manifest';
 import { getSession } from '../../src/runtime/ort';
 import { stepFunction } from '../../src/runtime/stepModel';

@@ -1,12 +1,13 @@
 // The library's entry createGenerator (src/createGenerator.ts) in Node (in-process, WASM) on the tiny
-// step model, and the backend choice / fallbacks it runs through (src/backends.ts).
+// step model, and the backend choice / fallbacks it runs through (src/loadModel.ts).
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
-import { loadModel, runWithFallback } from '../../src/backends';
-import { createGenerator, resolveRequest } from '../../src/createGenerator';
-import { type GenerateOptions, type GenerateResult, type Generator, openModel } from '../../src/generate';
+import { loadModel, runWithFallback } from '../../src/loadModel';
+import { createGenerator } from '../../src/createGenerator';
+import { resolveRequest } from '../../src/requests';
+import { type GenerateOptions, type GenerateResult, type Generator, openModel } from '../../src/openModel';
 import { ModelFileError, loadManifest } from '../../src/manifest';
 import { AbortError } from '../../src/sampler/sampler';
 import { poseTrack } from '../../src/three';

@@ -6,7 +6,7 @@ import fs from 'node:fs';
 import path from 'node:path';
 import { describe, expect, it } from 'vitest';
 import { createGenerator } from '../../src/createGenerator';
-import { openModel } from '../../src/generate';
+import { openModel } from '../../src/openModel';
 import { loadManifest } from '../../src/manifest';
 import { MODELS_DIR } from './coreFixtures';
 

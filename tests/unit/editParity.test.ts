@@ -10,7 +10,7 @@ import {
   type EditBegin, type EditBeginRequest, type EditGenerate, type EditRequest, type TimelineSegment, LOOP_END_FRAMES, OVERLAP_FRAMES, SEAM_BLEND_EXTRA, SEAM_BLEND_TAU, SEAM_BLEND_VELOCITY, SEAM_EASE_ACCEL,
   SEAM_EASE_ACCEL_MIN, SEAM_EASE_FRAMES, TIMELINE_KEEP_FROM, bodyPartEdit, easeSeams, generateTimeline, inBetween, makeLoop, seamAccel,
 } from '../../src/edit';
-import { type Generator, openModel } from '../../src/generate';
+import { type Generator, openModel } from '../../src/openModel';
 import { type Manifest, loadManifest } from '../../src/manifest';
 import { recoverJoints } from '../../src/motion/recover';
 import { buildTinyManifest } from '../fixtures/parity/tinyManifest';

@@ -12,7 +12,7 @@ import { SeededRandom } from '../../src/sampler/rng';
 import { sample, type SampleOptions, type StepFn, type StepInputs } from '../../src/sampler/sampler';
 import { computeSchedule } from '../../src/sampler/schedule';
 import { type EditBegin, type EditGenerate, generateTimeline } from '../../src/edit';
-import { openModel, quantisesPerCall } from '../../src/generate';
+import { openModel, quantisesPerCall } from '../../src/openModel';
 import { loadManifest } from '../../src/manifest';
 import { MODELS_DIR, PARITY_DIR, loadCase, maxAbsDiff, tinyModels } from './coreFixtures';
 

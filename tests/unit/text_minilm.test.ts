@@ -3,7 +3,7 @@
 import { beforeAll, describe, expect, test, vi } from 'vitest';
 import fs from 'node:fs';
 import path from 'node:path';
-import { openModel } from '../../src/generate';
+import { openModel } from '../../src/openModel';
 import { loadManifest } from '../../src/manifest';
 import { cosine, createTextEncoder, type TextEncoder, TextEncoderError } from '../../src/text';
 import { loadTransformers } from '../../src/text/transformersEnv';

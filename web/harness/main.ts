@@ -1,7 +1,14 @@
 // Core harness page: runs the TypeScript core in the browser exactly as in Node, for the
 // determinism spec (tests/e2e/core-determinism.spec.ts) and the browser benchmark
 // (scripts/bench/core-bench.mjs). Exposes window.coreHarness; no UI.
-import { loadModel, type Generator, type GenerateOptions, type Manifest, loadManifest, sha256Hex, createTextEncoder, SeededRandom, GenerationClient } from '../../src/index';
+import { type Manifest, loadManifest } from '../../src/index';
+import { loadModel } from '../../src/loadModel';
+import { sha256Hex } from '../../src/manifest';
+import type { Generator, GenerateOptions } from '../../src/openModel';
+import { SeededRandom } from '../../src/sampler/rng';
+import { createTextEncoder } from '../../src/text';
+import { GenerationClient } from '../../src/worker/client';
+import type { SamplingSettings } from '../../src/sampler/settings';
 import { buildTinyManifest } from '../../tests/fixtures/parity/tinyManifest';
 import tinyMeanStdUrl from '../../tests/fixtures/parity/tiny.meanstd.f32?url&no-inline';
 import tinyOnnxUrl from '../../tests/fixtures/parity/tiny-step.onnx?url&no-inline';
@@ -14,19 +21,14 @@ const MODELS = params.get('models') ?? `${import.meta.env.BASE_URL}models/`;
 // ?via=worker runs generate() in the page's generation worker (src/worker) instead of on this thread
 const VIA_WORKER = params.get('via') === 'worker';
 
-export interface HarnessRequest {
+/** A harness request: the model and what to generate, sampled with its SamplingSettings. */
+export interface HarnessRequest extends SamplingSettings {
   /** 'tiny' / 'tiny-ddim' (the parity fixture's tiny step model, DDGAN / DDIM) or a shipped model name */
   model: string;
   /** a manifest variant of the model (e.g. 'int8'); default its fp32 file */
   variant?: string;
   condition: GenerateOptions['condition'];
   frames: number;
-  steps: number;
-  guidance: number;
-  /** guide only steps whose time is above this (default: the manifest entry's guidanceMinTime, else every step) */
-  guidanceMinTime?: number;
-  /** σ (frames) of x̂0's smoothing along time (default: the manifest entry's x0Smoothing, else off) */
-  x0Smoothing?: number;
   seed: number;
 }
 
@@ -98,12 +100,9 @@ const harness = {
     return { sha256: await hex(v), values: Array.from(v) };
   },
   async generate(req: HarnessRequest) {
-    const gen = await generatorFor(req.model, req.variant);
-    const r = await gen.generate({
-      condition: req.condition, frames: req.frames, steps: req.steps, guidance: req.guidance, seed: req.seed,
-      ...(req.guidanceMinTime !== undefined ? { guidanceMinTime: req.guidanceMinTime } : {}),
-      ...(req.x0Smoothing !== undefined ? { x0Smoothing: req.x0Smoothing } : {}),
-    });
+    const { model, variant, ...options } = req;
+    const gen = await generatorFor(model, variant);
+    const r = await gen.generate(options);
     return {
       featuresSha256: await hex(r.motion.features),
       jointsSha256: await hex(r.motion.joints),

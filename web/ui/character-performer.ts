@@ -2,7 +2,8 @@
 // retargeted onto it in slices (retargetMotionAsync: ~8 ms of work, then the page draws), then played on the
 // page's clock; a newer motion for the same copy cancels the one under way.
 import { AnimationMixer, type AnimationAction, type Group, LoopOnce, type Object3D } from 'three';
-import { contactsFromFeatures, type LoadedCharacter, type Motion, plantContacts, type RetargetResult, retargetMotionAsync, type Skeleton } from '../../src/index';
+import { type LoadedCharacter, type Motion, type RetargetResult, retargetMotionAsync, type Skeleton } from '../../src/index';
+import { contactsFromFeatures, plantContacts } from '../../src/motion/footContact';
 
 export interface Performer {
   root: Object3D;

@@ -2,10 +2,13 @@
 // NEWEST request wins: starting one aborts the one before it (the worker stops it at the next denoising
 // step) and waits for it to stop before running. Backend choice and the WebGPU → WASM fallback (at load
 // and at run time) are not made here or in web/main.ts: the page's `backend` (URL) goes to the worker,
-// where src/backends.ts decides, in one place for the page and the library (createGenerator). Which file of a
+// where src/loadModel.ts decides, in one place for the page and the library (createGenerator). Which file of a
 // model runs (fp32 or a variant such as int8) is the manifest's chooseVariant: the entry's defaultVariant
 // unless the page asks for another (URL `variant=fp32`).
-import { type Manifest, type ModelEntry, GenerationClient, chooseVariant, type ClientEvents, type ModelInfo, type RemoteGenerateOptions, type RemoteResult, type RemoteTimelineOptions, type RemoteTimelineResult, type TimelineRequest } from '../../src/index';
+import { type Manifest, type ModelEntry } from '../../src/index';
+import { chooseVariant } from '../../src/manifest';
+import { GenerationClient, type ClientEvents, type ModelInfo, type RemoteGenerateOptions, type RemoteResult, type RemoteTimelineOptions, type RemoteTimelineResult } from '../../src/worker/client';
+import type { TimelineRequest } from '../../src/worker/generationHost';
 import type { BackendChoice, Mode } from './state';
 
 export interface ModelChoice {

@@ -1,6 +1,6 @@
 // Model files in the side bar: each file's state while the models load (from the cache, bytes from the
 // network, verified, failed), and the "clear cached models (N MB)" control.
-import type { FileEvent } from '../../src/index';
+import type { FileEvent } from '../../src/worker/client';
 import { byId, el, formatBytes } from './dom';
 
 const LABEL: Record<FileEvent['state'], string> = { cache: 'from cache', network: 'downloading', done: 'verified', failed: 'failed' };

@@ -2,7 +2,8 @@
 // when a prompt is far from all of it (with the closest prompts that work, as chips), the "What this model knows"
 // list one click from the prompt, and the weak labels of the Action tab. The check itself runs in the worker with
 // the motion (generate's promptCheck); this module only shows it.
-import type { Capabilities, PromptCheck } from '../../src/index';
+import { type PromptCheck } from '../../src/index';
+import type { Capabilities } from '../../src/capabilities';
 import { byId, el } from './dom';
 
 /** The notice's words for an unknown prompt. */

@@ -1,14 +1,15 @@
 // The page's generation session: the manifest's models, what they allow (StateLimits), and the
 // generation worker behind web/ui/engine.ts. It turns a PageState into motions (newest request wins)
 // and counts what ran; it never touches the DOM. Backend choice and the WebGPU → WASM fallback are not
-// here: they live in the worker (src/backends.ts); the session only passes the page's `backend` on.
+// here: they live in the worker (src/loadModel.ts); the session only passes the page's `backend` on.
 //
 // A panel that generates calls `session.generate(state, { extra })`: `extra` goes to the worker's
 // generate as is (e.g. `known: { features, keep }` for in-betweening), `hooks` receive progress and
 // step previews. Showing the result is the view's job (web/ui/view.ts).
-import {
-  assertFinite, type GenerateResult, type Manifest, type ModelInfo, type RemoteGenerateOptions, type WireStepPreview,
-} from '../../src/index';
+import { type Manifest } from '../../src/index';
+import { assertFinite } from '../../src/errors';
+import type { GenerateResult } from '../../src/openModel';
+import type { ModelInfo, RemoteGenerateOptions, WireStepPreview } from '../../src/worker/client';
 import type { PoseTrack } from '../../src/three';
 import { compareStepChoices, planCompare, type ComparePlan } from './compare';
 import { Engine, modelForMode, pickModels, type LoadEvents } from './engine';

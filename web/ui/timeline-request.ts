@@ -2,9 +2,10 @@
 // as the page's newest request (cancelling a running one) with its windows generated in the worker, report
 // progress next to the mode's controls, solve and show the result, and sum up where the time went
 // (EditSummary, for the test API). Errors are said in the panel and rethrown.
-import {
-  EditError, type EditCondition, type EditGenerate, type EditMotion, type GenerateResult, type RemoteResult, type WirePose, type WireBeginOptions,
-} from '../../src/index';
+import { EditError, type EditCondition, type EditGenerate, type EditMotion } from '../../src/index';
+import type { GenerateResult } from '../../src/openModel';
+import type { RemoteResult, WirePose } from '../../src/worker/client';
+import type { WireBeginOptions } from '../../src/worker/protocol';
 import type { PoseTrack } from '../../src/three';
 import { isAbort } from './engine';
 import type { PageContext } from './page-context';

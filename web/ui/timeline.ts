@@ -7,10 +7,10 @@
 // timeline is one request: its windows, seam easing, stitching, decoding and IK all run in the worker
 // (GenerationHost.timeline); the edits send their one window and decode here.
 // The panel builds its DOM inside one container (#edit-panel in index.html) and styles it in timeline.css.
-import {
-  EditError, MAX_TIMELINE_SECONDS, bodyPartEdit, decodeJoints, inBetween, makeLoop, planTimeline, recoverJoints,
-  type EditCondition, type EditMotion, type KeptPart, type Timeline, type TimelineSegment,
-} from '../../src/index';
+import { EditError, MAX_TIMELINE_SECONDS, bodyPartEdit, inBetween, makeLoop, type EditCondition, type EditMotion, type KeptPart, type Timeline, type TimelineSegment } from '../../src/index';
+import { planTimeline } from '../../src/edit';
+import { decodeJoints } from '../../src/motion/decode';
+import { recoverJoints } from '../../src/motion/recover';
 import { el } from './dom';
 import type { PageContext } from './page-context';
 import { randomSeed } from './state';

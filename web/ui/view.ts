@@ -8,7 +8,9 @@
 // web/ui/character-picker.ts through `view.picker`).
 import { type Bone, MeshStandardMaterial, Quaternion, Vector3 } from 'three';
 import { HEAD_PITCH, applyPose, createCharacter, MotionPlayer, motionToGLB, type PoseTrack } from '../../src/three';
-import { ModelFileError, motionToJSON, NonFiniteMotionError, type GenerateResult, type Manifest, type WireStepPreview } from '../../src/index';
+import { ModelFileError, motionToJSON, NonFiniteMotionError, type Manifest } from '../../src/index';
+import type { GenerateResult } from '../../src/openModel';
+import type { WireStepPreview } from '../../src/worker/client';
 import { CharacterPicker } from './character-picker';
 import { byId, formatBytes, formatMs, saveBlob } from './dom';
 import { fileStem, motionToBVH } from './downloads';

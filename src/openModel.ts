@@ -2,10 +2,11 @@
  * openModel: one model on one backend — text / action / nothing → 3-D motion. Wires the manifest
  * (verified downloads), the text encoder, the ONNX step model (src/runtime), the sampler (src/sampler)
  * and decoding (src/motion). Which backend, and falling back from WebGPU to WASM, is decided in ONE
- * place, src/backends.ts (loadModel, runWithFallback), which the library's entry createGenerator
+ * place, src/loadModel.ts (loadModel, runWithFallback), which the library's entry createGenerator
  * (src/createGenerator.ts) runs through.
  */
-import { type PromptCheck, type Capabilities, checkPrompt, loadCapabilities } from './capabilities';
+import type { PromptCheck } from './capabilities';
+import { type Condition, conditionEncoder } from './condition';
 import { assertFinite } from './errors';
 import { type Manifest, type ModelEntry, ModelFileError, fetchVerified } from './manifest';
 import { decodeJoints } from './motion/decode';
@@ -16,36 +17,19 @@ import { type Backend, type OrtSession, getSession } from './runtime/ort';
 import { IncompatibleModelError, stepFunction } from './runtime/stepModel';
 import { together } from './sampler/lockstep';
 import { type RandomState, SeededRandom } from './sampler/rng';
-import { type NoiseSource, type SampleOptions, type SamplerChoice, type SamplerName, type StepFn, sample } from './sampler/sampler';
+import { type NoiseSource, type SampleOptions, type StepFn, sample } from './sampler/sampler';
+import type { SamplerName, SamplingSettings } from './sampler/settings';
 import type { KnownMotion } from './sampler/mask';
-import { ddimScheduleFor, scheduleFor } from './sampler/schedule';
-import { type TextEncoder, createTextEncoder } from './text';
+import { type Schedule, scheduleFor } from './sampler/schedule';
+import type { TextEncoder } from './text';
 
-export type Condition =
-  | { type: 'text'; text: string }
-  | { type: 'action'; label: number }
-  | { type: 'none' }
-  /** a ready condition vector (e.g. an embedding computed elsewhere); zero = unconditional */
-  | { type: 'vector'; vector: Float32Array };
+export type { Condition };
 
-export interface GenerateOptions {
+/** One generation on one model: what to generate, its SamplingSettings (steps and guidance given; `method`, `guidanceMinTime` and `x0Smoothing` default to the model's), and how to report. */
+export interface GenerateOptions extends SamplingSettings {
   condition: Condition;
   /** motion length in frames at 20 fps (1 … maxFrames) */
   frames: number;
-  /** denoising steps: one of the model's supportedSteps */
-  steps: number;
-  /** classifier-free guidance scale (1 = off) */
-  guidance: number;
-  /**
-   * guide only the steps whose time is above this (guidance in a limited interval; the other steps run one
-   * batch row). Default: the model's manifest `guidanceMinTime`, else 0 = every step.
-   */
-  guidanceMinTime?: number;
-  /**
-   * smooth x̂0 along time (Gaussian, σ frames) at every denoising step but the last, so the motion stays coherent
-   * from step to step. Default: the model's manifest `x0Smoothing`, else 0 = off.
-   */
-  x0Smoothing?: number;
   /** uint32 seed: the same seed gives bit-identical output in Node and the browser (same backend) */
   seed: number;
   signal?: AbortSignal;
@@ -96,7 +80,7 @@ export interface GenerateResult {
   modelCalls: number;
   /** steps that ran the unconditional batch row too (guidance; only those above guidanceMinTime) */
   guidedSteps?: number;
-  /** the sampler that ran: 'ddgan' (EMDM posterior, objective "ddgan") or 'ddim' (η = 0, objective "diffusion") */
+  /** the sampler that ran (`method`): 'ddgan' (EMDM posterior, objective "ddgan") or 'ddim' (η = 0, objective "diffusion") */
   sampler: SamplerName;
   /** denoising steps run */
   steps: number;
@@ -161,7 +145,7 @@ export interface GeneratorOptions {
   manifest: Manifest;
   baseUrl: string;
   model: string;
-  /** the backend to open the model on (default 'wasm'); choosing and falling back: src/backends.ts */
+  /** the backend to open the model on (default 'wasm'); choosing and falling back: src/loadModel.ts */
   backend?: Backend;
   threads?: number;
   /** a variant key of the model entry (e.g. 'int8') instead of the fp32 `onnx` file */
@@ -174,8 +158,6 @@ export interface GeneratorOptions {
 }
 
 const now = () => performance.now();
-/** Prompts whose embedding a generator keeps (oldest dropped first). */
-const EMBEDDING_CACHE = 64;
 
 function modelEntry(manifest: Manifest, name: string): ModelEntry {
   const entry = manifest.models[name];
@@ -210,10 +192,64 @@ export function quantisesPerCall(onnx: ArrayBuffer | Uint8Array): boolean {
   return false;
 }
 
+/** A request's frames, guidance, step count (its schedule for `method`, returned) and resume state, checked against the model before anything runs. */
+function checkedSchedule(o: GenerateOptions | BeginOptions, entry: ModelEntry, model: string, method: SamplerName): Schedule {
+  if (!Number.isInteger(o.frames) || o.frames < 1 || o.frames > entry.maxFrames) {
+    throw new RangeError(`generate: frames must be an integer in 1…${entry.maxFrames}, got ${o.frames}`);
+  }
+  if (!Number.isFinite(o.guidance) || o.guidance < 0) throw new RangeError(`generate: guidance must be a finite number ≥ 0, got ${o.guidance}`);
+  const schedule = scheduleFor(entry, o.steps, model, method);
+  const resume = 'resume' in o ? o.resume : undefined;
+  if (resume && (resume.frames !== o.frames || resume.steps !== o.steps)) {
+    throw new RangeError(`generate: resume is a state of ${resume.frames} frames and ${resume.steps} steps; this request asks for ${o.frames} frames and ${o.steps} steps (resume with the options it was begun with)`);
+  }
+  return schedule;
+}
+
+/** The verified files of a model (its step model and mean/std), fetched together with one combined progress. */
+function fetchFiles(o: GeneratorOptions, paths: string[]): Promise<ArrayBuffer[]> {
+  const sizes = paths.map((p) => o.manifest.files[p]?.bytes ?? 0);
+  const total = sizes.reduce((a, b) => a + b, 0);
+  const loaded = paths.map(() => 0);
+  const progress = (i: number) => (l: number) => {
+    loaded[i] = l;
+    o.onDownload?.(loaded.reduce((a, b) => a + b, 0), total);
+  };
+  return Promise.all(paths.map((p, i) => fetchVerified(o.baseUrl, o.manifest, p, progress(i))));
+}
+
+/**
+ * The step model's session and checked step function on exactly one backend (a 2-frame warm-up call checks the shapes
+ * and compiles kernels before the first prompt). On WASM every failure is the model's fault (ModelFileError
+ * 'incompatible'); on WebGPU it is a plain Error (a backend problem: src/loadModel.ts then opens WASM).
+ */
+async function openStep(bytes: ArrayBuffer, b: Backend, o: GeneratorOptions & { onnxPath: string; entry: ModelEntry }): Promise<{ session: OrtSession; step: StepFn }> {
+  const { onnxPath, entry } = o;
+  const D = entry.featureDim;
+  const C = entry.condition.dim;
+  let session: OrtSession;
+  try {
+    session = await getSession(`${onnxPath}#${o.manifest.files[onnxPath].sha256}`, bytes, b, { threads: o.threads, wasmPaths: o.wasmPaths });
+  } catch (e) {
+    if (b === 'webgpu') throw e;
+    throw new ModelFileError(onnxPath, 'incompatible', (e as Error).message);
+  }
+  try {
+    const st = stepFunction(session, { featureDim: D, zDim: entry.zDim, condDim: C }, onnxPath);
+    await st({ x: new Float32Array(2 * D), z: new Float32Array(entry.zDim), cond: new Float32Array(C), t: Float32Array.of(0.5), mask: new Float32Array(2).fill(1), batch: 1, frames: 2 });
+    return { session, step: st };
+  } catch (e) {
+    await session.release();
+    if (e instanceof IncompatibleModelError) throw new ModelFileError(onnxPath, 'incompatible', e.message.replace(`${onnxPath}: `, ''));
+    if (b === 'webgpu') throw new Error(`runtime: ${onnxPath} does not run on WebGPU: ${(e as Error).message}`, { cause: e });
+    throw new ModelFileError(onnxPath, 'incompatible', `the step model does not run with the manifest's shapes (featureDim ${D}, zDim ${entry.zDim}, condition dim ${C}): ${(e as Error).message}`);
+  }
+}
+
 /**
  * Open a model on exactly `opts.backend`. Fails with ModelFileError when a file is missing, corrupt or
  * does not fit the manifest; a WebGPU session that cannot run fails with a plain Error (a backend
- * problem: src/backends.ts then opens WASM).
+ * problem: src/loadModel.ts then opens WASM).
  */
 export async function openModel(opts: GeneratorOptions): Promise<Generator> {
   const { manifest, baseUrl, model } = opts;
@@ -223,122 +259,19 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     throw new ModelFileError('manifest.json', 'missing', `models.${model}.variants has no '${opts.variant}' (variants: ${Object.keys(entry.variants ?? {}).join(', ') || 'none'})`);
   }
   const D = entry.featureDim;
-  const C = entry.condition.dim;
   const samplerName: SamplerName = entry.objective === 'diffusion' ? 'ddim' : 'ddgan';
 
-  // downloads: model + mean/std, one combined progress
-  const sizes = [onnxPath, entry.meanStd].map((p) => manifest.files[p]?.bytes ?? 0);
-  const loaded = [0, 0];
-  const progress = (i: number) => (l: number) => {
-    loaded[i] = l;
-    opts.onDownload?.(loaded[0] + loaded[1], sizes[0] + sizes[1]);
-  };
-  const [bytes, msBuf] = await Promise.all([
-    fetchVerified(baseUrl, manifest, onnxPath, progress(0)),
-    fetchVerified(baseUrl, manifest, entry.meanStd, progress(1)),
-  ]);
+  const [bytes, msBuf] = await fetchFiles(opts, [onnxPath, entry.meanStd]);
   const { mean, std } = parseMeanStd(msBuf, D, entry.meanStd);
-
-  const key = `${onnxPath}#${manifest.files[onnxPath].sha256}`;
-  const cfg = { threads: opts.threads, wasmPaths: opts.wasmPaths };
-  const warmUp = (st: StepFn) =>
-    // a 2-frame call: checks the shapes and compiles kernels before the first prompt
-    st({ x: new Float32Array(2 * D), z: new Float32Array(entry.zDim), cond: new Float32Array(C), t: Float32Array.of(0.5), mask: new Float32Array(2).fill(1), batch: 1, frames: 2 });
-
-  /** Session + checked step function on one backend. On WASM every failure is the model's fault
-   * (ModelFileError 'incompatible'); on WebGPU it is a plain Error (a backend problem). */
-  async function open(b: Backend): Promise<{ session: OrtSession; step: StepFn }> {
-    let session: OrtSession;
-    try {
-      session = await getSession(key, bytes, b, cfg);
-    } catch (e) {
-      if (b === 'webgpu') throw e;
-      throw new ModelFileError(onnxPath!, 'incompatible', (e as Error).message);
-    }
-    try {
-      const st = stepFunction(session, { featureDim: D, zDim: entry.zDim, condDim: C }, onnxPath!);
-      await warmUp(st);
-      return { session, step: st };
-    } catch (e) {
-      await session.release();
-      if (e instanceof IncompatibleModelError) throw new ModelFileError(onnxPath!, 'incompatible', e.message.replace(`${onnxPath}: `, ''));
-      if (b === 'webgpu') throw new Error(`runtime: ${onnxPath} does not run on WebGPU: ${(e as Error).message}`, { cause: e });
-      throw new ModelFileError(onnxPath!, 'incompatible', `the step model does not run with the manifest's shapes (featureDim ${D}, zDim ${entry.zDim}, condition dim ${C}): ${(e as Error).message}`);
-    }
-  }
 
   const batchesExactly = !quantisesPerCall(bytes);
   const backend: Backend = opts.backend ?? 'wasm';
-  if (backend !== 'wasm' && backend !== 'webgpu') throw new RangeError(`openModel: backend must be 'wasm' or 'webgpu', got ${JSON.stringify(backend)} (choosing one: loadModel in src/backends.ts)`);
-  const { session, step } = await open(backend);
+  if (backend !== 'wasm' && backend !== 'webgpu') throw new RangeError(`openModel: backend must be 'wasm' or 'webgpu', got ${JSON.stringify(backend)} (choosing one: loadModel in src/loadModel.ts)`);
+  const { session, step } = await openStep(bytes, backend, { ...opts, onnxPath, entry });
 
-  let encoder: Promise<TextEncoder> | null = opts.textEncoder ? Promise.resolve(opts.textEncoder) : null;
-  // the prompts encoded last (a timeline's windows and a regenerated segment ask for the same prompt again)
-  const embeddings = new Map<string, Float32Array>();
+  const condition = conditionEncoder({ manifest, baseUrl, model, textEncoder: opts.textEncoder });
   let queue: Promise<unknown> = Promise.resolve();
   let disposed = false;
-
-  async function conditionVector(c: Condition): Promise<Float32Array> {
-    if (!c || typeof c !== 'object') throw new TypeError(`generate: condition must be {type: 'text'|'action'|'none'|'vector', ...}`);
-    switch (c.type) {
-      case 'none':
-        return new Float32Array(C);
-      case 'vector':
-        if (c.vector.length !== C) throw new RangeError(`generate: condition vector has ${c.vector.length} values, model ${model} expects ${C}`);
-        return Float32Array.from(c.vector);
-      case 'action': {
-        if (entry.condition.type !== 'action') throw new Error(`generate: model ${model} is a ${entry.condition.type} model; it takes no action label`);
-        const labels = entry.condition.labels;
-        if (!Number.isInteger(c.label) || c.label < 0 || c.label >= labels.length) {
-          throw new RangeError(`generate: action label ${c.label} out of range 0…${labels.length - 1} (${labels.join(', ')})`);
-        }
-        const v = new Float32Array(C);
-        v[c.label] = 1;
-        return v;
-      }
-      case 'text': {
-        if (entry.condition.type !== 'text') throw new Error(`generate: model ${model} is a ${entry.condition.type} model; it takes no text prompt`);
-        if (typeof c.text !== 'string' || !c.text.trim()) throw new Error('generate: the text prompt is empty');
-        const encId = entry.condition.encoder;
-        encoder ??= createTextEncoder(manifest, baseUrl, encId);
-        let enc: TextEncoder;
-        try {
-          enc = await encoder;
-        } catch (e) {
-          encoder = null;
-          throw e;
-        }
-        const hit = embeddings.get(c.text);
-        if (hit) return Float32Array.from(hit);
-        const v = await enc.encode(c.text);
-        if (v.length !== C) throw new Error(`generate: text encoder ${enc.id} gives ${v.length}-d vectors, model ${model} expects ${C}`);
-        if (embeddings.size >= EMBEDDING_CACHE) embeddings.delete(embeddings.keys().next().value!);
-        embeddings.set(c.text, Float32Array.from(v));
-        return v;
-      }
-      default:
-        throw new TypeError(`generate: unknown condition type ${(c as { type: unknown }).type}`);
-    }
-  }
-
-  let capabilities: Promise<Capabilities | null> | null = null;
-  /** The model's capabilities check of a prompt's embedding; undefined without a capabilities file (a broken one is said once on the console). */
-  async function promptCheck(embedding: Float32Array): Promise<PromptCheck | undefined> {
-    // the coverage benchmark measures the EMDM models: an unlisted file of a diffusion model is not looked for (no 404)
-    if (entry.objective === 'diffusion' && typeof entry.capabilities !== 'string') return undefined;
-    capabilities ??= loadCapabilities(manifest, baseUrl, model).catch((e) => {
-      console.warn(`generate: no prompt check for ${model}: ${(e as Error).message}`);
-      return null;
-    });
-    const caps = await capabilities;
-    return caps?.anchors ? checkPrompt(caps, embedding) : undefined;
-  }
-
-  /** How the encoder read the prompt (after conditionVector loaded it); undefined if it cannot say. */
-  async function promptTokens(text: string): Promise<GenerateResult['prompt']> {
-    const t = await (await encoder)?.tokenize?.(text);
-    return t && { tokens: t.tokens, maxTokens: t.maxTokens, truncated: t.truncated };
-  }
 
   /** Normalised features x [L, D] (the sampler's x0) → de-normalised features and joints, checked: the final result's and every step preview's one path. */
   function decode(x: Float32Array, o: GenerateOptions): { features: Float32Array; joints: Float32Array } {
@@ -353,25 +286,17 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
   /** The sampler's options for a request (checked; its condition encoded), all but the step function. */
   async function samplerOptions(o: GenerateOptions | BeginOptions, noise: NoiseSource): Promise<{ options: Omit<SampleOptions, 'step'>; prompt: GenerateResult['prompt']; check?: PromptCheck }> {
     if (disposed) throw new Error(`generator for ${model} was disposed`);
-    if (!Number.isInteger(o.frames) || o.frames < 1 || o.frames > entry.maxFrames) {
-      throw new RangeError(`generate: frames must be an integer in 1…${entry.maxFrames}, got ${o.frames}`);
-    }
-    if (!Number.isFinite(o.guidance) || o.guidance < 0) throw new RangeError(`generate: guidance must be a finite number ≥ 0, got ${o.guidance}`);
-    const choice: SamplerChoice = samplerName === 'ddim'
-      ? { method: 'ddim', schedule: ddimScheduleFor(entry, o.steps, model) }
-      : { method: 'ddgan', schedule: scheduleFor(entry, o.steps, model) };
+    const method = o.method ?? samplerName;
+    const schedule = checkedSchedule(o, entry, model, method);
     const resume = 'resume' in o ? o.resume : undefined;
-    if (resume && (resume.frames !== o.frames || resume.steps !== o.steps)) {
-      throw new RangeError(`generate: resume is a state of ${resume.frames} frames and ${resume.steps} steps; this request asks for ${o.frames} frames and ${o.steps} steps (resume with the options it was begun with)`);
-    }
-    const cond = await conditionVector(o.condition);
-    const prompt = o.condition.type === 'text' ? await promptTokens(o.condition.text) : undefined;
-    const check = o.condition.type === 'text' ? await promptCheck(cond) : undefined;
+    const cond = await condition.vector(o.condition);
+    const prompt = o.condition.type === 'text' ? await condition.tokens(o.condition.text) : undefined;
+    const check = o.condition.type === 'text' ? await condition.check(cond) : undefined;
     const known = o.known?.features?.map((v, i) => (v - mean[i % D]) / std[i % D]);
     return {
       prompt, ...(check ? { check } : {}),
       options: {
-        ...choice, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance,
+        method, schedule, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance,
         guidanceMinTime: o.guidanceMinTime ?? entry.guidanceMinTime ?? 0, x0Smoothing: o.x0Smoothing ?? entry.x0Smoothing ?? 0, signal: o.signal, onStep: o.onStep,
         ...(o.known ? { ...(known ? { known } : {}), keep: o.known.keep, keepFromTime: o.known.fromTime } : {}),
         ...(resume ? { resume: { x: resume.x, next: resume.next } } : {}),

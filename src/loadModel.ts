@@ -7,7 +7,7 @@
  * Each fallback is reported with its reason, so a page can tell the user. createGenerator
  * (src/createGenerator.ts) runs this through GenerationHost, in the generation worker or in-process.
  */
-import { type GenerateOptions, type GenerateResult, type Generator, type GeneratorOptions, openModel } from './generate';
+import { type GenerateOptions, type GenerateResult, type Generator, type GeneratorOptions, openModel } from './openModel';
 import { ModelFileError } from './manifest';
 import { type BackendRequest, webgpuAvailable } from './runtime/ort';
 

@@ -2,17 +2,19 @@
  * The generation worker's state, without the messaging: the generators it has loaded (lazily, once
  * each) and the text encoders they share. The backend choice with its fallbacks (WebGPU missing or
  * failing at load → WASM, WebGPU failing while generating → reload on WASM and run again) is
- * src/backends.ts's; events say what happened (downloads, fallbacks) so the page can tell the user.
+ * src/loadModel.ts's; events say what happened (downloads, fallbacks) so the page can tell the user.
  * Runs wherever createGenerator (src/createGenerator.ts) runs it: the worker in the browser, or
  * in-process (Node, `{worker: false}`).
  */
-import { loadModel, runWithFallback, withFallback } from '../backends';
+import { loadModel, runWithFallback, withFallback } from '../loadModel';
 import { type EditBegin, type EditCondition, EditError, type EditGenerate, type EditLimits, type Timeline, type TimelineSegment, generateTimeline } from '../edit';
-import type { BeginOptions, GenerateOptions, GenerateResult, Generator, SampleState } from '../generate';
+import type { BeginOptions, GenerateOptions, GenerateResult, Generator, SampleState } from '../openModel';
 import { type Manifest, chooseVariant } from '../manifest';
 import { decodeJoints } from '../motion/decode';
+import { type MotionPose, solvePose } from '../motion/ik';
 import { beginByModel, modelFor, resolveRequest, wireBegin } from '../requests';
 import { type BackendRequest, loadMark, preloadWasmRuntime } from '../runtime/ort';
+import type { SamplingSettings } from '../sampler/settings';
 import { createTextEncoder, type TextEncoder } from '../text';
 
 export interface HostEvents {
@@ -28,11 +30,9 @@ export interface HostOptions {
 }
 
 /** A timeline to generate where the models are (GenerationHost.timeline; the worker's `timeline` message). */
-export interface TimelineRequest {
+/** `steps` and `guidance` (SamplingSettings): every window's (default: each model's manifest defaults). */
+export interface TimelineRequest extends Partial<Pick<SamplingSettings, 'steps' | 'guidance'>> {
   segments: TimelineSegment[];
-  /** denoising steps and guidance of every window (default: each model's manifest defaults) */
-  steps?: number;
-  guidance?: number;
   /** the model of the prompt segments and of the action segments (default: the manifest's EMDM text / action model) */
   models?: { text?: string; action?: string };
   /** an earlier result's `timeline`: its segments equal to the new list's first ones are reused as they were */
@@ -104,10 +104,19 @@ export class GenerationHost {
     return g;
   }
 
-  /** Generate with a model; a WebGPU failure reloads the model on WASM (said with a fallback event) and runs again. */
-  async generate(model: string, o: GenerateOptions, variant?: string): Promise<{ gen: Generator; result: GenerateResult }> {
+  /**
+   * Generate with a model; a WebGPU failure reloads the model on WASM (said with a fallback event) and runs again.
+   * `pose`: also solve the motion's bone rotations (IK, `this.pose`).
+   */
+  async generate(model: string, o: GenerateOptions, variant?: string, pose = false): Promise<{ gen: Generator; result: GenerateResult; pose?: MotionPose }> {
     const gen = await this.load(model, variant);
-    return runWithFallback(gen, o, () => this.reloadOnWasm(model, variant), (reason) => this.events.fallback(model, reason));
+    const r = await runWithFallback(gen, o, () => this.reloadOnWasm(model, variant), (reason) => this.events.fallback(model, reason));
+    return pose ? { ...r, pose: this.pose(r.result.motion.joints, r.result.motion.frames) } : r;
+  }
+
+  /** Bone rotations (IK) of frames × 22 × 3 joints: every result's pose, step preview's and solve request's, in the worker and in-process. */
+  pose(joints: Float32Array, frames: number): MotionPose {
+    return solvePose(joints, frames, this.opts.manifest.skeleton);
   }
 
   /** Start several generations together (Generator.begin), with the same WebGPU → WASM fallback. */
@@ -121,8 +130,9 @@ export class GenerationHost {
    * A whole timeline (src/edit.ts's generateTimeline with this host's generate and begin): every window, its seam
    * easing and the stitching run here, so a page's worker answers one request per timeline. Each window is the
    * request createGenerator would make of it (resolveRequest): the same motion as generateTimeline elsewhere.
+   * `pose`: also solve the shown joints' bone rotations (IK, `this.pose`).
    */
-  async timeline(req: TimelineRequest, hooks: TimelineHooks = {}): Promise<TimelineResult> {
+  async timeline(req: TimelineRequest, hooks: TimelineHooks = {}, pose = false): Promise<TimelineResult & { pose?: MotionPose }> {
     const t0 = performance.now();
     const manifest = this.opts.manifest;
     const { signal } = hooks;
@@ -168,7 +178,8 @@ export class GenerationHost {
     };
     const timeline = await generateTimeline(req.segments, gen, limits, { previous: req.previous, signal, begin, onWindow: hooks.onWindow });
     const display = decodeJoints(timeline.features, timeline.frames, manifest.skeleton, { smooth: true, footCleanup: true });
-    return { timeline, display, windows, beginMs, totalMs: performance.now() - t0 };
+    const result: TimelineResult = { timeline, display, windows, beginMs, totalMs: performance.now() - t0 };
+    return pose ? { ...result, pose: this.pose(display, timeline.frames) } : result;
   }
 
   private reloadOnWasm(model: string, variant: string | undefined): Promise<Generator> {
