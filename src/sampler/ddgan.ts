@@ -3,7 +3,7 @@
  *
  *   x_k = coef1[k]·x̂0 + coef2[k]·x_{k+1} + sigma[k]·ε      (ε drawn only where sigma[k] ≠ 0: not at the last step)
  *
- * in float64, stored as float32, as numpy does it in emdm.sample.sample_features.
+ * in float64, stored as float32, as numpy does it in emdm.sampler.sample_features.
  */
 import type { Schedule } from './schedule';
 import type { SamplerRule, StepNoise } from './update';

@@ -7,7 +7,7 @@
  *   x_0 = x̂0                              (k = 0: the last step returns the prediction)
  *
  * Arithmetic is float32 operation by operation (Math.fround), as numpy does it in
- * emdm.sample.sample_features, so the two agree to the last bit or two.
+ * emdm.sampler.sample_features, so the two agree to the last bit or two.
  */
 import type { DdimSchedule } from './schedule';
 import type { SamplerRule } from './update';

@@ -1,7 +1,7 @@
 /**
  * The variance-preserving diffusion schedule for T steps as ONE object the sampler reads
  * (docs/ARCHITECTURE.md "Diffusion schedule" and "DDIM sampling"), like Python's
- * `emdm.model.schedule.make_schedule`:
+ * `emdm.sampler.schedule.make_schedule`:
  *
  * ```ts
  * const schedule = scheduleFor(manifest.models[name], 10, name);   // checks supportedSteps (and DDIM's grid)
@@ -13,7 +13,7 @@
  * - the DDIM marginals x_i = aCum[i]·x0 + sCum[i]·ε (i = 0..T) on the same time grid.
  * Pure float64 math. The manifest carries the posterior numbers per step count and `scheduleFor`
  * prefers them; the marginals are computed here from the same formula and tested against the numbers
- * emdm.model.schedule writes into the parity fixtures, and for a DDIM model `scheduleFor` checks that
+ * emdm.sampler.schedule writes into the parity fixtures, and for a DDIM model `scheduleFor` checks that
  * the manifest's time grid is the one they were computed for.
  */
 
@@ -31,7 +31,7 @@ export interface Schedule {
   sigma: Float64Array;
   /**
    * DDIM marginals (T + 1 values each, i = 0 is the data): x_i given x_0 is N(aCum[i]·x_0, sCum[i]²·I);
-   * aCum[0] = sqrt(1 − 1e-8), sCum[0] = 1e-4, as emdm.model.schedule's β_0 = 1e-8
+   * aCum[0] = sqrt(1 − 1e-8), sCum[0] = 1e-4, as emdm.sampler.schedule's β_0 = 1e-8
    */
   aCum: Float64Array;
   sCum: Float64Array;
@@ -76,7 +76,7 @@ function posterior(T: number, { betaMin, betaMax, eps }: VpParams): Pick<Schedul
   return { coef1, coef2, sigma };
 }
 
-/** DDIM marginals, mirroring emdm.model.schedule.make_schedule's a_cum / s_cum. */
+/** DDIM marginals, mirroring emdm.sampler.schedule.make_schedule's a_cum / s_cum. */
 function marginals(T: number, { betaMin, betaMax, eps }: VpParams): Pick<Schedule, 'aCum' | 'sCum'> {
   const alphaBar = new Float64Array(T + 1);
   for (let i = 0; i <= T; i++) {

@@ -1,6 +1,6 @@
 // DDIM sampling (models trained with `--objective diffusion`): the update rule on known numbers, the
-// marginals against emdm.model.schedule, and whole runs of the tiny step model against
-// emdm.sample.sample_features(objective="diffusion") (fixture tests/fixtures/parity/tiny-ddim.*).
+// marginals against emdm.sampler.schedule, and whole runs of the tiny step model against
+// emdm.sampler.sample_features (method "ddim") (fixture tests/fixtures/parity/tiny-ddim.*).
 import fs from 'node:fs';
 import path from 'node:path';
 import { describe, expect, it } from 'vitest';
@@ -61,7 +61,7 @@ describe('ddimUpdate', () => {
 });
 
 describe('DDIM schedule', () => {
-  it('aCum / sCum equal emdm.model.schedule for every step count of the diffusion baseline', () => {
+  it('aCum / sCum equal emdm.sampler.schedule for every step count of the diffusion baseline', () => {
     const marginals = fx.meta.marginals as Record<string, { a_cum: number[]; s_cum: number[] }>;
     expect(Object.keys(marginals).map(Number).sort((a, b) => a - b)).toEqual([1, 2, 4, 5, 8, 10, 20, 50, 100]);
     for (const [n, py] of Object.entries(marginals)) {
@@ -102,7 +102,7 @@ describe('DDIM schedule', () => {
   });
 });
 
-describe('DDIM runs of the tiny step model equal emdm.sample.sample_features(objective="diffusion")', () => {
+describe('DDIM runs of the tiny step model equal emdm.sampler.sample_features (method "ddim")', () => {
   it('guided: features within 1e-4, z drawn every step but given to the model as zeros, no ε drawn', async () => {
     const step = await tinyStep();
     const zSeen: number[] = [];

@@ -153,7 +153,7 @@ describe('openModel on the tiny model', () => {
 });
 
 describe('openModel on a diffusion-objective model (DDIM)', () => {
-  it('samples with DDIM and says so; a fixture run equals emdm.sample.sample_features(objective="diffusion")', async () => {
+  it('samples with DDIM and says so; a fixture run equals emdm.sampler.sample_features (method "ddim")', async () => {
     const { dir } = tinyModels(tmp);
     const manifest = await loadManifest(dir);
     const ddim = await openModel({ manifest, baseUrl: dir, model: 'tiny-ddim', backend: 'wasm', threads: 1 });
