@@ -287,7 +287,7 @@ function imposeNoisedKnown(x: Float32Array, c: Constraint, j: number, upto: numb
   }
 }
 
-/** How many leading frames `keep` [L, D] keeps on every channel, fewer than all (Python `emdm.sample.lead_frames`). */
+/** How many leading frames `keep` [L, D] keeps on every channel, fewer than all (Python `emdm.sampler.lead_frames`). */
 export function leadFrames(keep: ArrayLike<number>, L: number, D: number): number {
   let f = 0;
   for (; f < L; f++) {
