@@ -10,6 +10,7 @@ from emdm import manifest as mf
 from emdm.eval import capabilities as C
 from emdm.eval.coverage import PROMPTS_FILE, load_prompts, normalise, read_result
 from emdm.eval.report import RESULTS_DIR
+from emdm.paths import REPO_ROOT
 from emdm.sample import main as sample_main
 from emdm.text import encode_texts
 
@@ -90,3 +91,20 @@ def test_missing_coverage_result_is_one_line_exit_2(tmp_path, capsys):
     assert C.main(["--model", T2M, "--coverage", str(tmp_path / "none.json")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "none.json: no coverage result" in err[0]
+
+
+def test_the_check_names_the_closest_anchors_action(caps):
+    a = caps["anchors"]
+    vecs = C.dequantise(np.frombuffer(__import__("base64").b64decode(a["embeddings"]), np.int8).reshape(len(a["texts"]), -1))
+    for p in ["a person walks forward", "a person is running", "swims"]:
+        e = encode_texts([p])[0]
+        assert C.check(caps, e)["action"] == a["actions"][int(np.argmax(vecs @ e))], p
+    assert C.check(caps, encode_texts(["a person walks forward"])[0])["action"] == "walk"
+
+
+def test_realism_result_without_real_speeds_is_one_line_exit_2(tmp_path, capsys):
+    bad = tmp_path / "realism-x.json"
+    bad.write_text(json.dumps({"real": {"per_action": {}}}))
+    assert C.main(["--model", T2M, "--realism", str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "realism-x.json" in err[0] and "real.reference.speeds" in err[0], err
