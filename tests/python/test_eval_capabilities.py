@@ -102,6 +102,22 @@ def test_the_check_names_the_closest_anchors_action(caps):
     assert C.check(caps, encode_texts(["a person walks forward"])[0])["action"] == "walk"
 
 
+@pytest.mark.parametrize("model", [T2M, A2M])
+def test_shipped_file_carries_the_real_clips_speed_per_action(model):
+    """Each action's realSpeed is its real test clips' median and 5th–95th percentile, from the realism result the
+    file names (real.reference.speeds: one speed per clip)."""
+    c = json.loads((mf.DEFAULT_MODELS_DIR / C.file_name(model)).read_text())
+    real = read_result(REPO_ROOT / c["realSpeedSource"])["real"]["reference"]["speeds"]
+    rows = {r["label"]: r for r in c["actions"]}
+    assert {a for a, r in rows.items() if "realSpeed" in r} == {a for a in rows if len(real.get(a, []))}
+    walk = np.asarray(real["walk"])
+    assert rows["walk"]["realSpeed"] == {"median": round(float(np.median(walk)), 2), "clips": len(walk),
+                                         "low": round(float(np.percentile(walk, 5)), 2),
+                                         "high": round(float(np.percentile(walk, 95)), 2)}
+    assert 0.3 < rows["walk"]["realSpeed"]["low"] < rows["walk"]["realSpeed"]["median"] < rows["walk"]["realSpeed"]["high"] < 2.0
+    assert rows["run"]["realSpeed"]["median"] > 2 * rows["walk"]["realSpeed"]["median"]
+
+
 def test_realism_result_without_real_speeds_is_one_line_exit_2(tmp_path, capsys):
     bad = tmp_path / "realism-x.json"
     bad.write_text(json.dumps({"real": {"per_action": {}}}))
