@@ -1,11 +1,9 @@
-#!/usr/bin/env node
-// Self-host the ONNX Runtime Web wasm binaries (no CDN): copies onnxruntime-web (our direct dependency;
-// transformers.js runs on the same instance, see vite.config.ts) into public/ort/ and writes
-// public/ort/files.json: {name: {bytes, sha256}} of each .wasm, which src/runtime/ort.ts uses to
-// fetch the runtime as a verified file (progress, Cache Storage for the next visit, checked on read).
-// The folder is git-ignored and rebuilt from node_modules. Idempotent: a file whose size and mtime
-// already match is skipped (and its hash kept), so this is instant when nothing changed. A
-// public/ort-tfjs/ left by older builds (transformers.js's own ORT) is removed.
+// Self-host the ONNX Runtime Web wasm binaries (no CDN) for the test pages that scripts/build/serve-pages.mjs builds
+// (the repository's pages and a consumer's app get theirs from the package's plugin, src/vite.ts, with the same
+// files): copies onnxruntime-web's browser runtimes (the plain build of onnxruntime-web/wasm, which transformers.js
+// runs on too, see one-ort.mjs, and the asyncify build of onnxruntime-web/webgpu) into a folder with files.json:
+// {name: {bytes, sha256}} of each .wasm, which src/runtime/ort.ts uses to fetch the runtime as a verified file.
+// Idempotent: a file whose size and mtime already match is skipped (and its hash kept).
 // Runtime code points ORT at it with `env.wasm.wasmPaths = <base>/ort/`.
 import { createHash } from 'node:crypto';
 import fs from 'node:fs';
@@ -14,7 +12,7 @@ import { createRequire } from 'node:module';
 import { fileURLToPath } from 'node:url';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
-const WASM_FILE = /^ort-wasm-simd-threaded(\.[a-z]+)?\.(wasm|mjs)$/;
+const WASM_FILE = /^ort-wasm-simd-threaded(\.asyncify)?\.(wasm|mjs)$/;   // src/assets.ts's ORT_FILE
 
 function packageDir(name, fromDir) {
   const req = createRequire(path.join(fromDir, 'package.json'));
@@ -76,14 +74,7 @@ export function copyOrtInto(srcPkgDir, destDir) {
   return { version, files: names.length, copied };
 }
 
-export function copyOrt(root = ROOT) {
-  const ortDir = packageDir('onnxruntime-web', root);
-  const a = copyOrtInto(ortDir, path.join(root, 'public', 'ort'));
-  fs.rmSync(path.join(root, 'public', 'ort-tfjs'), { recursive: true, force: true });
-  return { ort: a };
-}
-
-if (process.argv[1] && path.resolve(process.argv[1]) === fileURLToPath(import.meta.url)) {
-  const r = copyOrt();
-  console.log(`copy-ort: public/ort <- onnxruntime-web ${r.ort.version} (${r.ort.copied}/${r.ort.files} copied, ${FILES_JSON} written)`);
+/** Copy the project's onnxruntime-web runtimes and files.json into `dest` (a built site's ort/). */
+export function copyOrt(dest, root = ROOT) {
+  return copyOrtInto(packageDir('onnxruntime-web', root), dest);
 }

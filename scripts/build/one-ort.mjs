@@ -1,4 +1,5 @@
-// One ONNX Runtime (a Vite/Rolldown plugin, used by vite.config.ts and scripts/build/serve-pages.mjs).
+// One ONNX Runtime (a Vite/Rolldown plugin for scripts/build/serve-pages.mjs, plain Node; src/vite.ts has the same for
+// the pages and consumers).
 // transformers.js (the text encoder) imports 'onnxruntime-web', which npm resolves to its own nested,
 // older build with another 21 MB .wasm; resolve it to the project's `onnxruntime-web/wasm` instead,
 // the very module src/runtime/ort.ts loads, so the text encoder and the step models share one ORT

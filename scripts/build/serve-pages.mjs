@@ -1,5 +1,5 @@
 // Build a folder of test pages (each <dir>/index.html) with Vite, against the project's public/
-// (models + self-hosted ORT), and serve the result with `vite preview` and the COOP/COEP headers.
+// (models; the self-hosted ORT is copied into the build's ort/), and serve the result with `vite preview` and the COOP/COEP headers.
 // Used by tests/e2e/text.spec.ts and scripts/build/bench-text.mjs.
 import fs from 'node:fs';
 import os from 'node:os';
@@ -27,13 +27,13 @@ function pages(dir) {
 
 /** Build `pagesDir` into a temp folder and serve it on 127.0.0.1:`port` (0 = any free port). */
 export async function buildAndServe({ pagesDir, port = 0 }) {
-  copyOrt(ROOT);
   const outDir = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-pages-'));
   const common = { configFile: false, root: pagesDir, publicDir: path.join(ROOT, 'public'), logLevel: 'warn', plugins: [oneOnnxRuntime()], worker: { format: 'es', plugins: () => [oneOnnxRuntime()] } };
   await build({
     ...common,
     build: { outDir, emptyOutDir: true, target: 'es2022', chunkSizeWarningLimit: 8192, rollupOptions: { input: pages(pagesDir) } },
   });
+  copyOrt(path.join(outDir, 'ort'));
   const server = await preview({
     ...common,
     build: { outDir },
