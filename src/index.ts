@@ -13,7 +13,7 @@ export type { TimelineHooks, TimelineRequest, TimelineResult, WindowRun } from '
 export type { WireBeginOptions } from './worker/protocol';
 export { clearModelCache, modelCacheUsage, useModelCache } from './cache/modelCache';
 export { capabilitiesFile, checkPrompt, loadCapabilities, validateCapabilities } from './capabilities';
-export type { ActionCapability, Capabilities, PromptCheck } from './capabilities';
+export type { ActionCapability, Capabilities, PromptCheck, RealSpeed } from './capabilities';
 export { loadManifest, fetchVerified, ModelFileError, sha256Hex, chooseVariant, stepFileOf } from './manifest';
 export { assertFinite, NonFiniteMotionError } from './errors';
 export type { Manifest, ModelEntry } from './manifest';

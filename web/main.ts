@@ -156,6 +156,7 @@ async function main(): Promise<void> {
   void Promise.all([capsOf(models.text?.name), capsOf(models.action?.name)]).then(([t, a]) => {
     fileList.settle();                       // their rows fold away with the models' once they are in
     knows.setCapabilities(t, a);
+    view.setTextCapabilities(t);
     markWeakActions(byId('action', HTMLSelectElement), a);
   });
   if (!models.action) controls.setModeAvailable('action', 'No action model is shipped with this demo');
