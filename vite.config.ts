@@ -28,6 +28,9 @@ export { CROSS_ORIGIN_ISOLATION_HEADERS };
 
 /** The mode of the test build (`vite build --mode e2e`): the demo plus the test pages. */
 export const E2E_MODE = 'e2e';
+/** The mode of scripts/build/serve-pages.mjs's builds: their own root and pages with this wiring (no demo pages, not
+ * precompressed). */
+export const PAGES_MODE = 'pages';
 
 /**
  * The pages of a build, keyed by folder ('main' for web/index.html) or by path without .html for the
@@ -55,16 +58,16 @@ export function pageInputs(webDir: string = WEB, { testPages = false }: { testPa
   return inputs;
 }
 
-// public/ort/ was the ORT folder of older builds (scripts/build/copy-ort.mjs): Vite would copy it into dist/ beside
+// public/ort/ was the ORT folder of older builds (a copy-ort script): Vite would copy it into dist/ beside
 // the plugin's ort/, so it goes.
 fs.rmSync(path.join(ROOT, 'public', 'ort'), { recursive: true, force: true });
 
 export default defineConfig(({ mode }) => {
-  const inputs = pageInputs(WEB, { testPages: mode === E2E_MODE });
+  const inputs = mode === PAGES_MODE ? {} : pageInputs(WEB, { testPages: mode === E2E_MODE });
   return {
     root: WEB,
     publicDir: path.join(ROOT, 'public'),
-    plugins: [...emdm(), precompress()],
+    plugins: [...emdm(), ...(mode === PAGES_MODE ? [] : [precompress()])],
     resolve: {
       // the library as its users import it (package.json "exports"): the examples use these names
       alias: [
