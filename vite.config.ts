@@ -1,39 +1,36 @@
 /// <reference types="vitest/config" />
 // Vite (dev/build/preview) and vitest configuration.
-// - root is web/ (the pages), static files come from public/ (models, self-hosted ORT wasm).
+// - root is web/ (the pages), static files come from public/ (the models).
 // - `vite build` (production, dist/) contains the demo (web/index.html) and the library's examples
 //   (web/examples/*.html, e.g. /examples/minimal.html; they import 'emdm-web' = src/index.ts and
 //   'emdm-web/three' = src/three.ts, the aliases below, as package.json's exports). The test pages
 //   (web/harness/: no CSP, takes ?models=<any URL>) are built only in the test mode
 //   (`vite build --mode e2e`, into dist-e2e/), which Playwright's test server builds and serves;
 //   the dev server serves every page.
-// - COOP/COEP headers on dev AND preview so ORT-web can use wasm threads (SharedArrayBuffer).
+// - ONNX Runtime is wired by the package's own plugin, `emdm()` of 'emdm-web/vite' (src/vite.ts), as in a
+//   consumer's app: its wasm at /ort/ with files.json (from node_modules in dev, written into the build),
+//   transformers.js on the same onnxruntime-web, ES-module workers, COOP/COEP headers on dev AND preview so
+//   ORT-web can use wasm threads (SharedArrayBuffer). The models come from public/models (publicDir).
 // - the build writes .br/.gz beside every compressible file and preview serves them with
 //   Content-Encoding (scripts/build/precompress.mjs; README "Hosting" for static hosts).
-// - the ORT wasm binaries are copied into public/ort/ before anything runs (scripts/build/copy-ort.mjs);
-//   transformers.js is resolved onto the same onnxruntime-web (scripts/build/one-ort.mjs).
 import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { defineConfig, type Plugin } from 'vite';
-// @ts-expect-error -- plain ESM build script without type declarations
-import { copyOrt } from './scripts/build/copy-ort.mjs';
-// @ts-expect-error -- plain ESM build script without type declarations
-import { oneOnnxRuntime } from './scripts/build/one-ort.mjs';
+import { defineConfig } from 'vite';
 // @ts-expect-error -- plain ESM build script without type declarations
 import { precompress } from './scripts/build/precompress.mjs';
+import { CROSS_ORIGIN_ISOLATION_HEADERS, emdm } from './src/vite.ts';   // with its extension, as Node's own loader needs
 
 const ROOT = path.dirname(fileURLToPath(import.meta.url));
 const WEB = path.join(ROOT, 'web');
 
-export const CROSS_ORIGIN_ISOLATION_HEADERS = {
-  'Cross-Origin-Opener-Policy': 'same-origin',
-  'Cross-Origin-Embedder-Policy': 'require-corp',
-  'Cross-Origin-Resource-Policy': 'same-origin',
-};
+export { CROSS_ORIGIN_ISOLATION_HEADERS };
 
 /** The mode of the test build (`vite build --mode e2e`): the demo plus the test pages. */
 export const E2E_MODE = 'e2e';
+/** The mode of scripts/build/serve-pages.mjs's builds: their own root and pages with this wiring (no demo pages, not
+ * precompressed). */
+export const PAGES_MODE = 'pages';
 
 /**
  * The pages of a build, keyed by folder ('main' for web/index.html) or by path without .html for the
@@ -61,39 +58,16 @@ export function pageInputs(webDir: string = WEB, { testPages = false }: { testPa
   return inputs;
 }
 
-copyOrt(ROOT);
-
-/**
- * Dev server only: ORT loads its wasm glue with a runtime `import(wasmPaths + 'ort-wasm-*.mjs')`.
- * Vite's dev server rewrites such imports (`?import`) and refuses to serve public/ files as
- * modules, so answer /ort/* straight from public/ before Vite's transforms.
- * (The production build serves public/ files as-is, so nothing is needed there.)
- */
-function serveOrtRaw(): Plugin {
-  return {
-    name: 'emdm-serve-ort-raw',
-    apply: 'serve',
-    configureServer(server) {
-      server.middlewares.use((req, res, next) => {
-        const url = (req.url ?? '').split('?')[0];
-        const m = /^\/(ort)\/(ort-wasm-[\w.-]+\.(mjs|wasm))$/.exec(url);
-        if (!m) return next();
-        const file = path.join(ROOT, 'public', m[1], m[2]);
-        if (!fs.existsSync(file)) return next();
-        res.setHeader('Content-Type', m[3] === 'mjs' ? 'text/javascript' : 'application/wasm');
-        for (const [k, v] of Object.entries(CROSS_ORIGIN_ISOLATION_HEADERS)) res.setHeader(k, v);
-        fs.createReadStream(file).pipe(res);
-      });
-    },
-  };
-}
+// public/ort/ was the ORT folder of older builds (a copy-ort script): Vite would copy it into dist/ beside
+// the plugin's ort/, so it goes.
+fs.rmSync(path.join(ROOT, 'public', 'ort'), { recursive: true, force: true });
 
 export default defineConfig(({ mode }) => {
-  const inputs = pageInputs(WEB, { testPages: mode === E2E_MODE });
+  const inputs = mode === PAGES_MODE ? {} : pageInputs(WEB, { testPages: mode === E2E_MODE });
   return {
     root: WEB,
     publicDir: path.join(ROOT, 'public'),
-    plugins: [serveOrtRaw(), oneOnnxRuntime(), precompress()],
+    plugins: [...emdm(), ...(mode === PAGES_MODE ? [] : [precompress()])],
     resolve: {
       // the library as its users import it (package.json "exports"): the examples use these names
       alias: [
@@ -119,11 +93,6 @@ export default defineConfig(({ mode }) => {
       port: 5173,
       headers: CROSS_ORIGIN_ISOLATION_HEADERS,
     },
-    optimizeDeps: {
-      // ORT locates its wasm via wasmPaths (public/ort/); pre-bundling it breaks that lookup.
-      exclude: ['onnxruntime-web', '@huggingface/transformers'],
-    },
-    worker: { format: 'es', plugins: () => [oneOnnxRuntime()] },
     test: {
       root: ROOT,
       include: ['tests/unit/**/*.test.ts'],

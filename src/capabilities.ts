@@ -24,7 +24,12 @@ export interface ActionCapability {
   covered: boolean;
   /** its best benchmark prompt, where one works (text models) */
   prompt?: string;
+  /** its real test clips' speed (median horizontal root speed of each clip, m/s): their median and 5th–95th
+   * percentile (the realism benchmark's real row; absent for an action without real test clips) */
+  realSpeed?: RealSpeed;
 }
+
+export interface RealSpeed { median: number; low: number; high: number; clips: number }
 
 export interface Capabilities {
   schema: 1;
@@ -46,6 +51,8 @@ export interface PromptCheck {
   known: boolean;
   /** best cosine to the anchors */
   score: number;
+  /** the action of the closest anchor (the prompt's nearest action) */
+  action: string;
   nearest: string[];
 }
 
@@ -62,6 +69,12 @@ export function validateCapabilities(data: unknown, file: string): Capabilities 
   if (d.schema !== 1) fail(file, 'schema', `is ${JSON.stringify(d.schema)}, expected 1`);
   if (!Array.isArray(d.actions) || d.actions.some((a) => typeof a?.label !== 'string' || typeof a.covered !== 'boolean' || typeof a.rate !== 'number')) {
     fail(file, 'actions', 'must be a list of {label, rate, covered}');
+  }
+  for (const [i, r] of d.actions.entries()) {
+    const s = r.realSpeed;
+    if (s !== undefined && !(['median', 'low', 'high', 'clips'] as const).every((k) => Number.isFinite(s?.[k]))) {
+      fail(file, `actions[${i}].realSpeed`, 'must be {median, low, high, clips} numbers');
+    }
   }
   const a = d.anchors;
   if (a) {
@@ -121,7 +134,7 @@ export function checkPrompt(caps: Capabilities, embedding: ArrayLike<number>): P
     if (nearest.length === (caps.check.suggestions ?? 3)) break;
   }
   const score = cos[order[0]];
-  return { known: score >= caps.check.threshold, score: Math.round(score * 1e4) / 1e4, nearest };
+  return { known: score >= caps.check.threshold, score: Math.round(score * 1e4) / 1e4, action: a.actions[order[0]], nearest };
 }
 
 /**

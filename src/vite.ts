@@ -10,11 +10,11 @@
  * ```
  *
  * - ONNX Runtime's wasm at `<base>ort/` with the `files.json` (size, sha256) the library checks it against: served
- *   from node_modules by the dev server, written by the build (scripts/build/copy-ort.mjs does the same for this
- *   repository), the two runtimes the browser loads (28 MB) only. The copies Rollup emits under assets/ for ORT's
+ *   from node_modules by the dev server, written by the build (this repository's pages use this plugin too), the two
+ *   runtimes the browser loads (28 MB) only. The copies Rollup emits under assets/ for ORT's
  *   own `new URL(...)` are dropped: never fetched (69 MB).
  * - transformers.js (the text encoder) resolved onto the library's onnxruntime-web: one runtime, one .wasm, no CDN
- *   (scripts/build/one-ort.mjs), in workers too; ES-module workers; `optimizeDeps.exclude` for the packages whose
+ *   in workers too; ES-module workers; `optimizeDeps.exclude` for the packages whose
  *   `import.meta.url` lookups pre-bundling would break.
  * - `models` (a copy of the repository's public/models): served at `<base>models/` in dev, and the manifest with
  *   every file it lists copied there by the build (createGenerator's default baseUrl).
@@ -24,7 +24,7 @@ import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import type { Plugin } from 'vite';
-import { AssetError, copyModels, copyOrt, modelFiles, ortFiles } from './assets';
+import { AssetError, copyModels, copyOrt, modelFiles, ortFiles } from './assets.ts';   // with its extension: vite.config.ts loads this file too
 
 export interface EmdmPluginOptions {
   /** a models folder (manifest.json and the files it lists); omit when the app serves models itself */
@@ -46,7 +46,7 @@ function inside(root: string, rel: string): string | null {
 
 const TYPES: Record<string, string> = { '.mjs': 'text/javascript', '.wasm': 'application/wasm', '.json': 'application/json' };
 
-/** transformers.js's 'onnxruntime-web' → the library's 'onnxruntime-web/wasm' (scripts/build/one-ort.mjs). */
+/** transformers.js's 'onnxruntime-web' → the library's 'onnxruntime-web/wasm'. */
 function oneOnnxRuntime(): Plugin {
   const ours = path.join(HERE, 'runtime', fs.existsSync(path.join(HERE, 'runtime', 'ort.ts')) ? 'ort.ts' : 'ort.js');
   return {

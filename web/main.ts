@@ -211,6 +211,7 @@ function showCapabilities(manifest: Manifest, models: Models, controls: Controls
   void Promise.all([capsOf(models.text?.name), capsOf(models.action?.name)]).then(([t, a]) => {
     fileList.settle();                       // their rows fold away with the models' once they are in
     knows.setCapabilities(t, a);
+    view.setTextCapabilities(t);
     markWeakActions(byId('action', HTMLSelectElement), a);
   });
   return knows;

@@ -1,2 +1,1 @@
-export declare const HEADERS: Record<string, string>;
 export declare function buildAndServe(opts: { pagesDir: string; port?: number }): Promise<{ url: string; close(): Promise<void> }>;

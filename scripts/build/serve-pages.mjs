@@ -1,20 +1,13 @@
-// Build a folder of test pages (each <dir>/index.html) with Vite, against the project's public/
-// (models + self-hosted ORT), and serve the result with `vite preview` and the COOP/COEP headers.
-// Used by tests/e2e/text.spec.ts and scripts/build/bench-text.mjs.
+// Build a folder of test pages (each <dir>/index.html) with Vite and the repository's configuration (vite.config.ts in
+// its 'pages' mode: the package's plugin wires ONNX Runtime as for the demo, public/ gives the models), and serve the
+// result with `vite preview` and the COOP/COEP headers. Used by tests/e2e/text.spec.ts and scripts/build/bench-text.mjs.
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { build, preview } from 'vite';
-import { copyOrt } from './copy-ort.mjs';
-import { oneOnnxRuntime } from './one-ort.mjs';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
-export const HEADERS = {
-  'Cross-Origin-Opener-Policy': 'same-origin',
-  'Cross-Origin-Embedder-Policy': 'require-corp',
-  'Cross-Origin-Resource-Policy': 'same-origin',
-};
 
 function pages(dir) {
   const input = {};
@@ -27,18 +20,13 @@ function pages(dir) {
 
 /** Build `pagesDir` into a temp folder and serve it on 127.0.0.1:`port` (0 = any free port). */
 export async function buildAndServe({ pagesDir, port = 0 }) {
-  copyOrt(ROOT);
   const outDir = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-pages-'));
-  const common = { configFile: false, root: pagesDir, publicDir: path.join(ROOT, 'public'), logLevel: 'warn', plugins: [oneOnnxRuntime()], worker: { format: 'es', plugins: () => [oneOnnxRuntime()] } };
+  const common = { configFile: path.join(ROOT, 'vite.config.ts'), mode: 'pages', root: pagesDir, logLevel: 'warn' };
   await build({
     ...common,
-    build: { outDir, emptyOutDir: true, target: 'es2022', chunkSizeWarningLimit: 8192, rollupOptions: { input: pages(pagesDir) } },
+    build: { outDir, emptyOutDir: true, chunkSizeWarningLimit: 8192, rollupOptions: { input: pages(pagesDir) } },
   });
-  const server = await preview({
-    ...common,
-    build: { outDir },
-    preview: { host: '127.0.0.1', port, strictPort: port !== 0, headers: HEADERS },
-  });
+  const server = await preview({ ...common, build: { outDir }, preview: { host: '127.0.0.1', port, strictPort: port !== 0 } });
   const addr = server.httpServer.address();
   const url = `http://127.0.0.1:${typeof addr === 'object' && addr ? addr.port : port}`;
   return {

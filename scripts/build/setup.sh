@@ -16,7 +16,6 @@ setup_node() {
     ONNXRUNTIME_NODE_INSTALL_CUDA=skip npm ci --no-audit --no-fund
     echo "$want" > node_modules/.emdm-stamp
   fi
-  node scripts/build/copy-ort.mjs
 }
 
 setup_python() {

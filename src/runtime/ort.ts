@@ -9,7 +9,7 @@
  *   (transformers.js) runs on this same ORT instance (vite.config.ts resolves its 'onnxruntime-web'
  *   here), so one .wasm is downloaded and compiled for both. `preloadWasmRuntime` fetches that .wasm
  *   at once (beside the model downloads, not after them) through the model files' verified path:
- *   `<wasmPaths>files.json` (written by scripts/build/copy-ort.mjs) gives its size and sha256, so it
+ *   `<wasmPaths>files.json` (written by the emdm-web/vite plugin or `emdm-web ort`) gives its size and sha256, so it
  *   is counted in the download progress, checked, and kept in Cache Storage for the next visit
  *   (src/cache/modelCache.ts); ORT gets the bytes as `env.wasm.wasmBinary`. WebGPU via
  *   `onnxruntime-web/webgpu` when `navigator.gpu` gives an adapter (which backend, and falling back
@@ -57,7 +57,7 @@ export function loadMark(name: string): void {
 
 /** The .wasm of the WASM backend (`onnxruntime-web/wasm`, threaded SIMD build). */
 export const WASM_RUNTIME_FILE = 'ort-wasm-simd-threaded.wasm';
-/** Sizes and sha256 of the runtime files in the wasm folder (scripts/build/copy-ort.mjs writes it). */
+/** Sizes and sha256 of the runtime files in the wasm folder (src/assets.ts writes it). */
 export const RUNTIME_FILES = 'files.json';
 
 /** `<BASE_URL>ort/` as an absolute URL (an origin-less path makes Vite's dev server rewrite ORT's
@@ -109,7 +109,7 @@ async function fetchWasmRuntime(base: string, onProgress?: (loaded: number, tota
     if (e instanceof ModelFileError && e.reason === 'missing') return null;
     throw new Error(`runtime: cannot read ${base}${RUNTIME_FILES} (the ONNX Runtime file list): ${(e as Error).message}`, { cause: e });
   }
-  if (!files[WASM_RUNTIME_FILE]) throw new Error(`runtime: ${base}${RUNTIME_FILES} does not list ${WASM_RUNTIME_FILE}; rebuild (scripts/build/copy-ort.mjs)`);
+  if (!files[WASM_RUNTIME_FILE]) throw new Error(`runtime: ${base}${RUNTIME_FILES} does not list ${WASM_RUNTIME_FILE}; rebuild (the emdm-web/vite plugin or 'emdm-web ort' writes it)`);
   const bytes = await fetchVerified(base, { files }, WASM_RUNTIME_FILE, onProgress);
   loadMark('runtime-wasm-verified');
   return bytes;

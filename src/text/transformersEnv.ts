@@ -6,7 +6,7 @@
  *   transformers.js asks for it, and handed over through `env.customCache`, so transformers.js
  *   never reads an unverified byte and nothing is downloaded twice.
  * - Browser: transformers.js runs on the project's onnxruntime-web (the bundler resolves its
- *   'onnxruntime-web' import to ours: vite.config.ts `oneOnnxRuntime`), the same instance as the
+ *   'onnxruntime-web' import to ours: src/vite.ts `oneOnnxRuntime`), the same instance as the
  *   step models (src/runtime/ort.ts), configured there before transformers.js is imported: one
  *   .wasm to download and compile, one thread count. Node: transformers.js uses onnxruntime-node.
  */

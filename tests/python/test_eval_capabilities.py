@@ -10,6 +10,7 @@ from emdm import manifest as mf
 from emdm.eval import capabilities as C
 from emdm.eval.coverage import PROMPTS_FILE, load_prompts, normalise, read_result
 from emdm.eval.results import RESULTS_DIR
+from emdm.paths import REPO_ROOT
 from emdm.sample import main as sample_main
 from emdm.text import encode_texts
 
@@ -90,3 +91,36 @@ def test_missing_coverage_result_is_one_line_exit_2(tmp_path, capsys):
     assert C.main(["--model", T2M, "--coverage", str(tmp_path / "none.json")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "none.json: no coverage result" in err[0]
+
+
+def test_the_check_names_the_closest_anchors_action(caps):
+    a = caps["anchors"]
+    vecs = C.dequantise(np.frombuffer(__import__("base64").b64decode(a["embeddings"]), np.int8).reshape(len(a["texts"]), -1))
+    for p in ["a person walks forward", "a person is running", "swims"]:
+        e = encode_texts([p])[0]
+        assert C.check(caps, e)["action"] == a["actions"][int(np.argmax(vecs @ e))], p
+    assert C.check(caps, encode_texts(["a person walks forward"])[0])["action"] == "walk"
+
+
+@pytest.mark.parametrize("model", [T2M, A2M])
+def test_shipped_file_carries_the_real_clips_speed_per_action(model):
+    """Each action's realSpeed is its real test clips' median and 5th–95th percentile, from the realism result the
+    file names (real.reference.speeds: one speed per clip)."""
+    c = json.loads((mf.DEFAULT_MODELS_DIR / C.file_name(model)).read_text())
+    real = read_result(REPO_ROOT / c["realSpeedSource"])["real"]["reference"]["speeds"]
+    rows = {r["label"]: r for r in c["actions"]}
+    assert {a for a, r in rows.items() if "realSpeed" in r} == {a for a in rows if len(real.get(a, []))}
+    walk = np.asarray(real["walk"])
+    assert rows["walk"]["realSpeed"] == {"median": round(float(np.median(walk)), 2), "clips": len(walk),
+                                         "low": round(float(np.percentile(walk, 5)), 2),
+                                         "high": round(float(np.percentile(walk, 95)), 2)}
+    assert 0.3 < rows["walk"]["realSpeed"]["low"] < rows["walk"]["realSpeed"]["median"] < rows["walk"]["realSpeed"]["high"] < 2.0
+    assert rows["run"]["realSpeed"]["median"] > 2 * rows["walk"]["realSpeed"]["median"]
+
+
+def test_realism_result_without_real_speeds_is_one_line_exit_2(tmp_path, capsys):
+    bad = tmp_path / "realism-x.json"
+    bad.write_text(json.dumps({"real": {"per_action": {}}}))
+    assert C.main(["--model", T2M, "--realism", str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "realism-x.json" in err[0] and "real.reference.speeds" in err[0], err

@@ -116,3 +116,19 @@ def test_models_folder_from_the_environment(venv, tmp_path):
     assert "no models folder" in r.stderr and "EMDM_MODELS_DIR" in r.stderr
     ok(run(cmd, cwd=tmp_path, env=clean_env(EMDM_MODELS_DIR=str(MODELS))))
     assert (tmp_path / "w.metres.bvh").is_file()
+
+
+EDITOR = """
+import sys
+from emdm.model.open import open_model
+from emdm.motion.edit import Editor
+ed = Editor.open(open_model("emdm-t2m-web", models_dir=sys.argv[1], variant="int8"), steps=2)
+print(list(ed.sample("a person waves", 20, seed=1).shape))
+"""
+
+
+def test_editor_encodes_prompts_from_the_models_folder_it_opened(venv, tmp_path):
+    """Editor.open of a model from models_dir encodes its prompts with that folder's text encoder (no
+    $EMDM_MODELS_DIR, no public/models beside the installed package)."""
+    r = ok(run([venv / "bin" / "python", "-c", EDITOR, MODELS], cwd=tmp_path))
+    assert r.stdout.strip().splitlines()[-1] == "[20, 263]"

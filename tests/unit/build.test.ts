@@ -35,13 +35,14 @@ describe('vite build', () => {
     // no longer brings its own nested ORT and its 21 MB jsep .wasm)
     const ortDist = path.join(ROOT, 'node_modules/onnxruntime-web/dist');
     const ours = new Set(fs.readdirSync(ortDist).filter((f) => f.endsWith('.wasm')).map((f) => sha256(path.join(ortDist, f))));
-    const wasm = built.filter((f) => f.endsWith('.wasm'));
-    expect(wasm.length).toBeGreaterThan(0);
+    // the package's plugin wires it (src/vite.ts): WASM's and WebGPU's runtimes in ort/, no copies under assets/
+    const wasm = built.filter((f) => f.endsWith('.wasm')).sort();
+    expect(wasm).toEqual(['ort/ort-wasm-simd-threaded.asyncify.wasm', 'ort/ort-wasm-simd-threaded.wasm']);
     for (const f of wasm) expect(ours.has(sha256(path.join(out, f))), `${f} is not one of onnxruntime-web's own .wasm files`).toBe(true);
   }, 180_000);
 
-  it("public/ort/ holds the project's ORT .wasm files and files.json with their sizes and sha256 (the runtime is fetched as a verified file)", () => {
-    const dir = path.join(ROOT, 'public/ort');
+  it("the build's ort/ holds ORT's .wasm files and files.json with their sizes and sha256 (the runtime is fetched as a verified file)", () => {
+    const dir = path.join(out, 'ort');
     const list = JSON.parse(fs.readFileSync(path.join(dir, 'files.json'), 'utf8')) as Record<string, { bytes: number; sha256: string }>;
     expect(Object.keys(list)).toContain('ort-wasm-simd-threaded.wasm');
     for (const [name, meta] of Object.entries(list)) {
@@ -49,6 +50,7 @@ describe('vite build', () => {
       expect(sha256(path.join(dir, name))).toBe(meta.sha256);
     }
     expect(fs.existsSync(path.join(ROOT, 'public/ort-tfjs')), 'transformers.js has no ORT of its own any more').toBe(false);
+    expect(fs.existsSync(path.join(ROOT, 'public/ort')), 'the plugin serves ORT; an old public/ort/ would be copied beside it').toBe(false);
   });
 
   it('the test mode adds the harness (served to Playwright, never deployed)', () => {

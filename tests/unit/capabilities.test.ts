@@ -37,6 +37,7 @@ describe('capabilities', () => {
       expect(got.known, ex.prompt).toBe(ex.known);
       expect(Math.abs(got.score - ex.score), ex.prompt).toBeLessThan(3e-3);
       expect(got.nearest, ex.prompt).toEqual(ex.nearest);
+      expect(got.action, ex.prompt).toBe(ex.action);
     }
   });
 
@@ -70,6 +71,8 @@ describe('capabilities', () => {
     stale.files[onnx] = { ...stale.files[onnx], sha256: '0'.repeat(64) };
     expect(await loadCapabilities(stale, MODELS, T2M)).toBeNull();
     expect(() => validateCapabilities({ schema: 1, actions: [{ label: 'walk' }] }, 'c.json')).toThrow(/c.json: field 'actions'/);
+    const slow = { schema: 1, actions: [{ label: 'walk', rate: 1, covered: true, realSpeed: { median: 1.1, low: 0.5 } }] };
+    expect(() => validateCapabilities(slow, 'c.json')).toThrow(/c.json: field 'actions\[0\]\.realSpeed'/);
     const broken = JSON.parse(fs.readFileSync(path.join(MODELS, 'capabilities-emdm-t2m-web.json'), 'utf8'));
     broken.anchors.suggest.pop();
     expect(() => validateCapabilities(broken, 'c.json')).toThrow(ModelFileError);

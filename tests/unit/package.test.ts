@@ -3,6 +3,9 @@
 // three peer linked from this checkout's node_modules: no registry needed), then
 // - plain Node imports 'emdm-web' and 'emdm-web/three' by name and generates a BVH from the shipped models;
 // - a consumer's strict tsc (erasableSyntaxOnly, no unused locals/parameters, skipLibCheck off) accepts its types;
+// - three (a peer) at the lowest and the highest version of the declared range, each in a scratch app of its own (the
+//   lowest installed from the npm registry with its @types/three and three-vrm): plain Node makes a character, loads a
+//   glTF and a VRM character, retargets a motion and writes its GLB, and the strict tsc accepts the types;
 // - the tarball holds the built library, not models, tests, sources or the Python pipeline, and is under 5 MB;
 // - `emdm-web models|ort` copies a verified models folder / ORT's browser runtimes into an app's static folder;
 // - a Vite app whose only wiring is `emdm({ models })` from 'emdm-web/vite' generates a motion in Chromium, from
@@ -24,8 +27,8 @@ const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-pack-'));
 const app = path.join(tmp, 'app');
 let packed: { size: number; files: { path: string }[]; filename: string };
 
-function link(name: string): void {
-  const to = path.join(app, 'node_modules', name);
+function link(name: string, into = app): void {
+  const to = path.join(into, 'node_modules', name);
   fs.mkdirSync(path.dirname(to), { recursive: true });
   fs.symlinkSync(fs.realpathSync(path.join(ROOT, 'node_modules', name)), to);
 }
@@ -70,28 +73,103 @@ describe('npm package', () => {
   });
 
   it("a consumer's strict tsc accepts its types", () => {
-    fs.writeFileSync(path.join(app, 'main.ts'), `
-      import { createGenerator, writeBVH, type GeneratedMotion } from 'emdm-web';
-      import { createCharacter } from 'emdm-web/three';
-      const g = await createGenerator({ baseUrl: '/models/' });
-      const m: GeneratedMotion = await g.generate({ prompt: 'a person walks forward', seconds: 2 });
-      export const text: string = writeBVH(m, g.skeleton);
-      export const character = createCharacter(g.skeleton);
-    `);
-    fs.writeFileSync(path.join(app, 'tsconfig.json'), JSON.stringify({
-      compilerOptions: { target: 'ES2022', module: 'ESNext', moduleResolution: 'Bundler', strict: true, noEmit: true, skipLibCheck: false,
-        erasableSyntaxOnly: true, noUnusedLocals: true, noUnusedParameters: true, lib: ['ES2022', 'DOM'], types: [] },
-      files: ['main.ts'],
-    }));
-    const tsc = path.join(ROOT, 'node_modules', 'typescript', 'bin', 'tsc');
-    let out = '';
-    try {
-      execFileSync(process.execPath, [tsc, '-p', app], { cwd: app, encoding: 'utf8' });
-    } catch (e) {
-      out = String((e as { stdout?: string }).stdout);
-    }
-    expect(out).toBe('');
+    expect(strictTsc(app)).toBe('');
   });
+});
+
+/** What a consumer's strict tsc (skipLibCheck off) says of a module using the package's typed API in `dir` ('' = no error). */
+function strictTsc(dir: string): string {
+  fs.writeFileSync(path.join(dir, 'main.ts'), `
+    import { characterToGLB, createGenerator, loadCharacter, retargetMotion, writeBVH, type GeneratedMotion } from 'emdm-web';
+    import { createCharacter } from 'emdm-web/three';
+    const g = await createGenerator({ baseUrl: '/models/' });
+    const m: GeneratedMotion = await g.generate({ prompt: 'a person walks forward', seconds: 2 });
+    export const text: string = writeBVH(m, g.skeleton);
+    export const character = createCharacter(g.skeleton);
+    const ch = await loadCharacter([{ name: 'a.glb', data: new Uint8Array(8) }]);
+    export const glb: Uint8Array = characterToGLB(ch, retargetMotion(ch.root, ch.mapping, m, g.skeleton));
+  `);
+  fs.writeFileSync(path.join(dir, 'tsconfig.json'), JSON.stringify({
+    compilerOptions: { target: 'ES2022', module: 'ESNext', moduleResolution: 'Bundler', strict: true, noEmit: true, skipLibCheck: false,
+      erasableSyntaxOnly: true, noUnusedLocals: true, noUnusedParameters: true, lib: ['ES2022', 'DOM'], types: [] },
+    files: ['main.ts'],
+  }));
+  const tsc = path.join(ROOT, 'node_modules', 'typescript', 'bin', 'tsc');
+  try {
+    execFileSync(process.execPath, [tsc, '-p', dir], { cwd: dir, encoding: 'utf8' });
+    return '';
+  } catch (e) {
+    return String((e as { stdout?: string }).stdout);
+  }
+}
+
+/** A scratch app with a copy of the package and three `version` (with its @types/three and three-vrm): the
+ * development version linked from this checkout, another installed from the npm registry. */
+function appWithThree(version: string): string {
+  const dir = path.join(tmp, `three-${version}`);
+  if (fs.existsSync(dir)) return dir;
+  fs.mkdirSync(dir, { recursive: true });
+  fs.writeFileSync(path.join(dir, 'package.json'), JSON.stringify({ name: 'app-three', type: 'module', private: true }));
+  if (version === pkg.devDependencies.three) {
+    for (const name of ['three', '@types/three', '@pixiv/three-vrm']) link(name, dir);
+  } else {
+    execFileSync('npm', ['install', '--no-audit', '--no-fund', '--ignore-scripts', '--prefer-offline', `three@${version}`, `@types/three@~${version}`,
+      `@pixiv/three-vrm@${pkg.dependencies['@pixiv/three-vrm']}`], { cwd: dir, encoding: 'utf8', stdio: 'pipe' });
+  }
+  // a copy, not a link: the package resolves 'three' from where it lies
+  fs.cpSync(path.join(app, 'node_modules', 'emdm-web'), path.join(dir, 'node_modules', 'emdm-web'), { recursive: true });
+  for (const name of ['onnxruntime-web', '@huggingface/transformers']) link(name, dir);
+  return dir;
+}
+
+const THREE_RANGE = /^>=(0\.\d+\.\d+) <0\.(\d+)\.0$/;
+
+describe('three, the peer dependency', () => {
+  const [, lowest, next] = THREE_RANGE.exec(pkg.peerDependencies.three) ?? [];
+  const highest: string = pkg.devDependencies.three;
+
+  it('is declared as the range tested here: from its lowest version to the development one', () => {
+    expect(pkg.peerDependencies.three).toMatch(THREE_RANGE);
+    expect(Number(next)).toBe(Number(highest.split('.')[1]) + 1);      // nothing newer than what is tested
+    expect(pkg.peerDependencies['@types/three']).toBe(pkg.peerDependencies.three);
+    expect(pkg.devDependencies['@types/three']).toBe(highest);
+  });
+
+  for (const [which, version] of [['lowest', lowest], ['highest', highest]]) {
+    it(`three ${version} (the ${which}): Node makes, loads, retargets and exports characters; strict tsc accepts the types`, () => {
+      const dir = appWithThree(version);
+      fs.writeFileSync(path.join(dir, 'run.mjs'), `
+        import fs from 'node:fs';
+        import { Box3, REVISION, Vector3 } from 'three';
+        import { characterToGLB, createGenerator, loadCharacter, retargetMotion } from 'emdm-web';
+        import { createCharacter } from 'emdm-web/three';
+        const [models, rigs] = process.argv.slice(2);
+        const g = await createGenerator({ baseUrl: models, backend: 'wasm', worker: false, threads: 1 });
+        const m = await g.generate({ prompt: 'a person walks forward', seconds: 2, seed: 1 });
+        const c = createCharacter(g.skeleton);
+        c.play(m);
+        const hips = () => (c.object.updateMatrixWorld(true), c.bones[0].getWorldPosition(new Vector3()));
+        const start = hips();
+        c.update(1.5);
+        const box = new Box3().setFromObject(c.object, true);
+        const read = (name) => loadCharacter([{ name, data: new Uint8Array(fs.readFileSync(rigs + '/' + name)) }]);
+        const robot = await read('RobotExpressive.glb');
+        const vrm = await read('cryptovoxels.vrm');
+        const r = retargetMotion(robot.root, robot.mapping, m, g.skeleton);
+        const glb = characterToGLB(robot, r);
+        console.log(JSON.stringify({ three: REVISION, walked: hips().distanceTo(start), height: box.max.y - box.min.y,
+          robot: robot.mappingSource, vrm: vrm.mappingSource, finite: r.rotations.every((q) => q.every(Number.isFinite)),
+          glb: new TextDecoder().decode(glb.subarray(0, 4)) }));
+      `);
+      const out = JSON.parse(execFileSync(process.execPath, ['run.mjs', MODELS, path.join(ROOT, 'tests', 'fixtures', 'rigs')],
+        { cwd: dir, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] }).trim().split('\n').pop()!);
+      expect(out).toMatchObject({ three: version.split('.')[1], robot: 'names', vrm: 'vrm', finite: true, glb: 'glTF' });
+      expect(out.walked).toBeGreaterThan(0.5);           // 1.5 s of a walk moved the hips
+      expect(out.height).toBeGreaterThan(1.4);           // a standing person's size, posed
+      expect(out.height).toBeLessThan(2.1);
+      expect(strictTsc(dir)).toBe('');
+    }, 240_000);
+  }
 });
 
 describe('emdm-web command', () => {

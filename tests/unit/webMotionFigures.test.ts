@@ -1,5 +1,7 @@
 // The compare view's figures (web/ui/motion-figures.ts) on motions whose answer is known.
 import { describe, expect, it } from 'vitest';
+import type { Capabilities } from '../../src/capabilities';
+import { realSpeedNote, realSpeedOf } from '../../web/ui/compare-figures';
 import { FOOT_JOINTS, motionFigures } from '../../web/ui/motion-figures';
 
 const J = 22;
@@ -33,5 +35,27 @@ describe('motionFigures', () => {
     // never on the floor (a motion of fewer than 2 frames): NaN, not 0
     expect(motionFigures(m, 1, FPS).footSkate).toBeNaN();
     expect(motionFigures(m, 3, FPS).jerk).toBeNaN();
+  });
+
+  it('speed: the median horizontal root speed, m/s (one jump of the root does not move it; height does not count)', () => {
+    // the pelvis walks 1.2 m/s along x, bobbing up and down, and teleports 1 m sideways once
+    const m = motion(41, (f, j) => [j === 0 ? 1.2 * f / FPS : 0, 1 + 0.05 * Math.sin(f), j === 0 && f >= 20 ? 1 : 0]);
+    expect(motionFigures(m, 41, FPS).speed).toBeCloseTo(1.2, 4);
+    expect(motionFigures(m, 1, FPS).speed).toBeNaN();
+  });
+});
+
+describe("the real clips' speed beside the figure", () => {
+  const walk = { median: 1.11, low: 0.55, high: 1.43, clips: 90 };
+  const caps = { actions: [{ label: 'walk-turn-left', rate: 1, covered: true, realSpeed: walk }, { label: 'kick', rate: 0, covered: false }] } as unknown as Capabilities;
+
+  it("is the prompt's nearest action's, from the capabilities file, only for a prompt the check knows", () => {
+    const check = { known: true, score: 0.9, action: 'walk-turn-left', nearest: [] };
+    expect(realSpeedOf(caps, check)).toEqual({ action: 'walk-turn-left', speed: walk });
+    expect(realSpeedNote(realSpeedOf(caps, check)!)).toBe('real walk turn left 0.55–1.43');
+    expect(realSpeedOf(caps, { ...check, known: false })).toBeNull();          // far prompt: its "nearest" action is a guess
+    expect(realSpeedOf(caps, { ...check, action: 'kick' })).toBeNull();        // no real clips
+    expect(realSpeedOf(null, check)).toBeNull();
+    expect(realSpeedOf(caps, undefined)).toBeNull();
   });
 });

@@ -1,7 +1,10 @@
-// The compare view's small chart of what the steps change: jerk and foot skate of the two motions on screen
+// The compare view's small chart of what the steps change: jerk, foot skate and speed of the two motions on screen
 // (web/ui/motion-figures.ts), in the table #compare-figures of the rail, each figure with a bar scaled to the larger
-// of its row (the bars are drawing only: the numbers are the table's text).
-import { byId } from './dom';
+// of its row (the bars are drawing only: the numbers are the table's text). Beside each speed, the real clips' range
+// of the prompt's nearest action (the capabilities file's realSpeed, the action from the prompt check) when the
+// check knows the prompt.
+import type { Capabilities, PromptCheck, RealSpeed } from '../../src/capabilities';
+import { byId, el } from './dom';
 import { motionFigures, type MotionFigures } from './motion-figures';
 
 interface ShownMotion { joints: ArrayLike<number>; frames: number; fps: number }
@@ -12,12 +15,28 @@ export function formatFigure(v: number): string {
   return v >= 100 ? v.toFixed(0) : v >= 10 ? v.toFixed(1) : v.toFixed(2);
 }
 
-/** Fill the table from the EMDM (left) and DDIM (right) motions. */
-export function showFigures(emdm: ShownMotion, ddim: ShownMotion): void {
+/** The real clips' speed of the prompt's nearest action: only for a prompt the check knows, of an action with clips. */
+export function realSpeedOf(caps: Capabilities | null, check: PromptCheck | undefined): { action: string; speed: RealSpeed } | null {
+  if (!caps || !check?.known) return null;
+  const speed = caps.actions.find((a) => a.label === check.action)?.realSpeed;
+  return speed ? { action: check.action, speed } : null;
+}
+
+/** "real walk 0.55–1.43" */
+export function realSpeedNote(r: { action: string; speed: RealSpeed }): string {
+  return `real ${r.action.replace(/[_-]+/g, ' ')} ${formatFigure(r.speed.low)}–${formatFigure(r.speed.high)}`;
+}
+
+/** Fill the table from the EMDM (left) and DDIM (right) motions; `real`: the speed range to show beside each. */
+export function showFigures(emdm: ShownMotion, ddim: ShownMotion, real: { action: string; speed: RealSpeed } | null = null): void {
   const figs = { emdm: motionFigures(emdm.joints, emdm.frames, emdm.fps), ddim: motionFigures(ddim.joints, ddim.frames, ddim.fps) };
-  for (const [row, key] of [['jerk', 'jerk'], ['skate', 'footSkate']] as const) {
+  for (const [row, key] of [['jerk', 'jerk'], ['skate', 'footSkate'], ['speed', 'speed']] as const) {
     const top = Math.max(figs.emdm[key] || 0, figs.ddim[key] || 0);
-    for (const side of ['emdm', 'ddim'] as const) fillCell(byId(`fig-${side}-${row}`), figs[side], key, top);
+    for (const side of ['emdm', 'ddim'] as const) {
+      const td = byId(`fig-${side}-${row}`);
+      fillCell(td, figs[side], key, top);
+      if (row === 'speed' && real) td.firstChild!.after(el('span', 'fig-real', ` (${realSpeedNote(real)})`));
+    }
   }
 }
 

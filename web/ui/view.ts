@@ -11,13 +11,14 @@ import { HEAD_PITCH, applyPose, createCharacter, MotionPlayer, motionToGLB, type
 import { ModelFileError, motionToJSON, NonFiniteMotionError, type Manifest } from '../../src/index';
 import type { GenerateResult } from '../../src/openModel';
 import type { WireStepPreview } from '../../src/worker/client';
+import type { Capabilities } from '../../src/capabilities';
 import { CharacterPicker } from './character-picker';
 import { byId, formatBytes, formatMs, saveBlob } from './dom';
 import { fileStem, motionToBVH } from './downloads';
 import type { ErrorPanel, Notices } from './notices';
 import { PlaybackBar } from './playback';
 import type { Generation, Produced } from './session';
-import { showFigures } from './compare-figures';
+import { realSpeedOf, showFigures } from './compare-figures';
 import { Stage } from './stage';
 import type { PageState } from './state';
 import { StepStrip } from './step-strip';
@@ -159,6 +160,8 @@ export class View {
   private readonly timingsHud = byId('timings');
   readonly comparePanels = byId('compare-panels');
   private readonly compareFigures = byId('compare-figures');
+  /** the text model's capabilities (setTextCapabilities): the real speed range beside the compare figures */
+  private textCapabilities: Capabilities | null = null;
   private readonly compareDivider = byId('compare-divider');
   readonly showSteps = byId('show-steps', HTMLInputElement);
 
@@ -215,9 +218,18 @@ export class View {
     this.shown = { state: s, result: main.result, track: main.track, label, model: main.model, steps: main.result.steps, ikMs: main.ikMs };
     this.picker.setMotion(main.result.motion, fileStem(label, s.seed));
     this.showCaption(g);
-    if (ddim) this.showPanels(main, ddim);
+    if (ddim) this.showPanels(main, ddim, realSpeedOf(this.textCapabilities, main.result.promptCheck));
     else this.showTimings(main.result, main.ikMs);
     for (const id of ['dl-bvh', 'dl-glb', 'dl-json']) byId(id, HTMLButtonElement).disabled = false;
+  }
+
+  /** The text model's capabilities, once loaded (they arrive after the models): a compare view already on screen gets
+   * its real speed range now. */
+  setTextCapabilities(caps: Capabilities | null): void {
+    this.textCapabilities = caps;
+    if (this.compareShown && this.shown) {
+      showFigures(this.shown.result.motion, this.compareShown.result.motion, realSpeedOf(caps, this.shown.result.promptCheck));
+    }
   }
 
   /** The compare view was turned off: back to the EMDM character alone. */
@@ -301,7 +313,7 @@ export class View {
     if (ddim) this.timingsHud.hidden = true;
   }
 
-  private showPanels(emdm: Produced, ddim: Produced): void {
+  private showPanels(emdm: Produced, ddim: Produced, real: ReturnType<typeof realSpeedOf>): void {
     for (const [id, p] of [['emdm', emdm], ['ddim', ddim]] as const) {
       const t = p.result.timings;
       const mean = t.stepMs.length ? t.stepMs.reduce((a, b) => a + b, 0) / t.stepMs.length : NaN;
@@ -312,7 +324,7 @@ export class View {
       byId(`panel-${id}-total`).textContent = formatMs(t.totalMs + p.ikMs);
       byId(`stage-label-${id}`).textContent = `${id === 'emdm' ? 'EMDM' : 'DDIM'} · ${p.result.steps} step${p.result.steps === 1 ? '' : 's'}`;
     }
-    showFigures(emdm.result.motion, ddim.result.motion);
+    showFigures(emdm.result.motion, ddim.result.motion, real);
   }
 
   /** Say what failed: a model file in the error panel, a bad generation in a notice. */

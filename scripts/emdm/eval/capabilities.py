@@ -15,6 +15,11 @@ The threshold is calibrated on prompts the file was not built from: of each acti
 the first is used to build, the others are held apart. Held-apart paraphrases of covered actions should pass,
 every prompt of an uncovered action should be warned; the threshold maximises the mean of the two success rates
 and the file records both error counts (``check``). Rebuild it whenever a model ships.
+
+Each action with real test clips also carries their speed (``realSpeed``: median horizontal root speed of each clip,
+m/s; the clips' median and 5th–95th percentile), read from the realism benchmark's real row
+(``docs/results/json/realism-*.json``, ``emdm.eval.realism``): the compare view shows a motion's speed beside the real
+range of the prompt's nearest action (the check's ``action``).
 """
 
 from __future__ import annotations
@@ -85,7 +90,8 @@ def calibrate(known: np.ndarray, unknown: np.ndarray) -> dict:
 
 
 def check(caps: dict, emb: np.ndarray) -> dict:
-    """{known, score, nearest: [chip prompts, closest first, one per action]} for one unit embedding."""
+    """{known, score, action: the closest anchor's action, nearest: [chip prompts, closest first, one per action]} for
+    one unit embedding."""
     a = caps["anchors"]
     vecs = dequantise(np.frombuffer(base64.b64decode(a["embeddings"]), np.int8).reshape(len(a["texts"]), -1))
     cos = vecs @ np.asarray(emb, np.float32)
@@ -96,8 +102,9 @@ def check(caps: dict, emb: np.ndarray) -> dict:
             nearest.append(a["texts"][i])
             if len(nearest) == SUGGESTIONS:
                 break
-    score = float(cos.max())
-    return {"known": score >= caps["check"]["threshold"], "score": round(score, 4), "nearest": nearest}
+    best = int(np.argmax(cos))
+    return {"known": bool(cos[best] >= caps["check"]["threshold"]), "score": round(float(cos[best]), 4),
+            "action": a["actions"][best], "nearest": nearest}
 
 
 def notice(result: dict) -> str | None:
@@ -131,6 +138,33 @@ def actions_table(coverage: dict, prompts: dict[str, list[str]] | None) -> tuple
     return steps, out
 
 
+def real_speeds(realism: dict) -> dict[str, dict]:
+    """Per action, its real test clips' speed from a realism result's real row (``real.reference.speeds``: one median
+    horizontal root speed per clip, m/s): {median, low: 5th percentile, high: 95th percentile, clips}."""
+    try:
+        speeds = dict(realism["real"]["reference"]["speeds"])
+    except (KeyError, TypeError, ValueError):
+        raise CoverageError(f"{realism.get('_file', 'the realism result')}: no field real.reference.speeds; "
+                            "rerun python -m emdm.eval.realism") from None
+    out = {}
+    for label, s in speeds.items():
+        if len(s):
+            lo, mid, hi = np.percentile(np.asarray(s, float), [5, 50, 95])
+            out[label] = {"median": round(float(mid), 2), "low": round(float(lo), 2), "high": round(float(hi), 2),
+                          "clips": len(s)}
+    return out
+
+
+def realism_result(model: str, results: Path) -> Path:
+    """The newest realism result of ``model`` in ``results`` (its real row is the dataset's test clips, the same for
+    every model of that dataset), else the newest of any model."""
+    for pattern in (f"realism-{model}*.json", "realism-*.json"):
+        found = sorted(results.glob(pattern), key=lambda p: (json.loads(p.read_text()).get("created", ""), p.name))
+        if found:
+            return found[-1]
+    raise CoverageError(f"{results}: no realism-*.json; run python -m emdm.eval.realism --model {model} or pass --realism")
+
+
 def training_captions(dataset: Path, actions: set[str], per_action: int = CAPTIONS) -> dict[str, list[str]]:
     """Up to ``per_action`` distinct train-split captions per action (evenly spread over the sorted list)."""
     meta = Path(dataset) / "metadata.csv"
@@ -151,14 +185,21 @@ def training_captions(dataset: Path, actions: set[str], per_action: int = CAPTIO
 
 
 def build(coverage: dict, prompts: dict[str, list[str]] | None, captions: dict[str, list[str]],
-          encode: Callable[[list[str]], np.ndarray], encoder: dict) -> dict:
+          encode: Callable[[list[str]], np.ndarray], encoder: dict, realism: dict | None = None) -> dict:
     """The capabilities file (see the module doc) from a coverage result, the benchmark prompts, the training captions
-    of covered actions and an encoder (``encode``: texts → unit rows; ``encoder``: {id, sha256} of its file)."""
+    of covered actions, an encoder (``encode``: texts → unit rows; ``encoder``: {id, sha256} of its file) and a
+    realism result's real clips' speed per action (``real_speeds``, with ``source``: the result's file)."""
     steps, table = actions_table(coverage, prompts)
+    speeds = (realism or {}).get("speeds", {})
+    for row in table:
+        if row["label"] in speeds:
+            row["realSpeed"] = speeds[row["label"]]
     out = {"schema": SCHEMA, "model": coverage["name"], "condition": coverage.get("condition", "text"),
            "source": coverage.get("_file"), "coverageCreated": coverage.get("created"), "steps": steps,
            "thresholds": {"covered": COVERED, **({"chip": coverage["thresholds"]["chip"]} if "thresholds" in coverage else {})},
            "actions": table}
+    if realism is not None:
+        out["realSpeedSource"] = realism["source"]
     if out["condition"] != "text":
         return out
     covered = {r["label"] for r in table if r["covered"]}
@@ -240,6 +281,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--dataset", type=Path, default=DATASET_DIR, help="its training captions (text models)")
     ap.add_argument("--prompts", type=Path, default=PROMPTS_FILE)
     ap.add_argument("--captions", type=int, default=CAPTIONS, help="training captions per covered action")
+    ap.add_argument("--realism", type=Path, default=None,
+                    help="its real clips' speed per action; default the newest docs/results/json/realism-<model>*.json")
     ap.add_argument("--models-dir", type=Path, default=mf.DEFAULT_MODELS_DIR)
     ap.add_argument("--register", action="store_true", help="also list the file in manifest.json with its sha256")
     a = ap.parse_args(argv)
@@ -248,6 +291,11 @@ def main(argv: list[str] | None = None) -> int:
         coverage = read_result(cov_path)
         if coverage is None:
             raise CoverageError(f"{cov_path}: no coverage result; run python -m emdm.eval.coverage --model {a.model}")
+        real_path = a.realism or realism_result(a.model, RESULTS_DIR / "json")
+        realism = read_result(real_path)
+        if realism is None:
+            raise CoverageError(f"{real_path} (--realism): not found; run python -m emdm.eval.realism")
+        realism = {"speeds": real_speeds(realism), "source": realism["_file"]}
         manifest = mf.load(a.models_dir)
         entry = manifest["models"].get(a.model)
         if entry is None:
@@ -258,7 +306,7 @@ def main(argv: list[str] | None = None) -> int:
         captions = training_captions(a.dataset, covered, a.captions) if text else {}
         enc_id = entry["condition"].get("encoder", "")
         caps = build(coverage, prompts, captions, lambda ts: text_encoders.encode_texts(ts, enc_id, models_dir=a.models_dir),
-                     encoder_info(manifest, enc_id) if text else {})
+                     encoder_info(manifest, enc_id) if text else {}, realism)
         out = a.models_dir / file_name(a.model)
         write(caps, out)
         if a.register:

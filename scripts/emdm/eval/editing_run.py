@@ -24,7 +24,8 @@ from emdm.model.open import open_model
 from emdm.motion import edit as E
 from emdm.motion.features import recover_joints
 from emdm.motion.stitch import align_segment, append_segment
-from emdm.paths import MODELS_DIR, display_path
+from emdm import paths
+from emdm.paths import display_path
 
 ACTIONS = ("walk", "raise-both-hands", "walk-backward", "walk-turn-left", "climb", "lie-down")
 LAST_ONLY = ("lie-down",)          # a timeline puts these last (nothing in the data gets up from lying down)
@@ -355,14 +356,14 @@ def timed_editor(a, threads: int):
     import torch
 
     torch.set_num_threads(threads)
-    entry = mf.load(Path(a.models_dir or MODELS_DIR))["models"].get(a.model)
+    entry = mf.load(paths.models_dir(a.models_dir))["models"].get(a.model)
     if entry is None:
         raise EditingError(f"--model {a.model}: no such entry in the manifest (its sampling settings time --ckpt)")
     opened = open_model(Path(a.ckpt), device=a.device)
     if opened.meta["condition"] != entry["condition"]:
         raise EditingError(f"--ckpt {display_path(Path(a.ckpt))}: its condition ({opened.meta['condition'].get('type')}, "
                            f"dim {opened.meta['condition'].get('dim')}) is not that of --model {a.model}")
-    return E.Editor.from_entry(opened.step, entry, opened.mean, opened.std, steps=a.steps)
+    return E.Editor.from_entry(opened.step, entry, opened.mean, opened.std, steps=a.steps, models_dir=a.models_dir)
 
 
 def time_ratio(a, threads: int, orders: list[list[str]], frames: int, log=print) -> dict:
@@ -400,6 +401,6 @@ def page_variant(model: str, models_dir: Path | None) -> str | None:
     """The file the page runs for a shipped model: its entry's ``defaultVariant`` (None: the fp32 file, also when the
     manifest cannot be read, which ``open_model`` then reports)."""
     try:
-        return mf.load(Path(models_dir or MODELS_DIR))["models"].get(model, {}).get("defaultVariant")
+        return mf.load(paths.models_dir(models_dir))["models"].get(model, {}).get("defaultVariant")
     except mf.ManifestError:
         return None

@@ -132,11 +132,11 @@ def conditions(opened, prompts: list[str], actions: list[str] | None) -> list[tu
     """(label, condition vector) for every prompt (text model) or action label (action model)."""
     spec = opened.meta["condition"]
     if spec["type"] == "text":
-        return [(p, make_condition(spec, p, None, False)) for p in prompts]
+        return [(p, make_condition(spec, p, None, False, opened.models_dir)) for p in prompts]
     labels = actions if actions else list(spec.get("labels", []))
     if not labels:
         raise PosesError("--actions: the action model lists no labels; name them with --actions")
-    return [(a, make_condition(spec, None, a, False)) for a in labels]
+    return [(a, make_condition(spec, None, a, False, opened.models_dir)) for a in labels]
 
 
 def run_grid(opened, steps: list[int], guidance: list[float], seconds: list[float], seeds: int,

@@ -30,7 +30,7 @@ from emdm.model.open import onnx_step
 from emdm.sampler import SamplingSettings, make_condition, sample_features
 from emdm.sampler.schedule import make_schedule
 from emdm import manifest as mf
-from emdm.paths import MODELS_DIR
+from emdm import paths
 from emdm import text as text_encoders      # .encode_texts looked up at each call: tests replace it
 
 PROMPTS = ["a person kicks", "a person bows", "a person squats", "a person walks forward"]
@@ -44,15 +44,15 @@ def recorder(step, calls: list):
     return rec
 
 
-def conditions(entry: dict, prompts: list[str] | None) -> list[tuple[str, np.ndarray]]:
+def conditions(entry: dict, prompts: list[str] | None, models_dir: Path) -> list[tuple[str, np.ndarray]]:
     """(name, condition vector) per prompt (text model) or action label (action model)."""
     spec = entry["condition"]
     if spec["type"] == "text":
         prompts = prompts or PROMPTS
-        emb = np.asarray(text_encoders.encode_texts(prompts, encoder_id=spec["encoder"], batch_size=1), np.float32)
+        emb = np.asarray(text_encoders.encode_texts(prompts, encoder_id=spec["encoder"], batch_size=1, models_dir=models_dir), np.float32)
         return list(zip(prompts, emb))
     labels = prompts or list(spec["labels"])
-    return [(lab, make_condition(spec, None, lab, False)) for lab in labels]
+    return [(lab, make_condition(spec, None, lab, False, models_dir)) for lab in labels]
 
 
 def bench_settings(entry: dict, T: int, guidance: float) -> SamplingSettings:
@@ -123,7 +123,7 @@ def main(argv=None) -> int:
     ap.add_argument("--interval", action="store_true", help="also the guidance-interval table (one more run per τ)")
     ap.add_argument("--verbose", action="store_true", help="per condition, per step: input std, x̂0 std, effect")
     a = ap.parse_args(argv)
-    models_dir = Path(a.models_dir or MODELS_DIR)
+    models_dir = paths.models_dir(a.models_dir)
     manifest = mf.load(models_dir)
     for name in a.model:
         if name not in manifest["models"]:
@@ -131,7 +131,7 @@ def main(argv=None) -> int:
         entry = manifest["models"][name]
         onnx = entry["variants"][a.variant] if a.variant else entry["onnx"]
         step = onnx_step(models_dir / onnx, a.threads)
-        conds = conditions(entry, a.prompts)
+        conds = conditions(entry, a.prompts, models_dir)
         for T in [int(s) for s in a.steps.split(",")]:
             if T not in entry["supportedSteps"]:
                 print(f"\n{name}: {T} steps not in its supportedSteps {entry['supportedSteps']}; skipped")

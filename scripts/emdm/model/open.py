@@ -200,6 +200,7 @@ class OpenedModel:
     generator: Any = None      # checkpoint: the PyTorch generator (eval mode)
     checkpoint_meta: dict | None = None           # checkpoint: its meta as emdm.train wrote it
     summary: dict | None = None                   # checkpoint: {steps, wall_s, losses}
+    models_dir: Path | None = None                # shipped: the models folder it came from (its text encoder too)
 
     @property
     def task(self) -> str:
@@ -284,7 +285,7 @@ def open_shipped(name: str, *, models_dir: Path | str | None = None, variant: st
             "train_wall_min": round(tr.get("wallSeconds", 0) / 60, 1), "device": tr.get("device"),
             "preset": entry.get("preset"), "dataset": tr.get("dataset")}
     return OpenedModel(step=step, mean=mean, std=std, meta=entry, info=info, path=onnx_path, name=name,
-                       kind="shipped", variant=variant or "fp32", flags=dict(tr.get("flags", {})))
+                       kind="shipped", variant=variant or "fp32", flags=dict(tr.get("flags", {})), models_dir=models_dir)
 
 
 def quantises_per_call(onnx: Path | str) -> bool:

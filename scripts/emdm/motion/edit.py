@@ -95,10 +95,12 @@ class Editor:
     batches_exactly: bool = True
 
     @classmethod
-    def open(cls, opened, steps: int | None = None, guidance: float | None = None) -> "Editor":
+    def open(cls, opened, steps: int | None = None, guidance: float | None = None, models_dir=None) -> "Editor":
         """From ``emdm.model.open.open_model(...)``: its step, mean/std and manifest entry (text prompts are encoded
-        once each, an action model takes label names or indices)."""
-        ed = cls.from_entry(opened.step, opened.meta, opened.mean, opened.std, steps, guidance)
+        once each, by the encoder of ``models_dir``, default the folder a shipped model came from, else
+        ``emdm.paths.models_dir()``; an action model takes label names or indices)."""
+        ed = cls.from_entry(opened.step, opened.meta, opened.mean, opened.std, steps, guidance,
+                            models_dir=opened.models_dir if models_dir is None else models_dir)
         exact = opened.kind != "shipped" or not quantises_per_call(opened.path)
         return ed if exact else dataclasses.replace(ed, batches_exactly=False)
 
