@@ -40,6 +40,7 @@ from emdm.data.dataset import DatasetError, cached_text_embeddings, parse_text_f
 from emdm.eval import data as evdata
 from emdm.eval import evaluators as E
 from emdm.eval.protocol import Conditions, sample_lengths
+from emdm.eval.args import add_model_source, add_sampling_settings
 from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, evaluator_info, hardware, slug, write_result
 from emdm.eval.sources import ModelSource
 from emdm.model.open import ModelError, open_model
@@ -321,20 +322,13 @@ def print_chips(a) -> int:
 def build_parser() -> argparse.ArgumentParser:
     ints = lambda s: [int(x) for x in s.split(",") if x.strip()]  # noqa: E731
     ap = argparse.ArgumentParser(prog="python -m emdm.eval.coverage", description=__doc__.split("\n\n")[0])
-    src = ap.add_mutually_exclusive_group(required=True)
-    src.add_argument("--model", help="a shipped model of public/models/manifest.json (ONNX Runtime)")
-    src.add_argument("--ckpt", type=Path, help="an emdm.train checkpoint (PyTorch, EMA weights)")
-    ap.add_argument("--models-dir", type=Path, default=None)
-    ap.add_argument("--variant", default=None, help="with --model: fp32 (default) or a manifest variant, e.g. int8")
+    add_model_source(ap)
     ap.add_argument("--name", default=None, help="result name (default: the model's; names the JSON file)")
     ap.add_argument("--steps", type=ints, default=[1, 2, 4, 10])
     ap.add_argument("--seeds", type=int, default=8, help="motions per prompt")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--guidance", type=float, default=None, help="default: the manifest's (2.5 for checkpoints)")
-    ap.add_argument("--guidance-min-time", type=float, default=None, metavar="T",
-                    help="guide only steps whose time is above T (default: the manifest's guidanceMinTime, else 0 = every step)")
-    ap.add_argument("--x0-smoothing", type=float, default=None, metavar="SIGMA",
-                    help="smooth x̂0 along time (σ frames) at every step but the last (default: the manifest's x0Smoothing, else 0)")
+    add_sampling_settings(ap)
     ap.add_argument("--dataset", type=Path, default=DATASET_DIR)
     ap.add_argument("--split", default="test")
     ap.add_argument("--classifier", type=Path, default=RUNS_DIR / "eval" / "classifier.pt")

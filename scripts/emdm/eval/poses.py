@@ -43,6 +43,7 @@ import numpy as np
 
 from emdm import skeleton as sk
 from emdm.sampler import SampleError, SamplingSettings, make_condition, sample_features
+from emdm.eval.args import add_model_source, add_sampling_settings
 from emdm.eval.results import RESULTS_DIR, hardware, slug
 from emdm.model.open import ModelError, open_model
 from emdm.motion.features import recover_joints
@@ -204,17 +205,11 @@ def build_parser() -> argparse.ArgumentParser:
     ints = lambda s: [int(x) for x in s.split(",") if x.strip()]      # noqa: E731
     floats = lambda s: [float(x) for x in s.split(",") if x.strip()]  # noqa: E731
     ap = argparse.ArgumentParser(prog="python -m emdm.eval.poses", description=__doc__.split("\n\n")[0])
-    src = ap.add_mutually_exclusive_group()
-    src.add_argument("--model", default=None, help="a shipped model of public/models/manifest.json (default emdm-t2m-web)")
-    src.add_argument("--ckpt", type=Path, help="an emdm.train checkpoint (PyTorch, EMA weights)")
-    ap.add_argument("--models-dir", type=Path, default=None)
-    ap.add_argument("--variant", default=None, help="with --model: fp32 (default) or a manifest variant, e.g. int8")
+    add_model_source(ap, required=False,
+                     model_help="a shipped model of public/models/manifest.json (default emdm-t2m-web)")
     ap.add_argument("--steps", type=ints, default=None, help="default 1,2,4,10 (those the model supports)")
     ap.add_argument("--guidance", type=floats, default=GUIDANCE)
-    ap.add_argument("--guidance-min-time", type=float, default=None, metavar="T",
-                    help="guide only steps whose time is above T (default: the manifest's guidanceMinTime, else 0)")
-    ap.add_argument("--x0-smoothing", type=float, default=None, metavar="SIGMA",
-                    help="smooth x̂0 along time (σ frames) at every step but the last (default: the manifest's x0Smoothing, else 0)")
+    add_sampling_settings(ap)
     ap.add_argument("--seconds", type=floats, default=SECONDS)
     ap.add_argument("--seeds", type=int, default=5, help="motions per prompt and setting")
     ap.add_argument("--seed", type=int, default=0)

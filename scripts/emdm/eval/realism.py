@@ -41,6 +41,7 @@ from emdm.eval import kinematics as K
 from emdm.eval.plausibility import batch_plausibility, flip_share
 from emdm.eval.poses import check_frames
 from emdm.eval import markdown as md
+from emdm.eval.args import add_model_source, add_sampling_settings
 from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, evaluator_info, hardware, slug, write_result
 from emdm.eval.sources import ModelSource
 from emdm.model.open import ModelError, open_model
@@ -242,18 +243,13 @@ def run(a) -> Path:
 
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="python -m emdm.eval.realism", description=__doc__.split("\n\n")[0])
-    src = ap.add_mutually_exclusive_group(required=True)
-    src.add_argument("--model", help="a shipped model of public/models/manifest.json (ONNX Runtime)")
-    src.add_argument("--ckpt", type=Path, help="an emdm.train checkpoint (PyTorch, EMA weights)")
-    ap.add_argument("--models-dir", type=Path, default=None)
-    ap.add_argument("--variant", default=None, help="fp32 (default) or a manifest variant, e.g. int8 (the page's)")
+    add_model_source(ap)
     ap.add_argument("--name", default=None, help="result name (default: model, variant and --x0-smoothing)")
     ap.add_argument("--steps", type=int, default=10)
     ap.add_argument("--seeds", type=int, default=8, help="motions per prompt")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--guidance", type=float, default=None, help="default: the manifest's")
-    ap.add_argument("--guidance-min-time", type=float, default=None, metavar="T", help="default: the manifest's")
-    ap.add_argument("--x0-smoothing", type=float, default=None, metavar="SIGMA", help="default: the manifest's")
+    add_sampling_settings(ap)
     ap.add_argument("--decode", choices=["page", "raw"], default="page",
                     help="judge the joints as the page shows them (page: σ = 1 smoothing and foot clean-up, "
                          "emdm.motion.decode) or as recovered (raw); the classifier reads the sampler's features")
