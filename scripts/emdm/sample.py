@@ -47,7 +47,7 @@ import numpy as np
 
 from emdm import manifest as mf
 from emdm import paths
-from emdm.eval import capabilities
+from emdm import prompt_check
 from emdm.writers.bvh import bvh_path, write_bvh
 from emdm.model.open import ModelError, open_model
 from emdm.motion import edit as E
@@ -339,7 +339,7 @@ def run(a: argparse.Namespace) -> int:
         feats, joints = run_edit(a, dataclasses.replace(editor, settings=settings), frames)
         return write_motion(a, feats[None], joints[None])
     cond = make_condition(entry["condition"], a.text, a.action, a.uncond, a.models_dir)
-    far = a.text and a.model and capabilities.prompt_notice(a.model, cond, a.models_dir)
+    far = a.text and a.model and prompt_check.prompt_notice(a.model, cond, a.models_dir)
     if far:                                          # the page says the same beside its prompt box
         print(far, file=sys.stderr)
     known, keep = known_and_keep(a, frames, mean, std) if a.keep else (None, None)

@@ -35,25 +35,19 @@ from typing import Callable
 import numpy as np
 
 from emdm import manifest as mf
-from emdm import paths
 from emdm.data.dataset import parse_text_file
 from emdm.eval.coverage import COVERED, PROMPTS_FILE, CoverageError, chips, load_prompts, normalise, read_result
 from emdm.eval.results import RESULTS_DIR
+from emdm.prompt_check import SCHEMA, SUGGESTIONS, check, dequantise, file_name, load, notice, prompt_notice  # noqa: F401
 from emdm.outdir import OutputRefused, check_writable
 from emdm.paths import DATASET_DIR, display_path
 from emdm import text as text_encoders      # .encode_texts looked up at each call: tests replace it
 
-SCHEMA = 1
 CAPTIONS = 16          # training captions per covered action kept as anchors
-SUGGESTIONS = 3        # closest working prompts offered for an unknown one
 SCALE = 127            # int8 embedding = round(v · SCALE); unit vectors, so |q| ≤ 127
 # prompts a new visitor tried (issue 30) and covered ones: checked by both runtimes against the file's answers
 EXAMPLES = ["a person kicks", "bows", "throws a punch", "dances", "swims", "a person walks", "a person walks forward",
             "a person raises the left hand"]
-
-
-def file_name(model: str) -> str:
-    return f"capabilities-{model}.json"
 
 
 # ----------------------------------------------------------------------------- pure parts
@@ -65,12 +59,6 @@ def build_split(prompts: dict[str, list[str]]) -> tuple[dict[str, list[str]], di
 
 def quantise(emb: np.ndarray) -> np.ndarray:
     return np.clip(np.rint(np.asarray(emb, np.float32) * SCALE), -127, 127).astype(np.int8)
-
-
-def dequantise(q: np.ndarray) -> np.ndarray:
-    """int8 rows → unit float rows (what the page computes with)."""
-    v = np.asarray(q, np.float32)
-    return v / np.maximum(np.linalg.norm(v, axis=1, keepdims=True), 1e-12)
 
 
 def scores(anchors: np.ndarray, emb: np.ndarray) -> np.ndarray:
@@ -87,33 +75,6 @@ def calibrate(known: np.ndarray, unknown: np.ndarray) -> dict:
     return {"threshold": round(float(best), 4),
             "falseWarnings": {"n": int(known.size), "warned": int((known < best).sum())},
             "misses": {"n": int(unknown.size), "notWarned": int((unknown >= best).sum())}}
-
-
-def check(caps: dict, emb: np.ndarray) -> dict:
-    """{known, score, action: the closest anchor's action, nearest: [chip prompts, closest first, one per action]} for
-    one unit embedding."""
-    a = caps["anchors"]
-    vecs = dequantise(np.frombuffer(base64.b64decode(a["embeddings"]), np.int8).reshape(len(a["texts"]), -1))
-    cos = vecs @ np.asarray(emb, np.float32)
-    nearest, seen = [], set()
-    for i in np.argsort(-cos, kind="stable"):
-        if a["suggest"][i] and a["actions"][i] not in seen:
-            seen.add(a["actions"][i])
-            nearest.append(a["texts"][i])
-            if len(nearest) == SUGGESTIONS:
-                break
-    best = int(np.argmax(cos))
-    return {"known": bool(cos[best] >= caps["check"]["threshold"]), "score": round(float(cos[best]), 4),
-            "action": a["actions"][best], "nearest": nearest}
-
-
-def notice(result: dict) -> str | None:
-    """The one line the CLI prints for an unknown prompt (None for a known one); the page says the same."""
-    if result["known"]:
-        return None
-    return ("this prompt is far from what the model does well (best match "
-            f"{result['score']:.2f}); it may come out as walking or standing. Closest prompts that work: "
-            + "; ".join(repr(p) for p in result["nearest"]))
 
 
 # ----------------------------------------------------------------------------- building
@@ -236,26 +197,6 @@ def encoder_info(manifest: dict, encoder_id: str) -> dict:
     if entry is None:
         raise CoverageError(f"manifest.json: no textEncoders entry {encoder_id!r}")
     return {"id": encoder_id, "onnx": entry["onnx"], "sha256": manifest["files"][entry["onnx"]]["sha256"]}
-
-
-def load(model: str, models_dir: Path | str | None = None) -> dict | None:
-    """The shipped capabilities file of ``model`` (None when there is none, or it was built for another encoder file)."""
-    models_dir = paths.models_dir(models_dir)       # the argument, $EMDM_MODELS_DIR or public/models
-    path = models_dir / file_name(model)
-    if not path.is_file():
-        return None
-    caps = json.loads(path.read_text())
-    if caps.get("schema") != SCHEMA or caps.get("model") != model or "check" not in caps:
-        return None
-    enc = caps["encoder"]
-    if mf.load(models_dir)["files"].get(enc["onnx"], {}).get("sha256") != enc["sha256"]:
-        return None                           # embeddings of another encoder file: stale, say nothing
-    return caps
-
-
-def prompt_notice(model: str, emb: np.ndarray, models_dir: Path | str | None = None) -> str | None:
-    caps = load(model, models_dir)
-    return None if caps is None else notice(check(caps, emb))
 
 
 def write(caps: dict, path: Path) -> None:

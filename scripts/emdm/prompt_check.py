@@ -1,0 +1,74 @@
+"""Is a prompt near what a shipped model does well? The runtime half of the capabilities file (the twin of
+``src/capabilities.ts``'s ``checkPrompt``): reads ``capabilities-<model>.json`` beside the model, scores a prompt's
+embedding against its anchors and names the closest working prompts. Light on purpose: ``emdm.sample`` prints its
+line, and a no-torch install runs it; ``emdm.eval.capabilities`` builds the file."""
+from __future__ import annotations
+
+import base64
+import json
+from pathlib import Path
+
+import numpy as np
+
+from emdm import manifest as mf
+from emdm import paths
+
+SCHEMA = 1
+SUGGESTIONS = 3        # closest working prompts offered for an unknown one
+
+
+def file_name(model: str) -> str:
+    return f"capabilities-{model}.json"
+
+
+def dequantise(q: np.ndarray) -> np.ndarray:
+    """int8 rows → unit float rows (what the page computes with)."""
+    v = np.asarray(q, np.float32)
+    return v / np.maximum(np.linalg.norm(v, axis=1, keepdims=True), 1e-12)
+
+
+def check(caps: dict, emb: np.ndarray) -> dict:
+    """{known, score, action: the closest anchor's action, nearest: [chip prompts, closest first, one per action]} for
+    one unit embedding."""
+    a = caps["anchors"]
+    vecs = dequantise(np.frombuffer(base64.b64decode(a["embeddings"]), np.int8).reshape(len(a["texts"]), -1))
+    cos = vecs @ np.asarray(emb, np.float32)
+    nearest, seen = [], set()
+    for i in np.argsort(-cos, kind="stable"):
+        if a["suggest"][i] and a["actions"][i] not in seen:
+            seen.add(a["actions"][i])
+            nearest.append(a["texts"][i])
+            if len(nearest) == SUGGESTIONS:
+                break
+    best = int(np.argmax(cos))
+    return {"known": bool(cos[best] >= caps["check"]["threshold"]), "score": round(float(cos[best]), 4),
+            "action": a["actions"][best], "nearest": nearest}
+
+
+def notice(result: dict) -> str | None:
+    """The one line the CLI prints for an unknown prompt (None for a known one); the page says the same."""
+    if result["known"]:
+        return None
+    return ("this prompt is far from what the model does well (best match "
+            f"{result['score']:.2f}); it may come out as walking or standing. Closest prompts that work: "
+            + "; ".join(repr(p) for p in result["nearest"]))
+
+
+def load(model: str, models_dir: Path | str | None = None) -> dict | None:
+    """The shipped capabilities file of ``model`` (None when there is none, or it was built for another encoder file)."""
+    models_dir = paths.models_dir(models_dir)       # the argument, $EMDM_MODELS_DIR or public/models
+    path = models_dir / file_name(model)
+    if not path.is_file():
+        return None
+    caps = json.loads(path.read_text())
+    if caps.get("schema") != SCHEMA or caps.get("model") != model or "check" not in caps:
+        return None
+    enc = caps["encoder"]
+    if mf.load(models_dir)["files"].get(enc["onnx"], {}).get("sha256") != enc["sha256"]:
+        return None                           # embeddings of another encoder file: stale, say nothing
+    return caps
+
+
+def prompt_notice(model: str, emb: np.ndarray, models_dir: Path | str | None = None) -> str | None:
+    caps = load(model, models_dir)
+    return None if caps is None else notice(check(caps, emb))
