@@ -26,6 +26,8 @@ import type { Skeleton } from './skeleton';
 import { GenerationClient, type ClientEvents } from './worker/client';
 import type { TimelineRequest, TimelineResult, WindowRun } from './worker/generationHost';
 import type { WireGenerateOptions } from './worker/protocol';
+import { type LiveOptions, type LiveStream, startLive } from './live/stream';
+import { solvePose } from './motion/ik';
 
 export type { BeginRequest, MotionRequest } from './requests';
 
@@ -93,6 +95,9 @@ export interface GeneratedTimeline extends Motion {
   windows: WindowRun[];
 }
 
+/** Options of MotionGenerator.live: the first prompt or action, the seed, the window settings (src/live/core.ts) and every window's steps and guidance. */
+export interface LiveCallOptions extends LiveOptions, Partial<Pick<SamplingSettings, 'steps' | 'guidance'>> {}
+
 export interface MotionGenerator {
   readonly manifest: Manifest;
   readonly skeleton: Skeleton;
@@ -112,6 +117,12 @@ export interface MotionGenerator {
    * worker, one request for the whole timeline). Bad input rejects with an EditError naming the segment.
    */
   timeline(segments: readonly TimelineSegment[], options?: TimelineCallOptions): Promise<GeneratedTimeline>;
+  /**
+   * A live stream (src/live/stream.ts): motion made ahead of playback in short windows, each a timeline window
+   * continuing the motion being played (generate with `known`: in the worker where there is one); `prompt()` changes
+   * what comes next, `frameAt(t)` never waits. Resolves once its first window is ready. Bad input: EditError.
+   */
+  live(options: LiveCallOptions): Promise<LiveStream>;
   dispose(): Promise<void>;
 }
 
@@ -169,6 +180,9 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
         if (!r.pose) throw new Error('generation worker: the timeline has no pose (IK) although it was asked for');
         return timelineOf(r, r.pose);
       },
+      live(o) {
+        return liveOn(this as MotionGenerator, o);
+      },
       dispose: () => client.dispose(),
     };
   }
@@ -196,8 +210,23 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
       const r = await host.timeline(timelineRequest(segments, o), { signal: o.signal, onWindow: o.onWindow, onStep: o.onStep }, true);
       return timelineOf(r, r.pose!);
     },
+    live(o) {
+      return liveOn(this as MotionGenerator, o);
+    },
     dispose: () => host.dispose(),
   };
+}
+
+/** A live stream whose windows are `g.generate` calls (so they run where g's generations run). */
+function liveOn(g: MotionGenerator, o: LiveCallOptions): Promise<LiveStream> {
+  const { steps, guidance, ...live } = o ?? {};
+  const entry = g.manifest.models[modelFor(g.manifest, live.action !== undefined ? { action: live.action } : {})];
+  const limits = { fps: entry?.fps ?? g.skeleton.fps, maxFrames: entry?.maxFrames ?? 196 };
+  const sampling = { ...(steps !== undefined ? { steps } : {}), ...(guidance !== undefined ? { guidance } : {}) };
+  return startLive((r) => g.generate({ ...r, ...sampling }), limits, live, (joints) => {
+    const p = solvePose(joints, 1, g.skeleton);
+    return { rootPos: p.rootPos, quats: p.quats };
+  });
 }
 
 function timelineOf(r: TimelineResult, pose: GeneratedMotion['pose']): GeneratedTimeline {
