@@ -15,7 +15,7 @@
  *   GenerationHost, whose backend choice and fallbacks (WebGPU missing or failing → WASM, at load and
  *   while generating) are src/loadModel.ts's; the results are bit-identical on the same backend.
  */
-import type { Timeline, TimelineSegment } from './edit';
+import { type EditCondition, EditError, type Timeline, type TimelineSegment } from './edit';
 import type { GenerateResult, SampleState } from './openModel';
 import { type Manifest, chooseVariant, loadManifest } from './manifest';
 import type { Motion } from './motion/types';
@@ -26,6 +26,7 @@ import type { Skeleton } from './skeleton';
 import { GenerationClient, type ClientEvents } from './worker/client';
 import type { TimelineRequest, TimelineResult, WindowRun } from './worker/generationHost';
 import type { WireGenerateOptions } from './worker/protocol';
+import { liveCondition } from './live/core';
 import { type LiveOptions, type LiveStream, startLive } from './live/stream';
 import { solvePose } from './motion/ik';
 
@@ -218,15 +219,30 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
 }
 
 /** A live stream whose windows are `g.generate` calls (so they run where g's generations run). */
-function liveOn(g: MotionGenerator, o: LiveCallOptions): Promise<LiveStream> {
-  const { steps, guidance, ...live } = o ?? {};
-  const entry = g.manifest.models[modelFor(g.manifest, live.action !== undefined ? { action: live.action } : {})];
-  const limits = { fps: entry?.fps ?? g.skeleton.fps, maxFrames: entry?.maxFrames ?? 196 };
+async function liveOn(g: MotionGenerator, o: LiveCallOptions): Promise<LiveStream> {
+  if (o === null || typeof o !== 'object') throw new EditError(`live: options must be an object such as {prompt: 'a person walks'}, got ${String(o)}`);
+  const { steps, guidance, ...live } = o;
+  const first = liveCondition({ prompt: live.prompt, action: live.action });
+  let entry;
+  try {
+    entry = g.manifest.models[modelFor(g.manifest, first.action !== undefined ? { action: first.action } : {})];
+  } catch (e) {
+    throw new EditError(`live: ${(e as Error).message}`);
+  }
+  const limits = { fps: entry.fps, maxFrames: entry.maxFrames };
   const sampling = { ...(steps !== undefined ? { steps } : {}), ...(guidance !== undefined ? { guidance } : {}) };
-  return startLive((r) => g.generate({ ...r, ...sampling }), limits, live, (joints) => {
+  const check = (c: EditCondition) => {
+    try {
+      resolveRequest(g.manifest, { ...c, ...sampling, frames: 1, seed: 0 });
+    } catch (e) {
+      throw new EditError(`live: ${(e as Error).message}`);
+    }
+  };
+  const solve = (joints: Float32Array) => {
     const p = solvePose(joints, 1, g.skeleton);
     return { rootPos: p.rootPos, quats: p.quats };
-  });
+  };
+  return startLive((r) => g.generate({ ...r, ...sampling }), limits, live, { solve, check });
 }
 
 function timelineOf(r: TimelineResult, pose: GeneratedMotion['pose']): GeneratedTimeline {

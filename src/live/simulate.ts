@@ -19,6 +19,8 @@ export interface SimulatedPrompt {
 export interface SimulatedLive {
   /** frames × 22 × 3 joints as played, world coordinates (stage + origin) */
   joints: Float32Array;
+  /** frames × 2: the pelvis x/z as played, stage coordinates (the root kept near the stage) */
+  stage: Float32Array;
   /** every window generated: its request and the frame it was accepted at */
   windows: { req: LiveWindowRequest; at: number; from: number | null; dropped: boolean }[];
 }
@@ -34,6 +36,7 @@ export async function simulateLive(core: LiveCore, gen: (r: EditRequest) => Prom
   const start = (req: LiveWindowRequest, p: number) => ({ req, ready: p + cost[(req.id - 1) % cost.length] });
   await join(core.request(0)!, 0);
   const joints = new Float32Array(frames * 66);
+  const stage = new Float32Array(frames * 2);
   for (let p = 0; p < frames; p++) {
     if (running && p >= running.ready) {
       const { req } = running;
@@ -46,11 +49,12 @@ export async function simulateLive(core: LiveCore, gen: (r: EditRequest) => Prom
       if (req) running = start(req, p);
     }
     const j = core.frameAt(p);
+    stage.set([j[0], j[2]], p * 2);
     for (let i = 0; i < 66; i += 3) {
       j[i] += core.origin[0];
       j[i + 2] += core.origin[1];
     }
     joints.set(j, p * 66);
   }
-  return { joints, windows };
+  return { joints, stage, windows };
 }

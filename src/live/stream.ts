@@ -16,7 +16,7 @@
  */
 import { type EditCondition, type EditLimits, type EditMotion, type EditRequest, EditError } from '../edit';
 import { AbortError } from '../sampler/sampler';
-import { type LiveSettings, type LiveWindowRequest, LiveCore } from './core';
+import { type LiveSettings, type LiveWindowRequest, LiveCore, liveCondition } from './core';
 
 /** One live window as the stream asks for it: src/edit.ts's EditRequest with a signal that drops it. */
 export type LiveGenerate = (req: EditRequest & { signal: AbortSignal }) => Promise<EditMotion>;
@@ -74,10 +74,20 @@ const push = <T>(a: T[], v: T) => {
 };
 
 /** Start a live stream on `gen` (one window at a time); resolves once its first window is ready. */
-export async function startLive(gen: LiveGenerate, limits: EditLimits, opts: LiveOptions, solve?: (joints: Float32Array) => LiveFrame['pose']): Promise<LiveStream> {
+export interface LiveHooks {
+  /** bone rotations of one frame's joints (IK) for LiveFrame.pose */
+  solve?: (joints: Float32Array) => LiveFrame['pose'];
+  /** throw (an EditError) for a prompt the model cannot take, e.g. an action not among its labels */
+  check?: (c: EditCondition) => void;
+}
+
+export async function startLive(gen: LiveGenerate, limits: EditLimits, opts: LiveOptions, hooks: LiveHooks = {}): Promise<LiveStream> {
+  const { solve, check: checkCondition } = hooks;
+  if (opts === null || typeof opts !== 'object') throw new EditError(`live: options must be an object such as {prompt: 'a person walks'}, got ${String(opts)}`);
   const { seed = 0, clock, window, lead, promptLead, recordSeconds, ...cond } = opts;
   const settings = Object.fromEntries(Object.entries({ window, lead, promptLead, recordSeconds }).filter(([, v]) => v !== undefined));
   const core = new LiveCore(limits, cond, seed, settings);
+  checkCondition?.(core.condition);
   const fps = limits.fps;
   let closed = false;
   let running: { req: LiveWindowRequest; ctl: AbortController; t0: number; promptAt?: number } | null = null;
@@ -132,7 +142,9 @@ export async function startLive(gen: LiveGenerate, limits: EditLimits, opts: Liv
     now,
     prompt(c) {
       check('prompt()');
-      const req = core.prompt(c, playhead());
+      const cond = liveCondition(c);
+      checkCondition?.(cond);
+      const req = core.prompt(cond, playhead());
       if (running) stats.dropped++;
       void run(req, now());
     },

@@ -6,7 +6,7 @@ import os from 'node:os';
 import path from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import type { EditGenerate } from '../../src/edit';
-import { COAST_FRAMES, LIVE_LEAD_FRAMES, LIVE_PROMPT_LEAD_FRAMES, LIVE_WINDOW_FRAMES, LiveCore, RECENTRE_M } from '../../src/live/core';
+import { COAST_FRAMES, LIVE_LEAD_FRAMES, LIVE_PROMPT_LEAD_FRAMES, LiveCore, RECENTRE_M } from '../../src/live/core';
 import { simulateLive } from '../../src/live/simulate';
 import { type Generator, openModel } from '../../src/openModel';
 import { PARITY_DIR, fixtureNoise, loadCase, maxAbsDiff, maxJointDist, tinyModels } from './coreFixtures';
@@ -35,17 +35,18 @@ const gen: EditGenerate = async (r) => {
 };
 
 describe('src/live = emdm.motion.live (tiny-live fixture)', () => {
-  it('uses the same constants', () => {
-    expect([meta.window, meta.lead, meta.promptLead, meta.coast, meta.recentre]).toEqual([LIVE_WINDOW_FRAMES, LIVE_LEAD_FRAMES, LIVE_PROMPT_LEAD_FRAMES, COAST_FRAMES, RECENTRE_M]);
+  it('uses the same constants (the fixture\'s windows are shorter than the default)', () => {
+    expect([meta.lead, meta.promptLead, meta.coast, meta.recentre]).toEqual([LIVE_LEAD_FRAMES, LIVE_PROMPT_LEAD_FRAMES, COAST_FRAMES, RECENTRE_M]);
   });
 
   it('the same windows and the same frames as played, for the same prompts, seeds and prompt times', async () => {
-    const core = new LiveCore({ fps: 20, maxFrames: 196 }, { action: meta.first.label }, meta.first.seed);
+    const core = new LiveCore({ fps: 20, maxFrames: 196 }, { action: meta.first.label }, meta.first.seed, { window: meta.window });
     const sim = await simulateLive(core, gen, meta.frames, meta.prompts.map((p) => ({ frame: p.frame, cond: { action: p.label } })), meta.cost);
     expect(sim.windows.map((w) => [w.req.id, w.req.action, w.req.seed, w.req.frames, w.req.c, w.req.cut, w.at, w.from, w.dropped]))
       .toEqual(meta.windows.map((w) => [w.id, w.label, w.seed, w.frames, w.c, w.cut, w.at, w.from, w.dropped]));
     expect(sim.windows.some((w) => w.from! > w.req.cut)).toBe(true); // a late join is among them
-    expect(meta.windows.map((w) => w.id)).not.toContain(4); // the window dropped by the prompt a frame later: never generated
+    const ids = meta.windows.map((w) => w.id);
+    expect(ids.length).toBeLessThan(ids.at(-1)!); // windows dropped in preparation by a prompt: never generated
     expect([core.base, core.underruns, ...core.origin]).toEqual([meta.base, meta.underruns, ...meta.origin]);
     expect(maxAbsDiff(core.features, fx.get('buffer_features'))).toBeLessThan(1e-4);
     // the tiny model's root jumps metres a frame (hundreds of metres in all) and its joints sit up to 11 m from the

@@ -4,8 +4,8 @@ it generates, which ``src/live/simulate.ts`` must reproduce with the same noise 
     .venv/bin/python -m emdm.motion.live_fixture        # writes tests/fixtures/parity/tiny-live.{json,bin}
 
 The model is ``emdm.motion.edit_fixture.tiny_editor`` (8 one-hot labels, DDGAN, 2 steps, guidance 2.5). The stream
-starts with label ``b`` (seed 7) and plays ``FRAMES`` frames; ``PROMPTS`` are (frame, label): the one at frame 71
-comes while frame 70's window is in preparation (dropped, never generated). Windows cost ``COST`` frames in turn
+starts with label ``b`` (seed 7), windows of ``WINDOW`` new frames, and plays ``FRAMES`` frames; ``PROMPTS`` are
+(frame, label): the one at frame 51 comes while frame 50's window is in preparation (dropped, never generated). Windows cost ``COST`` frames in turn
 (6: on time, before the prompt's cut 10 frames on; 14: late, blended in from the frame after the one playing), so
 both joins are checked. Arrays: ``played_joints`` (FRAMES, 22, 3) as played, world coordinates; ``buffer_features``
 the buffer at the end (from frame ``base``); per noise run ``r<k>_`` its ``x_T``, ``z_<k>``, ``eps_<k>``
@@ -27,13 +27,14 @@ from emdm.sampler.schedule import make_schedule
 
 NAME = "tiny-live"
 FIRST = ("b", 7)
-FRAMES = 170
-PROMPTS = ((25, "e"), (70, "g"), (71, "c"), (120, "h"))
+WINDOW = 20             # new frames of a window (the stream's default is L.WINDOW; shorter keeps the fixture small)
+FRAMES = 105
+PROMPTS = ((25, "e"), (50, "g"), (51, "c"), (80, "h"))
 COST = (6, 14)
 
 
 def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
-    core = L.LiveCore(tiny_editor(parity_dir), FIRST[0], FIRST[1])
+    core = L.LiveCore(tiny_editor(parity_dir), FIRST[0], FIRST[1], window=WINDOW)
     sim = L.simulate(core, FRAMES, PROMPTS, COST)
     sched = make_schedule(STEPS)
     arrays: dict[str, np.ndarray] = {"played_joints": sim.joints, "buffer_features": core.features}
@@ -50,7 +51,7 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
         "model": "tiny-step.onnx", "meanStd": "tiny.meanstd.f32", "labels": list(LABELS), "steps": STEPS,
         "first": {"label": FIRST[0], "seed": FIRST[1]}, "frames": FRAMES,
         "prompts": [{"frame": f, "label": p} for f, p in PROMPTS], "cost": list(COST),
-        "window": L.WINDOW, "lead": L.LEAD, "promptLead": L.PROMPT_LEAD, "coast": L.COAST, "recentre": L.RECENTRE_M,
+        "window": WINDOW, "lead": L.LEAD, "promptLead": L.PROMPT_LEAD, "coast": L.COAST, "recentre": L.RECENTRE_M,
         "base": core.base, "origin": list(core.origin), "underruns": core.underruns, "windows": windows,
     }
     return write_case(out_dir, NAME, meta, arrays)
