@@ -35,7 +35,7 @@ export const LIVE_WINDOW_FRAMES = 40;
 /** The next window is started when fewer frames than this are buffered after the playhead. */
 export const LIVE_LEAD_FRAMES = 30;
 /** A prompt's window continues the motion this many frames after the playhead (what plays when it is ready). */
-export const LIVE_PROMPT_LEAD_FRAMES = 10;
+export const LIVE_PROMPT_LEAD_FRAMES = 8;
 /** Seconds of motion kept behind the playhead (what `record` gives). */
 export const LIVE_RECORD_SECONDS = 60;
 /** Frames played back at a time when nothing is buffered (an underrun). */

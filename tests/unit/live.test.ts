@@ -8,7 +8,7 @@ import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
 import { createGenerator } from '../../src/createGenerator';
 import { type EditMotion, type EditRequest, EditError } from '../../src/edit';
-import { LiveCore, RECENTRE_M } from '../../src/live/core';
+import { LIVE_PROMPT_LEAD_FRAMES, LiveCore, RECENTRE_M } from '../../src/live/core';
 import { simulateLive } from '../../src/live/simulate';
 import { startLive } from '../../src/live/stream';
 import { recoverJoints } from '../../src/motion/recover';
@@ -58,8 +58,8 @@ describe('live stream behaviour (a walking generator, a simulated or a hand-driv
     await new Promise((r) => setTimeout(r, 0));
     calls[2].done();
     await new Promise((r) => setTimeout(r, 0));
-    expect(s.stats()).toMatchObject({ windows: 2, dropped: 1, underruns: 0, blends: [42] });
-    expect(s.stats().latencies[0]).toBeCloseTo(42 / 20 - 1.6, 6); // on time: its first frame is the cut's
+    expect(s.stats()).toMatchObject({ windows: 2, dropped: 1, underruns: 0, blends: [32 + LIVE_PROMPT_LEAD_FRAMES] });
+    expect(s.stats().latencies[0]).toBeCloseTo((32 + LIVE_PROMPT_LEAD_FRAMES) / 20 - 1.6, 6); // on time: its first frame is the cut's
     expect(Array.from(s.frameAt(44 / 20).joints)).not.toEqual(Array.from(before)); // frames after the cut: the new prompt's
     await s.close();
   });

@@ -22,7 +22,7 @@ from emdm.motion.stitch import align_segment
 
 WINDOW = 40             # new frames of a window (2 s at 20 fps; docs/RESULTS.md "Live stream")
 LEAD = 30               # the next window starts when fewer frames are buffered after the playhead
-PROMPT_LEAD = 10        # a prompt's window continues the motion this many frames after the playhead
+PROMPT_LEAD = 8         # a prompt's window continues the motion this many frames after the playhead
 RECORD_SECONDS = 60     # kept behind the playhead
 COAST = 10              # frames played back at a time when nothing is buffered (an underrun)
 RECENTRE_M = 2.0        # the root moves back towards the stage's centre by whole metres once this far from it
