@@ -10,7 +10,8 @@
 //   95th percentile of the played motion elsewhere (record(): what was played, world coordinates).
 //
 //   node scripts/bench/live-bench.mjs                    # defaults: --seconds 180 --steady 120, the page's steps (10)
-//   node scripts/bench/live-bench.mjs --steps 6 --prompt-lead 8 --seconds 60 --json out.json
+//   node scripts/bench/live-bench.mjs --json docs/results/json/live-emdm-t2m-web-node-wasm.json   # then python -m emdm.eval.report
+//   node scripts/bench/live-bench.mjs --steps 6 --prompt-lead 8 --seconds 60
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -115,7 +116,9 @@ await withLibrary(async (load) => {
   const entry = g.manifest.models[MODEL];
   const frames = OVERLAP_FRAMES + live.window;
   console.log(`live-bench: ${MODEL} (${info.backend}, ${info.threads} thread), steps ${steps ?? entry.defaultSteps}, window ${live.window} + ${OVERLAP_FRAMES} frames, lead ${live.lead}, prompt lead ${live.promptLead}; ${os.cpus().length} CPUs, load ${os.loadavg().map((v) => v.toFixed(2)).join(' ')}`);
+  for (const p of PROMPTS) await g.generate({ prompt: p, frames: 40, seed: 0, steps }); // warm-up: every prompt encoded once
   let cost = [];
+  const windowCost = {};
   for (const w of [...new Set([20, 40, 80, live.window])].sort((a, b) => a - b)) { // what a window of w new frames costs
     const ms = [];
     for (let i = 0; i < 7; i++) {
@@ -124,6 +127,7 @@ await withLibrary(async (load) => {
       if (i >= 2) ms.push(performance.now() - t0);
     }
     if (w === live.window) cost = ms;
+    windowCost[w] = ms;
     console.log(`window cost, ${w} + ${OVERLAP_FRAMES} frames: median ${q(ms, 0.5).toFixed(0)} ms, max ${Math.max(...ms).toFixed(0)} ms (${(q(ms, 0.5) / 50).toFixed(1)} frames of playback)`);
   }
 
@@ -139,8 +143,15 @@ await withLibrary(async (load) => {
   const over = ratios.filter((r) => r > 1.5).length;
   console.log(`seams: ${ratios.length} prompt blends, peak acceleration over the eased span ÷ the stream's p95 elsewhere (${all.map((s) => s.p95.toFixed(1)).join(', ')} m/s²): median ${q(ratios, 0.5).toFixed(2)}, p95 ${q(ratios, 0.95).toFixed(2)}, max ${Math.max(...ratios).toFixed(2)}; over 1.5×: ${over}; frames repeated in what was played: ${all.map((s) => s.repeated).join(', ')}`);
   const out = opt('json');
-  if (out) {
-    fs.writeFileSync(out, JSON.stringify({ steps: steps ?? entry.defaultSteps, live, costMs: cost, random: { latencies: lat, stats: random.stats }, steady: { stats: steady.stats, maxPullGap: steady.maxPullGap }, seams: { ratios, p95: all.map((s) => s.p95) } }, null, 1));
+  if (out) { // docs/RESULTS.md "Live stream" (python -m emdm.eval.report reads docs/results/json/live-*.json)
+    const cpu = os.cpus()[0]?.model ?? 'unknown CPU';
+    fs.writeFileSync(out, JSON.stringify({
+      schema: 1, task: 'live', name: `live-${MODEL}-node-${info.backend}`, model: MODEL, runtime: `node ${process.version}, onnxruntime-web ${info.backend}, ${info.threads} thread, in-process`,
+      hardware: `${cpu}, ${os.cpus().length} cores`, load: os.loadavg()[0], steps: steps ?? entry.defaultSteps, variant: g.manifest.models[MODEL].defaultVariant ?? 'fp32', live,
+      windowCost, random: { seconds, prompts: random.prompts, latencies: lat, stats: random.stats },
+      steady: { seconds: steadySeconds, prompts: steady.prompts, latencies: steady.stats.latencies, stats: steady.stats, maxPullGapMs: steady.maxPullGap },
+      seams: { ratios, p95: all.map((x) => x.p95), repeated: all.map((x) => x.repeated), span },
+    }, null, 1) + '\n');
   }
   await g.dispose();
 });
