@@ -27,3 +27,19 @@ def test_a_stalled_generator_plays_the_motion_back_never_a_repeated_frame():
     steps = np.abs(np.diff(sim.joints, axis=0)).max(axis=(1, 2))
     assert (steps > 0).all(), f"frames {np.nonzero(steps == 0)[0] + 1} repeat the one before"
     assert [w[0].id for w in sim.windows] == [1]
+
+
+def test_results_row_says_which_bars_are_met():
+    from emdm.eval import live_section
+    run = {"_file": "live-x.json", "name": "live-x", "runtime": "node", "hardware": "2 cores", "load": 2.0, "steps": 10,
+           "variant": "int8", "live": {"window": 40, "lead": 30, "promptLead": 8}, "windowCost": {"40": [200, 250]},
+           "random": {"latencies": [0.3, 0.4, 1.2]},
+           "steady": {"seconds": 120, "prompts": 23, "stats": {"underruns": 2}},
+           "seams": {"ratios": [0.5, 1.6], "p95": [60.0], "repeated": [0]}}
+    row = live_section.row(run)
+    assert "**0.40 / 1.12 s** over 3 prompts (not met)" in row     # p95 over 1 s
+    assert "**2** in 120 s, 23 prompts (not met)" in row
+    assert "**1/2** (max 1.60×" in row
+    run["random"]["latencies"] = [0.3, 0.4, 0.45]
+    run["steady"]["stats"]["underruns"] = 0
+    assert "(met)" in live_section.row(run) and "not met" not in live_section.row(run)
