@@ -45,6 +45,7 @@ describe('src/live = emdm.motion.live (tiny-live fixture)', () => {
     expect(sim.windows.map((w) => [w.req.id, w.req.action, w.req.seed, w.req.frames, w.req.c, w.req.cut, w.at, w.from, w.dropped]))
       .toEqual(meta.windows.map((w) => [w.id, w.label, w.seed, w.frames, w.c, w.cut, w.at, w.from, w.dropped]));
     expect(sim.windows.some((w) => w.from! > w.req.cut)).toBe(true); // a late join is among them
+    expect(meta.underruns).toBeGreaterThan(0); // and an underrun (a window that took longer than the lead)
     const ids = meta.windows.map((w) => w.id);
     expect(ids.length).toBeLessThan(ids.at(-1)!); // windows dropped in preparation by a prompt: never generated
     expect([core.base, core.underruns, ...core.origin]).toEqual([meta.base, meta.underruns, ...meta.origin]);

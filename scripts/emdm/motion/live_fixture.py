@@ -5,9 +5,11 @@ it generates, which ``src/live/simulate.ts`` must reproduce with the same noise 
 
 The model is ``emdm.motion.edit_fixture.tiny_editor`` (8 one-hot labels, DDGAN, 2 steps, guidance 2.5). The stream
 starts with label ``b`` (seed 7), windows of ``WINDOW`` new frames, and plays ``FRAMES`` frames; ``PROMPTS`` are
-(frame, label): the one at frame 51 comes while frame 50's window is in preparation (dropped, never generated). Windows cost ``COST`` frames in turn
-(6: on time, before the prompt's cut 10 frames on; 14: late, blended in from the frame after the one playing), so
-both joins are checked. Arrays: ``played_joints`` (FRAMES, 22, 3) as played, world coordinates; ``buffer_features``
+(frame, label): the one at frame 51 comes while frame 50's window is in preparation (dropped, never
+generated). Windows cost ``COST`` frames in turn
+(6: on time, before the prompt's cut 8 frames on; 14: late, blended in from the frame after the one playing; 45: longer
+than the lead, so playback runs out and the motion is played back: an underrun), so both joins and the underrun are
+checked. Arrays: ``played_joints`` (FRAMES, 22, 3) as played, world coordinates; ``buffer_features``
 the buffer at the end (from frame ``base``); per noise run ``r<k>_`` its ``x_T``, ``z_<k>``, ``eps_<k>``
 (``emdm.fixtures.draw_noise``). JSON ``windows``: every generated window (id, label, seed, frames, c, cut, accepted
 at, first new frame, dropped, its noise prefix).
@@ -30,7 +32,7 @@ FIRST = ("b", 7)
 WINDOW = 20             # new frames of a window (the stream's default is L.WINDOW; shorter keeps the fixture small)
 FRAMES = 105
 PROMPTS = ((25, "e"), (50, "g"), (51, "c"), (80, "h"))
-COST = (6, 14)
+COST = (6, 14, 45)
 
 
 def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
