@@ -15,7 +15,7 @@
  *   GenerationHost, whose backend choice and fallbacks (WebGPU missing or failing → WASM, at load and
  *   while generating) are src/loadModel.ts's; the results are bit-identical on the same backend.
  */
-import type { Timeline, TimelineSegment } from './edit';
+import { type EditCondition, EditError, type Timeline, type TimelineSegment } from './edit';
 import type { GenerateResult, SampleState } from './openModel';
 import { type Manifest, chooseVariant, loadManifest } from './manifest';
 import type { Motion } from './motion/types';
@@ -26,6 +26,9 @@ import type { Skeleton } from './skeleton';
 import { GenerationClient, type ClientEvents } from './worker/client';
 import type { TimelineRequest, TimelineResult, WindowRun } from './worker/generationHost';
 import type { WireGenerateOptions } from './worker/protocol';
+import { liveCondition } from './live/core';
+import { type LiveOptions, type LiveStream, startLive } from './live/stream';
+import { solvePose } from './motion/ik';
 
 export type { BeginRequest, MotionRequest } from './requests';
 
@@ -93,6 +96,9 @@ export interface GeneratedTimeline extends Motion {
   windows: WindowRun[];
 }
 
+/** Options of MotionGenerator.live: the first prompt or action, the seed, the window settings (src/live/core.ts) and every window's steps and guidance. */
+export interface LiveCallOptions extends LiveOptions, Partial<Pick<SamplingSettings, 'steps' | 'guidance'>> {}
+
 export interface MotionGenerator {
   readonly manifest: Manifest;
   readonly skeleton: Skeleton;
@@ -112,6 +118,12 @@ export interface MotionGenerator {
    * worker, one request for the whole timeline). Bad input rejects with an EditError naming the segment.
    */
   timeline(segments: readonly TimelineSegment[], options?: TimelineCallOptions): Promise<GeneratedTimeline>;
+  /**
+   * A live stream (src/live/stream.ts): motion made ahead of playback in short windows, each a timeline window
+   * continuing the motion being played (generate with `known`: in the worker where there is one); `prompt()` changes
+   * what comes next, `frameAt(t)` never waits. Resolves once its first window is ready. Bad input: EditError.
+   */
+  live(options: LiveCallOptions): Promise<LiveStream>;
   dispose(): Promise<void>;
 }
 
@@ -169,6 +181,9 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
         if (!r.pose) throw new Error('generation worker: the timeline has no pose (IK) although it was asked for');
         return timelineOf(r, r.pose);
       },
+      live(o) {
+        return liveOn(this as MotionGenerator, o);
+      },
       dispose: () => client.dispose(),
     };
   }
@@ -196,8 +211,38 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
       const r = await host.timeline(timelineRequest(segments, o), { signal: o.signal, onWindow: o.onWindow, onStep: o.onStep }, true);
       return timelineOf(r, r.pose!);
     },
+    live(o) {
+      return liveOn(this as MotionGenerator, o);
+    },
     dispose: () => host.dispose(),
   };
+}
+
+/** A live stream whose windows are `g.generate` calls (so they run where g's generations run). */
+async function liveOn(g: MotionGenerator, o: LiveCallOptions): Promise<LiveStream> {
+  if (o === null || typeof o !== 'object') throw new EditError(`live: options must be an object such as {prompt: 'a person walks'}, got ${String(o)}`);
+  const { steps, guidance, ...live } = o;
+  const first = liveCondition({ prompt: live.prompt, action: live.action });
+  let entry;
+  try {
+    entry = g.manifest.models[modelFor(g.manifest, first.action !== undefined ? { action: first.action } : {})];
+  } catch (e) {
+    throw new EditError(`live: ${(e as Error).message}`);
+  }
+  const limits = { fps: entry.fps, maxFrames: entry.maxFrames };
+  const sampling = { ...(steps !== undefined ? { steps } : {}), ...(guidance !== undefined ? { guidance } : {}) };
+  const check = (c: EditCondition) => {
+    try {
+      resolveRequest(g.manifest, { ...c, ...sampling, frames: 1, seed: 0 });
+    } catch (e) {
+      throw new EditError(`live: ${(e as Error).message}`);
+    }
+  };
+  const solve = (joints: Float32Array) => {
+    const p = solvePose(joints, 1, g.skeleton);
+    return { rootPos: p.rootPos, quats: p.quats };
+  };
+  return startLive((r) => g.generate({ ...r, ...sampling }), limits, live, { solve, check });
 }
 
 function timelineOf(r: TimelineResult, pose: GeneratedMotion['pose']): GeneratedTimeline {

@@ -139,7 +139,7 @@ const fmtS = (s: number) => `${Number(s.toFixed(2))} s`;
 const label = (i: number) => `segment ${i + 1}`;
 
 /** A segment's condition for the request ('' prompt and no action: an EditError naming it). */
-function conditionOf(c: EditCondition, i: number | null): EditCondition {
+export function conditionOf(c: EditCondition, i: number | null): EditCondition {
   if (c.action !== undefined && c.action !== '') return { action: c.action };
   const text = typeof c.prompt === 'string' ? c.prompt.trim() : '';
   if (!text) {
@@ -288,7 +288,7 @@ function windowsToGenerate(segments: readonly TimelineSegment[], plan: TimelineP
 }
 
 /** A window's keep mask: its first c frames (the sequence's last c) on every channel, then m free frames. */
-const contextKeep = (c: number, m: number): Float32Array => keepMask(c + m, [{ frames: [[0, c - 1]] }]);
+export const contextKeep = (c: number, m: number): Float32Array => keepMask(c + m, [{ frames: [[0, c - 1]] }]);
 
 /**
  * Generate a timeline window by window (see the header); segments before the first change from

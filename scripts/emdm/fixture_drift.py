@@ -39,7 +39,7 @@ from emdm import fixtures as fx
 from emdm import manifest as mf
 from emdm import paths
 from emdm.sampler import schedule as schedule_mod
-from emdm.motion import edit_fixture, mask_fixture
+from emdm.motion import edit_fixture, live_fixture, mask_fixture
 
 COMMITTED = fx.PARITY_DIR
 ARRAY_RTOL = 3e-5          # float32 arrays no chain amplifies (one model call, inputs, closed-form arrays)
@@ -69,6 +69,7 @@ AMPLIFICATION: dict[str, dict[str, float]] = {
                   "loop_in_place_joints": 1.9e-4, "regen_joints": 1.7e-4, "loop_long_joints": 1.3e-4,
                   "body_features": 6.6e-6, "ease_out": 6.2e-6, "regen_features": 6.1e-6, "loop_features": 5.9e-6,
                   "timeline_features": 5.9e-6, "inbetween_features": 5.9e-6, "loop_long_features": 5.9e-6},
+    "tiny-live": {"played_joints": 1.3e-4, "buffer_features": 6.6e-6},
     "model-emdm-t2m-web": {"features": 2.8e-5, "final_x": 2.2e-5, "joints": 1.3e-5, "step_x0": 2.1e-6,
                            "step_cond": 1.2e-7, "cond": 1.2e-7},       # cond: the text encoder's output
     "model-emdm-a2m-web": {"final_x": 9.2e-6, "features": 3.8e-6, "step_x0": 2.8e-6, "joints": 1.5e-6},
@@ -101,6 +102,10 @@ def _regen_edit(out: Path) -> None:
     edit_fixture.make(out)
 
 
+def _regen_live(out: Path) -> None:
+    live_fixture.make(out)
+
+
 def shipped_models() -> dict[str, dict]:
     """The manifest's models (name → entry); none when public/models has no readable manifest."""
     try:
@@ -121,7 +126,8 @@ def _regen_model(name: str, check_schedule: bool = True) -> Callable[[Path], Non
 
 def regenerators(check_schedule: bool = True) -> dict[str, Callable[[Path], None]]:
     """Case name → a function that writes that case, made by today's code, into a folder."""
-    out = {"tiny": _regen_tiny, "tiny-ddim": _regen_tiny_ddim, "tiny-mask": _regen_mask, "tiny-edit": _regen_edit}
+    out = {"tiny": _regen_tiny, "tiny-ddim": _regen_tiny_ddim, "tiny-mask": _regen_mask, "tiny-edit": _regen_edit,
+           "tiny-live": _regen_live}
     out.update({f"model-{n}": _regen_model(n, check_schedule) for n in shipped_models()})
     return out
 

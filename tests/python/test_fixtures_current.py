@@ -32,8 +32,8 @@ COMMITTED = fd.COMMITTED
 REGENERATE = "regenerate them with `.venv/bin/python -m emdm.fixtures` and commit tests/fixtures/parity/"
 WRITER = "regenerate it with `.venv/bin/python -m emdm.motion.{}_fixture` and commit tests/fixtures/parity/tiny-{}.*"
 WRITERS = {"tiny": REGENERATE, "tiny-ddim": REGENERATE, "tiny-mask": WRITER.format("mask", "mask"),
-           "tiny-edit": WRITER.format("edit", "edit")}
-CASES = ["tiny", "tiny-ddim", "tiny-mask", "tiny-edit"] + [f"model-{n}" for n in fd.shipped_models()]
+           "tiny-edit": WRITER.format("edit", "edit"), "tiny-live": WRITER.format("live", "live")}
+CASES = ["tiny", "tiny-ddim", "tiny-mask", "tiny-edit", "tiny-live"] + [f"model-{n}" for n in fd.shipped_models()]
 NOISE_SEED = 7              # not one of fd.SEEDS, which measured the table
 read_case, compare_case = fd.read_case, fd.compare_case
 
@@ -67,7 +67,7 @@ def test_tiny_cases_are_current(regenerated):
 
 # the inpainting (issue 14's sampler) and editing (timeline, in-between, body part, loop) cases have writers of
 # their own; each must be small, since the TypeScript tests load them
-@pytest.mark.parametrize("name", ["tiny-mask", "tiny-edit"])
+@pytest.mark.parametrize("name", ["tiny-mask", "tiny-edit", "tiny-live"])
 def test_mask_and_edit_cases_are_current(regenerated, name):
     assert_current(regenerated(name), name, WRITERS[name])
     size = (COMMITTED / f"{name}.bin").stat().st_size + (COMMITTED / f"{name}.json").stat().st_size

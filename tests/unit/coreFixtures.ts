@@ -14,14 +14,15 @@ export const PARITY_DIR = process.env.EMDM_PARITY_DIR ?? path.join(ROOT, 'tests'
 export const MODELS_DIR = process.env.EMDM_MODELS_DIR ?? path.join(ROOT, 'public', 'models');
 
 /** A new models folder under `parent` with the tiny step model as an 8-action model (labels a…h; mean 0,
- * std 1 except the root height), its manifest listing the files with their sha256. */
-export function tinyModels(parent: string): { dir: string; manifest: Manifest } {
+ * std 1 except the root height, or `meanStd`: e.g. the parity fixtures' tiny.meanstd.f32), its manifest listing the
+ * files with their sha256. */
+export function tinyModels(parent: string, meanStd?: Buffer): { dir: string; manifest: Manifest } {
   const sha = (b: Buffer) => crypto.createHash('sha256').update(b).digest('hex');
   const onnx = fs.readFileSync(path.join(PARITY_DIR, 'tiny-step.onnx'));
   const ms = new Float32Array(2 * 263);
   ms.fill(1, 263);
   ms[3] = 0.9; // mean root height
-  const msBuf = Buffer.from(ms.buffer);
+  const msBuf = meanStd ?? Buffer.from(ms.buffer);
   const real = JSON.parse(fs.readFileSync(path.join(MODELS_DIR, 'manifest.json'), 'utf8'));
   const manifest = buildTinyManifest(
     real.skeleton,

@@ -37,7 +37,7 @@ import os
 import sys
 from pathlib import Path
 
-from emdm.eval import editing_section, poses, realism, seams
+from emdm.eval import editing_section, live_section, poses, realism, seams
 from emdm.eval.report_plots import plot_coverage, plot_fid_vs_steps, plot_time_vs_steps
 from emdm.eval.report_tables import (
     VARIANT_LABEL, ReportError, action_table, clips_per_row, coverage_section, headlines, models_table,
@@ -75,14 +75,16 @@ def load_results(json_dir: Path | str) -> list[dict]:
         if r.get("schema") != SCHEMA:
             raise ReportError(f"{path}: field 'schema' is {r.get('schema')!r}, expected {SCHEMA}")
         task = r.get("task")
-        if task not in ("text", "action", "timing", "coverage", "editing", "editing-time", "poses", "realism", "seams"):
+        if task not in ("text", "action", "timing", "coverage", "editing", "editing-time", "poses", "realism", "seams",
+                        "live"):
             raise ReportError(f"{path}: field 'task' is {task!r}, expected 'text', 'action', 'timing', 'coverage', "
-                              f"'editing', 'editing-time', 'poses', 'realism' or 'seams'")
+                              f"'editing', 'editing-time', 'poses', 'realism', 'seams' or 'live'")
         need = {"timing": ("rows", "runtime"), "coverage": ("name", "labels", "real", "runs"), "poses": ("name", "rows"),
                 "realism": ("name", "labels", "real", "generated", "rules", "judged"),
                 "editing": ("name", "seams", "semantics", "kept", "loops", "time", "bars"),
                 "editing-time": ("name", "runtime", "hardware", "steps", "time", "bars"),
-                "seams": ("name", "figures", "rows", "bars")}.get(
+                "seams": ("name", "figures", "rows", "bars"),
+                "live": ("name", "runtime", "hardware", "live", "windowCost", "random", "steady", "seams")}.get(
             task, ("name", "kind", "info", "metrics"))
         for k in need:
             if k not in r:
@@ -224,6 +226,9 @@ def _benchmarks(results: list[dict], plots: dict[str, str]) -> list[str]:
                 "ease faster than the calm timeline around them). A loop re-generates all but its ends, so its gait against the plain "
                 "walk varies with the seed either way; in place keeps the gait of the same loop travelling.", ""]
         out += seams.section(seam_runs)
+    live_runs = [r for r in results if r["task"] == "live"]
+    if live_runs:
+        out += live_section.section(live_runs)
     grids = sorted((r for r in results if r["task"] == "poses"), key=lambda r: r["name"])
     if grids:
         out += ["## Impossible poses over the page's settings (issue 12)", "",

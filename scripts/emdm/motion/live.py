@@ -1,0 +1,214 @@
+"""The live stream (issue 33) for evaluation: motion made ahead of playback in short windows, each a timeline window
+continuing the motion being played, new prompts joining as soon as their window exists. The TypeScript twin is
+``src/live/core.ts`` (the bookkeeping) with ``src/live/simulate.ts`` (a simulated clock); the ``tiny-live`` parity
+fixture (``python -m emdm.motion.live_fixture``) checks both. The contract is in ``src/live/core.ts``'s header.
+
+    model = Editor.open(open_model("emdm-t2m-web"), steps=4)
+    core = LiveCore(model, "a person walks forward", seed=1)
+    sim = simulate(core, 600, [(100, "a person waves"), (220, "a person jumps")], cost=[8])
+    sim.joints      # (600, 22, 3) as played, world coordinates; sim.windows: (request, accepted at, first new frame)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from emdm.motion.edit import OVERLAP, TIMELINE_KEEP_FROM, EditError, Editor, context_keep
+from emdm.motion.features import recover_joints
+from emdm.motion.seams import ease_seams, seam_accel
+from emdm.motion.stitch import align_segment
+
+WINDOW = 40             # new frames of a window (2 s at 20 fps; docs/RESULTS.md "Live stream")
+LEAD = 30               # the next window starts when fewer frames are buffered after the playhead
+PROMPT_LEAD = 8         # a prompt's window continues the motion this many frames after the playhead
+RECORD_SECONDS = 60     # kept behind the playhead
+COAST = 10              # frames played back at a time when nothing is buffered (an underrun)
+RECENTRE_M = 2.0        # the root moves back towards the stage's centre by whole metres once this far from it
+FPS = 20
+
+
+@dataclass
+class Request:
+    id: int
+    prompt: str
+    seed: int
+    frames: int
+    c: int
+    cut: int
+    prompted: bool
+    known: np.ndarray | None = None     # (c + W, 263) de-normalised, its first c rows kept
+
+
+@dataclass
+class LiveCore:
+    model: Editor
+    prompt: str
+    seed: int = 0
+    window: int = WINDOW
+    lead: int = LEAD
+    prompt_lead: int = PROMPT_LEAD
+    record_seconds: float = RECORD_SECONDS
+    base: int = 0
+    features: np.ndarray = field(default_factory=lambda: np.zeros((0, 263), np.float32))
+    joints: np.ndarray = field(default_factory=lambda: np.zeros((0, 22, 3), np.float32))
+    origin: tuple = (0.0, 0.0)
+    pending: Request | None = None
+    requested: int = 0
+    underruns: int = 0
+
+    def __post_init__(self):
+        self.prompt = _check_prompt(self.prompt)
+        if OVERLAP + self.window > self.model.max_frames:
+            raise EditError(f"live: a window of {self.window} new frames + {OVERLAP} kept exceeds the model's {self.model.max_frames}")
+
+    @property
+    def end(self) -> int:
+        return self.base + len(self.features)
+
+    def _next(self, cut: int, prompted: bool) -> Request:
+        seed = (self.seed + self.requested) % 2**32
+        self.requested += 1
+        if len(self.features) == 0:
+            self.pending = Request(self.requested, self.prompt, seed, OVERLAP + self.window, 0, 0, prompted)
+            return self.pending
+        known = np.zeros((OVERLAP + self.window, 263), np.float32)
+        known[:OVERLAP] = self.features[cut - OVERLAP - self.base:cut - self.base]
+        self.pending = Request(self.requested, self.prompt, seed, OVERLAP + self.window, OVERLAP, cut, prompted, known)
+        return self.pending
+
+    def request(self, p: int) -> Request | None:
+        """The window to start at playhead p (None: one is under way, or enough is buffered)."""
+        if self.pending is not None or (len(self.features) and self.end - 1 - p >= self.lead):
+            return None
+        return self._next(self.end, False)
+
+    def new_prompt(self, prompt: str, p: int) -> Request:
+        """A prompt at playhead p: the window in preparation is dropped, the new one continues frame p + prompt_lead."""
+        self.prompt = _check_prompt(prompt)
+        self.pending = None
+        if len(self.features) == 0:
+            return self._next(0, True)
+        return self._next(min(self.end, max(self.base + OVERLAP, p + self.prompt_lead)), True)
+
+    def generate(self, req: Request) -> np.ndarray:
+        """The request's raw de-normalised features (the model's sampling, a timeline window's keep)."""
+        m = self.model
+        if req.known is None:
+            return m.denormalise(m.sample(req.prompt, req.frames, req.seed))
+        keep = context_keep(req.c, req.frames - req.c)
+        return m.denormalise(m.sample(req.prompt, req.frames, req.seed, m.normalise(req.known) * keep, keep, TIMELINE_KEEP_FROM))
+
+    def accept(self, req: Request, raw: np.ndarray, p: int) -> tuple[int, bool] | None:
+        """Join a generated window at playhead p: (its first new frame, dropped); None for a stale one."""
+        if self.pending is None or self.pending.id != req.id:
+            return None
+        self.pending = None
+        if req.c == 0 and len(self.features) == 0:
+            self.features = np.asarray(raw, np.float32)
+            self.joints = recover_joints(self.features).astype(np.float32)
+            return 0, False
+        c, cut, n = req.c, req.cut, req.frames
+        self.extend(p)
+        before = min(n, cut - self.base)
+        rows = lambda a, b: self.features[a - self.base:b - self.base]  # noqa: E731
+        f = ease_seams(raw, context_keep(c, n - c), accel=seam_accel(rows(cut - before, cut)))
+        late = max(0, p + 1 - cut)
+        k = c + late
+        if k >= n:
+            return cut, True
+        if late:
+            f = f.copy()
+            f[c:k] = rows(cut, cut + late)
+            f = ease_seams(f, context_keep(k, n - k), accel=seam_accel(rows(cut + late - before, cut + late)))
+        at = cut + late
+        aligned = align_segment(self.joints[at - k - self.base:at - self.base], recover_joints(f), k)
+        self.features = np.concatenate([self.features[:at - self.base], np.asarray(f[k:], np.float32)])
+        self.joints = np.concatenate([self.joints[:at - self.base], np.asarray(aligned[k:], np.float32)])
+        self._recentre()
+        self.trim(p)
+        return at, False
+
+    def extend(self, p: int) -> None:
+        """Make frame p buffered: an underrun plays the motion back from its last frame (mirrored)."""
+        if len(self.features) == 0 or p < self.end:
+            return
+        self.underruns += 1
+        while p >= self.end:
+            n = min(COAST, len(self.features) - 1)
+            idx = np.arange(len(self.features) - 2, len(self.features) - 2 - n, -1)
+            f = self.features[idx].copy()
+            f[:, 0:3] *= -1
+            f[:, 193:259] *= -1
+            self.features = np.concatenate([self.features, f])
+            self.joints = np.concatenate([self.joints, self.joints[idx]])
+
+    def _recentre(self) -> None:
+        last = self.joints[-1, 0]
+        sx, sz = (float(np.trunc(v)) if abs(v) > RECENTRE_M else 0.0 for v in (last[0], last[2]))
+        if sx or sz:
+            self.joints = self.joints.copy()
+            self.joints[..., 0] -= np.float32(sx)
+            self.joints[..., 2] -= np.float32(sz)
+            self.origin = (self.origin[0] + sx, self.origin[1] + sz)
+
+    def trim(self, p: int) -> None:
+        frm = min(p - round(self.record_seconds * FPS), self.end - OVERLAP - self.window)
+        if frm > self.base:
+            self.features = self.features[frm - self.base:]
+            self.joints = self.joints[frm - self.base:]
+            self.base = frm
+
+    def frame_at(self, p: int) -> np.ndarray:
+        """Joints of frame p (22, 3), stage coordinates."""
+        q = max(p, self.base)
+        self.extend(q)
+        return self.joints[q - self.base].copy()
+
+
+@dataclass
+class Simulated:
+    joints: np.ndarray                              # (frames, 22, 3) as played, world coordinates
+    windows: list = field(default_factory=list)     # (request, accepted at p, first new frame or None, dropped)
+
+
+def simulate(core: LiveCore, frames: int, prompts, cost) -> Simulated:
+    """``src/live/simulate.ts``'s clock: at each frame p, (1) the window under way is generated and accepted once
+    p ≥ its start + its cost (cost[(id − 1) mod len]), (2) a prompt at p replaces it, (3) with none under way one may
+    start, (4) frame p is played."""
+    out = Simulated(np.zeros((frames, 22, 3), np.float32))
+
+    def join(req: Request, p: int) -> None:
+        r = core.accept(req, core.generate(req), p)
+        out.windows.append((req, p, None if r is None else r[0], True if r is None else r[1]))
+
+    join(core.request(0), 0)
+    running = None
+    for p in range(frames):
+        if running is not None and p >= running[1]:
+            req, running = running[0], None
+            if core.pending is not None and core.pending.id == req.id:
+                join(req, p)
+        for at, prompt in prompts:
+            if at == p:
+                req = core.new_prompt(prompt, p)
+                running = (req, p + cost[(req.id - 1) % len(cost)])
+        if running is None:
+            req = core.request(p)
+            if req is not None:
+                running = (req, p + cost[(req.id - 1) % len(cost)])
+        j = core.frame_at(p)
+        j[:, 0] += core.origin[0]
+        j[:, 2] += core.origin[1]
+        out.joints[p] = j
+    return out
+
+
+def _check_prompt(prompt) -> str:
+    if not isinstance(prompt, str) or not prompt.strip():
+        raise EditError("live: the prompt is empty; say what the character should do")
+    return prompt.strip()
+
+
+__all__ = ["LiveCore", "Request", "Simulated", "simulate"]

@@ -1,0 +1,135 @@
+// The live stream (src/live): a prompt drops the window in preparation, frameAt never waits nor repeats a frame for
+// lack of motion, memory stays bounded over a long run, the root is kept near the stage and the floor where it was;
+// bad input gets one clear EditError. Behaviour runs on a cheap walking generator (the windows' bookkeeping is what is
+// tested; tests/unit/liveParity.test.ts checks it against Python on the tiny step model), the API on the tiny model.
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { afterAll, describe, expect, it } from 'vitest';
+import { createGenerator } from '../../src/createGenerator';
+import { type EditMotion, type EditRequest, EditError } from '../../src/edit';
+import { LIVE_PROMPT_LEAD_FRAMES, LiveCore, RECENTRE_M } from '../../src/live/core';
+import { simulateLive } from '../../src/live/simulate';
+import { startLive } from '../../src/live/stream';
+import { recoverJoints } from '../../src/motion/recover';
+import { tinyModels } from './coreFixtures';
+
+const D = 263;
+const limits = { fps: 20, maxFrames: 196 };
+/** A walk forward at 1.3 m/s (features), its arms at a height set by the action and seed; kept frames as known. */
+function walk(r: EditRequest): EditMotion {
+  const f = new Float32Array(r.frames * D);
+  const lift = 0.1 * ('abcdefgh'.indexOf(String(r.action)) + 1) + 0.01 * (r.seed % 7);
+  for (let t = 0; t < r.frames; t++) {
+    const row = f.subarray(t * D, (t + 1) * D);
+    row[2] = 0.065;
+    row[3] = 0.9 + 0.02 * Math.sin(t / 3);
+    for (let j = 0; j < 21; j++) {
+      const side = j % 2 ? 1 : -1; // odd: left (+x), as l_hip (1) and l_shoulder (16, even: fixed below)
+      row[4 + 3 * j] = side * 0.15;
+      row[5 + 3 * j] = -0.8 + 0.08 * j + (j >= 15 ? lift * Math.sin(t / 4 + j) : 0);
+      row[6 + 3 * j] = 0.1 * Math.sin(t / 5 + j);
+    }
+    row[4 + 3 * 15] = 0.2; // l_shoulder (joint 16)
+    row[4 + 3 * 16] = -0.2; // r_shoulder (joint 17)
+  }
+  const k = r.known;
+  if (k) for (let i = 0; i < f.length; i++) if (k.keep[i] === 1) f[i] = k.features[i];
+  return { frames: r.frames, fps: 20, features: f, joints: recoverJoints(f, r.frames) };
+}
+
+describe('live stream behaviour (a walking generator, a simulated or a hand-driven clock)', () => {
+  it('a prompt drops the window in preparation (aborted, its result ignored) and joins its own where it was cut', async () => {
+    let t = 0;
+    const calls: { r: EditRequest; signal: AbortSignal; done: () => void }[] = [];
+    const gen = (r: EditRequest & { signal: AbortSignal }) => new Promise<EditMotion>((res) => calls.push({ r, signal: r.signal, done: () => res(walk(r)) }));
+    const started = startLive(gen, limits, { action: 'a', seed: 3, clock: () => t });
+    calls[0].done();
+    const s = await started;
+    expect(calls).toHaveLength(1); // 60 frames buffered: no window needed yet
+    t = 1.6; // frame 32: fewer than 30 frames left ahead
+    s.frameAt(t);
+    expect(calls).toHaveLength(2);
+    const before = s.frameAt(44 / 20).joints;
+    s.prompt({ action: 'c' });
+    expect(calls[1].signal.aborted).toBe(true);
+    expect(calls[2].r).toMatchObject({ action: 'c', seed: 5, frames: 60 });
+    calls[1].done(); // the dropped window arrives after all: ignored
+    await new Promise((r) => setTimeout(r, 0));
+    calls[2].done();
+    await new Promise((r) => setTimeout(r, 0));
+    expect(s.stats()).toMatchObject({ windows: 2, dropped: 1, underruns: 0, blends: [32 + LIVE_PROMPT_LEAD_FRAMES] });
+    expect(s.stats().latencies[0]).toBeCloseTo((32 + LIVE_PROMPT_LEAD_FRAMES) / 20 - 1.6, 6); // on time: its first frame is the cut's
+    expect(Array.from(s.frameAt(44 / 20).joints)).not.toEqual(Array.from(before)); // frames after the cut: the new prompt's
+    await s.close();
+  });
+
+  it('frameAt never waits and never repeats a frame while generation has stalled (an underrun, counted)', async () => {
+    let t = 0;
+    let first = true;
+    const gen = (r: EditRequest) => (first ? ((first = false), Promise.resolve(walk(r))) : new Promise<EditMotion>(() => undefined));
+    const s = await startLive(gen, limits, { action: 'b', clock: () => t });
+    let prev: Float32Array | null = null;
+    for (let p = 0; p < 400; p++) {
+      t = p / 20;
+      const f = s.frameAt(t);
+      expect(f.frame).toBe(p);
+      if (prev) expect(Array.from(f.joints), `frame ${p} repeats frame ${p - 1}`).not.toEqual(Array.from(prev));
+      prev = f.joints;
+    }
+    expect(s.stats().underruns).toBeGreaterThan(0);
+    expect(s.stats().coastedFrames).toBeGreaterThan(300);
+    await s.close();
+  });
+
+  it('memory stays bounded over 20 simulated minutes; the root stays near the stage; the floor stays where it was', async () => {
+    const core = new LiveCore(limits, { action: 'a' }, 1, { recordSeconds: 10 });
+    const prompts = Array.from({ length: 200 }, (_, i) => ({ frame: 100 + i * 117, cond: { action: 'abcdefgh'[i % 8] } }));
+    const frames = 20 * 60 * 20;
+    const held: number[] = [];
+    const gen = async (r: EditRequest) => {
+      held.push(core.frames);
+      return walk(r);
+    };
+    const sim = await simulateLive(core, gen, frames, prompts, [6, 14, 35]);
+    expect(Math.max(...held)).toBeLessThanOrEqual(10 * 20 + 20 + 40 + 30 + 35 + 20);
+    expect(core.features.length).toBe(core.frames * D);
+    expect(core.base).toBeGreaterThan(frames - 400);
+    // walking 1.3 m/s for 20 min: ~1.5 km in the world, within a few metres of the stage's centre on it
+    expect(Math.hypot(...core.origin)).toBeGreaterThan(1000);
+    // the buffer's last frame is moved back once over RECENTRE_M out; a window and the lead ahead walk 70 frames more
+    const most = Math.max(...Array.from(sim.stage, Math.abs));
+    expect(most).toBeLessThan(RECENTRE_M + 1 + 70 * 0.065);
+    // heights as the features have them (never shifted): the pelvis is root height [3] on every frame played
+    const rec = recoverJoints(core.features, core.frames);
+    for (let p = 0; p < core.frames; p++) expect(core.joints[p * 66 + 1]).toBeCloseTo(rec[p * 66 + 1], 5);
+    const y = Array.from({ length: frames }, (_, p) => sim.joints[p * 66 + 1]);
+    expect(Math.min(...y)).toBeGreaterThan(0.85);
+    expect(Math.max(...y)).toBeLessThan(0.95);
+  });
+});
+
+describe('generator.live (the tiny action model, in-process)', () => {
+  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-live-'));
+  afterAll(() => fs.rmSync(tmp, { recursive: true, force: true }));
+
+  it('streams frames with a pose; bad input gets one clear EditError (unknown action, empty prompt, closed stream)', async () => {
+    const g = await createGenerator({ baseUrl: tinyModels(tmp).dir, threads: 1, worker: false });
+    await expect(g.live({ action: 'zz' })).rejects.toThrow(/^live: .*action 'zz' is not a label of tiny \(a, b, c, d, e, f, g, h\)/);
+    await expect(g.live({ prompt: '  ' })).rejects.toThrow(EditError);
+    let t = 0;
+    const s = await g.live({ action: 'b', seed: 2, steps: 2, clock: () => t });
+    const f = s.frameAt(0.5);
+    expect(f.joints).toHaveLength(66);
+    expect(f.pose!.quats).toHaveLength(22 * 4);
+    expect(() => s.prompt('')).toThrow(/live: the edit: the prompt is empty|prompt is empty/);
+    expect(() => s.prompt({ action: 'zz' })).toThrow(/^live: .*action 'zz' is not a label/);
+    expect(() => s.frameAt(-1)).toThrow(/frameAt takes seconds ≥ 0/);
+    t = 1;
+    expect(s.record().frames).toBe(21);
+    await s.close();
+    expect(() => s.frameAt(1)).toThrow(/live: the stream is closed; frameAt\(\) needs an open one/);
+    expect(() => s.prompt('a person waves')).toThrow(/closed/);
+    await g.dispose();
+  });
+});
