@@ -61,28 +61,10 @@ async function runStream(g, secs, nextGap) {
   return { stats, rec, pulls, maxPullGap, prompts: k - 1 };
 }
 
-/** Largest joint acceleration (m/s²) of each frame 1..F−2 of frames × 22 × 3 joints. */
-function accelerations(j, frames, fps) {
-  const a = new Float64Array(frames);
-  for (let t = 1; t < frames - 1; t++) {
-    let m = 0;
-    for (let k = 0; k < 22; k++) {
-      let s2 = 0;
-      for (let x = 0; x < 3; x++) {
-        const v = j[((t + 1) * 22 + k) * 3 + x] - 2 * j[(t * 22 + k) * 3 + x] + j[((t - 1) * 22 + k) * 3 + x];
-        s2 += v * v;
-      }
-      m = Math.max(m, Math.sqrt(s2) * fps * fps);
-    }
-    a[t] = m;
-  }
-  return a;
-}
-
 /** Each prompt's blend: its eased span's peak acceleration ÷ the 95th percentile of the played motion outside every span. */
-function seams(run, span) {
+function seams(run, span, jointAccelerations) {
   const { rec, stats } = run;
-  const acc = accelerations(rec.joints, rec.frames, rec.fps);
+  const acc = jointAccelerations(rec.joints, rec.frames, rec.fps);
   const inSpan = new Uint8Array(rec.frames);
   const peaks = [];
   for (const b of stats.blends) {
@@ -110,6 +92,7 @@ await withLibrary(async (load) => {
   const { createGenerator } = await load('src/createGenerator.ts');
   const { LIVE_DEFAULTS } = await load('src/live/core.ts');
   const { OVERLAP_FRAMES, SEAM_EASE_FRAMES, SEAM_BLEND_EXTRA } = await load('src/edit.ts');
+  const { jointAccelerations } = await load('src/motion/seams.ts');
   const g = await createGenerator({ baseUrl: path.join(ROOT, 'public', 'models') + '/', backend: 'wasm', threads: 1, worker: false });
   const info = await g.load(MODEL);
   const live = { ...LIVE_DEFAULTS, ...settings };
@@ -138,7 +121,7 @@ await withLibrary(async (load) => {
   console.log(`every 5 s for ${steadySeconds} s: ${steady.prompts} prompts, underruns ${steady.stats.underruns} (${steady.stats.coastedFrames} frames played back; bar 0), latency median ${q(steady.stats.latencies, 0.5).toFixed(3)} s, p95 ${q(steady.stats.latencies, 0.95).toFixed(3)} s; longest gap between pulls ${steady.maxPullGap.toFixed(0)} ms; load ${os.loadavg()[0].toFixed(2)}`);
 
   const span = SEAM_EASE_FRAMES + SEAM_BLEND_EXTRA;
-  const all = [seams(random, span), seams(steady, span)];
+  const all = [seams(random, span, jointAccelerations), seams(steady, span, jointAccelerations)];
   const ratios = all.flatMap((s) => s.peaks.map((p) => p / s.p95));
   const over = ratios.filter((r) => r > 1.5).length;
   console.log(`seams: ${ratios.length} prompt blends, peak acceleration over the eased span ÷ the stream's p95 elsewhere (${all.map((s) => s.p95.toFixed(1)).join(', ')} m/s²): median ${q(ratios, 0.5).toFixed(2)}, p95 ${q(ratios, 0.95).toFixed(2)}, max ${Math.max(...ratios).toFixed(2)}; over 1.5×: ${over}; frames repeated in what was played: ${all.map((s) => s.repeated).join(', ')}`);

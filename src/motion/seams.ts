@@ -54,8 +54,20 @@ function reach(d: ArrayLike<number>): number {
  */
 export function seamAccel(features: ArrayLike<number>, frames: number, fps = 20, dim = D): number {
   if (frames < 3) return SEAM_EASE_ACCEL;
-  const j = recoverJoints(Float32Array.from(features), frames, dim);
-  const acc: number[] = [];
+  const acc = Array.from(jointAccelerations(recoverJoints(Float32Array.from(features), frames, dim), frames, fps).subarray(1, frames - 1));
+  acc.sort((x, y) => x - y);
+  const pos = 0.95 * (acc.length - 1);
+  const lo = Math.floor(pos);
+  const p95 = acc[lo] + (acc[Math.min(lo + 1, acc.length - 1)] - acc[lo]) * (pos - lo);
+  return Math.min(SEAM_EASE_ACCEL, Math.max(SEAM_EASE_ACCEL_MIN, p95));
+}
+
+/**
+ * The largest joint's acceleration |J[t+1] − 2J[t] + J[t−1]|·fps² (m/s²) of each frame t = 1..F−2 of frames × 22 × 3
+ * joints, 0 at the two ends (Python `emdm.motion.seams.joint_acceleration`): what a seam's easing keeps to.
+ */
+export function jointAccelerations(j: ArrayLike<number>, frames: number, fps = 20): Float64Array {
+  const acc = new Float64Array(frames);
   for (let t = 1; t < frames - 1; t++) {
     let a = 0;
     for (let k = 0; k < 22; k++) {
@@ -66,13 +78,9 @@ export function seamAccel(features: ArrayLike<number>, frames: number, fps = 20,
       }
       a = Math.max(a, Math.sqrt(q) * fps * fps);
     }
-    acc.push(a);
+    acc[t] = a;
   }
-  acc.sort((x, y) => x - y);
-  const pos = 0.95 * (acc.length - 1);
-  const lo = Math.floor(pos);
-  const p95 = acc[lo] + (acc[Math.min(lo + 1, acc.length - 1)] - acc[lo]) * (pos - lo);
-  return Math.min(SEAM_EASE_ACCEL, Math.max(SEAM_EASE_ACCEL_MIN, p95));
+  return acc;
 }
 
 /** Frames b of a cross-fade over `r` metres whose peak acceleration r·(π/(b+1))²/2·fps² stays within `accel`. */
