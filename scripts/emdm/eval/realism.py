@@ -42,6 +42,7 @@ from emdm.eval.plausibility import batch_plausibility, flip_share
 from emdm.eval.poses import check_frames
 from emdm.eval import markdown as md
 from emdm.eval.args import add_model_source, add_sampling_settings
+from emdm.eval.report_plots import save_figure
 from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, evaluator_info, hardware, slug, write_result
 from emdm.eval.sources import ModelSource
 from emdm.model.open import ModelError, open_model
@@ -389,11 +390,7 @@ def plot(r: dict, path: Path) -> bool:
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3, axis="x")
     fig.suptitle(f"Realism per action: {r['name']}", fontsize=9, y=0.995)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return True
+    return save_figure(fig, path)
 
 
 if __name__ == "__main__":

@@ -12,6 +12,18 @@ from emdm.eval.metrics import mean_ci95
 from emdm.eval.report_tables import VARIANT_LABEL, steps_of, timing_rows
 
 
+
+def save_figure(fig, path: Path) -> bool:
+    """Lay ``fig`` out, write it to ``path`` (its folder made) and free it; True, what a plot function returns once
+    its file is written."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return True
+
 def plot_coverage(r: dict, path: Path) -> bool:
     """Horizontal grouped bars: per action, the real clips' and each step count's recognition rate."""
     import matplotlib
@@ -36,11 +48,7 @@ def plot_coverage(r: dict, path: Path) -> bool:
     fig.suptitle(f"Coverage per action: {r['name']} (* = too few real test clips)", fontsize=9)
     ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=len(series), frameon=False)
     ax.grid(alpha=0.3, axis="x")
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return True
+    return save_figure(fig, path)
 
 
 def _step_axis(ax, steps) -> None:
@@ -94,11 +102,7 @@ def plot_fid_vs_steps(results: list[dict], path: Path) -> bool:
     ax.set_title("Text-to-motion FID vs steps (test split, ±95%)")
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))        # outside: never over a point
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return True
+    return save_figure(fig, path)
 
 
 def plot_time_vs_steps(results: list[dict], path: Path) -> bool:
@@ -127,8 +131,4 @@ def plot_time_vs_steps(results: list[dict], path: Path) -> bool:
     ax.set_title("Generation time per frame vs steps")
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3, which="both")
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return True
+    return save_figure(fig, path)
