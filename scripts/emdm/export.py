@@ -218,7 +218,7 @@ def manifest_entry(name: str, meta: dict, summary: dict, files: dict[str, str], 
         "meanStd": files["meanStd"],
         "zDim": meta["generator"]["z_dim"], "featureDim": meta["generator"]["feature_dim"], "fps": 20,
         "maxFrames": meta["generator"]["max_frames"],
-        "guidance": 2.5, "defaultSteps": default, "supportedSteps": steps,
+        "guidance": extra.get("guidance", 2.5), "defaultSteps": default, "supportedSteps": steps,
         "schedules": {str(T): make_schedule(T).as_manifest() for T in steps},
         "preset": {k: meta["generator"]["preset"][k] for k in ("d", "layers", "heads", "ff")},
         "training": {"steps": summary["steps"], "wallSeconds": round(summary["wall_s"], 1),
@@ -366,23 +366,17 @@ def write_entry(a: argparse.Namespace, out: Path, meta: dict, summary: dict, fil
     """The manifest entry models.<name> (keeping the earlier entry's guidance, guidanceMinTime, x0Smoothing, defaultVariant
     unless given)."""
     var_err = extra.get("variantRelErr", {})
-    w = a.guidance
-    if w is None:        # a re-export keeps the guidance chosen for this model
-        w = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("guidance", 2.5)
-    extra["guidance"] = float(w)
-    gmin = a.guidance_min_time
-    if gmin is None:     # a re-export keeps the threshold chosen for this model
-        gmin = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("guidanceMinTime", 0.0)
+    earlier = mf.load(out, missing_ok=True)["models"].get(a.name, {})   # a re-export keeps what was chosen for it
+    extra["guidance"] = float(earlier.get("guidance", 2.5) if a.guidance is None else a.guidance)
+    gmin = earlier.get("guidanceMinTime", 0.0) if a.guidance_min_time is None else a.guidance_min_time
     if gmin:
         extra["guidanceMinTime"] = float(gmin)
-    sigma = a.x0_smoothing
-    if sigma is None:    # a re-export keeps the smoothing chosen for this model
-        sigma = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("x0Smoothing", 0.0)
+    sigma = earlier.get("x0Smoothing", 0.0) if a.x0_smoothing is None else a.x0_smoothing
     if sigma:
         extra["x0Smoothing"] = float(sigma)
     dv = a.default_variant
-    if dv is None:       # a re-export keeps the variant chosen for this model, while that file is still exported
-        dv = mf.load(out, missing_ok=True)["models"].get(a.name, {}).get("defaultVariant")
+    if dv is None:       # the earlier variant, while that file is still exported
+        dv = earlier.get("defaultVariant")
         dv = dv if dv in var_err else None
     if dv and dv != "fp32":
         extra["defaultVariant"] = dv
