@@ -290,11 +290,12 @@ def test_the_sampling_path_loads_no_torch():
     """`emdm-sample` and `emdm.generate` run in a no-torch install (pip's default extras): importing them must not
     import torch or scipy, directly or through a module they import (the prompt check once pulled in the eval
     classifier, and with it torch: 1.4 s per command, and a traceback without torch)."""
+    import os
     import subprocess
     import sys
 
     code = ("import sys, emdm.sample, emdm.generation, emdm.prompt_check; "
             "print(sorted(m for m in ('torch', 'scipy') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
-                         env={**__import__("os").environ, "PYTHONPATH": str(ROOT)})
+                         env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert out.stdout.strip() == "[]", out.stdout + out.stderr
