@@ -52,6 +52,7 @@ import { SEAM_EASE_FRAMES, easeSeams, seamAccel } from './motion/seams';
 import { appendSegment, pinKeptRoot } from './motion/stitch';
 import { keepMask, type FeatureGroup, type KnownMotion } from './sampler/mask';
 import { AbortError } from './sampler/sampler';
+import type { SamplingSettings } from './sampler/settings';
 import type { SampleState } from './openModel';
 
 export {
@@ -87,6 +88,7 @@ export interface TimelineSegment extends EditCondition {
 export interface EditRequest extends EditCondition {
   frames: number;
   seed: number;
+  /** the motion to keep part of, de-normalised (MotionRequest's `known`; the model normalises it into SamplingSettings') */
   known?: KnownMotion;
   /** finish what `EditBegin` started for this request (the generator's SampleState) */
   resume?: SampleState;
@@ -94,14 +96,13 @@ export interface EditRequest extends EditCondition {
 
 /**
  * A timeline window's steps before its context joins, as `EditBegin` gets them: its condition, frames and seed, the
- * frames it will keep (`keep`, imposed from `keepFromTime` on; absent for the timeline's first window) and `stopAt`.
+ * frames it will keep (SamplingSettings' `keep`, imposed from `keepFromTime` on; absent for the timeline's first
+ * window) and `stopAt`.
  */
-export interface EditBeginRequest extends EditCondition {
+export interface EditBeginRequest extends EditCondition, Pick<SamplingSettings, 'keep' | 'keepFromTime'> {
   frames: number;
   seed: number;
   stopAt: number;
-  keep?: Float32Array;
-  keepFromTime?: number;
 }
 
 /**

@@ -20,7 +20,7 @@ export { createGenerator } from './createGenerator';
 export type { BeginRequest, CreateGeneratorOptions, GeneratedMotion, GeneratedTimeline, LiveCallOptions, MotionGenerator, MotionRequest, TimelineCallOptions } from './createGenerator';
 /** generator.live's stream: frames pulled by time, prompts that change what comes next (src/live/stream.ts) */
 export type { LiveFrame, LiveStats, LiveStream } from './live/stream';
-export type { SamplerName, SamplingSettings } from './sampler/settings';
+export type { RequestSettings, SamplerName, SamplingSettings } from './sampler/settings';
 export type { Motion } from './motion/types';
 export type { SampleState } from './openModel';
 export type { WindowRun } from './worker/generationHost';

@@ -18,15 +18,15 @@ import { IncompatibleModelError, stepFunction } from './runtime/stepModel';
 import { together } from './sampler/lockstep';
 import { type RandomState, SeededRandom } from './sampler/rng';
 import { type NoiseSource, type SampleOptions, type StepFn, sample } from './sampler/sampler';
-import type { SamplerName, SamplingSettings } from './sampler/settings';
+import { type RequestSettings, type SamplerName, inpaintingSettings } from './sampler/settings';
 import type { KnownMotion } from './sampler/mask';
 import { type Schedule, scheduleFor } from './sampler/schedule';
 import type { TextEncoder } from './text';
 
 export type { Condition };
 
-/** One generation on one model: what to generate, its SamplingSettings (steps and guidance given; `method`, `guidanceMinTime` and `x0Smoothing` default to the model's), and how to report. */
-export interface GenerateOptions extends SamplingSettings {
+/** One generation on one model: what to generate, its SamplingSettings (steps and guidance given; `method`, `guidanceMinTime` and `x0Smoothing` default to the model's; inpainting as `known`), and how to report. */
+export interface GenerateOptions extends RequestSettings {
   condition: Condition;
   /** motion length in frames at 20 fps (1 … maxFrames) */
   frames: number;
@@ -45,7 +45,8 @@ export interface GenerateOptions extends SamplingSettings {
    * (frames × featureDim, de-normalised like `Motion.features`) where `keep` (`keepMask`) is 1; the rest is
    * generated around them. The result's features equal `features` there (up to float rounding), and kept
    * frames decode to `recoverJoints(features)`'s joints (free frames' root velocities are adjusted: `pinKeptRoot`).
-   * `fromTime`: the sampler's `keepFromTime` (default every step).
+   * `fromTime`: the sampler's `keepFromTime` (default every step). The sampler's settings get it normalised
+   * (`inpaintingSettings`: SamplingSettings' `known`, `keep`, `keepFromTime`).
    */
   known?: KnownMotion;
   /**
@@ -292,13 +293,12 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     const cond = await condition.vector(o.condition);
     const prompt = o.condition.type === 'text' ? await condition.tokens(o.condition.text) : undefined;
     const check = o.condition.type === 'text' ? await condition.check(cond) : undefined;
-    const known = o.known?.features?.map((v, i) => (v - mean[i % D]) / std[i % D]);
     return {
       prompt, ...(check ? { check } : {}),
       options: {
         method, schedule, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance,
         guidanceMinTime: o.guidanceMinTime ?? entry.guidanceMinTime ?? 0, x0Smoothing: o.x0Smoothing ?? entry.x0Smoothing ?? 0, signal: o.signal, onStep: o.onStep,
-        ...(o.known ? { ...(known ? { known } : {}), keep: o.known.keep, keepFromTime: o.known.fromTime } : {}),
+        ...inpaintingSettings(o.known, mean, std),
         ...(resume ? { resume: { x: resume.x, next: resume.next } } : {}),
       },
     };

@@ -7,10 +7,13 @@
 import type { BeginOptions, GenerateOptions, SampleState } from './openModel';
 import type { Manifest, ModelEntry } from './manifest';
 import type { KnownMotion } from './sampler/mask';
-import type { SamplingSettings } from './sampler/settings';
+import type { RequestSettings, SamplingSettings } from './sampler/settings';
 
-/** A request: what to generate, and how to sample it (SamplingSettings, each field defaulting to the model's manifest entry). */
-export interface MotionRequest extends Partial<SamplingSettings> {
+/**
+ * A request: what to generate, and how to sample it (SamplingSettings as a request gives them, each field defaulting to
+ * the model's manifest entry; inpainting as `known`, which the model turns into the settings' normalised `known`).
+ */
+export interface MotionRequest extends Partial<RequestSettings> {
   /** text prompt (text model) */
   prompt?: string;
   /** action label: its index or its name in the action model's labels */
@@ -29,7 +32,8 @@ export interface MotionRequest extends Partial<SamplingSettings> {
    * in-betweening, body-part edits and loops): keep the entries of `features` (frames × 263, de-normalised: an
    * earlier result's `features`) where `keep` (`keepMask(frames, …)`) is 1 and generate the rest. The arrays are
    * copied, not taken. Kept frames after free ones decode where the known motion has them (`pinKeptRoot`).
-   * `fromTime`: impose them only at the steps with t ≤ it (and the last; default every step).
+   * `fromTime`: impose them only at the steps with t ≤ it (and the last; default every step). Not the sampler's
+   * SamplingSettings `known` (normalised features): the model makes that, with `keep` and `keepFromTime`, from this.
    */
   known?: KnownMotion;
   /** finish a generation `begin` started (its state; the request as it was begun, now with `known.features`) */
@@ -42,7 +46,7 @@ export interface MotionRequest extends Partial<SamplingSettings> {
  * A request to `MotionGenerator.begin` (src/edit.ts's EditBeginRequest fits it): a generation stopped before its first
  * denoising step with t ≤ `stopAt`; `keep` (with `keepFromTime`) marks what it will keep once `known` is given.
  */
-export type BeginRequest = Omit<MotionRequest, 'known' | 'resume' | 'onStep' | 'signal'> & { stopAt: number; keep?: Float32Array; keepFromTime?: number };
+export type BeginRequest = Omit<MotionRequest, 'known' | 'resume' | 'onStep' | 'signal'> & { stopAt: number } & Pick<SamplingSettings, 'keep' | 'keepFromTime'>;
 
 /** The options of one generation as they cross to the worker (src/worker/protocol.ts): GenerateOptions without its signal, callbacks and noise source. */
 export type WireGenerateOptions = Omit<GenerateOptions, 'signal' | 'onStep' | 'onPreview' | 'noise'> & {
@@ -104,8 +108,8 @@ export function resolveRequest(manifest: Manifest, req: MotionRequest): { model:
   };
 }
 
-/** A request's SamplingSettings with the manifest's steps and guidance filled in (the rest, when absent, openModel's defaults). */
-function settingsOf(req: Partial<SamplingSettings>, entry: ModelEntry): SamplingSettings {
+/** A request's settings with the manifest's steps and guidance filled in (the rest, when absent, openModel's defaults). */
+function settingsOf(req: Partial<RequestSettings>, entry: ModelEntry): RequestSettings {
   const { method, steps = entry.defaultSteps, guidance = entry.guidance, guidanceMinTime, x0Smoothing } = req;
   return {
     ...(method !== undefined ? { method } : {}), steps, guidance,

@@ -27,6 +27,7 @@ import { type EditCondition, type EditLimits, EditError, OVERLAP_FRAMES, TIMELIN
 import { recoverJoints } from '../motion/recover';
 import { SEAM_EASE_FRAMES, easeSeams, seamAccel } from '../motion/seams';
 import { alignSegment } from '../motion/stitch';
+import type { KnownMotion } from '../sampler/mask';
 
 const D = 263;
 const JV = 22 * 3;
@@ -61,7 +62,8 @@ export interface LiveWindowRequest extends EditCondition {
   cut: number;
   /** requested by a prompt (not by the lead running low) */
   prompted: boolean;
-  known?: { features: Float32Array; keep: Float32Array; fromTime: number };
+  /** the context it continues, de-normalised (EditRequest's `known`), imposed from TIMELINE_KEEP_FROM on */
+  known?: Required<KnownMotion>;
 }
 
 /** What accepting a window did: the first frame it changed (`from`), or dropped (nothing left after the shown frames). */

@@ -50,6 +50,12 @@ export function recoverJoints(features: Float32Array | Float64Array, frames: num
   return out;
 }
 
+/** (x − mean) / std, per feature channel (frames × dim): denormalize's inverse, how a known motion enters the sampler. */
+export function normalizeFeatures(x: Float32Array, mean: Float32Array, std: Float32Array): Float32Array {
+  const dim = mean.length;
+  return x.map((v, i) => (v - mean[i % dim]) / std[i % dim]);
+}
+
 /** x·std + mean, per feature channel (frames × dim). */
 export function denormalize(x: Float32Array, mean: Float32Array, std: Float32Array): Float32Array {
   const dim = mean.length;

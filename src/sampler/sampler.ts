@@ -3,7 +3,7 @@
  * step model is a function, the noise a source, so tests can run it with fixture noise. The update rule is
  * the registry's (src/sampler/registry.ts: `settings.method`): the few-step DDGAN posterior (fresh z and ε every
  * step, ddgan.ts) for EMDM models and deterministic DDIM (z drawn then zeroed, no ε, ddim.ts) for the plain
- * diffusion baseline. With `known` and `keep` (src/sampler/mask.ts) the loop inpaints: docs/ARCHITECTURE.md
+ * diffusion baseline. With the settings' `known` and `keep` (src/sampler/mask.ts) the loop inpaints: docs/ARCHITECTURE.md
  * "Sampling with constraints".
  */
 import { MAX_STEPS, MAX_X0_SMOOTHING } from '../manifest';
@@ -40,8 +40,9 @@ export class AbortError extends Error {
 }
 
 /**
- * One sampling run: the request's SamplingSettings as they came (`method` default 'ddgan'; the step count is the
- * schedule's, made for `steps` by scheduleFor), the step model, the noise, the shapes and the inpainting data.
+ * One sampling run: the request's SamplingSettings as they came, inpainting (`known`, `keep`, `keepFromTime`)
+ * included (`method` default 'ddgan'; the step count is the schedule's, made for `steps` by scheduleFor), the step
+ * model, the noise and the model's shapes (Python's `z_dim`/`feature_dim` settings).
  */
 export interface SampleOptions extends Omit<SamplingSettings, 'steps'> {
   /** the schedule of the settings' `steps` (one object holds every rule's coefficients: scheduleFor / computeSchedule) */
@@ -53,25 +54,6 @@ export interface SampleOptions extends Omit<SamplingSettings, 'steps'> {
   zDim: number;
   /** condition vector [C]; a zero vector means unconditional */
   cond: Float32Array;
-  /**
-   * Inpainting: a known motion [L, D] in NORMALISED feature space and a 0/1 mask [L, D] (`keepMask`) of its
-   * entries to keep. x_T's kept part becomes aCum[T]·known + sCum[T]·x_T and x̂0's kept part is replaced by
-   * `known` before every update, so the model sees the known motion noised to each step's level and the
-   * result equals `known` exactly where keep = 1. Give both or neither.
-   */
-  known?: Float32Array;
-  keep?: Float32Array;
-  /**
-   * The kept part is imposed only at the steps whose time t_k ≤ keepFromTime (x_T's when the first step's is)
-   * and always at the last step: the earlier steps are shaped by the condition alone, the later ones reconcile
-   * the motion with the known part (a timeline window: src/edit.ts TIMELINE_KEEP_FROM). Absent or 1: every step.
-   * The frames kept on every channel at the start (`leadFrames`: a window's context) sit the earlier steps out: the
-   * model sees frames [lead, L) only, a generation of its own, and they join at the first imposing step k as
-   * aCum[k+1]·known + sCum[k+1]·(their x_T draw), the known motion noised to that step's level. That saves their
-   * rows at the steps they would not shape and leaves a window's early steps independent of what it continues.
-   * The random draws do not depend on it (x_T and every ε are drawn for all L frames; the rows left out go unused).
-   */
-  keepFromTime?: number;
   /**
    * Stop before the first step whose time is ≤ stopAt (at the latest before the last step; with one step, before
    * it) and return the state there (`SampleResult.next`): the first part of a run that `resume` finishes — a

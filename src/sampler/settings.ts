@@ -1,9 +1,16 @@
 /**
  * How to sample, as ONE object from the library's request to the sampler loop (Python: `emdm.sampler`'s
- * `SamplingSettings`, the same names). createGenerator's `MotionRequest` takes it with every field optional (the
- * model's manifest entry fills the rest), the generation host and `Generator.generate` take it filled in, and
- * `sample()` reads it as it came: each field is declared and documented here only.
+ * `SamplingSettings`, the same fields: `guidance_min_time` is `guidanceMinTime` and so on;
+ * tests/unit/sampling-settings.test.ts reads both). Python's `z_dim`/`feature_dim`, the model's shapes, are
+ * `SampleOptions`' `zDim`/`featureDim` here: openModel takes them from the manifest, never from a request.
+ *
+ * A request (createGenerator's `MotionRequest`, openModel's `GenerateOptions`) gives its `RequestSettings`, every
+ * field optional there (the model's manifest entry fills the rest), and its inpainting as `known`, a de-normalised
+ * `KnownMotion`; openModel turns that into the settings' normalised `known`, `keep` and `keepFromTime`
+ * (`inpaintingSettings`), and `sample()` reads the settings as they came: each field is declared and documented here only.
  */
+import { normalizeFeatures } from '../motion/recover';
+import type { KnownMotion } from './mask';
 
 /** An update rule of the sampler registry (src/sampler/registry.ts): the built-in 'ddgan' and 'ddim', or a registered one. */
 export type SamplerName = 'ddgan' | 'ddim' | (string & {});
@@ -34,4 +41,43 @@ export interface SamplingSettings {
    * `x0Smoothing`, else 0 = off, bit for bit; the random draws do not depend on it.
    */
   x0Smoothing?: number;
+  /**
+   * Inpainting (docs/ARCHITECTURE.md "Sampling with constraints"): a known motion [L, D] in NORMALISED feature space
+   * (a request's de-normalised `KnownMotion.features` through the model's mean/std: `inpaintingSettings`), kept where
+   * `keep` is 1. x_T's kept part becomes aCum[T]·known + sCum[T]·x_T and x̂0's kept part is replaced by `known` before
+   * every update, so the model sees the known motion noised to each step's level and the result equals `known`
+   * exactly where keep = 1. Give both or neither (a run that stops before the kept part is imposed may give `keep` alone).
+   */
+  known?: Float32Array;
+  /** the 0/1 mask [L, D] (`keepMask`) of `known`'s entries to keep */
+  keep?: Float32Array;
+  /**
+   * The kept part is imposed only at the steps whose time t_k ≤ keepFromTime (x_T's when the first step's is)
+   * and always at the last step: the earlier steps are shaped by the condition alone, the later ones reconcile
+   * the motion with the known part (a timeline window: src/edit.ts TIMELINE_KEEP_FROM). Absent or 1: every step.
+   * The frames kept on every channel at the start (`leadFrames`: a window's context) sit the earlier steps out: the
+   * model sees frames [lead, L) only, a generation of its own, and they join at the first imposing step k as
+   * aCum[k+1]·known + sCum[k+1]·(their x_T draw), the known motion noised to that step's level. That saves their
+   * rows at the steps they would not shape and leaves a window's early steps independent of what it continues.
+   * The random draws do not depend on it (x_T and every ε are drawn for all L frames; the rows left out go unused).
+   */
+  keepFromTime?: number;
+}
+
+/** The inpainting fields of SamplingSettings: in a request they arrive together as its de-normalised `known` (KnownMotion). */
+export type InpaintingField = 'known' | 'keep' | 'keepFromTime';
+
+/** SamplingSettings as a request gives them: all but inpainting, which a request gives as `known: KnownMotion`. */
+export type RequestSettings = Omit<SamplingSettings, InpaintingField>;
+
+/**
+ * A request's known motion as the sampler's inpainting settings: its features normalised with the model's `mean`/`std`
+ * (`normalizeFeatures`), its `keep`, and `fromTime` as `keepFromTime`. A request of `Generator.begin` that stops
+ * before the kept part is imposed may carry `keep` without `features`; no known motion gives no fields.
+ */
+export function inpaintingSettings(
+  known: (Omit<KnownMotion, 'features'> & { features?: Float32Array }) | undefined, mean: Float32Array, std: Float32Array,
+): Pick<SamplingSettings, InpaintingField> {
+  if (!known) return {};
+  return { ...(known.features ? { known: normalizeFeatures(known.features, mean, std) } : {}), keep: known.keep, keepFromTime: known.fromTime };
 }

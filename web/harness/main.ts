@@ -8,7 +8,7 @@ import type { Generator, GenerateOptions } from '../../src/openModel';
 import { SeededRandom } from '../../src/sampler/rng';
 import { createTextEncoder } from '../../src/text';
 import { GenerationClient } from '../../src/worker/client';
-import type { SamplingSettings } from '../../src/sampler/settings';
+import type { RequestSettings } from '../../src/sampler/settings';
 import { buildTinyManifest } from '../../tests/fixtures/parity/tinyManifest';
 import tinyMeanStdUrl from '../../tests/fixtures/parity/tiny.meanstd.f32?url&no-inline';
 import tinyOnnxUrl from '../../tests/fixtures/parity/tiny-step.onnx?url&no-inline';
@@ -21,8 +21,8 @@ const MODELS = params.get('models') ?? `${import.meta.env.BASE_URL}models/`;
 // ?via=worker runs generate() in the page's generation worker (src/worker) instead of on this thread
 const VIA_WORKER = params.get('via') === 'worker';
 
-/** A harness request: the model and what to generate, sampled with its SamplingSettings. */
-export interface HarnessRequest extends SamplingSettings {
+/** A harness request: the model and what to generate, sampled with its SamplingSettings (no inpainting here). */
+export interface HarnessRequest extends RequestSettings {
   /** 'tiny' / 'tiny-ddim' (the parity fixture's tiny step model, DDGAN / DDIM) or a shipped model name */
   model: string;
   /** a manifest variant of the model (e.g. 'int8'); default its fp32 file */
