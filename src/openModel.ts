@@ -18,7 +18,7 @@ import { IncompatibleModelError, stepFunction } from './runtime/stepModel';
 import { together } from './sampler/lockstep';
 import { type RandomState, SeededRandom } from './sampler/rng';
 import { type NoiseSource, type SampleOptions, type StepFn, sample } from './sampler/sampler';
-import { type RequestSettings, type SamplerName, inpaintingSettings } from './sampler/settings';
+import { type RequestSettings, type SamplerName, inpaintingSettings, methodOf } from './sampler/settings';
 import type { KnownMotion } from './sampler/mask';
 import { type Schedule, scheduleFor } from './sampler/schedule';
 import type { TextEncoder } from './text';
@@ -260,7 +260,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     throw new ModelFileError('manifest.json', 'missing', `models.${model}.variants has no '${opts.variant}' (variants: ${Object.keys(entry.variants ?? {}).join(', ') || 'none'})`);
   }
   const D = entry.featureDim;
-  const samplerName: SamplerName = entry.objective === 'diffusion' ? 'ddim' : 'ddgan';
+  const samplerName = methodOf(entry.objective);
 
   const [bytes, msBuf] = await fetchFiles(opts, [onnxPath, entry.meanStd]);
   const { mean, std } = parseMeanStd(msBuf, D, entry.meanStd);

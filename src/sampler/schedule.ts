@@ -17,7 +17,7 @@
  * the manifest's time grid is the one they were computed for.
  */
 
-import type { SamplerName } from './settings';
+import { type SamplerName, methodOf } from './settings';
 
 export interface Schedule {
   /** number of denoising steps T */
@@ -135,7 +135,7 @@ export interface ScheduleSource {
  * - 'ddim': computed; a manifest `schedules[steps].time` must be the grid the marginals belong to.
  */
 export function scheduleFor(model: ScheduleSource, steps: number, modelName = 'model',
-  method: SamplerName = model.objective === 'diffusion' ? 'ddim' : 'ddgan'): Schedule {
+  method: SamplerName = methodOf(model.objective)): Schedule {
   const supported = model.supportedSteps ?? [];
   if (!supported.includes(steps)) {
     throw new RangeError(

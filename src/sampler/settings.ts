@@ -15,6 +15,11 @@ import type { KnownMotion } from './mask';
 /** An update rule of the sampler registry (src/sampler/registry.ts): the built-in 'ddgan' and 'ddim', or a registered one. */
 export type SamplerName = 'ddgan' | 'ddim' | (string & {});
 
+/** The update rule a manifest `objective` calls for: "diffusion" → 'ddim', else (absent, "ddgan") 'ddgan' (Python `method_of`). */
+export function methodOf(objective: string | undefined): SamplerName {
+  return objective === 'diffusion' ? 'ddim' : 'ddgan';
+}
+
 export interface SamplingSettings {
   /**
    * The update rule (src/sampler/registry.ts): 'ddgan' (the EMDM posterior, a fresh z and ε every step) for models of

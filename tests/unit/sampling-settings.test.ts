@@ -12,7 +12,7 @@ import { createGenerator } from '../../src/createGenerator';
 import { openModel } from '../../src/openModel';
 import { loadManifest } from '../../src/manifest';
 import { type MotionRequest, resolveRequest } from '../../src/requests';
-import { inpaintingSettings } from '../../src/sampler/settings';
+import { inpaintingSettings, methodOf } from '../../src/sampler/settings';
 import { tinyModels } from './coreFixtures';
 
 const ROOT = path.resolve(__dirname, '../..');
@@ -106,5 +106,9 @@ describe('SamplingSettings', () => {
     // @ts-expect-error a request's known is a de-normalised KnownMotion, not SamplingSettings' normalised features
     const wrong: MotionRequest = { known: got.known };
     expect(wrong.known).toBe(got.known);
+  });
+
+  it('a model\'s objective names its update rule as Python\'s method_of does (absent: ddgan)', () => {
+    expect([methodOf('ddgan'), methodOf('diffusion'), methodOf(undefined)]).toEqual(['ddgan', 'ddim', 'ddgan']);
   });
 });
