@@ -26,7 +26,7 @@ def caps():
 
 def test_far_prompts_are_unknown_and_get_three_working_suggestions(caps):
     chips = set(read_result(RESULTS_DIR / "json" / f"coverage-{T2M}.json")["chips"]["prompts"])
-    for p in ["a person kicks", "bows", "throws a punch", "dances", "swims"]:
+    for p in ["a person kicks", "dances", "swims", "a person does a cartwheel", "plays the guitar"]:
         r = C.check(caps, encode_texts([p])[0])
         assert not r["known"], (p, r)
         assert len(r["nearest"]) == 3 and set(r["nearest"]) <= chips, r
