@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -194,3 +195,35 @@ def load_weights_file(path: Path | str) -> dict:
         raise CheckpointError(f"{path}: 'G_ema' is not a state dict")
     st["G_ema"] = {k: v.float() for k, v in st["G_ema"].items()}
     return st
+
+
+def half_weights_file(src: Path | str, dst: Path | str) -> Path:
+    """A --weights-out file (or ckpt.pt) as a float16 --weights-out file: the next call of a GPU lease continues
+    from what the last one returned, at half the size it travels (scripts/gpu/lease.sh init). Read with every
+    check, written atomically with a fresh checksum; meta, step, wall and losses are kept."""
+    st = load_weights_file(src)
+    dst = Path(dst)
+    save_weights_file(dst, st["G_ema"], step=st["step"], wall=st["wall"], meta=st["meta"],
+                      last_losses=st.get("last_losses", {}), dtype="float16")
+    return dst
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m emdm.checkpoints half SRC DST``: see half_weights_file."""
+    import argparse
+    ap = argparse.ArgumentParser(prog="python -m emdm.checkpoints", description=main.__doc__)
+    ap.add_argument("command", choices=["half"])
+    ap.add_argument("src")
+    ap.add_argument("dst")
+    a = ap.parse_args(argv)
+    try:
+        out = half_weights_file(a.src, a.dst)
+    except CheckpointError as e:
+        print(f"emdm.checkpoints: {e}", file=sys.stderr)
+        return 2
+    print(f"emdm.checkpoints: {display_path(out)} ({out.stat().st_size / 2**20:.1f} MiB, float16)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

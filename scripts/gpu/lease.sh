@@ -14,10 +14,14 @@
 #   scripts/gpu/lease.sh files              the paths that would travel, one a line (what `size` adds up)
 #   scripts/gpu/lease.sh stage DIR          copy exactly those paths into DIR (the CPU rehearsal runs there)
 #   scripts/gpu/lease.sh restore            undo `shrink` (index from HEAD, exclude and hook removed); idempotent
+#   scripts/gpu/lease.sh init RUN FILE      .lease/init-RUN.pt from FILE (a call's returned weights), as float16:
+#                                           the next call of the same lease continues from it (7.6 MB carried,
+#                                           where the float32 file would take the tree over the limit)
 #
 # A slice, in order: prepare (once per machine), shrink, size, then the device call
 #   run(command="bash scripts/gpu/lease-train.sh t2m", carry=[".lease"], timeout_s=560)
-# then restore, give_back. tests/python/test_gpu_lease.py rehearses all of it on the CPU in CI.
+# then restore, give_back. Time left for another call: init t2m /path/to/returned/emdm-t2m-web.pt, size, and the
+# same device call with a smaller LEASE_SECONDS. tests/python/test_gpu_lease.py rehearses all of it on the CPU in CI.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
 cd "$root"
@@ -93,6 +97,13 @@ cmd_restore() {
   echo "lease.sh: restored"
 }
 
+cmd_init() {
+  local run="${1:?init RUN FILE}" src="${2:?init RUN FILE}"
+  [[ "$run" =~ ^(t2m|a2m|ddim)$ ]] || die "init: unknown run '$run' (t2m, a2m or ddim)"
+  mkdir -p "$lease"
+  "$py" -m emdm.checkpoints half "$src" "$lease/init-$run.pt" || exit 2
+}
+
 cmd_size() {
   local bytes
   bytes=$(travelling | tr '\n' '\0' | xargs -0 -r stat -c %s | awk '{s += $1} END {print s + 0}')
@@ -116,8 +127,9 @@ case "${1:-}" in
   prepare) shift; cmd_prepare "$@" ;;
   shrink) cmd_shrink ;;
   restore) cmd_restore ;;
+  init) shift; cmd_init "$@" ;;
   size) cmd_size ;;
   files) travelling ;;
   stage) shift; cmd_stage "$@" ;;
-  *) echo "usage: $0 prepare [DATASET] | shrink | size | files | stage DIR | restore" >&2; exit 2 ;;
+  *) echo "usage: $0 prepare [DATASET] | shrink | size | files | stage DIR | init RUN FILE | restore" >&2; exit 2 ;;
 esac

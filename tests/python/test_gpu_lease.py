@@ -134,6 +134,32 @@ def test_the_slice_runs_from_exactly_what_travels(repo, tmp_path):
     log = (out_dir / "train.out").read_text()
     assert "weights at step 3 -> " in log and "weights at step 4 -> " in log
 
+    # a second call of the same lease continues from what the first returned: `init` makes it float16 in .lease
+    init = lease(repo, "init", "t2m", str(out_dir / "emdm-t2m-web.pt"))
+    assert init.returncode == 0, init.stderr
+    carried = repo / ".lease/init-t2m.pt"
+    st_init = load_weights_file(carried)
+    assert st_init["meta"]["weights_dtype"] == "float16" and st_init["step"] == 4
+    assert carried.stat().st_size < (out_dir / "emdm-t2m-web.pt").stat().st_size * 0.6
+    shutil.copy2(carried, travel / ".lease/init-t2m.pt")
+    out2 = tmp_path / "OUT2"
+    second = subprocess.run(["bash", "scripts/gpu/lease-train.sh", "t2m"], cwd=travel, capture_output=True, text=True,
+                            env={**env, "OUT": str(out2), "LEASE_WORK": str(tmp_path / "work2")}, timeout=900)
+    assert second.returncode == 0, second.stdout[-3000:] + second.stderr[-3000:]
+    assert "emdm-t2m-web from init-t2m.pt" in second.stdout
+    runs = load_weights_file(out2 / "emdm-t2m-web.pt")["meta"]["init"]["runs"]
+    assert runs[-1]["file"] == "init-t2m.pt" and runs[-1]["weights_dtype"] == "float16" and runs[-1]["steps"] == 4
+
+
+def test_init_refuses_a_file_that_is_not_weights(repo, tmp_path):
+    bad = tmp_path / "returned.pt"
+    bad.write_bytes(b"not a torch file")
+    out = lease(repo, "init", "t2m", str(bad))
+    assert out.returncode == 2 and "returned.pt" in out.stderr and "cannot read" in out.stderr, out.stderr
+    assert not (repo / ".lease/init-t2m.pt").exists() or (repo / ".lease/init-t2m.pt").stat().st_size > 1000
+    wrong = lease(repo, "init", "t2x", str(bad))
+    assert wrong.returncode == 2 and "unknown run 't2x'" in wrong.stderr
+
 
 def test_the_slice_says_what_is_missing(tmp_path):
     env = {**os.environ, "PYTHON": sys.executable, "OUT": str(tmp_path / "OUT")}
