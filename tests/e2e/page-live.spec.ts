@@ -1,0 +1,109 @@
+// Live mode (issue 33) through the page as a visitor uses it: the Live toggle by keyboard, the character moving on
+// its own, prompts sent with Enter (and an example chip) listed in the strip with their latency, the unknown-prompt
+// notice for a live prompt, every displayed frame from the stream, Record → the BVH download, and the toggle off
+// closing the stream. No timing thresholds: latencies must exist and be finite (their size is the benchmark's,
+// tests/e2e/page-bench-live.spec.ts).
+import fs from 'node:fs';
+import { expect, test, type Page } from '@playwright/test';
+import { watchPage } from './helpers';
+
+const live = (page: Page) => page.evaluate(() => {
+  const l = window.emdm.live!;
+  return { on: l.on, active: l.active, displayed: l.displayed, repeated: l.repeated, last: l.last(), prompts: l.prompts(), stats: l.stats(), started: l.started, closed: l.closed };
+});
+
+/** Type a prompt into the focused prompt box and press Enter; wait until its first new frame has played. */
+async function sendByEnter(page: Page, text: string): Promise<void> {
+  const n = (await live(page)).prompts.length;
+  await page.keyboard.press('ControlOrMeta+a');
+  await page.keyboard.type(text);
+  await page.keyboard.press('Enter');
+  await page.waitForFunction(([k, t]) => {
+    const p = window.emdm.live!.prompts();
+    return p.length === k + 1 && p[k].text === t && p[k].latency !== null;
+  }, [n, text] as const, { timeout: 60_000 });
+}
+
+test('live mode: keyboard toggle, a character that keeps moving, prompts by Enter and chip, record → BVH, toggle off', async ({ page }) => {
+  test.setTimeout(180_000);
+  const watch = watchPage(page);
+  await page.goto('/?noauto=1&backend=wasm&steps=2');
+  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+  expect(await page.evaluate(() => window.emdm.error)).toBe('');
+  await page.locator('#prompt').fill('a person walks');
+
+  // on by keyboard: the toggle says it is pressed, the prompt box has the focus, the playback bar gives way
+  const toggle = page.locator('#live');
+  await expect(toggle).toHaveAttribute('aria-pressed', 'false');
+  await toggle.focus();
+  await page.keyboard.press('Enter');
+  await expect(toggle).toHaveAttribute('aria-pressed', 'true');
+  await page.waitForFunction(() => window.emdm.live!.active, null, { timeout: 60_000 });
+  await expect(page.locator('#prompt')).toBeFocused();
+  await expect(page.locator('#playback')).toBeHidden();
+  await expect(page.locator('#generate')).toBeDisabled();
+
+  // the character moves on its own: two looks at the live clock, two poses
+  await page.waitForFunction(() => window.emdm.live!.last() !== null);
+  const a = (await live(page)).last!;
+  await page.waitForFunction((t) => window.emdm.live!.last()!.time > t + 0.5, a.time);
+  const b = (await live(page)).last!;
+  expect(Math.hypot(b.root[0] - a.root[0], b.root[1] - a.root[1], b.root[2] - a.root[2]), 'the pelvis moved').toBeGreaterThan(0);
+
+  // three prompts by Enter (one the model does not know: the page says so, as for a generated one)
+  await sendByEnter(page, 'a person raises both hands');
+  await sendByEnter(page, 'a person kicks');
+  const notice = page.locator('#prompt-check');
+  await expect(notice).toBeVisible();
+  await expect(notice).toContainText('has not learned anything close to “a person kicks”');
+  await sendByEnter(page, 'a person squats down');
+  // an example chip sends its prompt to the stream too
+  const chip = page.locator('#examples button.chip').first();
+  const chipText = (await chip.textContent())!.trim();
+  const before = (await live(page)).prompts.length;
+  await chip.click();
+  await page.waitForFunction(([k, t]) => window.emdm.live!.prompts()[k]?.text === t, [before, chipText] as const);
+
+  const s = await live(page);
+  const sent = s.prompts.slice(1, 4);
+  expect(sent.map((p) => p.text)).toEqual(['a person raises both hands', 'a person kicks', 'a person squats down']);
+  for (const p of sent) expect(Number.isFinite(p.latency), `latency of “${p.text}”`).toBe(true);
+  expect(s.stats!.latencies.length).toBeGreaterThanOrEqual(3);
+  for (const l of s.stats!.latencies) expect(Number.isFinite(l)).toBe(true);
+  // the strip: an ordered list, newest last
+  const items = page.locator('#live-prompts > li');
+  await expect(items.last()).toContainText(chipText);
+  const strip = await items.allTextContents();
+  expect(strip.length).toBe(s.prompts.length);
+  expect(strip.findIndex((t) => t.includes('raises both hands'))).toBeLessThan(strip.findIndex((t) => t.includes('squats down')));
+  expect(strip[1]).toMatch(/^0:\d\d\.\d “a person raises both hands” · in \d+\.\d\d s$/);
+
+  // every displayed frame came from the stream: counted, none showing the pose of the one before
+  expect(s.displayed).toBeGreaterThan(30);
+  expect(s.repeated).toBeLessThanOrEqual(Math.floor(s.displayed * 0.05));
+  expect(typeof s.stats!.underruns).toBe('number');
+  expect(s.stats!.windows).toBeGreaterThan(3);
+
+  // Record: the last seconds become the page's motion, the BVH download writes them
+  await page.locator('#live-record').click();
+  await expect(page.locator('#live-hint')).toContainText('Recorded the last');
+  await expect(page.locator('#dl-bvh')).toBeEnabled();
+  const [dl] = await Promise.all([page.waitForEvent('download'), page.locator('#dl-bvh').click()]);
+  const bvh = fs.readFileSync((await dl.path())!, 'utf8');
+  expect(bvh.split('\n')[0].trim()).toBe('HIERARCHY');
+  const frames = Number(/Frames:\s*(\d+)/.exec(bvh)![1]);
+  expect(frames).toBeGreaterThan(20);
+
+  // off: the stream closes, the page plays the recording with its playback bar
+  await toggle.click();
+  await expect(toggle).toHaveAttribute('aria-pressed', 'false');
+  const off = await live(page);
+  expect(off.active).toBe(false);
+  expect(off.closed).toBe(off.started);
+  await expect(page.locator('#playback')).toBeVisible();
+  await expect(page.locator('#live-panel')).toBeHidden();
+  await expect(page.locator('#generate')).toBeEnabled();
+  const pb = await page.evaluate(() => window.emdm.playback());
+  expect(Math.abs(pb.duration - (frames - 1) / 20)).toBeLessThan(1e-6);
+  watch.assertClean();
+});
