@@ -107,3 +107,25 @@ test('live mode: keyboard toggle, a character that keeps moving, prompts by Ente
   expect(Math.abs(pb.duration - (frames - 1) / 20)).toBeLessThan(1e-6);
   watch.assertClean();
 });
+
+test('live mode on a phone (390×844): the toggle, the strip and Record fit the width, nothing scrolls sideways', async ({ page }) => {
+  test.setTimeout(120_000);
+  const watch = watchPage(page);
+  await page.setViewportSize({ width: 390, height: 844 });
+  await page.goto('/?noauto=1&backend=wasm&steps=2');
+  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+  await expect(page.locator('#live')).toBeVisible();
+  await page.locator('#live').click();
+  await page.waitForFunction(() => window.emdm.live!.active, null, { timeout: 60_000 });
+  await page.locator('#prompt').fill('a person walks and then turns to the left, slowly, looking around the room as it goes');
+  await page.locator('#prompt').press('Enter');
+  await expect(page.locator('#live-prompts > li')).toHaveCount(2);
+  for (const id of ['#live', '#generate', '#prompt', '#live-panel', '#live-prompts', '#live-record']) {
+    const box = (await page.locator(id).boundingBox())!;
+    expect(box, `${id} is laid out`).not.toBeNull();
+    expect(box.x, `${id} left edge`).toBeGreaterThanOrEqual(0);
+    expect(box.x + box.width, `${id} right edge`).toBeLessThanOrEqual(390 + 0.5);
+  }
+  expect(await page.evaluate(() => document.documentElement.scrollWidth), 'no sideways scrolling').toBeLessThanOrEqual(390);
+  watch.assertClean();
+});
