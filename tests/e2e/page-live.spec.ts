@@ -5,6 +5,7 @@
 // tests/e2e/page-bench-live.spec.ts).
 import fs from 'node:fs';
 import { expect, test, type Page } from '@playwright/test';
+import { RIGS, buildRigGlb } from '../unit/retargetRigs';
 import { watchPage } from './helpers';
 
 const live = (page: Page) => page.evaluate(() => {
@@ -127,5 +128,44 @@ test('live mode on a phone (390×844): the toggle, the strip and Record fit the 
     expect(box.x + box.width, `${id} right edge`).toBeLessThanOrEqual(390 + 0.5);
   }
   expect(await page.evaluate(() => document.documentElement.scrollWidth), 'no sideways scrolling').toBeLessThanOrEqual(390);
+  watch.assertClean();
+});
+
+type CharacterProbe = { active: boolean; builtInVisible: boolean; retargets: { finished: number }; jointWorld(j: string): [number, number, number] | null };
+const probe = (page: Page) => page.evaluate(() => {
+  const c = (window as unknown as { emdmCharacter: CharacterProbe }).emdmCharacter;
+  return { active: c.active, builtIn: c.builtInVisible, finished: c.retargets.finished, pelvis: c.jointWorld('pelvis'), t: window.emdm.live!.last()?.time ?? 0 };
+});
+
+test('live mode on the visitor\'s character: it keeps performing the stream, piece after piece', async ({ page }) => {
+  test.setTimeout(180_000);
+  const watch = watchPage(page);
+  await page.goto('/?noauto=1&backend=wasm&steps=2');
+  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+  await page.evaluate(() => window.emdm.generate({ text: 'a person walks forward', seconds: 2, steps: 1, seed: 3 }));
+  const manifest = JSON.parse(fs.readFileSync('public/models/manifest.json', 'utf8'));
+  const rig = buildRigGlb(manifest.skeleton, RIGS[0]);
+  const b64 = Buffer.from(rig).toString('base64');
+  const dt = await page.evaluateHandle((data) => {
+    const d = new DataTransfer();
+    d.items.add(new File([Uint8Array.from(atob(data), (c) => c.charCodeAt(0))], 'hero.glb'));
+    return d;
+  }, b64);
+  await page.dispatchEvent('#viewport', 'drop', { dataTransfer: dt });
+  await page.waitForFunction(() => (window as unknown as { emdmCharacter: CharacterProbe }).emdmCharacter.active, null, { timeout: 30_000 });
+
+  await page.locator('#prompt').fill('a person walks');
+  await page.locator('#live').click();
+  await page.waitForFunction(() => window.emdm.live!.active, null, { timeout: 60_000 });
+  const start = await probe(page);
+  // well past the first piece (what was made when live mode began: at most a few seconds)
+  await page.waitForFunction((t) => (window.emdm.live!.last()?.time ?? 0) > t + 6, start.t, { timeout: 60_000 });
+  const a = await probe(page);
+  await page.waitForFunction((t) => window.emdm.live!.last()!.time > t + 0.5, a.t);
+  const b = await probe(page);
+  expect(b.builtIn, 'the built-in character stays hidden').toBe(false);
+  expect(b.finished - start.finished, 'pieces of the stream retargeted').toBeGreaterThanOrEqual(2);
+  expect(a.pelvis && b.pelvis && a.pelvis.concat(b.pelvis).every(Number.isFinite)).toBe(true);
+  expect(Math.hypot(a.pelvis![0] - b.pelvis![0], a.pelvis![1] - b.pelvis![1], a.pelvis![2] - b.pelvis![2]), 'the pelvis still moves').toBeGreaterThan(0.01);
   watch.assertClean();
 });
