@@ -1,18 +1,20 @@
 // Live mode benchmark on the demo page in headless Chromium (issue 33's page bars; WASM, the page's defaults: the
 // shipped text model, its default file and steps). First the idle page: a generated motion playing, no generation,
-// its requestAnimationFrame gaps (again after the session). Then a live session through the real prompt box (Enter) with a prompt at random
-// moments (3–7 s apart, 5 s on average, a seeded draw): prompt → first new frame latency on the live clock (the
+// its requestAnimationFrame gaps (again after the session). Then a live session through the real prompt box (Enter) with a prompt at a random
+// moment of every 5 s (a seeded draw): prompt → first new frame latency on the live clock (the
 // stream's stats: median, 95th percentile), underruns, frames displayed and repeated, and the page's frame gaps live
 // against idle (95th percentile, max). A benchmark, not a test: it runs only with EMDM_BENCH=1, asserts nothing about
 // speed, and writes bench-live.json to the test output folder.
 //
 //   EMDM_BENCH=1 npx playwright test tests/e2e/page-bench-live.spec.ts
 //
-// EMDM_BENCH_LIVE_SECONDS (default 160: ≥ 30 prompts) is the session's length; EMDM_BENCH_IDLE_SECONDS (default 10).
+// EMDM_BENCH_LIVE_SECONDS (default 160: 32 prompts) is the session's length; EMDM_BENCH_IDLE_SECONDS (default 10).
 import fs from 'node:fs';
 import os from 'node:os';
 import { expect, test, type Page } from '@playwright/test';
 
+/** One prompt in each slot of this length, at a random moment of it. */
+const SLOT_MS = 5000;
 const PROMPTS = ['a person walks forward', 'a person waves with the right hand', 'a person raises both hands', 'a person runs forward',
   'a person squats down', 'a person walks backward', 'a person turns around', 'a person jumps', 'a person bows', 'a person kicks'];
 
@@ -81,10 +83,9 @@ test('benchmark: live mode — prompt latency, underruns, repeated frames, frame
   const draw = rng(33);
   const t0 = Date.now();
   let sent = 0;
-  for (;;) {
-    const wait = 3000 + 4000 * draw();
-    if (Date.now() - t0 + wait > seconds * 1000) break;
-    await page.waitForTimeout(wait);
+  // one prompt in each 5 s slot, at a random moment of it
+  for (let k = 0; (k + 1) * SLOT_MS <= seconds * 1000; k++) {
+    await page.waitForTimeout(Math.max(0, t0 + (k + draw()) * SLOT_MS - Date.now()));
     await page.locator('#prompt').fill(PROMPTS[(1 + sent) % PROMPTS.length]);
     await page.locator('#prompt').press('Enter');
     sent++;
