@@ -78,7 +78,7 @@ test('benchmark: live mode — prompt latency, underruns, repeated frames, frame
   await page.locator('#prompt').fill(PROMPTS[0]);
   await page.locator('#live').click();
   await page.waitForFunction(() => window.emdm.live!.active, null, { timeout: 120_000 });
-  const startShown = await page.evaluate(() => ({ displayed: window.emdm.live!.displayed, repeated: window.emdm.live!.repeated }));
+  const startShown = await page.evaluate(() => ({ displayed: window.emdm.live!.displayed, repeated: window.emdm.live!.repeated, poseMs: window.emdm.live!.poseMs }));
   stop = await recordGaps(page);
   const draw = rng(33);
   const t0 = Date.now();
@@ -95,7 +95,7 @@ test('benchmark: live mode — prompt latency, underruns, repeated frames, frame
   const load1 = os.loadavg()[0];
   const r = await page.evaluate(() => {
     const l = window.emdm.live!;
-    return { stats: l.stats()!, displayed: l.displayed, repeated: l.repeated, prompts: l.prompts() };
+    return { stats: l.stats()!, displayed: l.displayed, repeated: l.repeated, poseMs: l.poseMs, prompts: l.prompts() };
   });
   // idle again after live mode (the page's adaptive quality may have changed meanwhile: both idle figures are printed)
   await page.locator('#live').click();
@@ -112,6 +112,7 @@ test('benchmark: live mode — prompt latency, underruns, repeated frames, frame
     windows: r.stats.windows, dropped: r.stats.dropped, windowMsMedian: Math.round(quantile(r.stats.windowMs, 0.5)), windowMsP95: Math.round(quantile(r.stats.windowMs, 0.95)),
     underruns: r.stats.underruns, coastedFrames: r.stats.coastedFrames,
     displayed: r.displayed - startShown.displayed, repeated: r.repeated - startShown.repeated,
+    poseMsPerFrame: Number(((r.poseMs - startShown.poseMs) / Math.max(1, r.displayed - startShown.displayed)).toFixed(3)),
     frameGapMs: {
       idle: gapFigures(idle), live: gapFigures(live), idleAfter: gapFigures(idleAfter),
     },
@@ -119,7 +120,8 @@ test('benchmark: live mode — prompt latency, underruns, repeated frames, frame
   console.log(`live benchmark: ${sent} prompts in ${seconds} s at ${env.steps} steps (${env.env?.threads} WASM threads), load ${load0.toFixed(2)} → ${load1.toFixed(2)} on ${os.cpus().length} cores\n`
     + `  prompt → first new frame: median ${summary.latencyMedianS} s, p95 ${summary.latencyP95S} s, max ${summary.latencyMaxS} s (${lat.length} of ${sent} prompts)\n`
     + `  windows ${summary.windows} (dropped ${summary.dropped}), window ms median ${summary.windowMsMedian} / p95 ${summary.windowMsP95}\n`
-    + `  underruns ${summary.underruns} (${summary.coastedFrames} frames played back), frames displayed ${summary.displayed}, repeated ${summary.repeated}\n`
+    + `  underruns ${summary.underruns} (${summary.coastedFrames} frames played back), frames displayed ${summary.displayed}, repeated ${summary.repeated}, `
+    + `posing from the stream ${summary.poseMsPerFrame} ms per displayed frame\n`
     + `  frame gaps (rAF, ms): ${(['idle', 'live', 'idleAfter'] as const).map((k) => `${k} median ${summary.frameGapMs[k].median} p95 ${summary.frameGapMs[k].p95} max ${summary.frameGapMs[k].max}`).join('; ')}\n`
     + `  live p95 / idle p95: ${(summary.frameGapMs.live.p95 / summary.frameGapMs.idle.p95).toFixed(2)} (before), ${(summary.frameGapMs.live.p95 / summary.frameGapMs.idleAfter.p95).toFixed(2)} (after)`);
   fs.writeFileSync(test.info().outputPath('bench-live.json'), JSON.stringify({ summary, latencies: lat, prompts: r.prompts }, null, 1));

@@ -44,6 +44,8 @@ export interface LiveTestApi {
   /** frames the page displayed from the stream, and how many showed exactly the pose of the one before */
   readonly displayed: number;
   readonly repeated: number;
+  /** ms this thread spent posing displayed frames from the stream (frameAt, IK, interpolation), in all */
+  readonly poseMs: number;
   /** the pose shown last: the live clock (s), the root (stage coordinates) */
   last(): { time: number; root: [number, number, number] } | null;
   prompts(): LivePrompt[];
@@ -71,6 +73,7 @@ export class LivePanel implements PoseDriver {
   private recorded: Generation | null = null;
   private displayed = 0;
   private repeated = 0;
+  private poseMs = 0;
   private readonly root = new Float32Array(3);
   private quats = new Float32Array(0);
   private readonly prev = { root: new Float32Array(3), quats: new Float32Array(0), shown: false, time: 0 };
@@ -217,6 +220,7 @@ export class LivePanel implements PoseDriver {
     const s = this.stream;
     if (!s) return null;
     let track: PoseTrack;
+    const t0 = performance.now();
     const t = s.now();
     const f = Math.floor(t * s.fps);
     try {
@@ -232,6 +236,7 @@ export class LivePanel implements PoseDriver {
     if (this.quats.length !== track.quats.length / 2) this.quats = new Float32Array(track.quats.length / 2);
     samplePose(track, t - f / s.fps, this.root, this.quats);
     this.count(t);
+    this.poseMs += performance.now() - t0;
     return { root: this.root, quats: this.quats };
   }
 
@@ -351,6 +356,9 @@ export class LivePanel implements PoseDriver {
       },
       get repeated() {
         return self.repeated;
+      },
+      get poseMs() {
+        return self.poseMs;
       },
       last: () => (self.prev.shown ? { time: self.prev.time, root: [self.prev.root[0], self.prev.root[1], self.prev.root[2]] } : null),
       prompts: () => self.log.map((p) => ({ ...p })),
