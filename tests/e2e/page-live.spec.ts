@@ -95,6 +95,13 @@ test('live mode: keyboard toggle, a character that keeps moving, prompts by Ente
   const frames = Number(/Frames:\s*(\d+)/.exec(bvh)![1]);
   expect(frames).toBeGreaterThan(20);
 
+  // fewer steps while live: a new stream with them takes over (the old one closed once it is ready)
+  await page.locator('#steps').focus();
+  await page.keyboard.press('ArrowLeft');
+  await page.waitForFunction(() => window.emdm.live!.started === 2 && window.emdm.live!.active, null, { timeout: 60_000 });
+  expect((await live(page)).closed).toBe(1);
+  await expect(page.locator('#live-hint')).toContainText('Live: type a prompt');
+
   // off: the stream closes, the page plays the recording with its playback bar
   await toggle.click();
   await expect(toggle).toHaveAttribute('aria-pressed', 'false');
@@ -167,5 +174,11 @@ test('live mode on the visitor\'s character: it keeps performing the stream, pie
   expect(b.finished - start.finished, 'pieces of the stream retargeted').toBeGreaterThanOrEqual(2);
   expect(a.pelvis && b.pelvis && a.pelvis.concat(b.pelvis).every(Number.isFinite)).toBe(true);
   expect(Math.hypot(a.pelvis![0] - b.pelvis![0], a.pelvis![1] - b.pelvis![1], a.pelvis![2] - b.pelvis![2]), 'the pelvis still moves').toBeGreaterThan(0.01);
+
+  // another mode leaves live mode, saying why
+  await page.locator('#mode-action').click();
+  await expect(page.locator('#live')).toHaveAttribute('aria-pressed', 'false');
+  expect(await page.evaluate(() => [window.emdm.live!.active, window.emdm.live!.closed])).toEqual([false, 1]);
+  expect((await page.evaluate(() => window.emdm.notices())).map((n) => n.text)).toContain('Live mode takes text prompts: it was turned off when you chose another mode.');
   watch.assertClean();
 });
