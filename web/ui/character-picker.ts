@@ -65,6 +65,8 @@ export class CharacterPicker {
   private motion: Motion | null = null;
   /** the clock's time of the motion's first frame (a piece of the live stream; 0 otherwise) */
   private start = 0;
+  /** the motion is a piece of the live stream: its retargeting is not announced (one every ~2 s) */
+  private piece = false;
   /** the compare view's second motion (DDIM), null when not comparing */
   private compareMotion: Motion | null = null;
   private stem = 'emdm';
@@ -143,9 +145,10 @@ export class CharacterPicker {
   }
 
   /** The motion on screen changed (live mode: a piece of the stream from the clock's time `start`): put it on the user's character (if one is shown). */
-  setMotion(motion: Motion, stem: string, start = 0): void {
+  setMotion(motion: Motion, stem: string, start?: number): void {
     this.motion = motion;
-    this.start = start;
+    this.start = start ?? 0;
+    this.piece = start !== undefined;
     this.stem = stem;
     if (this.shown) this.retarget().catch((e) => this.fail(e));
   }
@@ -262,11 +265,12 @@ export class CharacterPicker {
     this.dlGlb.disabled = true;
     this.dlBvh.disabled = true;
     const name = s.ch.name;
-    const done = await perform(s, this.motion, s.ch, this.host.skeleton, this.stats, (f) => this.say(`Putting the motion on ${name}… ${Math.round(f * 100)}%`), this.start);
+    const say = this.piece ? undefined : (f: number) => this.say(`Putting the motion on ${name}… ${Math.round(f * 100)}%`);
+    const done = await perform(s, this.motion, s.ch, this.host.skeleton, this.stats, say, this.start);
     if (!done || this.shown !== s) return;
     this.dlGlb.disabled = false;
     this.dlBvh.disabled = false;
-    this.say(s.summary);
+    if (this.status.textContent !== s.summary) this.say(s.summary);
   }
 
   private update(): void {

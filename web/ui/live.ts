@@ -12,6 +12,7 @@ import type { GenerateResult } from '../../src/openModel';
 import { resolveRequest } from '../../src/requests';
 import { samplePose, type PoseTrack } from '../../src/three';
 import { byId, el } from './dom';
+import { fileStem } from './downloads';
 import type { KnowsPanel } from './knows';
 import type { Notices } from './notices';
 import type { PageContext } from './page-context';
@@ -157,7 +158,7 @@ export class LivePanel implements PoseDriver {
     this.page.view.drive(null);
     const shown = this.page.view.shown;
     if (this.recorded) this.page.view.show(this.recorded);
-    else if (shown) this.page.view.picker.setMotion(shown.result.motion, 'emdm');
+    else if (shown) this.page.view.picker.setMotion(shown.result.motion, fileStem(shown.label, shown.state.seed));
     this.say('');
   }
 
