@@ -15,7 +15,7 @@
  *   GenerationHost, whose backend choice and fallbacks (WebGPU missing or failing → WASM, at load and
  *   while generating) are src/loadModel.ts's; the results are bit-identical on the same backend.
  */
-import { type EditCondition, EditError, type Timeline, type TimelineSegment } from './edit';
+import { type EditCondition, EditError, type EditMotion, type Timeline, type TimelineSegment } from './edit';
 import type { GenerateResult, SampleState } from './openModel';
 import { type Manifest, chooseVariant, loadManifest } from './manifest';
 import type { Motion } from './motion/types';
@@ -218,8 +218,14 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
   };
 }
 
+/**
+ * What a live stream needs of a generator: its manifest, skeleton and `generate` (a MotionGenerator is one; the demo
+ * page passes its own worker session's, web/ui/live.ts, so the stream runs on the models it already loaded).
+ */
+export type LiveHost = Pick<MotionGenerator, 'manifest' | 'skeleton'> & { generate(request: MotionRequest): Promise<EditMotion> };
+
 /** A live stream whose windows are `g.generate` calls (so they run where g's generations run). */
-async function liveOn(g: MotionGenerator, o: LiveCallOptions): Promise<LiveStream> {
+export async function liveOn(g: LiveHost, o: LiveCallOptions): Promise<LiveStream> {
   if (o === null || typeof o !== 'object') throw new EditError(`live: options must be an object such as {prompt: 'a person walks'}, got ${String(o)}`);
   const { steps, guidance, ...live } = o;
   const first = liveCondition({ prompt: live.prompt, action: live.action });

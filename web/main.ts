@@ -4,6 +4,7 @@
 //     web/ui/engine.ts: encoder, sampler and IK run there, never on this thread), newest request wins;
 //   - the view (web/ui/view.ts): stage, characters, playback, status line, panels, downloads;
 //   - the controls (web/ui/controls.ts) and their URL form (web/ui/state.ts);
+//   - live mode (web/ui/live.ts): the Live toggle, a stream that never stops;
 //   - the test API (web/ui/testapi.ts, window.emdm).
 // A new panel gets `page` (PageContext: session, view, controls, generate) — see the end of main().
 import { clearModelCache, loadManifest, ModelFileError, modelCacheUsage, type Manifest } from '../src/index';
@@ -21,6 +22,7 @@ import { failedModel, limitsFor, Session, type Generation, type SessionGenerateO
 import { pageFlagNotices, parseState, randomSeed, stateToSearch, unknownParamsNotice, type PageState, type StateLimits } from './ui/state';
 import { connectTestApi, installTestApi } from './ui/testapi';
 import { KnowsPanel, markWeakActions } from './ui/knows';
+import { LivePanel } from './ui/live';
 import { TimelinePanel } from './ui/timeline';
 import { describe, promptNote, View } from './ui/view';
 
@@ -83,6 +85,7 @@ async function main(): Promise<void> {
   connectTestApi(api, page);
   const timeline = new TimelinePanel(page, byId('edit-panel'));
   api.edit = timeline.testApi();
+  api.live = new LivePanel(page, knows, notices).testApi();
 
   // ------------------------------------------------------------ cold start: load the first model
   const first = modelForMode(models, controls.read().mode) ?? (models.text ?? models.action)!;

@@ -54,6 +54,8 @@ export interface LiveStats {
   bufferedFrames: number;
   /** the first new frame of each prompt's window (stream frames) */
   blends: number[];
+  /** seconds on the stream's clock up to which motion is made (frameAt before it reads it; after it, plays back) */
+  bufferedTo: number;
 }
 
 export interface LiveStream {
@@ -159,7 +161,7 @@ export async function startLive(gen: LiveGenerate, limits: EditLimits, opts: Liv
     },
     stats: () => ({
       ...stats, latencies: [...stats.latencies], windowMs: [...stats.windowMs], blends: [...stats.blends],
-      underruns: core.underruns, coastedFrames: core.coasted, bufferedFrames: core.frames,
+      underruns: core.underruns, coastedFrames: core.coasted, bufferedFrames: core.frames, bufferedTo: core.end / fps,
     }),
     record() {
       const from = Math.max(core.base, Math.min(playhead() + 1, core.end) - Math.round(core.settings.recordSeconds * fps));

@@ -1,5 +1,5 @@
 // Accessibility scan (issue 30): axe-core (WCAG 2.0/2.1 A and AA rules plus its best practices) on the demo page
-// after load, with the compare view on and a motion generated, and with the "Timeline & editing" panel open. No
+// after load, with the compare view on and a motion generated, and with the "Timeline & editing" panel open, and in live mode. No
 // serious or critical violation may remain (nor an undecided result of such a rule, save the two listed below), and no moderate one (checked softly); each is listed with the elements it names.
 import AxeBuilder from '@axe-core/playwright';
 import { expect, test, type Page } from '@playwright/test';
@@ -66,5 +66,17 @@ test('timeline panel open: no serious or critical axe violation', async ({ page 
   await page.locator('#edit-panel summary').click();
   await expect(page.locator('#edit-panel details')).toHaveAttribute('open', '');
   await expectAccessible(page, 'timeline panel open');
+  watch.assertClean();
+});
+
+test('live mode on, a prompt sent: no serious or critical axe violation', async ({ page }) => {
+  const watch = watchPage(page);
+  await open(page);
+  await page.locator('#live').click();
+  await page.waitForFunction(() => window.emdm.live!.active, null, { timeout: 60_000 });
+  await page.locator('#prompt').fill('a person raises both hands');
+  await page.locator('#prompt').press('Enter');
+  await expect(page.locator('#live-prompts > li')).toHaveCount(2);
+  await expectAccessible(page, 'live mode');
   watch.assertClean();
 });

@@ -82,6 +82,18 @@ describe('live stream behaviour (a walking generator, a simulated or a hand-driv
     await s.close();
   });
 
+  it('stats().bufferedTo says how far motion is made: frameAt before it reads it, at it plays back (the page feeds a character up to it)', async () => {
+    let first = true;
+    const gen = (r: EditRequest) => (first ? ((first = false), Promise.resolve(walk(r))) : new Promise<EditMotion>(() => undefined));
+    const s = await startLive(gen, limits, { action: 'b', clock: () => 0 });
+    expect(s.stats().bufferedTo).toBe(60 / 20); // the first window: 20 kept + 40 new frames
+    s.frameAt(59 / 20);
+    expect(s.stats()).toMatchObject({ underruns: 0, bufferedTo: 3 });
+    s.frameAt(60 / 20);
+    expect(s.stats()).toMatchObject({ underruns: 1, bufferedTo: 70 / 20 }); // 10 frames played back
+    await s.close();
+  });
+
   it('memory stays bounded over 20 simulated minutes; the root stays near the stage; the floor stays where it was', async () => {
     const core = new LiveCore(limits, { action: 'a' }, 1, { recordSeconds: 10 });
     const prompts = Array.from({ length: 200 }, (_, i) => ({ frame: 100 + i * 117, cond: { action: 'abcdefgh'[i % 8] } }));

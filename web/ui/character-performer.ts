@@ -13,6 +13,8 @@ export interface Performer {
   result: RetargetResult | null;
   /** the retargeting under way (aborted when a newer motion arrives), null when none */
   job: AbortController | null;
+  /** the clock's time of the clip's first frame (live mode plays pieces of a stream; 0 otherwise) */
+  start?: number;
 }
 
 /** Retargeting runs of this page visit (window.emdmCharacter.retargets). */
@@ -27,9 +29,9 @@ export interface RetargetStats {
 
 /**
  * Retarget `m` onto one copy of the character (at rest as loaded; read before the first slice ends) in
- * slices, then play it on the page's clock. A newer call for the same copy cancels this one: false then.
+ * slices, then play it on the page's clock from `clockStart` (s). A newer call for the same copy cancels this one: false then.
  */
-export async function perform(p: Performer, m: Motion, ch: LoadedCharacter, skeleton: Skeleton, stats: RetargetStats, progress?: (fraction: number) => void): Promise<boolean> {
+export async function perform(p: Performer, m: Motion, ch: LoadedCharacter, skeleton: Skeleton, stats: RetargetStats, progress?: (fraction: number) => void, clockStart = 0): Promise<boolean> {
   p.job?.abort();
   const job = new AbortController();
   p.job = job;
@@ -66,12 +68,13 @@ export async function perform(p: Performer, m: Motion, ch: LoadedCharacter, skel
   stats.finished++;
   const end = performance.now();
   stats.last = { frames: m.frames, ms: end - start, slices, start, end, firstSliceMs, longestSliceMs };
-  play(p, res);
+  play(p, res, clockStart);
   return true;
 }
 
-/** Play `res` on the copy (replacing its clip), at our size and facing. */
-function play(p: Performer, res: RetargetResult): void {
+/** Play `res` on the copy (replacing its clip) from the clock's time `start`, at our size and facing. */
+function play(p: Performer, res: RetargetResult, start: number): void {
+  p.start = start;
   p.mixer?.stopAllAction();
   p.mixer?.uncacheRoot(p.root);
   // shown at our size and facing, so the camera that follows our pelvis follows it too
@@ -92,10 +95,10 @@ export function drop(p: Performer): void {
   p.holder.removeFromParent();
 }
 
-/** Pose the copy at the clock's time `t` (seconds; clamped to its clip). */
+/** Pose the copy at the clock's time `t` (seconds, from its clip's start; clamped to its clip). */
 export function poseAt(p: Performer | null | undefined, t: number): void {
   if (!p?.mixer || !p.action || !p.result) return;
-  p.action.time = Math.min(Math.max(t, 0), p.result.clip.duration);
+  p.action.time = Math.min(Math.max(t - (p.start ?? 0), 0), p.result.clip.duration);
   p.mixer.update(0);
 }
 

@@ -63,6 +63,10 @@ export interface CharacterProbe {
 export class CharacterPicker {
   private shown: Shown | null = null;
   private motion: Motion | null = null;
+  /** the clock's time of the motion's first frame (a piece of the live stream; 0 otherwise) */
+  private start = 0;
+  /** the motion is a piece of the live stream: its retargeting is not announced (one every ~2 s) */
+  private piece = false;
   /** the compare view's second motion (DDIM), null when not comparing */
   private compareMotion: Motion | null = null;
   private stem = 'emdm';
@@ -140,9 +144,11 @@ export class CharacterPicker {
     (window as unknown as { emdmCharacter: CharacterProbe }).emdmCharacter = this.probe();
   }
 
-  /** The motion on screen changed: put it on the user's character (if one is shown). */
-  setMotion(motion: Motion, stem: string): void {
+  /** The motion on screen changed (live mode: a piece of the stream from the clock's time `start`): put it on the user's character (if one is shown). */
+  setMotion(motion: Motion, stem: string, start?: number): void {
     this.motion = motion;
+    this.start = start ?? 0;
+    this.piece = start !== undefined;
     this.stem = stem;
     if (this.shown) this.retarget().catch((e) => this.fail(e));
   }
@@ -231,7 +237,7 @@ export class CharacterPicker {
       this.say(`Putting the motion on ${ch.name}…`);
       this.pending = next;
       try {
-        if (!(await perform(next, motion, ch, this.host.skeleton, this.stats, (f) => this.say(`Putting the motion on ${ch.name}… ${Math.round(f * 100)}%`)))) return;
+        if (!(await perform(next, motion, ch, this.host.skeleton, this.stats, (f) => this.say(`Putting the motion on ${ch.name}… ${Math.round(f * 100)}%`), this.start))) return;
       } finally {
         if (this.pending === next) this.pending = null;
       }
@@ -259,11 +265,12 @@ export class CharacterPicker {
     this.dlGlb.disabled = true;
     this.dlBvh.disabled = true;
     const name = s.ch.name;
-    const done = await perform(s, this.motion, s.ch, this.host.skeleton, this.stats, (f) => this.say(`Putting the motion on ${name}… ${Math.round(f * 100)}%`));
+    const say = this.piece ? undefined : (f: number) => this.say(`Putting the motion on ${name}… ${Math.round(f * 100)}%`);
+    const done = await perform(s, this.motion, s.ch, this.host.skeleton, this.stats, say, this.start);
     if (!done || this.shown !== s) return;
     this.dlGlb.disabled = false;
     this.dlBvh.disabled = false;
-    this.say(s.summary);
+    if (this.status.textContent !== s.summary) this.say(s.summary);
   }
 
   private update(): void {

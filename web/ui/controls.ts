@@ -62,6 +62,8 @@ export class Controls {
   private ready = false;
   private backend: PageState['backend'] = 'auto';
   private readonly unavailable = new Map<Mode, string>();
+  /** live mode (web/ui/live.ts): Enter and the example chips send their prompt here instead of generating */
+  private live: ((text: string) => void) | null = null;
   /** what the text encoder said about a prompt it cut, shown under the prompt while it reads `text` */
   private promptNote: { text: string; note: string } | null = null;
 
@@ -94,7 +96,8 @@ export class Controls {
     this.prompt.addEventListener('keydown', (e) => {
       if (e.key === 'Enter' && !e.shiftKey && !e.isComposing) {
         e.preventDefault();
-        if (!this.button.disabled) this.on.generate();
+        if (this.live) this.live(this.prompt.value);
+        else if (!this.button.disabled) this.on.generate();
       }
     });
     for (const input of [this.steps, this.seconds, this.guidance, this.seed, this.action]) {
@@ -114,12 +117,22 @@ export class Controls {
     byId('copy-link').addEventListener('click', (e) => void copyLink(e.currentTarget as HTMLButtonElement));
   }
 
-  /** Put `text` in the prompt box (Text mode) and generate it, as an example chip does. */
+  /** Put `text` in the prompt box (Text mode) and generate it, as an example chip does (in live mode: send it to the stream). */
   usePrompt(text: string): void {
     this.prompt.value = text;
     this.setMode('text');
     this.refresh(true);
-    if (!this.button.disabled) this.on.generate();
+    if (this.live) this.live(text);
+    else if (!this.button.disabled) this.on.generate();
+  }
+
+  /**
+   * Live mode on (`send` takes the prompts that Enter and the chips would generate; Generate is disabled, saying why)
+   * or off (null).
+   */
+  setLive(send: ((text: string) => void) | null): void {
+    this.live = send;
+    this.refresh();
   }
 
   /** Show a state in the controls (no events fired). */
@@ -264,8 +277,8 @@ export class Controls {
     this.promptHint.textContent = hint;
     this.promptHint.classList.toggle('warn', warn);
     const blocked = this.unavailable.get(s.mode);
-    this.button.disabled = !this.ready || !!blocked || (s.mode === 'text' && empty) || (s.mode === 'action' && !s.action);
-    this.button.title = blocked ?? (s.mode === 'text' && empty ? 'Type a prompt first' : '');
+    this.button.disabled = !this.ready || !!blocked || !!this.live || (s.mode === 'text' && empty) || (s.mode === 'action' && !s.action);
+    this.button.title = blocked ?? (this.live ? 'Live mode is on: press Enter in the prompt box to send a prompt' : s.mode === 'text' && empty ? 'Type a prompt first' : '');
     if (changed) this.on.change(s);
   }
 }

@@ -3,6 +3,7 @@ import { type Counters, emptyCounters } from './counters';
 import type { PageContext } from './page-context';
 import type { Produced } from './session';
 import type { EditTestApi } from './timeline';
+import type { LiveTestApi } from './live';
 import { MAX_GUIDANCE, MAX_SECONDS, MAX_SEED, MIN_GUIDANCE, MIN_SECONDS, stepChoices, type Mode, type PageState, type StateLimits } from './state';
 
 export interface GenerateRequest {
@@ -107,6 +108,8 @@ export interface EmdmTestApi {
   characterRects(): Array<{ x: number; y: number; width: number; height: number }>;
   /** the timeline & editing panel (web/ui/timeline.ts), once the page is ready */
   edit?: EditTestApi;
+  /** live mode (web/ui/live.ts): its state, the stream's figures, the frames displayed and repeated, the prompts sent */
+  live?: LiveTestApi;
 }
 
 declare global {

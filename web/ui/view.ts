@@ -130,6 +130,15 @@ export interface Shown {
   ikMs: number;
 }
 
+/**
+ * What poses the character instead of the player (live mode, web/ui/live.ts): each displayed frame's pose (null: none
+ * yet, the player's motion is shown) and its clock, which the visitor's character follows too.
+ */
+export interface PoseDriver {
+  pose(dt: number): { root: ArrayLike<number>; quats: ArrayLike<number> } | null;
+  time(): number;
+}
+
 export class View {
   readonly stage = new Stage(byId('scene', HTMLCanvasElement));
   readonly player = new MotionPlayer();
@@ -152,6 +161,8 @@ export class View {
   picker!: CharacterPicker;
   stepStrip!: StepStrip;
   private loopBones: Bone[] = [];
+  /** poses the character instead of the player (live mode), null otherwise */
+  private driver: PoseDriver | null = null;
 
   private readonly progress = byId('progress');
   private readonly progressFill = byId('progress-fill');
@@ -187,7 +198,7 @@ export class View {
     this.stage.add(this.ddimCharacter.object);
     // a character the visitor drops replaces the built-in one (web/ui/character-picker.ts)
     this.picker = new CharacterPicker({
-      add: (o) => this.stage.add(o), builtIn: this.character.object, skeleton, time: () => this.player.time,
+      add: (o) => this.stage.add(o), builtIn: this.character.object, skeleton, time: () => this.driver?.time() ?? this.player.time,
       notify: (kind, text) => this.notices.show(kind, text), before: byId('panel-actions'),
       changed: () => this.showCompare(this.compareShown),
     });
@@ -207,13 +218,26 @@ export class View {
     if (snap) this.stage.snapTo(track.rootPos);
   }
 
-  /** Show a finished generation: the character(s), path, caption, timings or compare panels, downloads. */
+  /**
+   * Pose the character from `driver` on every frame instead of the player (live mode; its playback bar and path are
+   * hidden), or from the player again (null).
+   */
+  drive(driver: PoseDriver | null): void {
+    this.driver = driver;
+    byId('playback').hidden = !!driver;
+    const t = this.shown?.track;
+    this.stage.setPath(t?.rootPos ?? new Float32Array(0), driver || !t ? 0 : t.frames);
+    if (!driver && t) this.play(t);
+  }
+
+  /** Show a finished generation: the character(s), path, caption, timings or compare panels, downloads (while a
+   * driver poses the character, only the motion behind the downloads changes: it plays once the driver is gone). */
   show(g: Generation): void {
     const { main, ddim, state: s, label } = g;
     this.play(main.track, false);
     this.showCompare(ddim);
-    this.stage.setPath(main.track.rootPos, ddim ? 0 : main.track.frames);
-    this.stage.snapTo(main.track.rootPos);
+    this.stage.setPath(main.track.rootPos, ddim || this.driver ? 0 : main.track.frames);
+    if (!this.driver) this.stage.snapTo(main.track.rootPos);
     if (ddim) this.stage.snapTo2(ddim.track.rootPos);
     this.shown = { state: s, result: main.result, track: main.track, label, model: main.model, steps: main.result.steps, ikMs: main.ikMs };
     this.picker.setMotion(main.result.motion, fileStem(label, s.seed));
@@ -377,7 +401,9 @@ export class View {
       last = now;
       let second: ArrayLike<number> | null = null;
       const player = this.player;
-      if (player.track) {
+      const driven = this.driver?.pose(dt) ?? null;
+      if (driven) applyPose(this.loopBones, driven.root, driven.quats);
+      else if (player.track) {
         player.update(dt);
         applyPose(this.loopBones, player.root, player.quats);
         this.playback.sync();
@@ -387,7 +413,7 @@ export class View {
           second = this.player2.root;
         }
       }
-      this.stage.frame(dt, player.track ? player.root : null, second);
+      this.stage.frame(dt, driven ? driven.root : player.track ? player.root : null, second);
       const times = this.frameTimes;
       times.push(now);
       while (times.length > 2 && now - times[0] > 2000) times.shift();
