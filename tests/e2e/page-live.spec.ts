@@ -58,6 +58,10 @@ test('live mode: keyboard toggle, a character that keeps moving, prompts by Ente
   await expect(notice).toBeVisible();
   await expect(notice).toContainText('has not learned anything close to “a person kicks”');
   await sendByEnter(page, 'a person squats down');
+  // the caption names the live prompt now playing, not the last generation; the generation timings give way
+  await expect(page.locator('#caption')).toContainText('“a person squats down”');
+  await expect(page.locator('#caption')).toContainText('live');
+  await expect(page.locator('#timings')).toBeHidden();
   // an example chip sends its prompt to the stream too
   const chip = page.locator('#examples button.chip').first();
   const chipText = (await chip.textContent())!.trim();
@@ -111,6 +115,7 @@ test('live mode: keyboard toggle, a character that keeps moving, prompts by Ente
   await expect(page.locator('#playback')).toBeVisible();
   await expect(page.locator('#live-panel')).toBeHidden();
   await expect(page.locator('#generate')).toBeEnabled();
+  await expect(page.locator('#caption')).not.toContainText('live ·');
   const pb = await page.evaluate(() => window.emdm.playback());
   expect(Math.abs(pb.duration - (frames - 1) / 20)).toBeLessThan(1e-6);
   watch.assertClean();

@@ -142,6 +142,7 @@ export class LivePanel implements PoseDriver {
     this.latencies = 0;
     this.add({ text: first, at: 0, latency: null });
     view.drive(this);
+    view.liveCaption(first, this.page.controls.read().steps);
     clearInterval(this.timer);
     this.timer = window.setInterval(() => this.poll(), POLL_MS);
     this.say('Live: type a prompt and press Enter; the character blends into it.');
@@ -265,6 +266,7 @@ export class LivePanel implements PoseDriver {
       if (last && last.latency === null && this.log.length > 1) {
         last.latency = st.latencies[st.latencies.length - 1];
         this.render();
+        this.page.view.liveCaption(last.text, this.page.controls.read().steps);
       }
     }
     this.feedCharacter(s, st);

@@ -150,6 +150,8 @@ export class View {
   readonly frameTimes: number[] = [];
   /** the motion on screen, null before the first */
   shown: Shown | null = null;
+  /** what the caption says of the motion on screen (restored when live mode ends) */
+  private captionShown: Pick<Generation, 'state' | 'label' | 'plan'> | null = null;
   /** the compare view's DDIM motion on screen, null when not comparing */
   compareShown: Produced | null = null;
   /** the step previews of the last generation (show steps) */
@@ -225,6 +227,9 @@ export class View {
   drive(driver: PoseDriver | null): void {
     this.driver = driver;
     byId('playback').hidden = !!driver;
+    // the last generation's caption and timings do not describe a live stream: liveCaption names what plays
+    this.timingsHud.hidden = !!driver || !this.shown || !!this.compareShown;
+    if (!driver && this.captionShown) this.showCaption(this.captionShown);
     const t = this.shown?.track;
     this.stage.setPath(t?.rootPos ?? new Float32Array(0), driver || !t ? 0 : t.frames);
     if (!driver && t) this.play(t);
@@ -306,7 +311,18 @@ export class View {
     this.timingsHud.hidden = false;
   }
 
-  private showCaption({ state: s, label, plan }: Generation): void {
+  /** The caption in live mode: the prompt now playing and the stream's settings. */
+  liveCaption(prompt: string, steps: number): void {
+    const main = document.createElement('span');
+    main.textContent = `“${prompt}”`;
+    const small = document.createElement('small');
+    small.textContent = `live · ${steps} step${steps === 1 ? '' : 's'} · Enter in the prompt box sends the next`;
+    this.caption.replaceChildren(main, small);
+  }
+
+  private showCaption(g: Pick<Generation, 'state' | 'label' | 'plan'>): void {
+    this.captionShown = g;
+    const { state: s, label, plan } = g;
     this.caption.replaceChildren();
     const main = document.createElement('span');
     main.textContent = s.mode === 'text' ? `“${label}”` : label;
