@@ -5,12 +5,14 @@
  * ```ts
  * const caps = await loadCapabilities(manifest, baseUrl, 'emdm-t2m-web');   // null when the model has none
  * caps?.actions.filter((a) => !a.covered);                                  // what it does not do yet
- * checkPrompt(caps!, embedding);   // {known: false, score: 0.54, nearest: ['a person walks backward', ...]}
+ * checkPrompt(caps!, embedding);   // {known: false, score: 0.86, action: 'jump', covered: false, nearest: [...]}
  * ```
  *
- * The check: a prompt is *unknown* when its best cosine to the file's anchors (well-covered benchmark prompts and
- * training captions of covered actions, int8) is under `check.threshold`, calibrated on held-apart paraphrases; the
- * suggestions are the closest well-covered prompts, one per action. Python computes the same (emdm.eval.capabilities).
+ * The check: the file's anchors (int8) are well-covered benchmark prompts and training captions of the covered actions,
+ * and benchmark prompts and training captions of the uncovered ones. A prompt is *known* when its closest anchor is of a
+ * covered action and their cosine is at least `check.threshold` (calibrated on held-apart paraphrases); otherwise it is
+ * *unknown*, and `action` names the uncovered action it reads as where that is the closest. The suggestions are the
+ * closest well-covered prompts, one per action. Python computes the same (emdm.eval.capabilities).
  * The file is verified like a model file when the manifest lists it; an unlisted one is read and checked for shape,
  * and one built for another encoder file is ignored (its embeddings would be stale).
  */
@@ -31,8 +33,11 @@ export interface ActionCapability {
 
 export interface RealSpeed { median: number; low: number; high: number; clips: number }
 
+/** The capabilities file version this code reads (2: anchors of the uncovered actions too, the nearest-action rule). */
+export const CAPABILITIES_SCHEMA = 2;
+
 export interface Capabilities {
-  schema: 1;
+  schema: typeof CAPABILITIES_SCHEMA;
   model: string;
   condition: 'text' | 'action';
   steps: number;
@@ -53,6 +58,8 @@ export interface PromptCheck {
   score: number;
   /** the action of the closest anchor (the prompt's nearest action) */
   action: string;
+  /** whether the model does `action` well (false: the prompt reads as an action it does not do yet) */
+  covered: boolean;
   nearest: string[];
 }
 
@@ -66,7 +73,7 @@ function fail(file: string, field: string, what: string): never {
 export function validateCapabilities(data: unknown, file: string): Capabilities {
   const d = data as Partial<Capabilities> | null;
   if (!d || typeof d !== 'object') fail(file, '(root)', 'must be an object');
-  if (d.schema !== 1) fail(file, 'schema', `is ${JSON.stringify(d.schema)}, expected 1`);
+  if (d.schema !== CAPABILITIES_SCHEMA) fail(file, 'schema', `is ${JSON.stringify(d.schema)}, this library reads ${CAPABILITIES_SCHEMA}`);
   if (!Array.isArray(d.actions) || d.actions.some((a) => typeof a?.label !== 'string' || typeof a.covered !== 'boolean' || typeof a.rate !== 'number')) {
     fail(file, 'actions', 'must be a list of {label, rate, covered}');
   }
@@ -82,6 +89,9 @@ export function validateCapabilities(data: unknown, file: string): Capabilities 
     if (!Array.isArray(a.texts) || a.actions?.length !== n || a.suggest?.length !== n) fail(file, 'anchors', 'needs texts, actions and suggest of one length');
     if (!Number.isInteger(a.dim) || a.dim < 1) fail(file, 'anchors.dim', 'must be a positive integer');
     if (typeof d.check?.threshold !== 'number') fail(file, 'check.threshold', 'must be a number');
+    const labels = new Set(d.actions.map((r) => r.label));
+    const stray = a.actions.findIndex((x) => !labels.has(x));
+    if (stray >= 0) fail(file, `anchors.actions[${stray}]`, `is ${JSON.stringify(a.actions[stray])}, not an action of the file`);
   }
   return d as Capabilities;
 }
@@ -134,7 +144,9 @@ export function checkPrompt(caps: Capabilities, embedding: ArrayLike<number>): P
     if (nearest.length === (caps.check.suggestions ?? 3)) break;
   }
   const score = cos[order[0]];
-  return { known: score >= caps.check.threshold, score: Math.round(score * 1e4) / 1e4, action: a.actions[order[0]], nearest };
+  const action = a.actions[order[0]];
+  const covered = caps.actions.some((r) => r.label === action && r.covered);
+  return { known: covered && score >= caps.check.threshold, score: Math.round(score * 1e4) / 1e4, action, covered, nearest };
 }
 
 /**

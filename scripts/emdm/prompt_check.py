@@ -1,6 +1,7 @@
 """Is a prompt near what a shipped model does well? The runtime half of the capabilities file (the twin of
 ``src/capabilities.ts``'s ``checkPrompt``): reads ``capabilities-<model>.json`` beside the model, scores a prompt's
-embedding against its anchors and names the closest working prompts. Light on purpose: ``emdm.sample`` prints its
+embedding against its anchors (training captions of every action, covered or not) and names the closest working
+prompts. Light on purpose: ``emdm.sample`` prints its
 line, and a no-torch install runs it; ``emdm.eval.capabilities`` builds the file."""
 from __future__ import annotations
 
@@ -13,8 +14,12 @@ import numpy as np
 from emdm import manifest as mf
 from emdm import paths
 
-SCHEMA = 1
+SCHEMA = 2             # 2: anchors of the uncovered actions too; known = nearest anchor covered and close enough
 SUGGESTIONS = 3        # closest working prompts offered for an unknown one
+
+
+class CapabilitiesError(ValueError):
+    """A capabilities file this code cannot read (another schema version): one line naming the file and what to do."""
 
 
 def file_name(model: str) -> str:
@@ -27,9 +32,14 @@ def dequantise(q: np.ndarray) -> np.ndarray:
     return v / np.maximum(np.linalg.norm(v, axis=1, keepdims=True), 1e-12)
 
 
+def covered_actions(caps: dict) -> set[str]:
+    return {r["label"] for r in caps["actions"] if r["covered"]}
+
+
 def check(caps: dict, emb: np.ndarray) -> dict:
-    """{known, score, action: the closest anchor's action, nearest: [chip prompts, closest first, one per action]} for
-    one unit embedding."""
+    """{known, score, action: the closest anchor's action, covered: whether the model does that action well, nearest:
+    [chip prompts, closest first, one per action]} for one unit embedding. Known iff the closest anchor is of a covered
+    action and its cosine is at least ``check.threshold``."""
     a = caps["anchors"]
     vecs = dequantise(np.frombuffer(base64.b64decode(a["embeddings"]), np.int8).reshape(len(a["texts"]), -1))
     cos = vecs @ np.asarray(emb, np.float32)
@@ -41,27 +51,33 @@ def check(caps: dict, emb: np.ndarray) -> dict:
             if len(nearest) == SUGGESTIONS:
                 break
     best = int(np.argmax(cos))
-    return {"known": bool(cos[best] >= caps["check"]["threshold"]), "score": round(float(cos[best]), 4),
-            "action": a["actions"][best], "nearest": nearest}
+    covered = a["actions"][best] in covered_actions(caps)
+    return {"known": bool(covered and cos[best] >= caps["check"]["threshold"]), "score": round(float(cos[best]), 4),
+            "action": a["actions"][best], "covered": covered, "nearest": nearest}
 
 
 def notice(result: dict) -> str | None:
     """The one line the CLI prints for an unknown prompt (None for a known one); the page says the same."""
     if result["known"]:
         return None
-    return ("this prompt is far from what the model does well (best match "
-            f"{result['score']:.2f}); it may come out as walking or standing. Closest prompts that work: "
-            + "; ".join(repr(p) for p in result["nearest"]))
+    near = (f"it reads as {result['action'].replace('-', ' ')}, which the model does not do well yet"
+            if not result["covered"] else f"best match {result['score']:.2f}")
+    return (f"this prompt is far from what the model does well ({near}); it may come out as walking or standing. "
+            "Closest prompts that work: " + "; ".join(repr(p) for p in result["nearest"]))
 
 
 def load(model: str, models_dir: Path | str | None = None) -> dict | None:
-    """The shipped capabilities file of ``model`` (None when there is none, or it was built for another encoder file)."""
+    """The shipped capabilities file of ``model`` (None when there is none, or it was built for another encoder file;
+    a ``CapabilitiesError`` for a file of another schema version)."""
     models_dir = paths.models_dir(models_dir)       # the argument, $EMDM_MODELS_DIR or public/models
     path = models_dir / file_name(model)
     if not path.is_file():
         return None
     caps = json.loads(path.read_text())
-    if caps.get("schema") != SCHEMA or caps.get("model") != model or "check" not in caps:
+    if caps.get("schema") != SCHEMA:
+        raise CapabilitiesError(f"{paths.display_path(path)}: schema {caps.get('schema')!r}, this code reads {SCHEMA}; "
+                                f"rebuild it with python -m emdm.eval.capabilities --model {model}")
+    if caps.get("model") != model or "check" not in caps:
         return None
     enc = caps["encoder"]
     if mf.load(models_dir)["files"].get(enc["onnx"], {}).get("sha256") != enc["sha256"]:

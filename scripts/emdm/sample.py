@@ -339,7 +339,10 @@ def run(a: argparse.Namespace) -> int:
         feats, joints = run_edit(a, dataclasses.replace(editor, settings=settings), frames)
         return write_motion(a, feats[None], joints[None])
     cond = make_condition(entry["condition"], a.text, a.action, a.uncond, a.models_dir)
-    far = a.text and a.model and prompt_check.prompt_notice(a.model, cond, a.models_dir)
+    try:
+        far = a.text and a.model and prompt_check.prompt_notice(a.model, cond, a.models_dir)
+    except prompt_check.CapabilitiesError as e:      # advisory: say it once and generate (the page does the same)
+        far = f"no prompt check: {e}"
     if far:                                          # the page says the same beside its prompt box
         print(far, file=sys.stderr)
     known, keep = known_and_keep(a, frames, mean, std) if a.keep else (None, None)

@@ -1,4 +1,5 @@
-// What the model knows (issue 30), through the real prompt box: a prompt far from everything the text model does well
+// What the model knows (issue 30), through the real prompt box: a prompt far from everything the text model does well,
+// or nearest an action it does not do well (named),
 // says so under the box and offers three prompts that work (each one, clicked, generates without the notice), and still
 // generates; a covered prompt shows no notice; the list of actions the model does well and does not is one click from
 // the prompt; the Action tab marks the labels its model does not make yet.
@@ -26,18 +27,19 @@ test('a far prompt gets the notice and three working prompts, and still generate
   await open(page);
   const notice = page.locator('#prompt-check');
 
-  await page.locator('#prompt').fill('a person kicks');
+  // an action the model does not do, worded near one it does (climb): the notice names the action it reads as
+  await page.locator('#prompt').fill('someone jumps up and down');
   await generated(page, () => page.locator('#generate').click());
   await expect(page.locator('#play')).toBeEnabled();                     // it generated all the same
   await expect(notice).toBeVisible();
-  await expect(notice).toContainText('has not learned anything close to “a person kicks”');
+  await expect(notice).toContainText('“someone jumps up and down” reads as jump, which this model does not do well yet');
   const chips = notice.locator('button.chip');
   await expect(chips).toHaveCount(3);
   const suggestions = await chips.allTextContents();
   expect(new Set(suggestions).size).toBe(3);
 
   // editing the prompt hides the notice of the old one
-  await page.locator('#prompt').fill('a person kicks twice');
+  await page.locator('#prompt').fill('someone jumps up and down twice');
   await expect(notice).toBeHidden();
 
   // each suggestion works: clicked, it becomes the prompt, generates, and draws no notice

@@ -38,6 +38,25 @@ describe('capabilities', () => {
       expect(Math.abs(got.score - ex.score), ex.prompt).toBeLessThan(3e-3);
       expect(got.nearest, ex.prompt).toEqual(ex.nearest);
       expect(got.action, ex.prompt).toBe(ex.action);
+      expect(got.covered, ex.prompt).toBe(ex.covered);
+    }
+  });
+
+  test('a prompt for an action the model does not do finds that action and is unknown; covered ones are known', async () => {
+    // under schema 1 (anchors of covered actions only) "a person jumps" passed as climb (0.79 ≥ 0.76)
+    const cases: [string, boolean, string?][] = [
+      ['a person jumps', false, 'jump'], ['someone jumps up and down', false, 'jump'], ['a person kicks', false, 'kick'],
+      ['dances', false, 'dance'], ['swims', false], ['a person walks', true, 'walk'],
+      ['a person raises the left hand', true, 'raise-left-hand'], ['a person bows', true, 'bow'], ['a person punches', true, 'punch'],
+    ];
+    const examples = new Map(caps.examples!.map((e) => [e.prompt, e]));
+    for (const [prompt, known, action] of cases) {
+      const got = checkPrompt(caps, await enc.encode(prompt));
+      expect(got.known, prompt).toBe(known);
+      if (action) expect(got.action, prompt).toBe(action);
+      expect(got.covered, prompt).toBe(caps.actions.find((a) => a.label === got.action)!.covered);
+      expect(examples.get(prompt)?.known, `${prompt}: Python's answer in the file`).toBe(known);
+      if (!known) expect(got.nearest, prompt).toHaveLength(3);
     }
   });
 
@@ -70,11 +89,27 @@ describe('capabilities', () => {
     const onnx = manifest.textEncoders['all-MiniLM-L6-v2'].onnx as string;
     stale.files[onnx] = { ...stale.files[onnx], sha256: '0'.repeat(64) };
     expect(await loadCapabilities(stale, MODELS, T2M)).toBeNull();
-    expect(() => validateCapabilities({ schema: 1, actions: [{ label: 'walk' }] }, 'c.json')).toThrow(/c.json: field 'actions'/);
-    const slow = { schema: 1, actions: [{ label: 'walk', rate: 1, covered: true, realSpeed: { median: 1.1, low: 0.5 } }] };
+    expect(() => validateCapabilities({ schema: 2, actions: [{ label: 'walk' }] }, 'c.json')).toThrow(/c.json: field 'actions'/);
+    const slow = { schema: 2, actions: [{ label: 'walk', rate: 1, covered: true, realSpeed: { median: 1.1, low: 0.5 } }] };
     expect(() => validateCapabilities(slow, 'c.json')).toThrow(/c.json: field 'actions\[0\]\.realSpeed'/);
     const broken = JSON.parse(fs.readFileSync(path.join(MODELS, 'capabilities-emdm-t2m-web.json'), 'utf8'));
     broken.anchors.suggest.pop();
     expect(() => validateCapabilities(broken, 'c.json')).toThrow(ModelFileError);
+    const stray = JSON.parse(fs.readFileSync(path.join(MODELS, 'capabilities-emdm-t2m-web.json'), 'utf8'));
+    stray.anchors.actions[3] = 'fly';
+    expect(() => validateCapabilities(stray, 'c.json')).toThrow(/c.json: field 'anchors.actions\[3\]' is "fly"/);
+  });
+
+  test('a file of another schema version is refused in one line that says what to do', () => {
+    const old = { ...JSON.parse(fs.readFileSync(path.join(MODELS, 'capabilities-emdm-t2m-web.json'), 'utf8')), schema: 1 };
+    let message = '';
+    try {
+      validateCapabilities(old, 'capabilities-emdm-t2m-web.json');
+    } catch (e) {
+      expect(e).toBeInstanceOf(ModelFileError);
+      message = (e as Error).message;
+    }
+    expect(message).toMatch(/capabilities-emdm-t2m-web\.json.*field 'schema' is 1, this library reads 2; rebuild it with python -m emdm\.eval\.capabilities/);
+    expect(message.split('\n')).toHaveLength(1);
   });
 });

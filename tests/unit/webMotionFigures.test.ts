@@ -50,7 +50,7 @@ describe("the real clips' speed beside the figure", () => {
   const caps = { actions: [{ label: 'walk-turn-left', rate: 1, covered: true, realSpeed: walk }, { label: 'kick', rate: 0, covered: false }] } as unknown as Capabilities;
 
   it("is the prompt's nearest action's, from the capabilities file, only for a prompt the check knows", () => {
-    const check = { known: true, score: 0.9, action: 'walk-turn-left', nearest: [] };
+    const check = { known: true, score: 0.9, action: 'walk-turn-left', covered: true, nearest: [] };
     expect(realSpeedOf(caps, check)).toEqual({ action: 'walk-turn-left', speed: walk });
     expect(realSpeedNote(realSpeedOf(caps, check)!)).toBe('real walk turn left 0.55–1.43');
     expect(realSpeedOf(caps, { ...check, known: false })).toBeNull();          // far prompt: its "nearest" action is a guess

@@ -6,10 +6,12 @@ import { type PromptCheck } from '../../src/index';
 import type { Capabilities } from '../../src/capabilities';
 import { byId, el } from './dom';
 
-/** The notice's words for an unknown prompt. */
-export function farNote(prompt: string): string {
-  return `The model has not learned anything close to “${prompt.trim()}”, so the motion will probably be walking, `
-    + 'standing or a raised arm. These prompts are the closest it does well:';
+/** The notice's words for an unknown prompt (`weak`: the action it reads as, one the model does not do well yet). */
+export function farNote(prompt: string, weak?: string): string {
+  const what = weak
+    ? `“${prompt.trim()}” reads as ${weak.replace(/[_-]+/g, ' ')}, which this model does not do well yet`
+    : `The model has not learned anything close to “${prompt.trim()}”`;
+  return `${what}, so the motion will probably be walking, standing or a raised arm. These prompts are the closest it does well:`;
 }
 
 const pct = (r: number) => `${Math.round(r * 100)} %`;
@@ -69,7 +71,7 @@ export class KnowsPanel {
       this.check.hidden = true;
       return;
     }
-    this.checkText.textContent = farNote(prompt);
+    this.checkText.textContent = farNote(prompt, c.covered ? undefined : c.action);
     this.checkChips.replaceChildren(...c.nearest.map((p) => {
       const chip = el('button', 'chip', p);
       chip.type = 'button';
