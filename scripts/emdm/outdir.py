@@ -239,3 +239,14 @@ def recover(out: Path) -> str:
         done.append(f"removed {len(removed)} leftover temp folder{'s' if len(removed) > 1 else ''} of killed "
                     f"run{'s' if len(set(removed)) > 1 else ''} {pids}")
     return "; ".join(done)
+
+
+def write_text_atomic(path: Path | str, text: str) -> Path:
+    """Write ``text`` to ``path`` through a temporary file beside it and a rename: a killed run leaves the old file
+    whole (the generated docs: RESULTS.md, MODELS.md's tables)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+    return path

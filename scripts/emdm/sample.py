@@ -55,6 +55,7 @@ from emdm.motion.features import recover_joints
 from emdm.motion.mask import KeepSpecError, keep_mask, parse_keep
 from emdm.motion.stitch import pin_kept_root
 from emdm.outdir import OutputRefused, writable_folder
+from emdm.sampler.flags import add_sampling_settings, with_flags
 from emdm.sampler import (MAX_SEED, SampleError, SamplingSettings, StepFn, check_steps, check_x0_smoothing,
                           denormalise, make_condition, sample_features)
 
@@ -281,12 +282,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--frames", type=int, default=None, help="length in frames at 20 fps (≤ 196; default 120)")
     p.add_argument("--guidance", type=float, default=None, help="classifier-free guidance scale (default: model's)")
-    p.add_argument("--guidance-min-time", type=float, default=None, metavar="T",
-                   help="guide only the steps whose time is above T, one batch row below (guidance in a limited "
-                        "interval; default: the model's guidanceMinTime, else 0 = every step)")
-    p.add_argument("--x0-smoothing", type=float, default=None, metavar="SIGMA",
-                   help="smooth x̂0 along time (Gaussian, σ frames) at every step but the last (default: the model's "
-                        "x0Smoothing, else 0 = off)")
+    add_sampling_settings(p)
     p.add_argument("--num", type=int, default=1, help="number of samples")
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--out", type=Path, required=True, help="output path prefix (.npy, .features.npy, .metres.bvh)")
@@ -362,10 +358,7 @@ def settings_of(a: argparse.Namespace, entry: dict) -> SamplingSettings:
     """The model's sampling settings (its manifest entry) with the flags given: --steps (checked against its
     supportedSteps), --guidance, --guidance-min-time, --x0-smoothing."""
     steps = check_steps(a.steps, entry, a.model or str(a.ckpt))
-    s = SamplingSettings.from_entry(entry, steps, a.guidance)
-    if a.guidance_min_time is not None:
-        s = dataclasses.replace(s, guidance_min_time=a.guidance_min_time)
-    return s if a.x0_smoothing is None else dataclasses.replace(s, x0_smoothing=a.x0_smoothing)
+    return with_flags(SamplingSettings.from_entry(entry, steps, a.guidance), a)
 
 
 def write_motion(a: argparse.Namespace, feats: np.ndarray, joints: np.ndarray) -> int:

@@ -40,13 +40,14 @@ from emdm.data.dataset import DatasetError, cached_text_embeddings, parse_text_f
 from emdm.eval import data as evdata
 from emdm.eval import evaluators as E
 from emdm.eval.protocol import Conditions, sample_lengths
-from emdm.eval.args import add_model_source, add_sampling_settings
+from emdm.eval.args import add_model_source
 from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, evaluator_info, hardware, slug, write_result
 from emdm.eval.sources import ModelSource
 from emdm.model.open import ModelError, open_model
 from emdm.outdir import OutputRefused, check_writable
 from emdm.paths import DATASET_DIR, RUNS_DIR, display_path
 from emdm.eval.plausibility import flip_share
+from emdm.sampler.flags import add_sampling_settings
 
 PROMPTS_FILE = Path(__file__).with_name("prompts.json")
 COVERED = 0.5          # an action is covered when recognised in at least this share of its motions

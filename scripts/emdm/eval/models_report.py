@@ -32,6 +32,7 @@ from emdm.model.open import onnx_step, read_meanstd
 from emdm.sampler import SamplingSettings, denormalise, make_condition, sample_features
 from emdm.sampler.settings import method_of
 from emdm.motion.features import recover_joints
+from emdm.outdir import write_text_atomic
 
 MODELS_MD = paths.REPO_ROOT / "docs" / "MODELS.md"
 BONES_JSON = paths.REPO_ROOT / "docs" / "results" / "json" / "models-bones.json"
@@ -234,9 +235,7 @@ def main(argv: list[str] | None = None) -> int:
               file=sys.stderr)
         return 2
     text = render(a.out.read_text(), blocks(man, bones), str(a.out))
-    tmp = a.out.with_suffix(".tmp")
-    tmp.write_text(text)
-    tmp.replace(a.out)
+    write_text_atomic(a.out, text)
     print(f"wrote {a.out}")
     return 0
 

@@ -43,11 +43,12 @@ import numpy as np
 
 from emdm import skeleton as sk
 from emdm.sampler import SampleError, SamplingSettings, make_condition, sample_features
-from emdm.eval.args import add_model_source, add_sampling_settings
+from emdm.eval.args import add_model_source
 from emdm.eval.results import RESULTS_DIR, hardware, slug
 from emdm.model.open import ModelError, open_model
 from emdm.motion.features import recover_joints
 from emdm.outdir import OutputRefused, check_writable
+from emdm.sampler.flags import add_sampling_settings
 
 BONE_TOL = 0.30
 LEG_TOL = 1.15

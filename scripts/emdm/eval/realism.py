@@ -41,7 +41,7 @@ from emdm.eval import kinematics as K
 from emdm.eval.plausibility import batch_plausibility, flip_share
 from emdm.eval.poses import check_frames
 from emdm.eval import markdown as md
-from emdm.eval.args import add_model_source, add_sampling_settings
+from emdm.eval.args import add_model_source
 from emdm.eval.report_plots import save_figure
 from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, evaluator_info, hardware, slug, write_result
 from emdm.eval.sources import ModelSource
@@ -50,6 +50,7 @@ from emdm.motion.decode import decode_joints
 from emdm.motion.features import recover_joints
 from emdm.outdir import OutputRefused, check_writable
 from emdm.paths import DATASET_DIR, RUNS_DIR, display_path
+from emdm.sampler.flags import add_sampling_settings
 
 SPEED_SLACK = 1.15        # a motion's speed is in range within [p5 / this, p95 × this] of its action's real clips
 STEP_Q = 99               # the joint-step percentile reported

@@ -43,6 +43,7 @@ from emdm.eval.report_tables import (
     VARIANT_LABEL, ReportError, action_table, clips_per_row, coverage_section, headlines, models_table,
     plausibility_table, steps_of, text_table, timing_rows, timing_table)
 from emdm.eval.results import RESULTS_DIR, RESULTS_MD, SCHEMA
+from emdm.outdir import write_text_atomic
 
 # The rows the seed's comparisons need: (task, variant, steps or None for "any"), and the table they feed.
 EXPECTED = [
@@ -335,10 +336,7 @@ def main(argv: list[str] | None = None) -> int:
             if plot_coverage(r, png):
                 plots["coverage:" + r["_file"]] = rel(png.resolve())
     text = render(results, plots)
-    a.out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = a.out.with_suffix(".tmp")
-    tmp.write_text(text)
-    tmp.replace(a.out)
+    write_text_atomic(a.out, text)
     print(f"wrote {a.out} from {len(results)} result files; {len(missing(results))} rows not measured yet")
     return 0
 

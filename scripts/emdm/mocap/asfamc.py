@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from emdm.mocap.errors import MocapFormatError
+from emdm.mocap.errors import MocapFormatError, parse_float
 from emdm.mocap.rotations import axis_rotation
 from emdm.mocap.textfile import check_frames, check_values, iter_lines, read_text
 
@@ -79,16 +79,7 @@ class AMC:
 
 
 def _floats(toks: list[str], path: str, line: int, what: str) -> list[float]:
-    out = []
-    for t in toks:
-        try:
-            v = float(t)
-        except ValueError:
-            raise MocapFormatError(path, line, f"expected a number in {what}, got {t!r}") from None
-        if not math.isfinite(v):
-            raise MocapFormatError(path, line, f"{what}: {t!r} is not a finite number")
-        out.append(v)
-    return out
+    return [parse_float(t, path, line, what) for t in toks]
 
 
 def parse_asf_text(text: str, path: str = "<asf>") -> ASF:

@@ -16,14 +16,13 @@ HIERARCHY of at most ``MAX_HIERARCHY_CHARS``, ``MAX_FRAMES`` frames and ``MAX_VA
 
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from emdm.mocap.errors import MocapFormatError
+from emdm.mocap.errors import MocapFormatError, parse_float
 from emdm.mocap.rotations import axis_rotation
 from emdm.mocap.textfile import check_frames, check_values, iter_lines, read_text
 
@@ -65,16 +64,6 @@ class BVH:
             return self.names.index(name)
         except ValueError:
             raise KeyError(f"{self.path}: no joint named {name!r} (joints: {', '.join(self.names)})") from None
-
-
-def _parse_float(tok: str, path: str, line: int, what: str) -> float:
-    try:
-        v = float(tok)
-    except ValueError:
-        raise MocapFormatError(path, line, f"expected a number for {what}, got {tok!r}") from None
-    if not math.isfinite(v):
-        raise MocapFormatError(path, line, f"{what}: {tok!r} is not a finite number")
-    return v
 
 
 def _parse_hierarchy(lines: list[str], path: str):
@@ -149,7 +138,7 @@ def _parse_hierarchy(lines: list[str], path: str):
                 raise MocapFormatError(path, lineno, "OFFSET outside of a joint block")
             if len(toks) != 4:
                 raise MocapFormatError(path, lineno, f"expected 'OFFSET x y z', got {len(toks) - 1} values")
-            offsets[stack[-1]] = [_parse_float(t, path, lineno, "OFFSET") for t in toks[1:]]
+            offsets[stack[-1]] = [parse_float(t, path, lineno, "OFFSET") for t in toks[1:]]
         elif key == "CHANNELS":
             if not stack:
                 raise MocapFormatError(path, lineno, "CHANNELS outside of a joint block")
@@ -236,7 +225,7 @@ def _motion_header(text: str, start: int, lineno: int, path: str) -> tuple[int, 
     if len(header) < 2 or not header[1][1].lower().startswith("frame time:"):
         raise MocapFormatError(path, header[1][0] if len(header) > 1 else ln, "expected 'Frame Time: <seconds>'")
     ln, line, nxt = header[1]
-    frame_time = _parse_float(line.split(":", 1)[1].strip(), path, ln, "Frame Time")
+    frame_time = parse_float(line.split(":", 1)[1].strip(), path, ln, "Frame Time")
     lo, hi = FRAME_TIME_RANGE
     if not lo <= frame_time <= hi:
         raise MocapFormatError(path, ln, f"Frame Time must be between {lo:g} and {hi:g} seconds "
@@ -321,7 +310,7 @@ def _locate_motion_error(lines: list[str], first: int, frames: int, total: int, 
         if len(toks) != total:
             raise MocapFormatError(path, k + 1, f"motion row {row + 1} has {len(toks)} values, expected {total} (one per channel)")
         for t in toks:
-            _parse_float(t, path, k + 1, f"motion row {row + 1}")
+            parse_float(t, path, k + 1, f"motion row {row + 1}")
         row += 1
     raise MocapFormatError(path, len(lines), f"file has {row} motion rows, but the header says 'Frames: {frames}'"
                                              if row != frames else "a motion value is not a number this reader takes")

@@ -8,7 +8,8 @@
 - ``ddgan`` / ``ddim``: one update function each, ``registry``: the method names the loop can run;
 - ``settings``: ``SamplingSettings`` and ``SampleError``; ``condition``: the condition vector;
 - ``sampler``: the loop (``sample_features``, ``sampling`` as a generator, ``drive``);
-- ``lockstep``: several runs with one model call per step (``run_together``, ``finish``).
+- ``lockstep``: several runs with one model call per step (``run_together``, ``finish``);
+- ``flags``: the command-line flags of the settings every command shares (``add_sampling_settings``, ``with_flags``).
 """
 
 from emdm.sampler.condition import denormalise, make_condition
