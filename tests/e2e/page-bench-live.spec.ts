@@ -9,8 +9,19 @@
 //   EMDM_BENCH=1 npx playwright test tests/e2e/page-bench-live.spec.ts
 //
 // EMDM_BENCH_LIVE_SECONDS (default 160: 32 prompts) is the session's length; EMDM_BENCH_IDLE_SECONDS (default 10).
+// EMDM_BENCH_OUT=docs/results/json/live-emdm-t2m-web-page-wasm.json also writes the results JSON RESULTS.md's "Live
+// stream" section reads (task "live-page", emdm.eval.live_section).
+//
+// The soak (the issue's long-run bar): EMDM_BENCH_SOAK_MINUTES=10 runs a live session through the prompt box with a
+// prompt every 5 s (cycling PROMPTS) for that many minutes, samples every 10 s the JS heap after a forced GC (CDP),
+// the DOM nodes, the stream's buffered frames and list lengths, and follows every displayed frame's pelvis height
+// and root distance from the stage centre; EMDM_BENCH_SOAK_OUT=docs/results/json/live-emdm-t2m-web-page-soak.json
+// writes its results JSON (task "live-soak").
+//
+//   EMDM_BENCH=1 EMDM_BENCH_SOAK_MINUTES=10 npx playwright test tests/e2e/page-bench-live.spec.ts -g soak
 import fs from 'node:fs';
 import os from 'node:os';
+import path from 'node:path';
 import { expect, test, type Page } from '@playwright/test';
 
 /** One prompt in each slot of this length, at a random moment of it. */
@@ -55,6 +66,34 @@ async function recordGaps(page: Page): Promise<() => Promise<number[]>> {
   });
 }
 
+/** The real clips' pelvis height range (m): min / max of joint 0's y over every frame of the 7,202 windows of the
+ * prepared dataset (data/dataset/new_joints/*.npy, 664,250 frames; lying down to climbing). Computed with
+ * `np.concatenate([np.load(f)[:, 0, 1] for f in glob('data/dataset/new_joints/*.npy')])`: min 0.047, max 1.777
+ * (1st / 99th percentiles 0.625 / 1.483). kinematics.py records only pelvis drops, not heights. */
+const REAL_PELVIS_M = { min: 0.047, max: 1.777, p01: 0.625, p99: 1.483, source: 'data/dataset/new_joints (7,202 windows, 664,250 frames)' };
+
+/** Where the runs happened, for the results JSON. */
+const where = (page: Page, load: number[]) => ({
+  runtime: `Chromium ${page.context().browser()?.version() ?? '?'} headless`, hardware: `${os.cpus().length} cores (${os.cpus()[0]?.model.trim()})`,
+  load: Number(Math.max(...load).toFixed(2)), loadAverage: load.map((v) => Number(v.toFixed(2))),
+});
+
+/** Write a results JSON (schema 1, emdm.eval.report) to `file` when set. */
+function writeResults(file: string | undefined, body: Record<string, unknown>): void {
+  if (!file) return;
+  fs.mkdirSync(path.dirname(file), { recursive: true });
+  fs.writeFileSync(file, JSON.stringify({ schema: 1, ...body }, null, 1) + '\n');
+  console.log(`wrote ${file}`);
+}
+
+/** The page ready on WASM without a motion: the worker's environment and the steps slider's value. */
+async function openPage(page: Page) {
+  await page.goto('/?noauto=1&backend=wasm');
+  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+  expect(await page.evaluate(() => window.emdm.error)).toBe('');
+  return page.evaluate(() => ({ env: window.emdm.environment, steps: Number(document.querySelector<HTMLOutputElement>('#steps-out')!.textContent) }));
+}
+
 const gapFigures = (g: number[]) => ({ frames: g.length, median: Number(quantile(g, 0.5).toFixed(1)), p95: Number(quantile(g, 0.95).toFixed(1)), max: Number(Math.max(...g).toFixed(1)) });
 
 test('benchmark: live mode — prompt latency, underruns, repeated frames, frame gaps live vs idle', async ({ page }) => {
@@ -62,13 +101,10 @@ test('benchmark: live mode — prompt latency, underruns, repeated frames, frame
   const seconds = Number(process.env.EMDM_BENCH_LIVE_SECONDS ?? 160);
   const idleSeconds = Number(process.env.EMDM_BENCH_IDLE_SECONDS ?? 10);
   test.setTimeout((seconds + idleSeconds + 240) * 1000);
-  await page.goto('/?noauto=1&backend=wasm');
-  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
-  expect(await page.evaluate(() => window.emdm.error)).toBe('');
-  const env = await page.evaluate(() => ({ env: window.emdm.environment, steps: Number(document.querySelector<HTMLOutputElement>('#steps-out')!.textContent) }));
+  const env = await openPage(page);
 
   // idle: a motion playing, nothing generating
-  await page.evaluate(() => window.emdm.generate({ text: 'a person walks forward', seconds: 9.8, seed: 1 }));
+  const model = (await page.evaluate(() => window.emdm.generate({ text: 'a person walks forward', seconds: 9.8, seed: 1 }))).model;
   const load0 = os.loadavg()[0];
   let stop = await recordGaps(page);
   await page.waitForTimeout(idleSeconds * 1000);
@@ -125,4 +161,146 @@ test('benchmark: live mode — prompt latency, underruns, repeated frames, frame
     + `  frame gaps (rAF, ms): ${(['idle', 'live', 'idleAfter'] as const).map((k) => `${k} median ${summary.frameGapMs[k].median} p95 ${summary.frameGapMs[k].p95} max ${summary.frameGapMs[k].max}`).join('; ')}\n`
     + `  live p95 / idle p95: ${(summary.frameGapMs.live.p95 / summary.frameGapMs.idle.p95).toFixed(2)} (before), ${(summary.frameGapMs.live.p95 / summary.frameGapMs.idleAfter.p95).toFixed(2)} (after)`);
   fs.writeFileSync(test.info().outputPath('bench-live.json'), JSON.stringify({ summary, latencies: lat, prompts: r.prompts }, null, 1));
+  writeResults(process.env.EMDM_BENCH_OUT, {
+    task: 'live-page', name: `live-${model}-page-wasm`, model, ...where(page, [load0, load1]), steps: env.steps,
+    threads: env.env?.threads ?? null, summary, latencies: lat,
+  });
+});
+
+interface SoakSample {
+  /** seconds since the session started */
+  t: number;
+  heapMB: number;
+  /** CDP's Nodes (DOM nodes alive, detached ones included) and the document's elements */
+  nodes: number;
+  elements: number;
+  bufferedFrames: number;
+  lists: { latencies: number; windowMs: number; blends: number; prompts: number };
+  /** the displayed frames since the sample before: pelvis height min/max (m), largest root distance from the stage centre (m) */
+  pelvis: [number, number];
+  rootDistance: number;
+  frames: number;
+}
+
+const mean = (a: number[]) => a.reduce((x, y) => x + y, 0) / a.length;
+const mb = (v: number) => Number(v.toFixed(2));
+
+/** Follow every displayed frame in the page: its pelvis height and root distance, min/max since the last `take()`. */
+async function followFrames(page: Page): Promise<() => Promise<{ pelvis: [number, number]; rootDistance: number; frames: number }>> {
+  await page.evaluate(() => {
+    const w = window as unknown as { soak: { lo: number; hi: number; dist: number; frames: number; last: number } };
+    const s = (w.soak = { lo: Infinity, hi: -Infinity, dist: 0, frames: 0, last: -1 });
+    const tick = () => {
+      const l = window.emdm.live!;
+      const f = l.shownFrame();
+      const r = l.last();
+      if (f && f.frame !== s.last) {
+        s.last = f.frame;
+        s.lo = Math.min(s.lo, f.joints[1]);
+        s.hi = Math.max(s.hi, f.joints[1]);
+        s.frames++;
+      }
+      if (r) s.dist = Math.max(s.dist, Math.hypot(r.root[0], r.root[2]));
+      requestAnimationFrame(tick);
+    };
+    requestAnimationFrame(tick);
+  });
+  return () => page.evaluate(() => {
+    const s = (window as unknown as { soak: { lo: number; hi: number; dist: number; frames: number } }).soak;
+    const out = { pelvis: [s.lo, s.hi] as [number, number], rootDistance: s.dist, frames: s.frames };
+    Object.assign(s, { lo: Infinity, hi: -Infinity, dist: 0, frames: 0 });
+    return out;
+  });
+}
+
+test('benchmark: live mode soak — heap, DOM nodes, stream buffers, pelvis height over minutes', async ({ page }) => {
+  const minutes = Number(process.env.EMDM_BENCH_SOAK_MINUTES ?? 0);
+  test.skip(process.env.EMDM_BENCH !== '1' || !(minutes > 0), 'benchmark: set EMDM_BENCH=1 and EMDM_BENCH_SOAK_MINUTES to run it');
+  const seconds = minutes * 60;
+  test.setTimeout((seconds + 300) * 1000);
+  const env = await openPage(page);
+  const model = (await page.evaluate(() => window.emdm.generate({ text: 'a person walks forward', seconds: 2, seed: 1 }))).model;
+  const cdp = await page.context().newCDPSession(page);
+  await cdp.send('Performance.enable');
+  const load0 = os.loadavg()[0];
+
+  await page.locator('#prompt').fill(PROMPTS[0]);
+  await page.locator('#live').click();
+  await page.waitForFunction(() => window.emdm.live!.active, null, { timeout: 120_000 });
+  const take = await followFrames(page);
+  const start = await page.evaluate(() => ({ displayed: window.emdm.live!.displayed, repeated: window.emdm.live!.repeated }));
+  const t0 = Date.now();
+  const samples: SoakSample[] = [];
+  const sample = async () => {
+    await cdp.send('HeapProfiler.collectGarbage');
+    const { metrics } = await cdp.send('Performance.getMetrics');
+    const metric = (name: string) => metrics.find((m) => m.name === name)?.value ?? NaN;
+    const p = await page.evaluate(() => {
+      const l = window.emdm.live!;
+      const st = l.stats()!;
+      return {
+        elements: document.getElementsByTagName('*').length, bufferedFrames: st.bufferedFrames,
+        lists: { latencies: st.latencies.length, windowMs: st.windowMs.length, blends: st.blends.length, prompts: l.prompts().length },
+      };
+    });
+    const f = await take();
+    samples.push({ t: Math.round((Date.now() - t0) / 1000), heapMB: metric('JSHeapUsedSize') / 2 ** 20, nodes: metric('Nodes'), ...p, ...f });
+  };
+  await sample();
+  let sent = 0;
+  let nextSample = t0 + 10_000;
+  // a prompt every 5 s, a sample every 10 s (between prompts: the GC does not land on a prompt's Enter)
+  for (let k = 1; k * SLOT_MS <= seconds * 1000; k++) {
+    await page.waitForTimeout(Math.max(0, t0 + k * SLOT_MS - Date.now()));
+    await page.locator('#prompt').fill(PROMPTS[(1 + sent) % PROMPTS.length]);
+    await page.locator('#prompt').press('Enter');
+    sent++;
+    if (Date.now() + 2500 >= nextSample) {
+      await page.waitForTimeout(Math.max(0, nextSample - Date.now()));
+      await sample();
+      nextSample += 10_000;
+    }
+  }
+  const load1 = os.loadavg()[0];
+  const r = await page.evaluate(() => {
+    const l = window.emdm.live!;
+    return { stats: l.stats()!, displayed: l.displayed, repeated: l.repeated };
+  });
+  await page.locator('#live').click();
+  await page.waitForFunction(() => !window.emdm.live!.on);
+
+  const heap = samples.map((s) => s.heapMB);
+  const first = samples.filter((s) => s.t <= 60).map((s) => s.heapMB);
+  const last = samples.filter((s) => s.t >= seconds - 60).map((s) => s.heapMB);
+  const lo = Math.min(...samples.map((s) => s.pelvis[0]));
+  const hi = Math.max(...samples.map((s) => s.pelvis[1]));
+  const lat = r.stats.latencies;
+  const summary = {
+    minutes, promptsSent: sent, samples: samples.length, framesFollowed: samples.reduce((a, s) => a + s.frames, 0),
+    heapMB: { first: mb(heap[0]), last: mb(heap[heap.length - 1]), max: mb(Math.max(...heap)), firstMinuteMean: mb(mean(first)), lastMinuteMean: mb(mean(last)) },
+    heapGrowthMB: mb(mean(last) - mean(first)),
+    nodes: { first: samples[0].nodes, last: samples[samples.length - 1].nodes, max: Math.max(...samples.map((s) => s.nodes)) },
+    bufferedFramesMax: Math.max(...samples.map((s) => s.bufferedFrames)),
+    listsLast: samples[samples.length - 1].lists,
+    pelvisM: { min: mb(lo), max: mb(hi) }, realPelvisM: REAL_PELVIS_M,
+    pelvisWithinReal: lo >= REAL_PELVIS_M.min && hi <= REAL_PELVIS_M.max,
+    rootDistanceMaxM: mb(Math.max(...samples.map((s) => s.rootDistance))),
+    underruns: r.stats.underruns, coastedFrames: r.stats.coastedFrames, windows: r.stats.windows, dropped: r.stats.dropped,
+    displayed: r.displayed - start.displayed, repeated: r.repeated - start.repeated,
+    latencyMedianS: Number(quantile(lat, 0.5).toFixed(3)), latencyP95S: Number(quantile(lat, 0.95).toFixed(3)), latencies: lat.length,
+  };
+  const h = summary.heapMB;
+  console.log(`live soak: ${minutes} min, ${sent} prompts, ${samples.length} samples, load ${load0.toFixed(2)} → ${load1.toFixed(2)} on ${os.cpus().length} cores\n`
+    + `  JS heap after GC (MB): first ${h.first}, last ${h.last}, max ${h.max}; first-minute mean ${h.firstMinuteMean} → last-minute mean ${h.lastMinuteMean}: growth ${summary.heapGrowthMB} MB (bar 20)\n`
+    + `  DOM nodes ${summary.nodes.first} → ${summary.nodes.last} (max ${summary.nodes.max}); buffered frames max ${summary.bufferedFramesMax}; lists at the end ${JSON.stringify(summary.listsLast)}\n`
+    + `  pelvis height over ${summary.framesFollowed} displayed frames: ${summary.pelvisM.min}–${summary.pelvisM.max} m (real clips ${REAL_PELVIS_M.min}–${REAL_PELVIS_M.max} m: ${summary.pelvisWithinReal ? 'within' : 'OUTSIDE'}); root at most ${summary.rootDistanceMaxM} m from the stage centre\n`
+    + `  underruns ${summary.underruns} (${summary.coastedFrames} frames played back), repeated ${summary.repeated} of ${summary.displayed} displayed; latency median ${summary.latencyMedianS} s, p95 ${summary.latencyP95S} s`);
+  fs.writeFileSync(test.info().outputPath('bench-live-soak.json'), JSON.stringify({ summary, samples }, null, 1));
+  writeResults(process.env.EMDM_BENCH_SOAK_OUT, {
+    task: 'live-soak', name: `live-${model}-page-soak`, model, ...where(page, [load0, load1]), steps: env.steps,
+    threads: env.env?.threads ?? null, summary, samples: samples.map((s) => ({ ...s, heapMB: mb(s.heapMB), pelvis: s.pelvis.map(mb), rootDistance: mb(s.rootDistance) })),
+  });
+  // a benchmark: it asserts only that it ran
+  expect(samples.length).toBeGreaterThan(1);
+  expect(summary.framesFollowed).toBeGreaterThan(0);
 });

@@ -50,6 +50,12 @@ test('live mode: keyboard toggle, a character that keeps moving, prompts by Ente
   await page.waitForFunction((t) => window.emdm.live!.last()!.time > t + 0.5, a.time);
   const b = (await live(page)).last!;
   expect(Math.hypot(b.root[0] - a.root[0], b.root[1] - a.root[1], b.root[2] - a.root[2]), 'the pelvis moved').toBeGreaterThan(0);
+  // the stream frame under the pose shown (the soak follows its pelvis height): 22 joints, its pelvis where the drawn
+  // root is, up to the one frame's step the pose was interpolated over
+  const shown = await page.evaluate(() => ({ f: window.emdm.live!.shownFrame(), r: window.emdm.live!.last() }));
+  expect(shown.f!.joints).toHaveLength(66);
+  const [px, py, pz] = shown.f!.joints;
+  expect(Math.hypot(px - shown.r!.root[0], py - shown.r!.root[1], pz - shown.r!.root[2]), 'pelvis of the shown frame vs drawn root (m)').toBeLessThan(0.3);
 
   // three prompts by Enter (one the model does not know: the page says so, as for a generated one)
   await sendByEnter(page, 'a person raises both hands');

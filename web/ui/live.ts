@@ -49,6 +49,9 @@ export interface LiveTestApi {
   readonly poseMs: number;
   /** the pose shown last: the live clock (s), the root (stage coordinates) */
   last(): { time: number; root: [number, number, number] } | null;
+  /** the stream frame under the pose shown last (the earlier of the two it was interpolated from): its number and
+   * its 22 × 3 joints (stage coordinates, metres; the pelvis is joints 0–2) */
+  shownFrame(): { frame: number; joints: number[] } | null;
   prompts(): LivePrompt[];
   /** streams started and closed this visit */
   readonly started: number;
@@ -78,6 +81,8 @@ export class LivePanel implements PoseDriver {
   private readonly root = new Float32Array(3);
   private quats = new Float32Array(0);
   private readonly prev = { root: new Float32Array(3), quats: new Float32Array(0), shown: false, time: 0 };
+  /** the stream frame under the pose shown last (a reference to the stream's frame, not a copy) */
+  private shownFrame: { frame: number; joints: Float32Array } | null = null;
   /** the piece of the stream the visitor's character was given: from/to on the live clock, windows seen then */
   private piece: { from: number; to: number; windows: number } | null = null;
   private timer = 0;
@@ -226,8 +231,10 @@ export class LivePanel implements PoseDriver {
     const t = s.now();
     const f = Math.floor(t * s.fps);
     try {
-      const a = s.frameAt(f / s.fps).pose!;
+      const fa = s.frameAt(f / s.fps);
+      const a = fa.pose!;
       const b = s.frameAt((f + 1) / s.fps).pose!;
+      this.shownFrame = { frame: fa.frame, joints: fa.joints };
       const joints = a.quats.length / 4;
       track = { frames: 2, fps: s.fps, joints, rootPos: concat(a.rootPos, b.rootPos), quats: concat(a.quats, b.quats) };
     } catch (e) {
@@ -364,6 +371,7 @@ export class LivePanel implements PoseDriver {
         return self.poseMs;
       },
       last: () => (self.prev.shown ? { time: self.prev.time, root: [self.prev.root[0], self.prev.root[1], self.prev.root[2]] } : null),
+      shownFrame: () => (self.shownFrame ? { frame: self.shownFrame.frame, joints: Array.from(self.shownFrame.joints) } : null),
       prompts: () => self.log.map((p) => ({ ...p })),
       get started() {
         return self.counts.started;
