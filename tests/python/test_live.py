@@ -43,3 +43,51 @@ def test_results_row_says_which_bars_are_met():
     run["random"]["latencies"] = [0.3, 0.4, 0.45]
     run["steady"]["stats"]["underruns"] = 0
     assert "(met)" in live_section.row(run) and "not met" not in live_section.row(run)
+
+
+def _page_run(**summary):
+    s = {"seconds": 160, "promptsSent": 32, "latencies": 32, "latencyMedianS": 0.39, "latencyP95S": 0.4, "underruns": 0,
+         "displayed": 4000, "repeated": 0,
+         "frameGapMs": {"idle": {"p95": 20.0}, "live": {"p95": 30.0}, "idleAfter": {"p95": 25.0}}} | summary
+    return {"_file": "live-x-page.json", "task": "live-page", "name": "live-x-page", "runtime": "Chromium 1", "threads": 2,
+            "hardware": "2 cores", "load": 2.0, "steps": 10, "summary": s}
+
+
+def _soak_run(**summary):
+    s = {"minutes": 10, "promptsSent": 120, "heapMB": {"first": 30.0, "last": 31.0, "max": 33.0, "firstMinuteMean": 30.2,
+         "lastMinuteMean": 31.4}, "heapGrowthMB": 1.2, "pelvisM": {"min": 0.7, "max": 1.1},
+         "realPelvisM": {"min": 0.05, "max": 1.78, "source": "clips"}, "rootDistanceMaxM": 0.9, "underruns": 0,
+         "displayed": 12000, "repeated": 0} | summary
+    return {"_file": "live-x-soak.json", "task": "live-soak", "name": "live-x-soak", "runtime": "Chromium 1", "threads": 2,
+            "hardware": "2 cores", "load": 2.0, "steps": 10, "summary": s}
+
+
+def test_page_and_soak_rows_say_which_bars_are_met():
+    from emdm.eval import live_section
+    text = "\n".join(live_section.section([_page_run(), _soak_run()]))
+    assert "**0.39 / 0.40 s** over 32 of 32 prompts (met)" in text
+    assert "**0** in 160 s (met)" in text
+    assert "30.0 / 20.0, after 25.0 ms (1.20× the larger idle)" in text
+    assert "**+1.2 MB** (30.2 → 31.4; met)" in text
+    assert "**0.70–1.10 m** (real 0.05–1.78 m; met)" in text
+    assert "not met" not in text
+    assert "| Result | Runtime | Steps; frames |" not in text      # no Node run: no Node table
+    late = live_section.page_row(_page_run(latencyP95S=1.3, underruns=3))
+    assert "**0.39 / 1.30 s** over 32 of 32 prompts (not met)" in late and "**3** in 160 s (not met)" in late
+    grown = live_section.soak_row(_soak_run(heapGrowthMB=20.5, pelvisM={"min": 0.01, "max": 1.1}))
+    assert "**+20.5 MB** (30.2 → 31.4; not met)" in grown
+    assert "**0.01–1.10 m** (real 0.05–1.78 m; not met)" in grown
+
+
+def test_report_reads_page_results_and_names_a_missing_summary_field(tmp_path):
+    import json
+
+    from emdm.eval import report
+    for r in (_page_run(), _soak_run()):
+        (tmp_path / r["_file"]).write_text(json.dumps({"schema": 1} | {k: v for k, v in r.items() if k != "_file"}))
+    assert [r["task"] for r in report.load_results(tmp_path)] == ["live-page", "live-soak"]
+    bad = _soak_run()
+    del bad["summary"]["heapGrowthMB"]
+    (tmp_path / "live-x-soak.json").write_text(json.dumps({"schema": 1} | {k: v for k, v in bad.items() if k != "_file"}))
+    with pytest.raises(report.ReportError, match=r"live-x-soak.json: field 'summary' lacks 'heapGrowthMB'"):
+        report.load_results(tmp_path)

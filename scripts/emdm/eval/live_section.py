@@ -6,6 +6,14 @@ Live JSON: {"schema": 1, "task": "live", "name", "model", "runtime", "hardware",
 "live": {"window", "lead", "promptLead", "recordSeconds"}, "windowCost": {new frames: [ms]},
 "random": {"seconds", "prompts", "latencies": [s]}, "steady": {"seconds", "prompts", "stats": {"underruns",
 "coastedFrames"}, "maxPullGapMs"}, "seams": {"ratios": [peak ÷ p95 elsewhere], "p95": [m/s²], "repeated": [frames]}}.
+
+The page (tests/e2e/page-bench-live.spec.ts, EMDM_BENCH=1, Chromium on WASM) writes two more:
+task "live-page" (EMDM_BENCH_OUT): {"name", "runtime", "hardware", "load", "steps", "threads", "summary": {"seconds",
+"promptsSent", "latencies", "latencyMedianS", "latencyP95S", "underruns", "displayed", "repeated", "frameGapMs": {"idle",
+"live", "idleAfter": {"p95", ...}}}}; task "live-soak" (EMDM_BENCH_SOAK_OUT): {..., "summary": {"minutes",
+"promptsSent", "heapMB": {"first", "last", "max", "firstMinuteMean", "lastMinuteMean"}, "heapGrowthMB", "pelvisM":
+{"min", "max"}, "realPelvisM": {"min", "max", "source"}, "rootDistanceMaxM", "underruns", "displayed", "repeated"},
+"samples": [...]}.
 """
 
 from __future__ import annotations
@@ -14,6 +22,13 @@ import numpy as np
 
 LATENCY_BARS = (0.5, 1.0)       # median, 95th percentile (s)
 SEAM_BAR = 1.5                  # × the stream's 95th percentile of joint acceleration elsewhere
+HEAP_BAR_MB = 20                # the soak's JS heap growth, first minute's mean → last minute's (MB)
+TASKS = ("live", "live-page", "live-soak")
+
+PAGE_KEYS = ("seconds", "promptsSent", "latencies", "latencyMedianS", "latencyP95S", "underruns", "displayed",
+             "repeated", "frameGapMs")
+SOAK_KEYS = ("minutes", "promptsSent", "heapMB", "heapGrowthMB", "pelvisM", "realPelvisM", "rootDistanceMaxM",
+             "underruns", "displayed", "repeated")
 
 INTRO = ("`node scripts/bench/live-bench.mjs` runs `generator.live` (src/live: windows of C + W frames continuing the "
          "last second of what is playing, by the timelines' prefix inpainting and seam easing) in Node with the page's "
@@ -48,10 +63,81 @@ def row(r: dict) -> str:
             f"{sum(seams['repeated'])} |")
 
 
+PAGE_INTRO = ("In the page: `EMDM_BENCH=1 npx playwright test tests/e2e/page-bench-live.spec.ts` (headless Chromium, "
+              "WASM, the page's defaults) plays a generated motion idle, then runs live mode through the real prompt box "
+              "(Enter at a random moment of every 5 s): prompt → first new frame latency on the live clock, underruns, "
+              "frames displayed and how many repeated the pose before, and the page's requestAnimationFrame gaps live "
+              "against idle (95th percentile). `EMDM_BENCH_SOAK_MINUTES=10` (with `-g soak`) soaks it: a prompt every 5 s "
+              "for the minutes given, every 10 s the JS heap after a forced GC (CDP `Performance.getMetrics`), DOM nodes "
+              "and the stream's buffers, and every displayed frame's pelvis height against the real clips' range "
+              "(the prepared dataset's pelvis heights, min to max), the root's distance from the stage centre.")
+
+
+def missing(r: dict) -> list[str]:
+    """The summary fields a "live-page" / "live-soak" result lacks ([] for other tasks)."""
+    keys = {"live-page": PAGE_KEYS, "live-soak": SOAK_KEYS}.get(r.get("task"), ())
+    s = r.get("summary")
+    return [k for k in keys if not isinstance(s, dict) or k not in s]
+
+
+def _summary(r: dict) -> dict:
+    gone = missing(r)
+    if gone:
+        raise ValueError(f"{r.get('_file', r.get('name'))}: field 'summary' lacks {', '.join(repr(k) for k in gone)} "
+                         f"(task {r.get('task')!r}; rerun tests/e2e/page-bench-live.spec.ts)")
+    return r["summary"]
+
+
+def _met(ok: bool) -> str:
+    return "met" if ok else "not met"
+
+
+def page_row(r: dict) -> str:
+    """One page benchmark (task "live-page"): latency against the bars, underruns, repeated frames, frame gaps."""
+    s = _summary(r)
+    med, p95 = s["latencyMedianS"], s["latencyP95S"]
+    gaps = s["frameGapMs"]
+    idle = max(gaps["idle"]["p95"], gaps.get("idleAfter", gaps["idle"])["p95"])
+    return (f"| `{r['_file']}` | {r['runtime']}, WASM {r.get('threads', '?')} threads; {r['hardware']}, load {r['load']:.1f} | "
+            f"{r['steps']} | **{med:.2f} / {p95:.2f} s** over {s['latencies']} of {s['promptsSent']} prompts "
+            f"({_met(med <= LATENCY_BARS[0] and p95 <= LATENCY_BARS[1])}) | **{s['underruns']}** in {s['seconds']} s "
+            f"({_met(s['underruns'] == 0)}) | {s['repeated']} of {s['displayed']} | {gaps['live']['p95']:.1f} / "
+            f"{gaps['idle']['p95']:.1f}, after {gaps.get('idleAfter', gaps['idle'])['p95']:.1f} ms "
+            f"({gaps['live']['p95'] / idle:.2f}× the larger idle) |")
+
+
+def soak_row(r: dict) -> str:
+    """One soak (task "live-soak"): heap growth against HEAP_BAR_MB, pelvis height against the real clips' range."""
+    s = _summary(r)
+    h, pel, real = s["heapMB"], s["pelvisM"], s["realPelvisM"]
+    grow = s["heapGrowthMB"]
+    within = real["min"] <= pel["min"] and pel["max"] <= real["max"]
+    return (f"| `{r['_file']}` | {r['runtime']}, WASM {r.get('threads', '?')} threads; {r['hardware']}, load {r['load']:.1f} | "
+            f"{s['minutes']:g} min, {s['promptsSent']} prompts | {h['first']:.1f} / {h['last']:.1f} / {h['max']:.1f} | "
+            f"**{grow:+.1f} MB** ({h['firstMinuteMean']:.1f} → {h['lastMinuteMean']:.1f}; {_met(grow <= HEAP_BAR_MB)}) | "
+            f"**{pel['min']:.2f}–{pel['max']:.2f} m** (real {real['min']:.2f}–{real['max']:.2f} m; {_met(within)}) | "
+            f"{s['rootDistanceMaxM']:.2f} m | {s['underruns']} | {s['repeated']} of {s['displayed']} |")
+
+
 def section(runs: list[dict]) -> list[str]:
-    out = ["## Live stream (issue 33)", "", INTRO, "",
-           "| Result | Runtime | Steps; frames | Window cost (median) | Latency median / p95 (bars 0.5 / 1 s) | Underruns "
-           "(bar 0) | Seams ≤ 1.5× p95 | Repeated frames |",
-           "| --- | --- | --- | --- | --- | --- | --- | --- |"]
-    out += [row(r) for r in sorted(runs, key=lambda r: r["name"])]
-    return out + [""]
+    """The "Live stream" section from the runs of TASKS: the Node table, then the page's and the soak's."""
+    by = {t: sorted((r for r in runs if r["task"] == t), key=lambda r: r["name"]) for t in TASKS}
+    out = ["## Live stream (issue 33)", ""]
+    if by["live"]:
+        out += [INTRO, "",
+                "| Result | Runtime | Steps; frames | Window cost (median) | Latency median / p95 (bars 0.5 / 1 s) | Underruns "
+                "(bar 0) | Seams ≤ 1.5× p95 | Repeated frames |",
+                "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+        out += [row(r) for r in by["live"]] + [""]
+    if by["live-page"] or by["live-soak"]:
+        out += [PAGE_INTRO, ""]
+    if by["live-page"]:
+        out += ["| Result | Runtime | Steps | Latency median / p95 (bars 0.5 / 1 s) | Underruns (bar 0) | Repeated frames | "
+                "Frame gaps p95, live / idle |", "| --- | --- | --- | --- | --- | --- | --- |"]
+        out += [page_row(r) for r in by["live-page"]] + [""]
+    if by["live-soak"]:
+        out += [f"| Soak | Runtime | Length | JS heap first / last / max (MB) | Heap growth, first → last minute "
+                f"(bar {HEAP_BAR_MB} MB) | Pelvis height (real clips' range) | Root from stage centre, max | Underruns | "
+                "Repeated frames |", "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+        out += [soak_row(r) for r in by["live-soak"]] + [""]
+    return out

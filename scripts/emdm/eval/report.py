@@ -77,19 +77,24 @@ def load_results(json_dir: Path | str) -> list[dict]:
             raise ReportError(f"{path}: field 'schema' is {r.get('schema')!r}, expected {SCHEMA}")
         task = r.get("task")
         if task not in ("text", "action", "timing", "coverage", "editing", "editing-time", "poses", "realism", "seams",
-                        "live"):
+                        *live_section.TASKS):
             raise ReportError(f"{path}: field 'task' is {task!r}, expected 'text', 'action', 'timing', 'coverage', "
-                              f"'editing', 'editing-time', 'poses', 'realism', 'seams' or 'live'")
+                              f"'editing', 'editing-time', 'poses', 'realism', 'seams', 'live', 'live-page' or 'live-soak'")
         need = {"timing": ("rows", "runtime"), "coverage": ("name", "labels", "real", "runs"), "poses": ("name", "rows"),
                 "realism": ("name", "labels", "real", "generated", "rules", "judged"),
                 "editing": ("name", "seams", "semantics", "kept", "loops", "time", "bars"),
                 "editing-time": ("name", "runtime", "hardware", "steps", "time", "bars"),
                 "seams": ("name", "figures", "rows", "bars"),
-                "live": ("name", "runtime", "hardware", "live", "windowCost", "random", "steady", "seams")}.get(
+                "live": ("name", "runtime", "hardware", "live", "windowCost", "random", "steady", "seams"),
+                "live-page": ("name", "runtime", "hardware", "load", "steps", "summary"),
+                "live-soak": ("name", "runtime", "hardware", "load", "steps", "summary")}.get(
             task, ("name", "kind", "info", "metrics"))
         for k in need:
             if k not in r:
                 raise ReportError(f"{path}: missing field {k!r}")
+        gone = live_section.missing(r)
+        if gone:
+            raise ReportError(f"{path}: field 'summary' lacks {', '.join(repr(k) for k in gone)} (task {task!r})")
         r["_file"] = path.name
         out.append(r)
     return out
@@ -227,7 +232,7 @@ def _benchmarks(results: list[dict], plots: dict[str, str]) -> list[str]:
                 "ease faster than the calm timeline around them). A loop re-generates all but its ends, so its gait against the plain "
                 "walk varies with the seed either way; in place keeps the gait of the same loop travelling.", ""]
         out += seams.section(seam_runs)
-    live_runs = [r for r in results if r["task"] == "live"]
+    live_runs = [r for r in results if r["task"] in live_section.TASKS]
     if live_runs:
         out += live_section.section(live_runs)
     grids = sorted((r for r in results if r["task"] == "poses"), key=lambda r: r["name"])
