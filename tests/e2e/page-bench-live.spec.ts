@@ -74,7 +74,7 @@ const REAL_PELVIS_M = { min: 0.047, max: 1.777, p01: 0.625, p99: 1.483, source: 
 
 /** Where the runs happened, for the results JSON. */
 const where = (page: Page, load: number[]) => ({
-  runtime: `Chromium ${page.context().browser()?.version() ?? '?'} headless`, hardware: `${os.cpus().length} cores (${os.cpus()[0]?.model.trim()})`,
+  runtime: `Chromium ${page.context().browser()?.version() ?? '?'} headless`, hardware: `${os.cpus()[0]?.model.trim()}, ${os.cpus().length} cores`,
   load: Number(Math.max(...load).toFixed(2)), loadAverage: load.map((v) => Number(v.toFixed(2))),
 });
 

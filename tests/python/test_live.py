@@ -55,7 +55,7 @@ def _page_run(**summary):
 
 def _soak_run(**summary):
     s = {"minutes": 10, "promptsSent": 120, "heapMB": {"first": 30.0, "last": 31.0, "max": 33.0, "firstMinuteMean": 30.2,
-         "lastMinuteMean": 31.4}, "heapGrowthMB": 1.2, "pelvisM": {"min": 0.7, "max": 1.1},
+         "lastMinuteMean": 31.4}, "heapGrowthMB": 1.2, "nodes": {"first": 1800, "last": 1850, "max": 1900}, "pelvisM": {"min": 0.7, "max": 1.1},
          "realPelvisM": {"min": 0.05, "max": 1.78, "source": "clips"}, "rootDistanceMaxM": 0.9, "underruns": 0,
          "displayed": 12000, "repeated": 0} | summary
     return {"_file": "live-x-soak.json", "task": "live-soak", "name": "live-x-soak", "runtime": "Chromium 1", "threads": 2,
@@ -69,7 +69,7 @@ def test_page_and_soak_rows_say_which_bars_are_met():
     assert "**0** in 160 s (met)" in text
     assert "30.0 / 20.0, after 25.0 ms (1.20× the larger idle)" in text
     assert "**+1.2 MB** (30.2 → 31.4; met)" in text
-    assert "**0.70–1.10 m** (real 0.05–1.78 m; met)" in text
+    assert "**0.70–1.10 m** (real 0.05–1.78 m; met) | 1800 → 1850 (max 1900) | 0.90 m |" in text
     assert "not met" not in text
     assert "| Result | Runtime | Steps; frames |" not in text      # no Node run: no Node table
     late = live_section.page_row(_page_run(latencyP95S=1.3, underruns=3))

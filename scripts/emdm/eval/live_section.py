@@ -11,8 +11,8 @@ The page (tests/e2e/page-bench-live.spec.ts, EMDM_BENCH=1, Chromium on WASM) wri
 task "live-page" (EMDM_BENCH_OUT): {"name", "runtime", "hardware", "load", "steps", "threads", "summary": {"seconds",
 "promptsSent", "latencies", "latencyMedianS", "latencyP95S", "underruns", "displayed", "repeated", "frameGapMs": {"idle",
 "live", "idleAfter": {"p95", ...}}}}; task "live-soak" (EMDM_BENCH_SOAK_OUT): {..., "summary": {"minutes",
-"promptsSent", "heapMB": {"first", "last", "max", "firstMinuteMean", "lastMinuteMean"}, "heapGrowthMB", "pelvisM":
-{"min", "max"}, "realPelvisM": {"min", "max", "source"}, "rootDistanceMaxM", "underruns", "displayed", "repeated"},
+"promptsSent", "heapMB": {"first", "last", "max", "firstMinuteMean", "lastMinuteMean"}, "heapGrowthMB", "nodes": {"first",
+"last", "max"}, "pelvisM": {"min", "max"}, "realPelvisM": {"min", "max", "source"}, "rootDistanceMaxM", "underruns", "displayed", "repeated"},
 "samples": [...]}.
 """
 
@@ -27,7 +27,7 @@ TASKS = ("live", "live-page", "live-soak")
 
 PAGE_KEYS = ("seconds", "promptsSent", "latencies", "latencyMedianS", "latencyP95S", "underruns", "displayed",
              "repeated", "frameGapMs")
-SOAK_KEYS = ("minutes", "promptsSent", "heapMB", "heapGrowthMB", "pelvisM", "realPelvisM", "rootDistanceMaxM",
+SOAK_KEYS = ("minutes", "promptsSent", "heapMB", "heapGrowthMB", "nodes", "pelvisM", "realPelvisM", "rootDistanceMaxM",
              "underruns", "displayed", "repeated")
 
 INTRO = ("`node scripts/bench/live-bench.mjs` runs `generator.live` (src/live: windows of C + W frames continuing the "
@@ -88,6 +88,11 @@ def _summary(r: dict) -> dict:
     return r["summary"]
 
 
+def _where(r: dict) -> str:
+    n = r.get("threads")
+    return f"{r['runtime']}, WASM, {n if n is not None else '?'} thread{'' if n == 1 else 's'}; {r['hardware']}, load {r['load']:.1f}"
+
+
 def _met(ok: bool) -> str:
     return "met" if ok else "not met"
 
@@ -98,7 +103,7 @@ def page_row(r: dict) -> str:
     med, p95 = s["latencyMedianS"], s["latencyP95S"]
     gaps = s["frameGapMs"]
     idle = max(gaps["idle"]["p95"], gaps.get("idleAfter", gaps["idle"])["p95"])
-    return (f"| `{r['_file']}` | {r['runtime']}, WASM {r.get('threads', '?')} threads; {r['hardware']}, load {r['load']:.1f} | "
+    return (f"| `{r['_file']}` | {_where(r)} | "
             f"{r['steps']} | **{med:.2f} / {p95:.2f} s** over {s['latencies']} of {s['promptsSent']} prompts "
             f"({_met(med <= LATENCY_BARS[0] and p95 <= LATENCY_BARS[1])}) | **{s['underruns']}** in {s['seconds']} s "
             f"({_met(s['underruns'] == 0)}) | {s['repeated']} of {s['displayed']} | {gaps['live']['p95']:.1f} / "
@@ -112,11 +117,12 @@ def soak_row(r: dict) -> str:
     h, pel, real = s["heapMB"], s["pelvisM"], s["realPelvisM"]
     grow = s["heapGrowthMB"]
     within = real["min"] <= pel["min"] and pel["max"] <= real["max"]
-    return (f"| `{r['_file']}` | {r['runtime']}, WASM {r.get('threads', '?')} threads; {r['hardware']}, load {r['load']:.1f} | "
+    return (f"| `{r['_file']}` | {_where(r)} | "
             f"{s['minutes']:g} min, {s['promptsSent']} prompts | {h['first']:.1f} / {h['last']:.1f} / {h['max']:.1f} | "
             f"**{grow:+.1f} MB** ({h['firstMinuteMean']:.1f} → {h['lastMinuteMean']:.1f}; {_met(grow <= HEAP_BAR_MB)}) | "
             f"**{pel['min']:.2f}–{pel['max']:.2f} m** (real {real['min']:.2f}–{real['max']:.2f} m; {_met(within)}) | "
-            f"{s['rootDistanceMaxM']:.2f} m | {s['underruns']} | {s['repeated']} of {s['displayed']} |")
+            f"{s['nodes']['first']} → {s['nodes']['last']} (max {s['nodes']['max']}) | {s['rootDistanceMaxM']:.2f} m | "
+            f"{s['underruns']} | {s['repeated']} of {s['displayed']} |")
 
 
 def section(runs: list[dict]) -> list[str]:
@@ -137,7 +143,7 @@ def section(runs: list[dict]) -> list[str]:
         out += [page_row(r) for r in by["live-page"]] + [""]
     if by["live-soak"]:
         out += [f"| Soak | Runtime | Length | JS heap first / last / max (MB) | Heap growth, first → last minute "
-                f"(bar {HEAP_BAR_MB} MB) | Pelvis height (real clips' range) | Root from stage centre, max | Underruns | "
-                "Repeated frames |", "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+                f"(bar {HEAP_BAR_MB} MB) | Pelvis height (real clips' range) | DOM nodes (CDP), first → last | Root from stage "
+                "centre, max | Underruns | Repeated frames |", "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
         out += [soak_row(r) for r in by["live-soak"]] + [""]
     return out
