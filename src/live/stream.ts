@@ -94,7 +94,7 @@ export interface LiveHooks {
 }
 
 export async function startLive(gen: LiveGenerate, limits: EditLimits, opts: LiveOptions, hooks: LiveHooks = {}): Promise<LiveStream> {
-  const { solve, solveFrames, check: checkCondition } = hooks;
+  const { check: checkCondition } = hooks;
   if (opts === null || typeof opts !== 'object') throw new EditError(`live: options must be an object such as {prompt: 'a person walks'}, got ${String(opts)}`);
   const { seed = 0, clock, window, lead, maxLead, promptLead, recordSeconds, ...cond } = opts;
   const settings = Object.fromEntries(Object.entries({ window, lead, maxLead, promptLead, recordSeconds }).filter(([, v]) => v !== undefined));
@@ -104,28 +104,8 @@ export async function startLive(gen: LiveGenerate, limits: EditLimits, opts: Liv
   let closed = false;
   let running: { req: LiveWindowRequest; ctl: AbortController; t0: number; promptAt?: number } | null = null;
   let failure: Error | null = null;
-  const stats = { windows: 0, dropped: 0, latencies: [] as number[], windowMs: [] as number[], blends: [] as number[], poseFallbacks: 0 };
-  const poses = new PoseRing();
-  const solving = new Set<Promise<void>>();
-  core.onChange = (from, to) => {
-    const epoch = poses.changed(from, to);
-    if (!solve || !solveFrames) return;
-    const origin = [...core.origin] as [number, number];
-    const job = solveFrames(core.display.slice((from - core.base) * 66, (to - core.base) * 66), to - from)
-      .then((pose) => poses.put(from, pose, to - from, epoch, origin))
-      .catch((e) => void (failure ??= e as Error))
-      .finally(() => solving.delete(job));
-    solving.add(job);
-  };
-  /** Frame q's pose (buffered): the window's solve, else solved here (`fallback`) or null. */
-  const poseOf = (q: number, fallback: boolean): FramePose | null => {
-    const got = poses.get(q, core.origin);
-    if (got || !fallback || !solve) return got;
-    stats.poseFallbacks++;
-    const p = solve(core.display.slice((q - core.base) * 66, (q - core.base + 1) * 66));
-    poses.put(q, p, 1, poses.now, core.origin);
-    return { rootPos: Float32Array.from(p.rootPos), quats: Float32Array.from(p.quats) };
-  };
+  const stats = { windows: 0, dropped: 0, latencies: [] as number[], windowMs: [] as number[], blends: [] as number[] };
+  const shown = showFrames(core, hooks, (e) => void (failure ??= e));
   let t0 = 0;
   const now = clock ?? (() => performance.now() / 1000 - t0);
   const playhead = () => Math.max(0, Math.floor(now() * fps + 1e-9));
@@ -162,7 +142,7 @@ export async function startLive(gen: LiveGenerate, limits: EditLimits, opts: Liv
   };
 
   await run(core.request(0)!);
-  await Promise.all([...solving]);
+  await shown.settled();
   if (failure) throw failure;
   t0 = performance.now() / 1000;
   pump();
@@ -186,23 +166,14 @@ export async function startLive(gen: LiveGenerate, limits: EditLimits, opts: Liv
       check('frameAt()');
       if (!Number.isFinite(t) || t < 0) throw new EditError(`live: frameAt takes seconds ≥ 0 on the stream's clock, got ${t}`);
       const frame = Math.floor(t * fps + 1e-9);
-      const w = t * fps - frame > 1e-6 ? t * fps - frame : 0;
-      let joints = core.frameAt(frame);
-      const q = Math.max(frame, core.base);
-      let pose = solve ? poseOf(q, true)! : undefined;
-      const next = w > 0 && q + 1 < core.end ? (solve ? poseOf(q + 1, false) : true) : null;
-      if (next) { // between frames q and q + 1: both buffered (and their poses solved, when there is a solver)
-        const b = core.display.subarray((q + 1 - core.base) * 66, (q + 2 - core.base) * 66);
-        joints = joints.map((v, i) => v + (b[i] - v) * w);
-        if (pose && next !== true) pose = mixPose(pose, next, w);
-      }
+      const { joints, pose } = shown.at(frame, t * fps - frame > 1e-6 ? t * fps - frame : 0);
       if (!running) core.trim(frame);
       pump();
       return { frame, joints, origin: [...core.origin] as [number, number], ...(pose ? { pose } : {}) };
     },
     stats: () => ({
       ...stats, latencies: [...stats.latencies], windowMs: [...stats.windowMs], blends: [...stats.blends],
-      underruns: core.underruns, coastedFrames: core.coasted, bufferedFrames: core.frames, lead: core.lead,
+      underruns: core.underruns, coastedFrames: core.coasted, bufferedFrames: core.frames, lead: core.lead, poseFallbacks: shown.fallbacks,
     }),
     record() {
       const from = Math.max(core.base, Math.min(playhead() + 1, core.end) - Math.round(core.settings.recordSeconds * fps));
@@ -215,6 +186,56 @@ export async function startLive(gen: LiveGenerate, limits: EditLimits, opts: Liv
       closed = true;
       running?.ctl.abort();
       running = null;
+    },
+  };
+}
+
+/**
+ * What frameAt shows of `core`: the display joints at frame + w (w ∈ [0, 1): between that frame and the next when both
+ * are buffered) and their pose, read from the windows' solves (`solveFrames`, asked for whenever display frames change)
+ * or solved here (`solve`) for a frame whose window's solve is not back. A failed solve goes to `fail`.
+ */
+function showFrames(core: LiveCore, { solve, solveFrames }: LiveHooks, fail: (e: Error) => void) {
+  const poses = new PoseRing();
+  const solving = new Set<Promise<void>>();
+  let fallbacks = 0;
+  const rows = (a: number, b: number) => core.display.slice((a - core.base) * 66, (b - core.base) * 66);
+  core.onChange = (from, to) => {
+    const epoch = poses.changed(from, to);
+    if (!solve || !solveFrames) return;
+    const origin = [...core.origin] as [number, number];
+    const job = solveFrames(rows(from, to), to - from)
+      .then((pose) => poses.put(from, pose, to - from, epoch, origin))
+      .catch((e) => fail(e as Error))
+      .finally(() => solving.delete(job));
+    solving.add(job);
+  };
+  /** Frame q's pose (buffered): the window's solve, else solved here (`fallback`) or null. */
+  const poseOf = (q: number, fallback: boolean): FramePose | null => {
+    const got = poses.get(q, core.origin);
+    if (got || !fallback || !solve) return got;
+    fallbacks++;
+    const p = solve(rows(q, q + 1));
+    poses.put(q, p, 1, poses.now, core.origin);
+    return { rootPos: Float32Array.from(p.rootPos), quats: Float32Array.from(p.quats) };
+  };
+  return {
+    get fallbacks() {
+      return fallbacks;
+    },
+    /** every solve asked for so far has come back */
+    settled: () => Promise.all([...solving]),
+    at(frame: number, w: number): { joints: Float32Array; pose?: FramePose } {
+      let joints = core.frameAt(frame);
+      const q = Math.max(frame, core.base);
+      let pose = solve ? poseOf(q, true)! : undefined;
+      const next = w > 0 && q + 1 < core.end ? (solve ? poseOf(q + 1, false) : true) : null;
+      if (next) { // between frames q and q + 1: both buffered (and their poses solved, when there is a solver)
+        const b = rows(q + 1, q + 2);
+        joints = joints.map((v, i) => v + (b[i] - v) * w);
+        if (pose && next !== true) pose = mixPose(pose, next, w);
+      }
+      return { joints, pose };
     },
   };
 }
