@@ -29,9 +29,11 @@
  * - Underrun (nothing buffered at the playhead): the motion is played back from its last frame (mirrored: frame
  *   end − 1 + i repeats frame end − 1 − i, velocities negated; its display likewise), COAST_FRAMES at a time, and
  *   counted; never a still frame.
- * - Stage: after a window, when the root at the buffer's last frame is over RECENTRE_M from the stage's centre in
- *   x or z, every buffered joint moves by whole metres back towards it (`origin` adds up the moves: world = joints +
- *   origin; the display moves with them). Heights are never moved (the features' root height is absolute: no drift).
+ * - Stage: when the root shown at the playhead (after a window joins, and at every frameAt) is over RECENTRE_M from
+ *   the stage's centre in x or z, every buffered joint moves by whole metres back towards it (`origin` adds up the
+ *   moves: world = joints + origin; the display moves with them), so what plays stays within RECENTRE_M + 1 m of it
+ *   however far the buffer reaches ahead (a raised lead holds up to 8 s: 24 m of running). Heights are never moved (the
+ *   features' root height is absolute: no drift).
  * - Memory: frames before p − recordFrames are dropped (the record buffer; the rest is playback).
  */
 import { type EditCondition, type EditLimits, EditError, OVERLAP_FRAMES, TIMELINE_KEEP_FROM, conditionOf, contextKeep } from '../edit';
@@ -210,7 +212,7 @@ export class LiveCore {
     const shown = alignSegment(prev, k, decodeJoints(f, req.frames, RIG, { smooth: true, footCleanup: true }), req.frames, k, rec);
     const s = Math.max(p + 1, at - LIVE_DISPLAY_PAD, this.base);
     this.splice(at, f.subarray(k * D), aligned.subarray(k * JV), s, shown.subarray((k - (at - s) - 1) * JV));
-    this.recentre();
+    this.recentre(p);
     this.trim(p);
     return { from: at, shown: s, late, dropped: false, cost };
   }
@@ -281,9 +283,10 @@ export class LiveCore {
     }
   }
 
-  private recentre(): void {
-    const o = (this.frames - 1) * JV;
-    const shift = [0, 2].map((x) => (Math.abs(this.joints[o + x]) > RECENTRE_M ? Math.trunc(this.joints[o + x]) : 0));
+  /** Move the stage back under the root shown at frame p (see the header). */
+  private recentre(p: number): void {
+    const o = (Math.min(Math.max(p, this.base), this.end - 1) - this.base) * JV;
+    const shift = [0, 2].map((x) => (Math.abs(this.display[o + x]) > RECENTRE_M ? Math.trunc(this.display[o + x]) : 0));
     if (!shift[0] && !shift[1]) return;
     for (const a of [this.joints, this.display]) {
       for (let i = 0; i < a.length; i += 3) {
@@ -311,6 +314,7 @@ export class LiveCore {
     if (this.frames === 0) throw new EditError('live: no frame yet (the first window is not ready)');
     const q = Math.max(p, this.base);
     this.extend(q);
+    this.recentre(q);
     return this.display.slice((q - this.base) * JV, (q - this.base + 1) * JV);
   }
 }

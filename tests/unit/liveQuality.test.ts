@@ -3,7 +3,7 @@
 // machine buys buffer instead of underruns. LiveCore on simulateLive's clock with the walking generator.
 import { describe, expect, it } from 'vitest';
 import type { EditRequest } from '../../src/edit';
-import { LIVE_LEAD_FRAMES, LIVE_MAX_LEAD_FRAMES, LiveCore } from '../../src/live/core';
+import { LIVE_LEAD_FRAMES, LIVE_MAX_LEAD_FRAMES, LiveCore, RECENTRE_M } from '../../src/live/core';
 import { simulateLive } from '../../src/live/simulate';
 import { decodeJoints } from '../../src/motion/decode';
 import { FOOT_JOINT_NAMES, JOINT_NAMES, PARENTS } from '../../src/skeleton';
@@ -85,6 +85,11 @@ describe('live lead: raised when windows come late, lowered when they are early 
     expect(Math.max(...adaptive.leads)).toBeLessThanOrEqual(LIVE_MAX_LEAD_FRAMES);
     expect(adaptive.core.lead).toBe(LIVE_LEAD_FRAMES);
     expect(fixed.leads.every((l) => l === LIVE_LEAD_FRAMES)).toBe(true);
+  });
+
+  it('with the lead raised (the buffer reaching 5 s ahead) what plays stays within RECENTRE_M (+ a frame\'s step) of the stage\'s centre', async () => {
+    const { sim } = await run(LIVE_MAX_LEAD_FRAMES);
+    expect(Math.max(...Array.from(sim.stage, Math.abs))).toBeLessThan(RECENTRE_M + 0.07); // 1.3 m/s: 0.065 m a frame
   });
 
   it('bad bounds get one clear EditError', () => {

@@ -159,7 +159,7 @@ class LiveCore:
         self.features = np.concatenate([self.features[:at - self.base], np.asarray(f[k:], np.float32)])
         self.joints = np.concatenate([self.joints[:at - self.base], np.asarray(aligned[k:], np.float32)])
         self.display = display
-        self._recentre()
+        self._recentre(p)
         self.trim(p)
         return at, False
 
@@ -186,9 +186,10 @@ class LiveCore:
             self.joints = np.concatenate([self.joints, self.joints[idx]])
             self.display = np.concatenate([self.display, self.display[idx]])
 
-    def _recentre(self) -> None:
-        last = self.joints[-1, 0]
-        sx, sz = (float(np.trunc(v)) if abs(v) > RECENTRE_M else 0.0 for v in (last[0], last[2]))
+    def _recentre(self, p: int) -> None:
+        """Move the stage back under the root shown at frame p (src/live/core.ts's header)."""
+        root = self.display[min(max(p, self.base), self.end - 1) - self.base, 0]
+        sx, sz = (float(np.trunc(v)) if abs(v) > RECENTRE_M else 0.0 for v in (root[0], root[2]))
         if sx or sz:
             self.joints, self.display = self.joints.copy(), self.display.copy()
             for a in (self.joints, self.display):
@@ -208,6 +209,7 @@ class LiveCore:
         """Joints of frame p as shown (display, (22, 3)), stage coordinates."""
         q = max(p, self.base)
         self.extend(q)
+        self._recentre(q)
         return self.display[q - self.base].copy()
 
 
