@@ -14,8 +14,8 @@
 //   fixed (--max-lead = --lead, the stream before) and adapted to the windows' cost, and their underruns printed.
 //   --soak-minutes M [--speed X]: instead of the above, one session of M minutes on a clock X× wall time (default 4)
 //   with a prompt every 5–15 s: heap at start and end (after gc with node --expose-gc), the most frames buffered, the
-//   stats lists' lengths, the pelvis height and the lowest joint over every frame played against the real clips'
-//   range, and the root's largest distance from the stage's centre.
+//   stats lists' lengths, the pelvis height against the real clips' range, the lowest foot joint (the floor under the
+//   feet) and the lowest joint of all over every frame played, and the root's largest distance from the stage's centre.
 //
 //   node scripts/bench/live-bench.mjs                    # defaults: --seconds 180 --steady 120, the page's steps (10)
 //   node scripts/bench/live-bench.mjs --json docs/results/json/live-emdm-t2m-web-node-wasm.json   # then python -m emdm.eval.report
@@ -154,7 +154,8 @@ async function soak(g, minutes) {
   let k = 1;
   let p = 0;
   let minute = 1;
-  const x = { buffered: 0, pelvis: [Infinity, -Infinity], lowest: [Infinity, -Infinity], stage: 0, heap: m0.heapUsed, buffers: m0.arrayBuffers };
+  const x = { buffered: 0, pelvis: [Infinity, -Infinity], feet: [Infinity, -Infinity], lowest: { y: Infinity, joint: 0, prompt: '' }, stage: 0, heap: m0.heapUsed, buffers: m0.arrayBuffers };
+  const FEET = [7, 8, 10, 11]; // l_ankle, r_ankle, l_foot, r_foot
   while (s.now() < end) {
     if (s.now() >= nextPrompt) {
       s.prompt(PROMPTS[k++ % PROMPTS.length]);
@@ -162,10 +163,10 @@ async function soak(g, minutes) {
     }
     for (const last = Math.floor(s.now() * 20); p <= last; p++) {
       const j = s.frameAt(p / 20).joints;
-      let lowest = Infinity;
-      for (let i = 1; i < 66; i += 3) lowest = Math.min(lowest, j[i]);
+      const foot = Math.min(...FEET.map((f) => j[f * 3 + 1]));
+      for (let i = 0; i < 22; i++) if (j[i * 3 + 1] < x.lowest.y) x.lowest = { y: j[i * 3 + 1], joint: i, prompt: PROMPTS[(k - 1) % PROMPTS.length] };
       x.pelvis = [Math.min(x.pelvis[0], j[1]), Math.max(x.pelvis[1], j[1])];
-      x.lowest = [Math.min(x.lowest[0], lowest), Math.max(x.lowest[1], lowest)];
+      x.feet = [Math.min(x.feet[0], foot), Math.max(x.feet[1], foot)];
       x.stage = Math.max(x.stage, Math.hypot(j[0], j[2]));
     }
     x.buffered = Math.max(x.buffered, s.stats().bufferedFrames);
@@ -182,7 +183,7 @@ async function soak(g, minutes) {
   const st = s.stats();
   await s.close();
   const m1 = mem();
-  console.log(`soak: ${minutes} min of stream at ${speed}× (${p} frames played, ${k - 1} prompts, windows ${st.windows}, dropped ${st.dropped}, underruns ${st.underruns}, lead at the end ${st.lead}); heap${gc ? ' after gc' : ' (no --expose-gc: before gc)'} ${MB(m0.heapUsed)} → ${MB(m1.heapUsed)} MB (most ${MB(x.heap)}), array buffers ${MB(m0.arrayBuffers)} → ${MB(m1.arrayBuffers)} MB (most ${MB(x.buffers)}); most frames buffered ${x.buffered}; stats lists ${st.latencies.length} / ${st.windowMs.length} / ${st.blends.length}; pelvis ${x.pelvis[0].toFixed(3)}–${x.pelvis[1].toFixed(3)} m (real clips ${REAL_PELVIS.min}–${REAL_PELVIS.max}, 0.1–99.9 % ${REAL_PELVIS.p001}–${REAL_PELVIS.p999}); lowest joint ${x.lowest[0].toFixed(3)}–${x.lowest[1].toFixed(3)} m; root at most ${x.stage.toFixed(2)} m from the stage's centre; load ${os.loadavg()[0].toFixed(2)}`);
+  console.log(`soak: ${minutes} min of stream at ${speed}× (${p} frames played, ${k - 1} prompts, windows ${st.windows}, dropped ${st.dropped}, underruns ${st.underruns}, lead at the end ${st.lead}); heap${gc ? ' after gc' : ' (no --expose-gc: before gc)'} ${MB(m0.heapUsed)} → ${MB(m1.heapUsed)} MB (most ${MB(x.heap)}), array buffers ${MB(m0.arrayBuffers)} → ${MB(m1.arrayBuffers)} MB (most ${MB(x.buffers)}); most frames buffered ${x.buffered}; stats lists ${st.latencies.length} / ${st.windowMs.length} / ${st.blends.length}; pelvis ${x.pelvis[0].toFixed(3)}–${x.pelvis[1].toFixed(3)} m (real clips ${REAL_PELVIS.min}–${REAL_PELVIS.max}, 0.1–99.9 % ${REAL_PELVIS.p001}–${REAL_PELVIS.p999}); lowest foot joint ${x.feet[0].toFixed(3)}–${x.feet[1].toFixed(3)} m, lowest joint of all ${x.lowest.y.toFixed(3)} m (joint ${x.lowest.joint}, during '${x.lowest.prompt}'); root at most ${x.stage.toFixed(2)} m from the stage's centre; load ${os.loadavg()[0].toFixed(2)}`);
 }
 
 await withLibrary(async (load) => {
