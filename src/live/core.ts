@@ -25,7 +25,8 @@
  *   moved as its recovered joints are. Causal where it joins: frames up to the playhead never change; from
  *   s = max(p + 1, at − LIVE_DISPLAY_PAD) on the window's display replaces the buffer's, plus the difference between
  *   the buffer's display and the window's at frame s − 1 (the last one kept), faded out linearly over
- *   LIVE_DISPLAY_FADE frames (weights 1 − (i + 1)/(FADE + 1)), so the display stays continuous where it joins.
+ *   LIVE_DISPLAY_FADE frames (weights 1 − (i + 1)/(FADE + 1)), so the display stays continuous where it joins; a faded
+ *   frame whose lowest foot joint is then below the floor is lifted by that depth (as the clean-up's floor step).
  * - Underrun (nothing buffered at the playhead): the motion is played back from its last frame (mirrored: frame
  *   end − 1 + i repeats frame end − 1 − i, velocities negated; its display likewise), COAST_FRAMES at a time, and
  *   counted; never a still frame.
@@ -247,7 +248,10 @@ export class LiveCore {
     display.set(d.subarray(JV), ks * JV);
     for (let i = 0; i < LIVE_DISPLAY_FADE && ks + i < keep + n && ks > 0; i++) {
       const w = 1 - (i + 1) / (LIVE_DISPLAY_FADE + 1);
-      for (let x = 0, o = (ks + i) * JV, q = (ks - 1) * JV; x < JV; x++) display[o + x] += w * (this.display[q + x] - d[x]);
+      const o = (ks + i) * JV;
+      for (let x = 0, q = (ks - 1) * JV; x < JV; x++) display[o + x] += w * (this.display[q + x] - d[x]);
+      const low = Math.min(...RIG.footJoints.map((j) => display[o + j * 3 + 1]));
+      if (low < 0) for (let y = o + 1; y < o + JV; y += 3) display[y] -= low; // the floor stays under the feet
     }
     this.features = features;
     this.joints = joints;

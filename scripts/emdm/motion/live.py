@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from emdm import skeleton as sk
 from emdm.motion.decode import decode_joints
 from emdm.motion.edit import OVERLAP, TIMELINE_KEEP_FROM, EditError, Editor, context_keep
 from emdm.motion.features import recover_joints
@@ -156,6 +157,9 @@ class LiveCore:
             diff = self.display[ks - 1].astype(np.float64) - shown[k - (at - s) - 1]
             for i in range(min(DISPLAY_FADE, len(display) - ks)):
                 display[ks + i] += np.float32(1 - (i + 1) / (DISPLAY_FADE + 1)) * diff
+                low = display[ks + i, list(sk.FOOT_JOINTS), 1].min()
+                if low < 0:     # the floor stays under the feet (the clean-up's floor step)
+                    display[ks + i, :, 1] -= low
         self.features = np.concatenate([self.features[:at - self.base], np.asarray(f[k:], np.float32)])
         self.joints = np.concatenate([self.joints[:at - self.base], np.asarray(aligned[k:], np.float32)])
         self.display = display
