@@ -8,7 +8,8 @@
 //   (`vite build --mode e2e`, into dist-e2e/), which Playwright's test server builds and serves;
 //   the dev server serves every page.
 // - ONNX Runtime is wired by the package's own plugin, `emdm()` of 'emdm-web/vite' (src/vite.ts), as in a
-//   consumer's app: its wasm at /ort/ with files.json (from node_modules in dev, written into the build),
+//   consumer's app, with `webgpu: true` (the demo runs on WebGPU where a visitor has it): its two runtimes' wasm
+//   (WASM's and WebGPU's) at /ort/ with files.json (from node_modules in dev, written into the build),
 //   transformers.js on the same onnxruntime-web, ES-module workers, COOP/COEP headers on dev AND preview so
 //   ORT-web can use wasm threads (SharedArrayBuffer). The models come from public/models (publicDir).
 // - the build writes .br/.gz beside every compressible file and preview serves them with
@@ -67,7 +68,7 @@ export default defineConfig(({ mode }) => {
   return {
     root: WEB,
     publicDir: path.join(ROOT, 'public'),
-    plugins: [...emdm(), ...(mode === PAGES_MODE ? [] : [precompress()])],
+    plugins: [...emdm({ webgpu: true }), ...(mode === PAGES_MODE ? [] : [precompress()])],
     resolve: {
       // the library as its users import it (package.json "exports"): the examples use these names
       alias: [

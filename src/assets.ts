@@ -9,13 +9,16 @@ import { createRequire } from 'node:module';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 
-// The runtimes the browser loads: onnxruntime-web/wasm's (the WASM backend; transformers.js runs on it too) and
-// onnxruntime-web/webgpu's (.asyncify). The .jsep build (the package's default entry, Node only here) and .jspi are
-// never fetched: 45 MB left out. The .asyncify build runs the WASM backend too, but one file for both would cost every
+// The runtimes the browser loads: onnxruntime-web/wasm's (the WASM backend; transformers.js runs on it too) and, only
+// when the app asks for WebGPU (`webgpu: true`), onnxruntime-web/webgpu's (.asyncify): an app without it serves ONE
+// .wasm, its files.json does not list the .asyncify build, and the library then never tries WebGPU there
+// (src/loadModel.ts chooseBackend). The .jsep build (the package's default entry, Node only here) and .jspi are never
+// fetched: 45 MB left out. The .asyncify build runs the WASM backend too, but one file for both would cost every
 // machine without WebGPU (scripts/bench/ort-wasm-bench.mjs, headless Chromium, 1 thread, 2 cores): 4.7 MB brotli to
 // download instead of 2.7, ~1.1 s to the first session instead of ~0.6, and one 196-frame step of emdm-t2m-web 58 ms
-// instead of 53 (int8) / 103 instead of 97 (fp32).
-const ORT_FILE = /^ort-wasm-simd-threaded(\.asyncify)?\.(wasm|mjs)$/;
+// instead of 53 (int8) / 103 instead of 97 (fp32). Hence two files with WebGPU, one (the plain WASM runtime) without.
+const ORT_FILE = /^ort-wasm-simd-threaded\.(wasm|mjs)$/;
+const ORT_WEBGPU_FILE = /^ort-wasm-simd-threaded\.asyncify\.(wasm|mjs)$/;
 const HERE = path.dirname(fileURLToPath(import.meta.url));
 
 /** A bad models folder or file, said in one line (the command prints it and exits with status 2). */
@@ -35,10 +38,16 @@ function ortDir(): string {
   throw new AssetError(`onnxruntime-web not found from ${HERE}; install the app's dependencies`);
 }
 
+/** Which ORT runtimes an app serves: `webgpu` adds onnxruntime-web/webgpu's (.asyncify) to the WASM backend's. */
+export interface OrtOptions {
+  webgpu?: boolean;
+}
+
 /** ORT's browser runtime files (name → path) and the files.json (name → {bytes, sha256} of each .wasm). */
-export function ortFiles(): { files: Map<string, string>; list: string } {
+export function ortFiles({ webgpu = false }: OrtOptions = {}): { files: Map<string, string>; list: string } {
   const dist = path.join(ortDir(), 'dist');
-  const files = new Map(fs.readdirSync(dist).filter((n) => ORT_FILE.test(n)).sort().map((n) => [n, path.join(dist, n)]));
+  const wanted = (n: string) => ORT_FILE.test(n) || (webgpu && ORT_WEBGPU_FILE.test(n));
+  const files = new Map(fs.readdirSync(dist).filter(wanted).sort().map((n) => [n, path.join(dist, n)]));
   const list: Record<string, { bytes: number; sha256: string }> = {};
   for (const [n, p] of files) {
     if (!n.endsWith('.wasm')) continue;
@@ -49,8 +58,8 @@ export function ortFiles(): { files: Map<string, string>; list: string } {
 }
 
 /** Copy ORT's browser runtimes and files.json into `dest` (the app's `<base>ort/`); the names written. */
-export function copyOrt(dest: string): string[] {
-  const { files, list } = ortFiles();
+export function copyOrt(dest: string, options: OrtOptions = {}): string[] {
+  const { files, list } = ortFiles(options);
   fs.mkdirSync(dest, { recursive: true });
   for (const [n, p] of files) fs.copyFileSync(p, path.join(dest, n));
   fs.writeFileSync(path.join(dest, 'files.json'), list);

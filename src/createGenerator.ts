@@ -27,7 +27,7 @@ import { GenerationClient, type ClientEvents } from './worker/client';
 import type { TimelineRequest, TimelineResult, WindowRun } from './worker/generationHost';
 import type { WireGenerateOptions } from './worker/protocol';
 import { liveCondition } from './live/core';
-import { type LiveOptions, type LiveStream, startLive } from './live/stream';
+import { type LiveHooks, type LiveOptions, type LiveStream, startLive } from './live/stream';
 import { solvePose } from './motion/ik';
 
 export type { BeginRequest, MotionRequest } from './requests';
@@ -182,7 +182,7 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
         return timelineOf(r, r.pose);
       },
       live(o) {
-        return liveOn(this as MotionGenerator, o);
+        return liveOn(this as MotionGenerator, o, (joints, frames) => client.solve(joints, frames));
       },
       dispose: () => client.dispose(),
     };
@@ -212,7 +212,7 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
       return timelineOf(r, r.pose!);
     },
     live(o) {
-      return liveOn(this as MotionGenerator, o);
+      return liveOn(this as MotionGenerator, o, async (joints, frames) => host.pose(joints, frames));
     },
     dispose: () => host.dispose(),
   };
@@ -224,8 +224,9 @@ export async function createGenerator(opts: CreateGeneratorOptions = {}): Promis
  */
 export type LiveHost = Pick<MotionGenerator, 'manifest' | 'skeleton'> & { generate(request: MotionRequest): Promise<EditMotion> };
 
-/** A live stream whose windows are `g.generate` calls (so they run where g's generations run). */
-export async function liveOn(g: LiveHost, o: LiveCallOptions): Promise<LiveStream> {
+/** A live stream whose windows are `g.generate` calls and whose windows' poses are `solveFrames` calls (so both run where
+ * g's generations run: in its worker when it has one; without `solveFrames`, frameAt solves each frame it shows). */
+export async function liveOn(g: LiveHost, o: LiveCallOptions, solveFrames?: LiveHooks['solveFrames']): Promise<LiveStream> {
   if (o === null || typeof o !== 'object') throw new EditError(`live: options must be an object such as {prompt: 'a person walks'}, got ${String(o)}`);
   const { steps, guidance, ...live } = o;
   const first = liveCondition({ prompt: live.prompt, action: live.action });
@@ -248,7 +249,7 @@ export async function liveOn(g: LiveHost, o: LiveCallOptions): Promise<LiveStrea
     const p = solvePose(joints, 1, g.skeleton);
     return { rootPos: p.rootPos, quats: p.quats };
   };
-  return startLive((r) => g.generate({ ...r, ...sampling }), limits, live, { solve, check });
+  return startLive((r) => g.generate({ ...r, ...sampling }), limits, live, { solve, solveFrames, check });
 }
 
 function timelineOf(r: TimelineResult, pose: GeneratedMotion['pose']): GeneratedTimeline {

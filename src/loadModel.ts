@@ -1,15 +1,17 @@
 /**
  * Backend choice and fallback, in ONE place (docs/ARCHITECTURE.md "TypeScript library"):
- * - at load (`loadModel`): 'wasm' opens WASM; 'auto' or 'webgpu' opens WebGPU when this environment has
- *   an adapter, else WASM; a WebGPU session that fails to open or to run its warm-up falls back to WASM
- *   (a broken model file is not a backend problem: that ModelFileError is thrown as is);
+ * - at load (`loadModel`, choosing with `chooseBackend`): 'wasm' opens WASM; 'auto' or 'webgpu' opens WebGPU when
+ *   the app serves its runtime (ORT's files.json lists it: `emdm({ webgpu: true })`) and this environment has an
+ *   adapter, else WASM ('auto' on an app without the WebGPU runtime says nothing: the app chose WASM); a WebGPU
+ *   session that fails to open or to run its warm-up falls back to WASM (a broken model file is not a backend
+ *   problem: that ModelFileError is thrown as is);
  * - while generating (`runWithFallback`): a WebGPU run that fails is run again on WASM.
  * Each fallback is reported with its reason, so a page can tell the user. createGenerator
  * (src/createGenerator.ts) runs this through GenerationHost, in the generation worker or in-process.
  */
 import { type GenerateOptions, type GenerateResult, type Generator, type GeneratorOptions, openModel } from './openModel';
 import { ModelFileError } from './manifest';
-import { type BackendRequest, webgpuAvailable } from './runtime/ort';
+import { type Backend, type BackendRequest, type RuntimeFileList, servedRuntimes, WEBGPU_RUNTIME_FILE, webgpuAvailable } from './runtime/ort';
 
 export interface LoadModelOptions extends Omit<GeneratorOptions, 'backend'> {
   /** 'auto' (default) or 'webgpu': WebGPU where it works, else WASM; 'wasm': WASM only */
@@ -23,6 +25,36 @@ const hasNavigatorGpu = (): boolean => {
 
 const message = (e: unknown): string => (e instanceof Error ? e.message : String(e));
 
+/** What this environment offers WebGPU: no `navigator.gpu`, one without a usable adapter, or an adapter. */
+export type GpuState = 'no-api' | 'no-adapter' | 'adapter';
+
+/**
+ * The backend to open first for `request`, and why it is not WebGPU when WebGPU was wanted (`fallback`, for
+ * onFallback; absent when there is nothing to say). `served` is the app's ORT files.json (null: no list, as in Node
+ * or an older deployment: both runtimes assumed); without the WebGPU runtime in it WebGPU is never tried (no request
+ * for a file the app does not serve), silently for 'auto', with a notice for an explicit 'webgpu'. `gpu` is asked
+ * only when WebGPU could run.
+ */
+export async function chooseBackend(request: BackendRequest, served: RuntimeFileList | null, gpu: () => Promise<GpuState>): Promise<{ backend: Backend; fallback?: string }> {
+  if (request === 'wasm') return { backend: 'wasm' };
+  if (served && !served[WEBGPU_RUNTIME_FILE]) {
+    return request === 'auto' ? { backend: 'wasm' } : {
+      backend: 'wasm',
+      fallback: `WebGPU is not available (this app serves only ONNX Runtime's WebAssembly runtime; emdm({ webgpu: true }) or 'emdm-web ort --webgpu' adds WebGPU's)`,
+    };
+  }
+  const state = await gpu();
+  if (state === 'no-api') return { backend: 'wasm', fallback: 'WebGPU is not available in this browser' };
+  if (state === 'no-adapter') return { backend: 'wasm', fallback: 'WebGPU is not available (no usable GPU adapter)' };
+  return { backend: 'webgpu' };
+}
+
+/** This environment's WebGPU: `navigator.gpu`, then an adapter. */
+async function gpuState(): Promise<GpuState> {
+  if (!hasNavigatorGpu()) return 'no-api';
+  return (await webgpuAvailable()) ? 'adapter' : 'no-adapter';
+}
+
 /** Open `opts.model` on the requested backend, falling back to WASM (and saying why through `onFallback`). */
 export async function loadModel(opts: LoadModelOptions, onFallback: (reason: string) => void = () => undefined): Promise<Generator> {
   const request = opts.backend ?? 'auto';
@@ -31,14 +63,9 @@ export async function loadModel(opts: LoadModelOptions, onFallback: (reason: str
   }
   const wasm = () => openModel({ ...opts, backend: 'wasm' });
   if (request === 'wasm') return wasm();
-  if (!hasNavigatorGpu()) {
-    onFallback('WebGPU is not available in this browser');
-    return wasm();
-  }
-  if (!(await webgpuAvailable())) {
-    onFallback('WebGPU is not available (no usable GPU adapter)');
-    return wasm();
-  }
+  const choice = await chooseBackend(request, await servedRuntimes({ wasmPaths: opts.wasmPaths }), gpuState);
+  if (choice.fallback) onFallback(choice.fallback);
+  if (choice.backend === 'wasm') return wasm();
   try {
     return await openModel({ ...opts, backend: 'webgpu' });
   } catch (e) {

@@ -10,9 +10,10 @@
  * ```
  *
  * - ONNX Runtime's wasm at `<base>ort/` with the `files.json` (size, sha256) the library checks it against: served
- *   from node_modules by the dev server, written by the build (this repository's pages use this plugin too), the two
- *   runtimes the browser loads (28 MB) only. The copies Rollup emits under assets/ for ORT's
- *   own `new URL(...)` are dropped: never fetched (69 MB).
+ *   from node_modules by the dev server, written by the build (this repository's pages use this plugin too). One
+ *   runtime by default, the WASM backend's (14 MB); `webgpu: true` adds onnxruntime-web/webgpu's (.asyncify, 27 MB
+ *   more), and only then does the library try WebGPU (files.json lists what is served: src/loadModel.ts). The
+ *   copies Rollup emits under assets/ for ORT's own `new URL(...)` are dropped: never fetched (69 MB).
  * - transformers.js (the text encoder) resolved onto the library's onnxruntime-web: one runtime, one .wasm, no CDN
  *   in workers too; ES-module workers; `optimizeDeps.exclude` for the packages whose
  *   `import.meta.url` lookups pre-bundling would break.
@@ -29,6 +30,11 @@ import { AssetError, copyModels, copyOrt, modelFiles, ortFiles } from './assets.
 export interface EmdmPluginOptions {
   /** a models folder (manifest.json and the files it lists); omit when the app serves models itself */
   models?: string;
+  /**
+   * serve onnxruntime-web/webgpu's runtime too (a second .wasm, 27 MB more), so `backend: 'auto'` runs on WebGPU
+   * where the browser has it; default false: one .wasm, and every model runs on WASM
+   */
+  webgpu?: boolean;
 }
 
 export const CROSS_ORIGIN_ISOLATION_HEADERS = {
@@ -74,7 +80,7 @@ function dropOrtAssets(): Plugin {
   };
 }
 
-/** The plugins: add `emdm({ models })` to the app's `plugins`. */
+/** The plugins: add `emdm({ models })` (or `emdm({ models, webgpu: true })`) to the app's `plugins`. */
 export function emdm(options: EmdmPluginOptions = {}): Plugin[] {
   const models = options.models ? path.resolve(options.models) : null;
   try {
@@ -83,8 +89,9 @@ export function emdm(options: EmdmPluginOptions = {}): Plugin[] {
     throw e instanceof AssetError ? new Error(`emdm-web/vite: models: ${e.message}`) : e;
   }
   let base = '/';
+  const ortOptions = { webgpu: options.webgpu ?? false };
   let ort: ReturnType<typeof ortFiles> | null = null;
-  const ortNow = () => (ort ??= ortFiles());
+  const ortNow = () => (ort ??= ortFiles(ortOptions));
   const main: Plugin = {
     name: 'emdm-web',
     config: () => ({
@@ -116,7 +123,7 @@ export function emdm(options: EmdmPluginOptions = {}): Plugin[] {
     writeBundle(out) {
       const dir = out.dir;
       if (!dir || fs.existsSync(path.join(dir, 'ort', 'files.json'))) return;   // once per build
-      copyOrt(path.join(dir, 'ort'));
+      copyOrt(path.join(dir, 'ort'), ortOptions);
       if (models) copyModels(models, path.join(dir, 'models'));
     },
   };

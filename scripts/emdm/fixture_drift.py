@@ -69,7 +69,7 @@ AMPLIFICATION: dict[str, dict[str, float]] = {
                   "loop_in_place_joints": 1.9e-4, "regen_joints": 1.7e-4, "loop_long_joints": 1.3e-4,
                   "body_features": 6.6e-6, "ease_out": 6.2e-6, "regen_features": 6.1e-6, "loop_features": 5.9e-6,
                   "timeline_features": 5.9e-6, "inbetween_features": 5.9e-6, "loop_long_features": 5.9e-6},
-    "tiny-live": {"played_joints": 1.3e-4, "buffer_features": 6.6e-6},
+    "tiny-live": {"played_joints": 4.7e-4, "buffer_features": 6.6e-6},   # played: the page decode since live-soak
     "model-emdm-t2m-web": {"features": 2.8e-5, "final_x": 2.2e-5, "joints": 1.3e-5, "step_x0": 2.1e-6,
                            "step_cond": 1.2e-7, "cond": 1.2e-7},       # cond: the text encoder's output
     "model-emdm-a2m-web": {"final_x": 9.2e-6, "features": 3.8e-6, "step_x0": 2.8e-6, "joints": 1.5e-6},

@@ -40,22 +40,25 @@ export function headingAt(joints: ArrayLike<number>, f: number): number {
 /**
  * `next` (nextFrames × 22 × 3) turned about +Y and shifted in x/z so that its frame `overlap − 1` sits at
  * `prev`'s last frame's root x/z with its heading (a new array; `overlap` ≥ 1 frames of next repeat prev's last).
+ * `ref` (default `next`): the joints that move is measured on, e.g. the recovered joints when `next` is their
+ * decoded (smoothed) version, which then moves exactly as they do.
  */
-export function alignSegment(prev: ArrayLike<number>, prevFrames: number, next: ArrayLike<number>, nextFrames: number, overlap: number): Float32Array {
+export function alignSegment(prev: ArrayLike<number>, prevFrames: number, next: ArrayLike<number>, nextFrames: number, overlap: number, ref: ArrayLike<number> = next): Float32Array {
   checkJoints(prev, prevFrames, 'alignSegment: prev');
   checkJoints(next, nextFrames, 'alignSegment: next');
+  checkJoints(ref, nextFrames, 'alignSegment: ref');
   if (!Number.isInteger(overlap) || overlap < 1 || overlap > Math.min(prevFrames, nextFrames)) {
     throw new RangeError(`alignSegment: overlap must be an integer in 1…${Math.min(prevFrames, nextFrames)} (frames of next that repeat prev's last frames), got ${overlap}`);
   }
   const p = (prevFrames - 1) * J * 3;
   const q = (overlap - 1) * J * 3;
-  const dTheta = headingAt(prev, prevFrames - 1) - headingAt(next, overlap - 1);
+  const dTheta = headingAt(prev, prevFrames - 1) - headingAt(ref, overlap - 1);
   const c = Math.cos(dTheta);
   const s = Math.sin(dTheta);
   const out = new Float32Array(next.length);
   for (let i = 0; i < next.length; i += 3) {
-    const x = next[i] - next[q];
-    const z = next[i + 2] - next[q + 2];
+    const x = next[i] - ref[q];
+    const z = next[i + 2] - ref[q + 2];
     out[i] = c * x + s * z + prev[p];
     out[i + 1] = next[i + 1];
     out[i + 2] = -s * x + c * z + prev[p + 2];

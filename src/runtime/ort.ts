@@ -12,7 +12,8 @@
  *   `<wasmPaths>files.json` (written by the emdm-web/vite plugin or `emdm-web ort`) gives its size and sha256, so it
  *   is counted in the download progress, checked, and kept in Cache Storage for the next visit
  *   (src/cache/modelCache.ts); ORT gets the bytes as `env.wasm.wasmBinary`. WebGPU via
- *   `onnxruntime-web/webgpu` when `navigator.gpu` gives an adapter (which backend, and falling back
+ *   `onnxruntime-web/webgpu` when `navigator.gpu` gives an adapter and files.json lists its runtime
+ *   (the app serves it: `emdm({ webgpu: true })`; `servedRuntimes`) (which backend, and falling back
  *   from WebGPU to WASM, is decided in src/loadModel.ts only).
  * - ORT's wasm flags (thread count, paths) are global and fixed by the first session: a later
  *   request for a different thread count fails loudly instead of silently running with another.
@@ -57,8 +58,12 @@ export function loadMark(name: string): void {
 
 /** The .wasm of the WASM backend (`onnxruntime-web/wasm`, threaded SIMD build). */
 export const WASM_RUNTIME_FILE = 'ort-wasm-simd-threaded.wasm';
+/** The .wasm of the WebGPU backend (`onnxruntime-web/webgpu`): served only by apps that ask for WebGPU. */
+export const WEBGPU_RUNTIME_FILE = 'ort-wasm-simd-threaded.asyncify.wasm';
 /** Sizes and sha256 of the runtime files in the wasm folder (src/assets.ts writes it). */
 export const RUNTIME_FILES = 'files.json';
+/** files.json: each .wasm the app serves → its size and sha256. */
+export type RuntimeFileList = Record<string, FileEntry>;
 
 /** `<BASE_URL>ort/` as an absolute URL (an origin-less path makes Vite's dev server rewrite ORT's
  * dynamic import of the .mjs in public/ and refuse it). */
@@ -95,20 +100,50 @@ function configure(ort: Ort, cfg: RuntimeConfig): void {
   if (!isNode) ort.env.wasm.wasmPaths = cfg.wasmPaths ?? defaultWasmPaths();
 }
 
+/** `<wasmPaths>files.json`, fetched once (a failed fetch is forgotten so a retry fetches again). */
+let runtimeList: Promise<RuntimeFileList | null> | null = null;
+
+function wasmBase(cfg: RuntimeConfig): string {
+  const base = cfg.wasmPaths ?? defaultWasmPaths();
+  return base.endsWith('/') ? base : base + '/';
+}
+
+async function fetchRuntimeList(base: string): Promise<RuntimeFileList | null> {
+  try {
+    return JSON.parse(new TextDecoder().decode(await fetchBytes(base, RUNTIME_FILES))) as RuntimeFileList;
+  } catch (e) {
+    if (e instanceof ModelFileError && e.reason === 'missing') return null;
+    throw new Error(`runtime: cannot read ${base}${RUNTIME_FILES} (the ONNX Runtime file list): ${(e as Error).message}`, { cause: e });
+  }
+}
+
+/**
+ * The ONNX Runtime .wasm files the app serves (its files.json: the emdm-web/vite plugin or `emdm-web ort` writes it,
+ * with the WebGPU runtime only when asked for): what src/loadModel.ts reads before it tries WebGPU, so a runtime the
+ * app does not serve is never requested. null: no list (Node, or an older deployment without files.json).
+ */
+export function servedRuntimes(cfg: RuntimeConfig = {}): Promise<RuntimeFileList | null> {
+  if (isNode) return Promise.resolve(null);
+  if (!runtimeList) {
+    const p = fetchRuntimeList(wasmBase(cfg));
+    runtimeList = p;
+    p.catch(() => {
+      if (runtimeList === p) runtimeList = null;
+    });
+  }
+  return runtimeList;
+}
+
 /**
  * Fetch the WASM backend's .wasm as a verified file: `<wasmPaths>files.json` lists its size and sha256,
  * and the bytes come through fetchVerified (the model cache when one is in use: progress, per-file
  * state, kept for the next visit, re-verified on read). A server without files.json (an older
  * deployment): null, and ORT fetches the .wasm itself as before.
  */
-async function fetchWasmRuntime(base: string, onProgress?: (loaded: number, total: number) => void): Promise<ArrayBuffer | null> {
-  let files: Record<string, FileEntry>;
-  try {
-    files = JSON.parse(new TextDecoder().decode(await fetchBytes(base, RUNTIME_FILES))) as Record<string, FileEntry>;
-  } catch (e) {
-    if (e instanceof ModelFileError && e.reason === 'missing') return null;
-    throw new Error(`runtime: cannot read ${base}${RUNTIME_FILES} (the ONNX Runtime file list): ${(e as Error).message}`, { cause: e });
-  }
+async function fetchWasmRuntime(cfg: RuntimeConfig, onProgress?: (loaded: number, total: number) => void): Promise<ArrayBuffer | null> {
+  const base = wasmBase(cfg);
+  const files = await servedRuntimes(cfg);
+  if (!files) return null;
   if (!files[WASM_RUNTIME_FILE]) throw new Error(`runtime: ${base}${RUNTIME_FILES} does not list ${WASM_RUNTIME_FILE}; rebuild (the emdm-web/vite plugin or 'emdm-web ort' writes it)`);
   const bytes = await fetchVerified(base, { files }, WASM_RUNTIME_FILE, onProgress);
   loadMark('runtime-wasm-verified');
@@ -124,8 +159,7 @@ async function fetchWasmRuntime(base: string, onProgress?: (loaded: number, tota
 export function preloadWasmRuntime(cfg: RuntimeConfig = {}, onProgress?: (loaded: number, total: number) => void): Promise<void> {
   wasmOrt ??= (isNode ? import('onnxruntime-web') : import('onnxruntime-web/wasm')) as Promise<Ort>;
   if (!isNode && !wasmBinary) {
-    const base = cfg.wasmPaths ?? defaultWasmPaths();
-    const p = fetchWasmRuntime(base.endsWith('/') ? base : base + '/', onProgress);
+    const p = fetchWasmRuntime(cfg, onProgress);
     wasmBinary = p;
     p.catch(() => {
       if (wasmBinary === p) wasmBinary = null;

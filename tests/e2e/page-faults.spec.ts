@@ -357,4 +357,22 @@ test.describe('demo page: faults', () => {
     expect(notices).toMatch(/WebGPU is not available.*WebAssembly/);
     await expect(page.locator('#status-text')).toContainText('WASM');
   });
+
+  // An app built with emdm() alone serves one runtime: its files.json lists no WebGPU runtime, and the library never
+  // asks for it ('auto': WASM, nothing said; 'webgpu': WASM, and the notice says why).
+  for (const backend of ['auto', 'webgpu'] as const) {
+    test(`an app serving only the WASM runtime, backend=${backend}: WASM, no request for WebGPU's runtime${backend === 'webgpu' ? ', the notice says why' : ', no notice'}`, async ({ page }) => {
+      await page.route('**/ort/files.json', async (r: Route) => {
+        const list = await (await r.fetch()).json() as Record<string, unknown>;
+        await r.fulfill({ json: { 'ort-wasm-simd-threaded.wasm': list['ort-wasm-simd-threaded.wasm'] } });
+      });
+      const asked: string[] = [];
+      page.on('request', (r) => { if (r.url().includes('asyncify')) asked.push(r.url()); });
+      await open(page, `noauto=1&backend=${backend}`);
+      expect(await page.evaluate(() => window.emdm.backend)).toBe('wasm');
+      const notices = (await page.evaluate(() => window.emdm.notices())).map((n) => n.text).filter((t) => t.includes('WebGPU'));
+      expect(notices).toEqual(backend === 'auto' ? [] : [expect.stringMatching(/^WebGPU is not available \(this app serves only ONNX Runtime's WebAssembly runtime; .*\): .* runs on WebAssembly \(CPU\) instead\.$/)]);
+      expect(asked).toEqual([]);
+    });
+  }
 });

@@ -267,7 +267,7 @@ for (const vp of [{ width: 1280, height: 800 }, { width: 390, height: 844 }]) {
       await open(page);
       await page.locator('#edit-panel summary').click();
       await expect(page.locator('#edit-panel details')).toHaveAttribute('open', '');
-      await expect(page.locator('#tl-body-prompt')).toHaveValue('a person waves with both hands');
+      await expect(page.locator('#tl-body-prompt')).toHaveValue('a person raises both hands');
       await page.locator('#edit-panel').scrollIntoViewIfNeeded();
       await page.locator('#edit-panel details').screenshot({ path: info.outputPath(`timeline-${vp.width}.png`) });
       expect(await truncatedTimelineFields(page)).toEqual([]);

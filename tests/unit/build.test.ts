@@ -35,7 +35,8 @@ describe('vite build', () => {
     // no longer brings its own nested ORT and its 21 MB jsep .wasm)
     const ortDist = path.join(ROOT, 'node_modules/onnxruntime-web/dist');
     const ours = new Set(fs.readdirSync(ortDist).filter((f) => f.endsWith('.wasm')).map((f) => sha256(path.join(ortDist, f))));
-    // the package's plugin wires it (src/vite.ts): WASM's and WebGPU's runtimes in ort/, no copies under assets/
+    // the package's plugin wires it (src/vite.ts), with `webgpu: true` here: WASM's and WebGPU's runtimes in ort/, no
+    // copies under assets/ (a consumer's default build holds only WASM's: tests/unit/package.test.ts)
     const wasm = built.filter((f) => f.endsWith('.wasm')).sort();
     expect(wasm).toEqual(['ort/ort-wasm-simd-threaded.asyncify.wasm', 'ort/ort-wasm-simd-threaded.wasm']);
     for (const f of wasm) expect(ours.has(sha256(path.join(out, f))), `${f} is not one of onnxruntime-web's own .wasm files`).toBe(true);

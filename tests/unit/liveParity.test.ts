@@ -6,7 +6,9 @@ import os from 'node:os';
 import path from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import type { EditGenerate } from '../../src/edit';
-import { COAST_FRAMES, LIVE_LEAD_FRAMES, LIVE_PROMPT_LEAD_FRAMES, LiveCore, RECENTRE_M } from '../../src/live/core';
+import {
+  COAST_FRAMES, LEAD_SAFETY, LEAD_STEP_DOWN, LIVE_DISPLAY_FADE, LIVE_DISPLAY_PAD, LIVE_LEAD_FRAMES, LIVE_MAX_LEAD_FRAMES, LIVE_PROMPT_LEAD_FRAMES, LiveCore, RECENTRE_M,
+} from '../../src/live/core';
 import { simulateLive } from '../../src/live/simulate';
 import { type Generator, openModel } from '../../src/openModel';
 import { PARITY_DIR, fixtureNoise, loadCase, maxAbsDiff, maxJointDist, tinyModels } from './coreFixtures';
@@ -16,6 +18,7 @@ type Win = { id: number; label: string; seed: number; frames: number; c: number;
 const meta = fx.meta as unknown as {
   labels: string[]; steps: number; first: { label: string; seed: number }; frames: number; prompts: { frame: number; label: string }[]; cost: number[];
   window: number; lead: number; promptLead: number; coast: number; recentre: number; base: number; origin: [number, number]; underruns: number; windows: Win[];
+  maxLead: number; leadSafety: number; leadStepDown: number; displayPad: number; displayFade: number; leadNow: number;
 };
 const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-live-parity-'));
 afterAll(() => fs.rmSync(tmp, { recursive: true, force: true }));
@@ -37,6 +40,7 @@ const gen: EditGenerate = async (r) => {
 describe('src/live = emdm.motion.live (tiny-live fixture)', () => {
   it('uses the same constants (the fixture\'s windows are shorter than the default)', () => {
     expect([meta.lead, meta.promptLead, meta.coast, meta.recentre]).toEqual([LIVE_LEAD_FRAMES, LIVE_PROMPT_LEAD_FRAMES, COAST_FRAMES, RECENTRE_M]);
+    expect([meta.maxLead, meta.leadSafety, meta.leadStepDown, meta.displayPad, meta.displayFade]).toEqual([LIVE_MAX_LEAD_FRAMES, LEAD_SAFETY, LEAD_STEP_DOWN, LIVE_DISPLAY_PAD, LIVE_DISPLAY_FADE]);
   });
 
   it('the same windows and the same frames as played, for the same prompts, seeds and prompt times', async () => {
@@ -49,6 +53,8 @@ describe('src/live = emdm.motion.live (tiny-live fixture)', () => {
     const ids = meta.windows.map((w) => w.id);
     expect(ids.length).toBeLessThan(ids.at(-1)!); // windows dropped in preparation by a prompt: never generated
     expect([core.base, core.underruns, ...core.origin]).toEqual([meta.base, meta.underruns, ...meta.origin]);
+    expect(core.lead).toBe(meta.leadNow); // raised by the 45-frame window, lowered by the next
+    expect(meta.leadNow).toBeGreaterThan(meta.lead);
     expect(maxAbsDiff(core.features, fx.get('buffer_features'))).toBeLessThan(1e-4);
     // the tiny model's root jumps metres a frame (hundreds of metres in all) and its joints sit up to 11 m from the
     // pelvis: float32 rounding in each window's alignment (heading) grows along that path, so the pelvis is compared

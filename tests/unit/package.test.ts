@@ -10,7 +10,9 @@
 // - `emdm-web models|ort` copies a verified models folder / ORT's browser runtimes into an app's static folder;
 // - a Vite app whose only wiring is `emdm({ models })` from 'emdm-web/vite' generates a motion in Chromium, from
 //   its production build (vite build + vite preview) and its dev server, cross-origin isolated, fetching nothing
-//   from another host, its dist/ without ORT .wasm under assets/.
+//   from another host, its dist/ holding one ONNX Runtime .wasm (ort/ort-wasm-simd-threaded.wasm: the plugin adds
+//   WebGPU's only with `webgpu: true`, tests/unit/backendChoice.test.ts) and no 404 (the library asks for no
+//   runtime the app does not serve).
 import { type ChildProcess, execFileSync, spawn } from 'node:child_process';
 import { createHash } from 'node:crypto';
 import fs from 'node:fs';
@@ -181,11 +183,20 @@ describe('emdm-web command', () => {
     }
   };
 
-  it('copies ORT\'s browser runtimes with their files.json', () => {
+  it('copies ORT\'s WASM runtime with its files.json, and WebGPU\'s too with --webgpu', () => {
+    const wasmIn = (dir: string) => fs.readdirSync(path.join(app, dir)).filter((f) => f.endsWith('.wasm')).sort();
     expect(cli('ort', 'static/ort').code).toBe(0);
     const list = JSON.parse(fs.readFileSync(path.join(app, 'static', 'ort', 'files.json'), 'utf8'));
-    expect(Object.keys(list)).toEqual(['ort-wasm-simd-threaded.asyncify.wasm', 'ort-wasm-simd-threaded.wasm']);
+    expect(Object.keys(list)).toEqual(['ort-wasm-simd-threaded.wasm']);
+    expect(wasmIn('static/ort')).toEqual(['ort-wasm-simd-threaded.wasm']);
     expect(fs.statSync(path.join(app, 'static', 'ort', 'ort-wasm-simd-threaded.wasm')).size).toBe(list['ort-wasm-simd-threaded.wasm'].bytes);
+    expect(cli('ort', '--webgpu', 'static/ort-gpu').code).toBe(0);
+    expect(Object.keys(JSON.parse(fs.readFileSync(path.join(app, 'static', 'ort-gpu', 'files.json'), 'utf8')))).toEqual(
+      ['ort-wasm-simd-threaded.asyncify.wasm', 'ort-wasm-simd-threaded.wasm']);
+    expect(wasmIn('static/ort-gpu')).toEqual(['ort-wasm-simd-threaded.asyncify.wasm', 'ort-wasm-simd-threaded.wasm']);
+    const bad = cli('ort', 'static/x', '--webgpuu');
+    expect(bad.code).toBe(2);
+    expect(bad.out.trim().split('\n')).toEqual([expect.stringContaining('emdm-web ort <dest> [--webgpu]')]);
   });
 
   it('copies a models folder after checking every file, and nothing when one is wrong', () => {
@@ -287,9 +298,11 @@ describe('Vite app with emdm-web/vite', () => {
     execFileSync(process.execPath, [VITE, 'build'], { cwd: app, encoding: 'utf8' });
     const dist = path.join(app, 'dist');
     expect(fs.existsSync(path.join(dist, 'models', 'manifest.json'))).toBe(true);
-    expect(Object.keys(JSON.parse(fs.readFileSync(path.join(dist, 'ort', 'files.json'), 'utf8')))).toEqual(
-      ['ort-wasm-simd-threaded.asyncify.wasm', 'ort-wasm-simd-threaded.wasm']);       // WebGPU's and WASM's runtimes
-    expect(fs.readdirSync(path.join(dist, 'assets')).filter((f) => f.endsWith('.wasm'))).toEqual([]);
+    // ONE ONNX Runtime .wasm (WASM's; WebGPU's only with emdm({ webgpu: true })), listed in files.json
+    expect(Object.keys(JSON.parse(fs.readFileSync(path.join(dist, 'ort', 'files.json'), 'utf8')))).toEqual(['ort-wasm-simd-threaded.wasm']);
+    const wasm = fs.readdirSync(dist, { recursive: true, encoding: 'utf8' }).filter((f) => f.endsWith('.wasm')).map((f) => f.split(path.sep).join('/'));
+    console.log(`consumer dist .wasm: ${wasm.map((f) => `${f} (${fs.statSync(path.join(dist, f)).size} bytes)`).join(', ')}`);
+    expect(wasm).toEqual(['ort/ort-wasm-simd-threaded.wasm']);
     await generatesThrough(['preview']);
   }, 240_000);
 

@@ -125,7 +125,9 @@ export class LivePanel implements PoseDriver {
     try {
       await session.load(model.name);
       this.unchecked = first;
-      stream = await liveOn(this.host(), { prompt: first, seed: s.seed, steps: s.steps, guidance: s.guidance });
+      const client = this.page.session.engine.client;
+      stream = await liveOn(this.host(), { prompt: first, seed: s.seed, steps: s.steps, guidance: s.guidance },
+        (joints, frames) => client.solve(joints, frames));
     } catch (e) {
       if (token !== this.starts) return;
       this.notices.show('error', `Live mode could not start: ${describe(e)}`);

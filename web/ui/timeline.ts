@@ -101,7 +101,7 @@ export class TimelinePanel implements RequestPanel {
       o.value = v;
       bodyKeep.append(o);
     }
-    const bodyPrompt = input('tl-body-prompt', 'New part (prompt)', 'a person waves with both hands');
+    const bodyPrompt = input('tl-body-prompt', 'New part (prompt)', 'a person raises both hands');
     const bodyGo = button('Edit body part', 'ghost', () => void this.bodyEdit(bodyKeep.value as KeptPart, bodyPrompt.value).catch(() => undefined));
     const inPlace = el('input');
     inPlace.type = 'checkbox';
@@ -128,7 +128,7 @@ export class TimelinePanel implements RequestPanel {
         refused = e instanceof Error ? e.message : String(e);
       }
     }
-    for (const s of restored ?? [{ prompt: 'a person walks forward', seconds: 4, seed: randomSeed() }, { prompt: 'a person waves with the right hand', seconds: 3, seed: randomSeed() }]) this.rows.add(s);
+    for (const s of restored ?? [{ prompt: 'a person walks forward', seconds: 4, seed: randomSeed() }, { prompt: 'a person raises the right hand', seconds: 3, seed: randomSeed() }]) this.rows.add(s);
     if (tl !== null) details.open = true;
     this.rows.refreshTotal();
     this.restored = restored !== null;

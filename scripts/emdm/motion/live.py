@@ -7,6 +7,12 @@ fixture (``python -m emdm.motion.live_fixture``) checks both. The contract is in
     core = LiveCore(model, "a person walks forward", seed=1)
     sim = simulate(core, 600, [(100, "a person waves"), (220, "a person jumps")], cost=[8])
     sim.joints      # (600, 22, 3) as played, world coordinates; sim.windows: (request, accepted at, first new frame)
+
+What is played is the display: each window decoded as a generated motion is shown (``emdm.motion.decode``: σ = 1
+smoothing, feet cleaned up), joined causally (frames up to the playhead never change; the difference at the join is
+faded out over DISPLAY_FADE frames). The lead adapts to what windows cost (frames played while one was generated):
+raised to ⌈LEAD_SAFETY · cost⌉ (at most ``max_lead``) when short of it, lowered by LEAD_STEP_DOWN frames (never below
+``lead``) after a window that cost at most a quarter of it.
 """
 
 from __future__ import annotations
@@ -15,6 +21,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from emdm import skeleton as sk
+from emdm.motion.decode import decode_joints
 from emdm.motion.edit import OVERLAP, TIMELINE_KEEP_FROM, EditError, Editor, context_keep
 from emdm.motion.features import recover_joints
 from emdm.motion.seams import ease_seams, seam_accel
@@ -26,6 +34,11 @@ PROMPT_LEAD = 8         # a prompt's window continues the motion this many frame
 RECORD_SECONDS = 60     # kept behind the playhead
 COAST = 10              # frames played back at a time when nothing is buffered (an underrun)
 RECENTRE_M = 2.0        # the root moves back towards the stage's centre by whole metres once this far from it
+MAX_LEAD = 120          # the lead is never raised past this (6 s)
+LEAD_SAFETY = 2         # a lead short of this many times a window's cost is raised to it
+LEAD_STEP_DOWN = 4      # frames the lead comes down after a comfortably early window
+DISPLAY_PAD = 3         # a window's display replaces the buffer's from this many frames before its join
+DISPLAY_FADE = 6        # frames over which its difference to the buffer's display is faded out
 FPS = 20
 
 
@@ -38,6 +51,7 @@ class Request:
     c: int
     cut: int
     prompted: bool
+    start: int                          # the playhead when it was requested (its cost is counted from here)
     known: np.ndarray | None = None     # (c + W, 263) de-normalised, its first c rows kept
 
 
@@ -47,12 +61,15 @@ class LiveCore:
     prompt: str
     seed: int = 0
     window: int = WINDOW
-    lead: int = LEAD
+    lead: int = LEAD                    # the starting and lowest lead; `lead_now` is the one in use
+    max_lead: int = MAX_LEAD
     prompt_lead: int = PROMPT_LEAD
     record_seconds: float = RECORD_SECONDS
     base: int = 0
     features: np.ndarray = field(default_factory=lambda: np.zeros((0, 263), np.float32))
     joints: np.ndarray = field(default_factory=lambda: np.zeros((0, 22, 3), np.float32))
+    display: np.ndarray = field(default_factory=lambda: np.zeros((0, 22, 3), np.float32))  # as shown (decode_joints)
+    lead_now: int = -1
     origin: tuple = (0.0, 0.0)
     pending: Request | None = None
     requested: int = 0
@@ -62,35 +79,39 @@ class LiveCore:
         self.prompt = _check_prompt(self.prompt)
         if OVERLAP + self.window > self.model.max_frames:
             raise EditError(f"live: a window of {self.window} new frames + {OVERLAP} kept exceeds the model's {self.model.max_frames}")
+        if self.max_lead < self.lead:
+            raise EditError(f"live: maxLead ({self.max_lead} frames) must be at least lead ({self.lead})")
+        self.lead_now = self.lead
 
     @property
     def end(self) -> int:
         return self.base + len(self.features)
 
-    def _next(self, cut: int, prompted: bool) -> Request:
+    def _next(self, cut: int, prompted: bool, start: int) -> Request:
         seed = (self.seed + self.requested) % 2**32
         self.requested += 1
         if len(self.features) == 0:
-            self.pending = Request(self.requested, self.prompt, seed, OVERLAP + self.window, 0, 0, prompted)
+            self.pending = Request(self.requested, self.prompt, seed, OVERLAP + self.window, 0, 0, prompted, start)
             return self.pending
         known = np.zeros((OVERLAP + self.window, 263), np.float32)
         known[:OVERLAP] = self.features[cut - OVERLAP - self.base:cut - self.base]
-        self.pending = Request(self.requested, self.prompt, seed, OVERLAP + self.window, OVERLAP, cut, prompted, known)
+        self.pending = Request(self.requested, self.prompt, seed, OVERLAP + self.window, OVERLAP, cut, prompted, start,
+                               known)
         return self.pending
 
     def request(self, p: int) -> Request | None:
         """The window to start at playhead p (None: one is under way, or enough is buffered)."""
-        if self.pending is not None or (len(self.features) and self.end - 1 - p >= self.lead):
+        if self.pending is not None or (len(self.features) and self.end - 1 - p >= self.lead_now):
             return None
-        return self._next(self.end, False)
+        return self._next(self.end, False, p)
 
     def new_prompt(self, prompt: str, p: int) -> Request:
         """A prompt at playhead p: the window in preparation is dropped, the new one continues frame p + prompt_lead."""
         self.prompt = _check_prompt(prompt)
         self.pending = None
         if len(self.features) == 0:
-            return self._next(0, True)
-        return self._next(min(self.end, max(self.base + OVERLAP, p + self.prompt_lead)), True)
+            return self._next(0, True, p)
+        return self._next(min(self.end, max(self.base + OVERLAP, p + self.prompt_lead)), True, p)
 
     def generate(self, req: Request) -> np.ndarray:
         """The request's raw de-normalised features (the model's sampling, a timeline window's keep)."""
@@ -108,9 +129,11 @@ class LiveCore:
         if req.c == 0 and len(self.features) == 0:
             self.features = np.asarray(raw, np.float32)
             self.joints = recover_joints(self.features).astype(np.float32)
+            self.display = decode_joints(self.features)
             return 0, False
         c, cut, n = req.c, req.cut, req.frames
         self.extend(p)
+        self._adapt(max(0, p - req.start))
         before = min(n, cut - self.base)
         rows = lambda a, b: self.features[a - self.base:b - self.base]  # noqa: E731
         f = ease_seams(raw, context_keep(c, n - c), accel=seam_accel(rows(cut - before, cut)))
@@ -123,12 +146,34 @@ class LiveCore:
             f[c:k] = rows(cut, cut + late)
             f = ease_seams(f, context_keep(k, n - k), accel=seam_accel(rows(cut + late - before, cut + late)))
         at = cut + late
-        aligned = align_segment(self.joints[at - k - self.base:at - self.base], recover_joints(f), k)
+        prev = self.joints[at - k - self.base:at - self.base]
+        rec = recover_joints(f)
+        aligned = align_segment(prev, rec, k)
+        shown = align_segment(prev, decode_joints(f), k, ref=rec)
+        s = max(p + 1, at - DISPLAY_PAD, self.base)
+        ks = s - self.base
+        display = np.concatenate([self.display[:ks], shown[k - (at - s):]]).astype(np.float32)
+        if ks > 0:      # the difference at s − 1 (the last frame kept) faded out over DISPLAY_FADE frames
+            diff = self.display[ks - 1].astype(np.float64) - shown[k - (at - s) - 1]
+            for i in range(min(DISPLAY_FADE, len(display) - ks)):
+                display[ks + i] += np.float32(1 - (i + 1) / (DISPLAY_FADE + 1)) * diff
+                low = display[ks + i, list(sk.FOOT_JOINTS), 1].min()
+                if low < 0:     # the floor stays under the feet (the clean-up's floor step)
+                    display[ks + i, :, 1] -= low
         self.features = np.concatenate([self.features[:at - self.base], np.asarray(f[k:], np.float32)])
         self.joints = np.concatenate([self.joints[:at - self.base], np.asarray(aligned[k:], np.float32)])
-        self._recentre()
+        self.display = display
+        self._recentre(p)
         self.trim(p)
         return at, False
+
+    def _adapt(self, cost: int) -> None:
+        """The lead after a window that cost ``cost`` frames (src/live/core.ts's header)."""
+        need = int(np.ceil(LEAD_SAFETY * cost))
+        if need > self.lead_now:
+            self.lead_now = min(self.max_lead, need)
+        elif 2 * need <= self.lead_now:
+            self.lead_now = max(self.lead, self.lead_now - LEAD_STEP_DOWN)
 
     def extend(self, p: int) -> None:
         """Make frame p buffered: an underrun plays the motion back from its last frame (mirrored)."""
@@ -143,14 +188,17 @@ class LiveCore:
             f[:, 193:259] *= -1
             self.features = np.concatenate([self.features, f])
             self.joints = np.concatenate([self.joints, self.joints[idx]])
+            self.display = np.concatenate([self.display, self.display[idx]])
 
-    def _recentre(self) -> None:
-        last = self.joints[-1, 0]
-        sx, sz = (float(np.trunc(v)) if abs(v) > RECENTRE_M else 0.0 for v in (last[0], last[2]))
+    def _recentre(self, p: int) -> None:
+        """Move the stage back under the root shown at frame p (src/live/core.ts's header)."""
+        root = self.display[min(max(p, self.base), self.end - 1) - self.base, 0]
+        sx, sz = (float(np.trunc(v)) if abs(v) > RECENTRE_M else 0.0 for v in (root[0], root[2]))
         if sx or sz:
-            self.joints = self.joints.copy()
-            self.joints[..., 0] -= np.float32(sx)
-            self.joints[..., 2] -= np.float32(sz)
+            self.joints, self.display = self.joints.copy(), self.display.copy()
+            for a in (self.joints, self.display):
+                a[..., 0] -= np.float32(sx)
+                a[..., 2] -= np.float32(sz)
             self.origin = (self.origin[0] + sx, self.origin[1] + sz)
 
     def trim(self, p: int) -> None:
@@ -158,13 +206,15 @@ class LiveCore:
         if frm > self.base:
             self.features = self.features[frm - self.base:]
             self.joints = self.joints[frm - self.base:]
+            self.display = self.display[frm - self.base:]
             self.base = frm
 
     def frame_at(self, p: int) -> np.ndarray:
-        """Joints of frame p (22, 3), stage coordinates."""
+        """Joints of frame p as shown (display, (22, 3)), stage coordinates."""
         q = max(p, self.base)
         self.extend(q)
-        return self.joints[q - self.base].copy()
+        self._recentre(q)
+        return self.display[q - self.base].copy()
 
 
 @dataclass

@@ -9,8 +9,10 @@ starts with label ``b`` (seed 7), windows of ``WINDOW`` new frames, and plays ``
 generated). Windows cost ``COST`` frames in turn
 (6: on time, before the prompt's cut 8 frames on; 14: late, blended in from the frame after the one playing; 45: longer
 than the lead, so playback runs out and the motion is played back: an underrun), so both joins and the underrun are
-checked. Arrays: ``played_joints`` (FRAMES, 22, 3) as played, world coordinates; ``buffer_features``
-the buffer at the end (from frame ``base``); per noise run ``r<k>_`` its ``x_T``, ``z_<k>``, ``eps_<k>``
+checked; the 45-frame window at frame 100 raises the lead to 90 and the 6-frame one after it lowers it again
+(``leadNow``: the lead in use at the end, 86). Arrays:
+``played_joints`` (FRAMES, 22, 3) as played (the display: smoothed, feet cleaned up), world coordinates;
+``buffer_features`` the buffer at the end (from frame ``base``); per noise run ``r<k>_`` its ``x_T``, ``z_<k>``, ``eps_<k>``
 (``emdm.fixtures.draw_noise``). JSON ``windows``: every generated window (id, label, seed, frames, c, cut, accepted
 at, first new frame, dropped, its noise prefix).
 """
@@ -30,7 +32,7 @@ from emdm.sampler.schedule import make_schedule
 NAME = "tiny-live"
 FIRST = ("b", 7)
 WINDOW = 20             # new frames of a window (the stream's default is L.WINDOW; shorter keeps the fixture small)
-FRAMES = 105
+FRAMES = 160
 PROMPTS = ((25, "e"), (50, "g"), (51, "c"), (80, "h"))
 COST = (6, 14, 45)
 
@@ -54,6 +56,8 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
         "first": {"label": FIRST[0], "seed": FIRST[1]}, "frames": FRAMES,
         "prompts": [{"frame": f, "label": p} for f, p in PROMPTS], "cost": list(COST),
         "window": WINDOW, "lead": L.LEAD, "promptLead": L.PROMPT_LEAD, "coast": L.COAST, "recentre": L.RECENTRE_M,
+        "maxLead": L.MAX_LEAD, "leadSafety": L.LEAD_SAFETY, "leadStepDown": L.LEAD_STEP_DOWN,
+        "displayPad": L.DISPLAY_PAD, "displayFade": L.DISPLAY_FADE, "leadNow": core.lead_now,
         "base": core.base, "origin": list(core.origin), "underruns": core.underruns, "windows": windows,
     }
     return write_case(out_dir, NAME, meta, arrays)

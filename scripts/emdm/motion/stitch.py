@@ -18,14 +18,16 @@ import numpy as np
 from emdm.motion.features import check_joints, heading_angles, recover_root, rot_y
 
 
-def align_segment(prev: np.ndarray, nxt: np.ndarray, overlap: int) -> np.ndarray:
-    """``nxt`` (F, 22, 3) turned about +Y and shifted in x/z onto ``prev``'s last frame (see the module doc)."""
+def align_segment(prev: np.ndarray, nxt: np.ndarray, overlap: int, ref: np.ndarray | None = None) -> np.ndarray:
+    """``nxt`` (F, 22, 3) turned about +Y and shifted in x/z onto ``prev``'s last frame (see the module doc); the
+    move is measured on ``ref`` (default ``nxt``; e.g. the recovered joints when ``nxt`` is their decoded version)."""
     p, n = check_joints(prev, "prev"), check_joints(nxt, "next")
+    r = n if ref is None else check_joints(ref, "ref")
     if not isinstance(overlap, (int, np.integer)) or not 1 <= overlap <= min(len(p), len(n)):
         raise ValueError(f"align_segment: overlap must be an integer in 1..{min(len(p), len(n))} (frames of next "
                          f"that repeat prev's last frames), got {overlap!r}")
-    d_theta = heading_angles(p[-1:])[0] - heading_angles(n[overlap - 1:overlap])[0]
-    anchor = n[overlap - 1, 0] * [1.0, 0.0, 1.0]
+    d_theta = heading_angles(p[-1:])[0] - heading_angles(r[overlap - 1:overlap])[0]
+    anchor = r[overlap - 1, 0] * [1.0, 0.0, 1.0]
     out = rot_y(d_theta, n - anchor)
     out[..., 0] += p[-1, 0, 0]
     out[..., 2] += p[-1, 0, 2]
