@@ -67,7 +67,7 @@ def test_page_and_soak_rows_say_which_bars_are_met():
     text = "\n".join(live_section.section([_page_run(), _soak_run()]))
     assert "**0.39 / 0.40 s** over 32 of 32 prompts (met)" in text
     assert "**0** in 160 s (met)" in text
-    assert "30.0 / 20.0, after 25.0 ms (1.20× the larger idle)" in text
+    assert "30.0 / 20.0, after 25.0 ms (1.50× the smaller idle)" in text
     assert "**+1.2 MB** (30.2 → 31.4; met)" in text
     assert "**0.70–1.10 m** (real 0.05–1.78 m; met) | 1800 → 1850 (max 1900) | 0.90 m |" in text
     assert "not met" not in text

@@ -102,13 +102,13 @@ def page_row(r: dict) -> str:
     s = _summary(r)
     med, p95 = s["latencyMedianS"], s["latencyP95S"]
     gaps = s["frameGapMs"]
-    idle = max(gaps["idle"]["p95"], gaps.get("idleAfter", gaps["idle"])["p95"])
+    idle = min(gaps["idle"]["p95"], gaps.get("idleAfter", gaps["idle"])["p95"])     # the stricter of the two
     return (f"| `{r['_file']}` | {_where(r)} | "
             f"{r['steps']} | **{med:.2f} / {p95:.2f} s** over {s['latencies']} of {s['promptsSent']} prompts "
             f"({_met(med <= LATENCY_BARS[0] and p95 <= LATENCY_BARS[1])}) | **{s['underruns']}** in {s['seconds']} s "
             f"({_met(s['underruns'] == 0)}) | {s['repeated']} of {s['displayed']} | {gaps['live']['p95']:.1f} / "
             f"{gaps['idle']['p95']:.1f}, after {gaps.get('idleAfter', gaps['idle'])['p95']:.1f} ms "
-            f"({gaps['live']['p95'] / idle:.2f}× the larger idle) |")
+            f"({gaps['live']['p95'] / idle:.2f}× the smaller idle) |")
 
 
 def soak_row(r: dict) -> str:
