@@ -313,23 +313,23 @@ export class View {
 
   /** The caption in live mode: the prompt now playing and the stream's settings. */
   liveCaption(prompt: string, steps: number): void {
-    const main = document.createElement('span');
-    main.textContent = `“${prompt}”`;
-    const small = document.createElement('small');
-    small.textContent = `live · ${steps} step${steps === 1 ? '' : 's'} · Enter in the prompt box sends the next`;
-    this.caption.replaceChildren(main, small);
+    this.setCaption(`“${prompt}”`, `live · ${stepsText(steps)} · Enter in the prompt box sends the next`);
   }
 
   private showCaption(g: Pick<Generation, 'state' | 'label' | 'plan'>): void {
     this.captionShown = g;
     const { state: s, label, plan } = g;
-    this.caption.replaceChildren();
+    const steps = plan ? `EMDM ${plan.emdm} vs DDIM ${plan.ddim} steps` : stepsText(s.steps);
+    this.setCaption(s.mode === 'text' ? `“${label}”` : label, `${s.mode} · seed ${s.seed} · ${steps} · ${s.seconds.toFixed(1)} s`);
+  }
+
+  /** The caption over the stage: its main line and the small line under it. */
+  private setCaption(mainText: string, smallText: string): void {
     const main = document.createElement('span');
-    main.textContent = s.mode === 'text' ? `“${label}”` : label;
+    main.textContent = mainText;
     const small = document.createElement('small');
-    const steps = plan ? `EMDM ${plan.emdm} vs DDIM ${plan.ddim} steps` : `${s.steps} step${s.steps === 1 ? '' : 's'}`;
-    small.textContent = `${s.mode} · seed ${s.seed} · ${steps} · ${s.seconds.toFixed(1)} s`;
-    this.caption.append(main, small);
+    small.textContent = smallText;
+    this.caption.replaceChildren(main, small);
   }
 
   private showCompare(ddim: Produced | null): void {
@@ -437,4 +437,8 @@ export class View {
     };
     requestAnimationFrame(tick);
   }
+}
+
+function stepsText(n: number): string {
+  return `${n} step${n === 1 ? '' : 's'}`;
 }
