@@ -7,16 +7,19 @@
 #   scripts/gpu/lease.sh prepare [DATASET]  on the CPU: .lease/dataset.emdmpack (emdm.data.pack of DATASET,
 #                                           default data/dataset, prepared first if missing) and .lease/cache/
 #                                           (the text runs' caption embeddings, computed by emdm.train itself)
-#   scripts/gpu/lease.sh shrink             take what a run does not need out of what travels (out of git's
+#   scripts/gpu/lease.sh shrink [RUN]       take what a run does not need out of what travels (out of git's
 #                                           index, ignored in .git/info/exclude; nothing on disk is touched);
-#                                           commits are refused until `restore`
+#                                           commits are refused until `restore`. With RUN (t2m, a2m, ddim) the
+#                                           other models' weights stay behind too, and RUN's shipped weights as
+#                                           well once .lease holds init-RUN*.pt (room for several variants' starts)
 #   scripts/gpu/lease.sh size               what would travel now, in MiB; exit 1 over 64 MiB
 #   scripts/gpu/lease.sh files              the paths that would travel, one a line (what `size` adds up)
 #   scripts/gpu/lease.sh stage DIR          copy exactly those paths into DIR (the CPU rehearsal runs there)
 #   scripts/gpu/lease.sh restore            undo `shrink` (index from HEAD, exclude and hook removed); idempotent
 #   scripts/gpu/lease.sh init RUN FILE      .lease/init-RUN.pt from FILE (a call's returned weights), as float16:
 #                                           the next call of the same lease continues from it (7.6 MB carried,
-#                                           where the float32 file would take the tree over the limit)
+#                                           where the float32 file would take the tree over the limit); RUN may
+#                                           name a variant of lease-train.sh's VARIANTS: init t2m-crop FILE
 #
 # A slice, in order: prepare (once per machine), shrink, size, then the device call
 #   run(command="bash scripts/gpu/lease-train.sh t2m", carry=[".lease"], timeout_s=560)
@@ -40,8 +43,20 @@ drop_dirs=(public/models tests/fixtures)
 
 die() { echo "lease.sh: $*" >&2; exit 2; }
 
-dropped() {  # tracked paths that do not travel
-  git ls-files -- "${drop_dirs[@]}" | grep -Ev "$keep_re" || true
+declare -A run_model=([t2m]=emdm-t2m-web [a2m]=emdm-a2m-web [ddim]=diffusion-t2m-web)
+
+dropped() {  # tracked paths that do not travel (RUN given: only its weights travel, and not even those once
+             # .lease has starts of its own for it)
+  local run="${1:-}" keep="$keep_re"
+  if [[ -n "$run" ]]; then
+    local model="${run_model[$run]}"
+    if compgen -G "$lease/init-$run*.pt" >/dev/null; then
+      keep='^public/models/(manifest\.json|[^/]+\.meanstd\.f32)$'
+    else
+      keep="^public/models/(manifest\\.json|[^/]+\\.meanstd\\.f32|$model\\.weights\\.f16\\.pt)\$"
+    fi
+  fi
+  git ls-files -- "${drop_dirs[@]}" | grep -Ev "$keep" || true
 }
 
 travelling() {  # tracked + untracked-not-ignored files, then the carried .lease folder
@@ -70,9 +85,11 @@ cmd_prepare() {
 }
 
 cmd_shrink() {
+  local run="${1:-}"
+  [[ -z "$run" || -n "${run_model[$run]+x}" ]] || die "shrink: unknown run '$run' (t2m, a2m or ddim)"
   [[ -f "$marker" ]] && { echo "lease.sh: already shrunk ($(wc -l <"$marker") paths out); restore first to redo"; return; }
   git diff --cached --quiet || die "the index has staged changes; commit or unstage them first (shrink stages deletions)"
-  local list; list="$(dropped)"
+  local list; list="$(dropped "$run")"
   [[ -n "$list" ]] || die "nothing to take out"
   printf '%s\n' "$list" >"$marker"
   xargs -d '\n' git rm -r -q --cached -- <"$marker"
@@ -99,7 +116,7 @@ cmd_restore() {
 
 cmd_init() {
   local run="${1:?init RUN FILE}" src="${2:?init RUN FILE}"
-  [[ "$run" =~ ^(t2m|a2m|ddim)$ ]] || die "init: unknown run '$run' (t2m, a2m or ddim)"
+  [[ "$run" =~ ^(t2m|a2m|ddim)(-[a-z0-9]+)?$ ]] || die "init: unknown run '$run' (t2m, a2m or ddim, or RUN-VARIANT)"
   mkdir -p "$lease"
   "$py" -m emdm.checkpoints half "$src" "$lease/init-$run.pt" || exit 2
 }
@@ -125,11 +142,11 @@ cmd_stage() {
 
 case "${1:-}" in
   prepare) shift; cmd_prepare "$@" ;;
-  shrink) cmd_shrink ;;
+  shrink) shift; cmd_shrink "$@" ;;
   restore) cmd_restore ;;
   init) shift; cmd_init "$@" ;;
   size) cmd_size ;;
   files) travelling ;;
   stage) shift; cmd_stage "$@" ;;
-  *) echo "usage: $0 prepare [DATASET] | shrink | size | files | stage DIR | init RUN FILE | restore" >&2; exit 2 ;;
+  *) echo "usage: $0 prepare [DATASET] | shrink [RUN] | size | files | stage DIR | init RUN FILE | restore" >&2; exit 2 ;;
 esac

@@ -166,3 +166,73 @@ def test_the_slice_says_what_is_missing(tmp_path):
     bad = subprocess.run(["bash", str(paths.REPO_ROOT / "scripts/gpu/lease-train.sh"), "t2x"], env=env,
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "unknown run 't2x'" in bad.stderr
+
+
+def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
+    """VARIANTS: two recipes from the same start in one call, each its own weights and logs in $OUT/<name>/, its
+    flags on top of the recipe's; a second call continues each from its own float16 start, and `shrink t2m` then
+    leaves every shipped weights file behind (room for several starts in 64 MiB)."""
+    if not (repo / ".lease/dataset.emdmpack").is_file():
+        data = _run(tmp_path, *_user_folder(tmp_path))
+        prep = lease(repo, "prepare", str(data))
+        assert prep.returncode == 0, prep.stdout[-2000:] + prep.stderr[-2000:]
+    for f in (repo / ".lease").glob("init-*.pt"):
+        f.unlink()
+    assert lease(repo, "shrink", "t2m").returncode == 0
+    try:
+        travel = tmp_path / "travel"
+        assert lease(repo, "stage", str(travel)).returncode == 0
+        files = set(lease(repo, "files").stdout.splitlines())
+        assert "public/models/emdm-t2m-web.weights.f16.pt" in files
+        assert "public/models/emdm-a2m-web.weights.f16.pt" not in files        # another run's start stays behind
+    finally:
+        assert lease(repo, "restore").returncode == 0
+    env = {**os.environ, "PYTHON": sys.executable, "AMP": "off", "BATCH": "2", "PROBE_STEPS": "2", "MAX_STEPS": "3",
+           "WEIGHTS_MINUTES": "0", "LEASE_SECONDS": "300", "VARIANTS": "base:;crop:--random-crop 0.9 --crop-min 20",
+           "EMDM_TRAIN_EXTRA": "--device cpu --d-width 32 --threads 1 --log-every 1"}
+    env.pop("PYTHONPATH", None)
+
+    def call(out: Path, work: str) -> subprocess.CompletedProcess:
+        r = subprocess.run(["bash", "scripts/gpu/lease-train.sh", "t2m"], cwd=travel, capture_output=True, text=True,
+                           env={**env, "OUT": str(out), "LEASE_WORK": str(tmp_path / work)}, timeout=900)
+        assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+        return r
+
+    first = call(tmp_path / "OUT", "w1")
+    args = {}
+    for v in ("base", "crop"):
+        st = load_weights_file(tmp_path / "OUT" / v / "emdm-t2m-web.pt")
+        assert st["step"] == 3 and st["meta"]["init"]["runs"]
+        args[v] = st["meta"]["args"]
+        assert (tmp_path / "OUT" / v / "log.csv").is_file(), v
+        assert f"== t2m-{v}" in (tmp_path / "OUT/train.out").read_text()
+        assert f"[t2m-{v}] emdm-t2m-web from emdm-t2m-web.weights.f16.pt" in first.stdout
+    # a device call returns at most 8 files: env.txt, train.out and two per variant (three variants fit)
+    assert len([f for f in (tmp_path / "OUT").rglob("*") if f.is_file()]) == 6
+    assert args["base"]["random_crop"] == 0.3 and args["crop"]["random_crop"] == 0.9 and args["crop"]["crop_min"] == 20
+    assert args["base"]["balance_alpha"] == args["crop"]["balance_alpha"] == 0.5
+
+    # call 2: each variant from its own returned weights
+    for v in ("base", "crop"):
+        init = lease(repo, "init", f"t2m-{v}", str(tmp_path / "OUT" / v / "emdm-t2m-web.pt"))
+        assert init.returncode == 0, init.stderr
+        shutil.copy2(repo / f".lease/init-t2m-{v}.pt", travel / f".lease/init-t2m-{v}.pt")
+    assert lease(repo, "shrink", "t2m").returncode == 0
+    try:
+        files = set(lease(repo, "files").stdout.splitlines())
+        assert not any(f.endswith(".weights.f16.pt") for f in files), "the starts are in .lease now"
+        assert {".lease/init-t2m-base.pt", ".lease/init-t2m-crop.pt"} <= files
+    finally:
+        assert lease(repo, "restore").returncode == 0
+        for f in (repo / ".lease").glob("init-*.pt"):
+            f.unlink()
+    second = call(tmp_path / "OUT2", "w2")
+    for v in ("base", "crop"):
+        assert f"[t2m-{v}] emdm-t2m-web from init-t2m-{v}.pt" in second.stdout
+        runs = load_weights_file(tmp_path / "OUT2" / v / "emdm-t2m-web.pt")["meta"]["init"]["runs"]
+        assert runs[-1]["file"] == f"init-t2m-{v}.pt" and runs[-1]["steps"] == 3
+
+    bad = subprocess.run(["bash", "scripts/gpu/lease-train.sh", "t2m"], cwd=travel, capture_output=True, text=True,
+                         env={**env, "OUT": str(tmp_path / "OUT3"), "VARIANTS": "Crop!:--random-crop 0.5"})
+    assert bad.returncode == 2 and "bad name 'Crop!'" in bad.stderr
+    assert lease(repo, "shrink", "t2x").returncode == 2
