@@ -21,10 +21,11 @@
 #                                           where the float32 file would take the tree over the limit); RUN may
 #                                           name a variant of lease-train.sh's VARIANTS: init t2m-crop FILE
 #
-# A slice, in order: prepare (once per machine), shrink, size, then the device call
+# A slice, in order: prepare (once per machine), shrink t2m, size, then the device call
 #   run(command="bash scripts/gpu/lease-train.sh t2m", carry=[".lease"], timeout_s=560)
 # then restore, give_back. Time left for another call: init t2m /path/to/returned/emdm-t2m-web.pt, size, and the
-# same device call with a smaller LEASE_SECONDS. tests/python/test_gpu_lease.py rehearses all of it on the CPU in CI.
+# same device call with a smaller LEASE_SECONDS (with VARIANTS: init t2m-NAME per variant, restore, shrink t2m).
+# tests/python/test_gpu_lease.py rehearses all of it on the CPU in CI.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
 cd "$root"
