@@ -125,7 +125,7 @@ def test_the_slice_runs_from_exactly_what_travels(repo, tmp_path):
     st = load_weights_file(out_dir / "emdm-t2m-web.pt")
     assert st["step"] == 4 and st["meta"]["task"] == "text"
     assert st["meta"]["init"]["runs"], "the run must record the shipped weights it continued from"
-    assert st["meta"]["args"]["balance_alpha"] == 0.5 and st["meta"]["args"]["batch"] == 2
+    assert st["meta"]["args"]["balance_alpha"] == 0.25 and st["meta"]["args"]["batch"] == 2
     assert all(torch.isfinite(v).all() for v in st["G_ema"].values())
     assert (out_dir / "emdm-t2m-web.pt").stat().st_size <= 16 * 2**20      # what a device call returns per file
     for f in ("log.csv", "train.out", "env.txt"):
@@ -210,7 +210,7 @@ def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
     # a device call returns at most 8 files: env.txt, train.out and two per variant (three variants fit)
     assert len([f for f in (tmp_path / "OUT").rglob("*") if f.is_file()]) == 6
     assert args["base"]["random_crop"] == 0.3 and args["crop"]["random_crop"] == 0.9 and args["crop"]["crop_min"] == 20
-    assert args["base"]["balance_alpha"] == args["crop"]["balance_alpha"] == 0.5
+    assert args["base"]["balance_alpha"] == args["crop"]["balance_alpha"] == 0.25
 
     # call 2: each variant from its own returned weights
     for v in ("base", "crop"):
