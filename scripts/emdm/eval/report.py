@@ -230,7 +230,18 @@ def _benchmarks(results: list[dict], plots: dict[str, str]) -> list[str]:
                 "(`SEAM_BLEND_VELOCITY`) fixes; `-oldmodel`: the fixes on the text model before its first GPU slice (the "
                 "shipped one squats and lies down where that one did not, and two of its prompt changes into those "
                 "ease faster than the calm timeline around them). A loop re-generates all but its ends, so its gait against the plain "
-                "walk varies with the seed either way; in place keeps the gait of the same loop travelling.", ""]
+                "walk varies with the seed either way; in place keeps the gait of the same loop travelling.", "",
+                "Live segments (issue 33: \"each segment's meaning as good as the same prompt generated alone\"; "
+                "`emdm.eval.live_meaning`, the second table): one session of the live stream's Python twin "
+                "(`emdm.motion.live`, parity-tested with src/live; the page's file, steps and live settings) with prompt "
+                "changes drawn from the model's covered actions (its capabilities file), each cut into its segment (from "
+                "the end of its blend, SEAM_EASE + SEAM_BLEND_EXTRA frames after it, to the next prompt) and judged by the "
+                "action classifier (features) and the kinematic rules (joints as played) against the same prompt generated "
+                "alone at the segment's length, one alone motion per segment. Verdict: met unless a judge fails "
+                "significantly more live segments than their alone twins (one-sided sign test on the pairs the two "
+                "disagree on, p < 0.05). Blends: the Node benchmark's statistic (the peak joint acceleration over "
+                "[b − 1, b + 14] ÷ the played motion's 95th percentile outside every such span) on the frames played; "
+                "beside it the same statistic over a span in the middle of each segment, where nothing is blended.", ""]
         out += seams.section(seam_runs)
     live_runs = [r for r in results if r["task"] in live_section.TASKS]
     if live_runs:
