@@ -58,4 +58,4 @@ def test_the_committed_results_render_in_results_md():
     live = [r for r in rs if r.get("live")]
     assert live, "no committed seams result has a live session: run python -m emdm.eval.seams"
     text = "\n".join(lines[3 + len(rs):])
-    assert all(f"| `{r['_file']}` |" in text for r in live) and "Per action" in text
+    assert all(f"| `{r['_file']}` |" in text for r in live) and "Per action, live / alone" in text

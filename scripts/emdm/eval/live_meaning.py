@@ -286,6 +286,7 @@ def report_line(r: dict) -> str:
 # ----------------------------------------------------------------------------------------------- RESULTS.md
 
 def _judge_cell(x: dict | None, p: float | None) -> str:
+    """live / alone (× ratio; the discordant pairs, and the sign test's p if given)."""
     if x is None:
         return "–"
     ratio = "–" if x["ratio"] is None else f"{x['ratio']:.2f}"
@@ -294,9 +295,9 @@ def _judge_cell(x: dict | None, p: float | None) -> str:
 
 
 def section(rs: list[dict]) -> list[str]:
-    """The live rows of RESULTS.md's "Seams and loops" section (results with a ``live`` part), and the per-action
-    table of the first."""
-    rs = [r for r in rs if r.get("live")]
+    """The live rows of RESULTS.md's "Seams and loops" section (results with a ``live`` part), and their per-action
+    rates side by side."""
+    rs = sorted((r for r in rs if r.get("live")), key=lambda r: (r["name"], r["_file"]))
     if not rs:
         return []
     head = ["Result", "Session", "Classifier live / alone", "Kinematic rules live / alone",
@@ -316,13 +317,14 @@ def section(rs: list[dict]) -> list[str]:
                      "**met**" if v["verdict"]["met"] else "**not met**",
                      f"{b['within']}/{len(b['ratios'])} (max {max(b['ratios']):.2f}×; p95 {b['p95']:.0f} m/s²)",
                      f"{b['placebo_within']}/{len(b['placebo'])} (max {max(b['placebo']):.2f}×)"])
-    per = rs[0]["live"]["rates"]["per_action"]
-    acts = [[a, str(x["n"]), _judge_cell(x.get("classifier"), None), _judge_cell(x.get("kinematic"), None)]
-            for a, x in sorted(per.items())]
+    pair = lambda x: "–" if x is None else f"{x['live']:.0%} / {x['alone']:.0%}"  # noqa: E731
+    acts = sorted({a for r in rs for a in r["live"]["rates"]["per_action"]})
+    per = [[a] + [" · ".join(pair(r["live"]["rates"]["per_action"].get(a, {}).get(j)) for j in ("classifier", "kinematic"))
+                  for r in rs] for a in acts]
     table = lambda h, rows: ["| " + " | ".join(h) + " |", "|" + " --- |" * len(h)] + ["| " + " | ".join(c) + " |" for c in rows]  # noqa: E731
-    return (table(head, rows) + ["", f"Per action (`{rs[0]['_file']}`; kinematic: only actions its rule judges on the real "
-                                 "test clips):", ""] + table(["Action", "Segments", "Classifier live / alone", "Kinematic live / alone"], acts) + [""])
-
+    return (table(head, rows) + ["", "Per action, live / alone: classifier · kinematic rule (– : the rule does not judge "
+                                 "the action on the real test clips); each session has 10 or 11 segments per action.", ""]
+            + table(["Action"] + [f"`{r['_file']}`" for r in rs], per) + [""])
 
 __all__ = ["LiveMeaningError", "blend_ratios", "covered_prompts", "halves", "judge", "measure", "placebo_ratios",
            "prompt_blends", "rates", "run", "schedule", "section", "segments", "verdict", "worse_p"]
