@@ -2,7 +2,7 @@
 ``emdm.motion.edit`` and loops with and without "in place", on a shipped model (the page's file) and decoded as the
 page shows them (``emdm.motion.decode.decode_joints``: σ = 1 smoothing, feet cleaned up).
 
-    nice python -m emdm.eval.seams                 # about 2.5 minutes on 2 cores; figures printed, JSON written
+    nice python -m emdm.eval.seams                 # about 3 minutes on 2 cores (70 s of it live); figures printed, JSON written
     python -m emdm.eval.report                     # RESULTS.md's "Seams and loops" section
 
 What is measured (20 fps, metres):
