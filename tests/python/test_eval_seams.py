@@ -53,4 +53,9 @@ def test_the_committed_results_render_in_results_md():
     rs = [r for r in load_results(RESULTS_DIR / "json") if r["task"] == "seams"]
     assert rs, "docs/results/json/seams-*.json: run python -m emdm.eval.seams"
     lines = S.section(rs)
-    assert len(lines) == 3 + len(rs) and all(r["_file"] in "".join(lines) for r in rs)
+    assert lines[1 + len(rs)].startswith("| `") and lines[2 + len(rs)] == ""
+    assert all(r["_file"] in "".join(lines[:2 + len(rs)]) for r in rs)
+    live = [r for r in rs if r.get("live")]
+    assert live, "no committed seams result has a live session: run python -m emdm.eval.seams"
+    text = "\n".join(lines[3 + len(rs):])
+    assert all(f"| `{r['_file']}` |" in text for r in live) and "Per action, live / alone" in text

@@ -91,3 +91,24 @@ def test_report_reads_page_results_and_names_a_missing_summary_field(tmp_path):
     (tmp_path / "live-x-soak.json").write_text(json.dumps({"schema": 1} | {k: v for k, v in bad.items() if k != "_file"}))
     with pytest.raises(report.ReportError, match=r"live-x-soak.json: field 'summary' lacks 'heapGrowthMB'"):
         report.load_results(tmp_path)
+
+
+def test_a_prompts_window_leaves_more_of_its_steps_to_the_new_prompt():
+    import dataclasses
+
+    from emdm.motion.edit import TIMELINE_KEEP_FROM
+
+    model, seen = tiny_editor(), []
+
+    class Spy(type(model)):
+        def sample(self, prompt, frames, seed, known=None, keep=None, keep_from_time=1.0):
+            seen.append((prompt, known is not None, keep_from_time))
+            return super().sample(prompt, frames, seed, known, keep, keep_from_time)
+
+    spy = Spy(**{f.name: getattr(model, f.name) for f in dataclasses.fields(model)})
+    L.simulate(L.LiveCore(spy, "b", seed=3), 120, [(45, "e")], [6])
+    later = lambda p: [s[2] for s in seen if s[0] == p][1:]             # noqa: E731
+    assert seen[0] == ("b", False, 1.0)                                   # the first window: nothing kept
+    assert later("b") and set(later("b")) == {TIMELINE_KEEP_FROM}        # the same prompt continued
+    assert next(s for s in seen if s[0] == "e") == ("e", True, L.PROMPT_KEEP_FROM) < ("e", True, TIMELINE_KEEP_FROM)
+    assert later("e") and set(later("e")) == {TIMELINE_KEEP_FROM}

@@ -7,8 +7,8 @@ import os from 'node:os';
 import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
 import { createGenerator } from '../../src/createGenerator';
-import { type EditMotion, type EditRequest, EditError } from '../../src/edit';
-import { LIVE_PROMPT_LEAD_FRAMES, LiveCore, RECENTRE_M } from '../../src/live/core';
+import { type EditMotion, type EditRequest, EditError, TIMELINE_KEEP_FROM } from '../../src/edit';
+import { LIVE_PROMPT_KEEP_FROM, LIVE_PROMPT_LEAD_FRAMES, LiveCore, RECENTRE_M } from '../../src/live/core';
 import { simulateLive } from '../../src/live/simulate';
 import { startLive } from '../../src/live/stream';
 import { recoverJoints } from '../../src/motion/recover';
@@ -33,6 +33,9 @@ describe('live stream behaviour (a walking generator, a simulated or a hand-driv
     s.prompt({ action: 'c' });
     expect(calls[1].signal.aborted).toBe(true);
     expect(calls[2].r).toMatchObject({ action: 'c', seed: 5, frames: 60 });
+    // the prompt's window leaves more of its steps to the new prompt than a window continuing the same one
+    expect([calls[1].r.known?.fromTime, calls[2].r.known?.fromTime]).toEqual([TIMELINE_KEEP_FROM, LIVE_PROMPT_KEEP_FROM]);
+    expect(LIVE_PROMPT_KEEP_FROM).toBeLessThan(TIMELINE_KEEP_FROM);
     calls[1].done(); // the dropped window arrives after all: ignored
     await new Promise((r) => setTimeout(r, 0));
     calls[2].done();

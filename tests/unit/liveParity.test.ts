@@ -7,7 +7,7 @@ import path from 'node:path';
 import { afterAll, beforeAll, describe, expect, it } from 'vitest';
 import type { EditGenerate } from '../../src/edit';
 import {
-  COAST_FRAMES, LEAD_SAFETY, LEAD_STEP_DOWN, LIVE_DISPLAY_FADE, LIVE_DISPLAY_PAD, LIVE_LEAD_FRAMES, LIVE_MAX_LEAD_FRAMES, LIVE_PROMPT_LEAD_FRAMES, LiveCore, RECENTRE_M,
+  COAST_FRAMES, LEAD_SAFETY, LEAD_STEP_DOWN, LIVE_DISPLAY_FADE, LIVE_DISPLAY_PAD, LIVE_LEAD_FRAMES, LIVE_MAX_LEAD_FRAMES, LIVE_PROMPT_KEEP_FROM, LIVE_PROMPT_LEAD_FRAMES, LiveCore, RECENTRE_M,
 } from '../../src/live/core';
 import { simulateLive } from '../../src/live/simulate';
 import { type Generator, openModel } from '../../src/openModel';
@@ -18,7 +18,7 @@ type Win = { id: number; label: string; seed: number; frames: number; c: number;
 const meta = fx.meta as unknown as {
   labels: string[]; steps: number; first: { label: string; seed: number }; frames: number; prompts: { frame: number; label: string }[]; cost: number[];
   window: number; lead: number; promptLead: number; coast: number; recentre: number; base: number; origin: [number, number]; underruns: number; windows: Win[];
-  maxLead: number; leadSafety: number; leadStepDown: number; displayPad: number; displayFade: number; leadNow: number;
+  maxLead: number; leadSafety: number; leadStepDown: number; displayPad: number; displayFade: number; promptKeepFrom: number; leadNow: number;
 };
 const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-live-parity-'));
 afterAll(() => fs.rmSync(tmp, { recursive: true, force: true }));
@@ -41,6 +41,7 @@ describe('src/live = emdm.motion.live (tiny-live fixture)', () => {
   it('uses the same constants (the fixture\'s windows are shorter than the default)', () => {
     expect([meta.lead, meta.promptLead, meta.coast, meta.recentre]).toEqual([LIVE_LEAD_FRAMES, LIVE_PROMPT_LEAD_FRAMES, COAST_FRAMES, RECENTRE_M]);
     expect([meta.maxLead, meta.leadSafety, meta.leadStepDown, meta.displayPad, meta.displayFade]).toEqual([LIVE_MAX_LEAD_FRAMES, LEAD_SAFETY, LEAD_STEP_DOWN, LIVE_DISPLAY_PAD, LIVE_DISPLAY_FADE]);
+    expect(meta.promptKeepFrom).toBe(LIVE_PROMPT_KEEP_FROM);
   });
 
   it('the same windows and the same frames as played, for the same prompts, seeds and prompt times', async () => {

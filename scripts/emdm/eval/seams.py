@@ -2,7 +2,7 @@
 ``emdm.motion.edit`` and loops with and without "in place", on a shipped model (the page's file) and decoded as the
 page shows them (``emdm.motion.decode.decode_joints``: σ = 1 smoothing, feet cleaned up).
 
-    nice python -m emdm.eval.seams                 # about 2.5 minutes on 2 cores; figures printed, JSON written
+    nice python -m emdm.eval.seams                 # about 3 minutes on 2 cores (70 s of it live); figures printed, JSON written
     python -m emdm.eval.report                     # RESULTS.md's "Seams and loops" section
 
 What is measured (20 fps, metres):
@@ -21,6 +21,11 @@ What is measured (20 fps, metres):
   in-place loop is also set against the same loop travelling (what "in place" itself changes). The clip is decoded
   as a loop (``decode_joints(loop=True)``), as the page plays it.
 
+* live segments (``--live-changes``, 0: none): a session of the live stream's Python twin with that many prompt changes
+  drawn from the model's covered actions, each segment judged by the action classifier and the kinematic rules against
+  the same prompt generated alone, and each prompt's blend by the Node benchmark's statistic
+  (``emdm.eval.live_meaning``; it reads the prepared dataset's test clips and the classifier).
+
 Writes ``docs/results/json/seams-<model>.json`` (schema 1, task ``seams``).
 """
 
@@ -35,7 +40,9 @@ from pathlib import Path
 
 import numpy as np
 
-from emdm.eval.coverage import PROMPTS_FILE
+from emdm.eval import live_meaning as LM
+from emdm.data.dataset import DatasetError
+from emdm.eval.coverage import PROMPTS_FILE, CoverageError
 from emdm.eval.editing_run import page_variant
 from emdm.eval.results import RESULTS_DIR, SCHEMA, hardware, write_result
 from emdm.model.open import open_model
@@ -43,6 +50,7 @@ from emdm.motion import edit as E
 from emdm.motion.decode import decode_joints
 from emdm.motion.features import heading_angles
 from emdm.outdir import OutputRefused, check_writable
+from emdm.paths import DATASET_DIR, RUNS_DIR, models_dir
 
 FPS = 20
 SHOWCASE = ("a person walks", "a person waves both hands", "a person bows")
@@ -211,7 +219,8 @@ def section(rs: list[dict]) -> list[str]:
     head = ["Result", "Prompt-change seams: accel ≤ 1.5× p95", "largest seam step / p95",
             "walk → wave → bow: largest first-seam step; seams ≤ 1.5×", "Loop wrap ≤ largest step",
             "In place: wrap ≤ largest step", "In place vs travelling: stride / lift", "Loop gait within 30 % of the plain walk"]
-    return ["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)] + ["| " + " | ".join(c) + " |" for c in rows] + [""]
+    return (["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)] + ["| " + " | ".join(c) + " |" for c in rows] + [""]
+            + LM.section(rs))
 
 
 def run(a, log=print) -> Path:
@@ -220,6 +229,9 @@ def run(a, log=print) -> Path:
         prompts = sorted(e["plain"] for e in json.loads(Path(a.prompts).read_text())["actions"].values())
     except (OSError, ValueError, KeyError, TypeError) as e:
         raise SeamsError(f"--prompts {a.prompts}: expected coverage prompts {{\"actions\": {{label: {{\"plain\": ...}}}}}} ({e})") from None
+    capabilities = a.capabilities or models_dir(a.models_dir) / f"capabilities-{a.model}.json"
+    if a.live_changes:
+        LM.covered_prompts(capabilities)            # before anything is measured
     t0 = time.time()
     variant = page_variant(a.model, a.models_dir)
     opened = open_model(a.model, models_dir=a.models_dir, threads=a.threads, variant=variant)
@@ -229,10 +241,12 @@ def run(a, log=print) -> Path:
     loops = measure_loops(model, range(a.seed, a.seed + a.seeds), a.loop_seconds)
     fig = figures(seams, showcase, loops)
     report(fig, log)
+    live = LM.run(model, a.dataset, a.classifier, capabilities, a.live_changes, a.seed, a.live_cost, log) if a.live_changes else None
     result = {"schema": SCHEMA, "task": "seams", "name": a.model, "variant": opened.variant,
               "steps": model.settings.steps, "decode": "page (smooth σ=1, foot cleanup)", "segment_seconds": a.seconds,
               "loop_seconds": a.loop_seconds, "seed": a.seed, "bars": BARS, "figures": fig,
-              "rows": {"showcase": showcase, "changes": seams, "loops": loops}, "hardware": hardware(),
+              "rows": {"showcase": showcase, "changes": seams, "loops": loops}, **({"live": live} if live else {}),
+              "hardware": hardware(),
               "seconds": round(time.time() - t0, 1), "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     return write_result(result, out)
 
@@ -248,12 +262,20 @@ def parse_args(argv=None):
     p.add_argument("--loop-seconds", type=float, default=6.0, help="seconds of the walk a loop is made of")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--threads", type=int, default=1)
+    p.add_argument("--live-changes", type=int, default=180, help="prompt changes of the live session (0: none)")
+    p.add_argument("--live-cost", type=int, default=LM.COST, help="frames each live window costs")
+    p.add_argument("--capabilities", type=Path, default=None, help="the covered actions' prompts (default: the model's "
+                   "capabilities file beside it)")
+    p.add_argument("--dataset", type=Path, default=DATASET_DIR, help="the prepared dataset (its test clips: the judges' reference)")
+    p.add_argument("--classifier", type=Path, default=RUNS_DIR / "eval" / "classifier.pt")
     p.add_argument("--tag", default="", help="a suffix of the result file's name (e.g. before)")
     p.add_argument("--out", type=Path, default=None)
     a = p.parse_args(argv)
-    for name in ("changes", "seeds", "threads"):
+    for name in ("changes", "seeds", "threads", "live_cost"):
         if getattr(a, name) < 1:
-            p.error(f"--{name} must be at least 1, got {getattr(a, name)}")
+            p.error(f"--{name.replace('_', '-')} must be at least 1, got {getattr(a, name)}")
+    if a.live_changes < 0:
+        p.error(f"--live-changes must be 0 (no live session) or more, got {a.live_changes}")
     if not a.seconds > 1 or not a.loop_seconds > 1.05:
         p.error("--seconds and --loop-seconds must be over 1 s (a segment continues the last second)")
     return a
@@ -263,7 +285,7 @@ def main(argv=None) -> int:
     a = parse_args(argv)
     try:
         out = run(a)
-    except (SeamsError, E.EditError, OutputRefused) as e:
+    except (SeamsError, LM.LiveMeaningError, CoverageError, DatasetError, E.EditError, OutputRefused, FileNotFoundError) as e:
         print(f"emdm.eval.seams: {e}", file=sys.stderr)
         return 2
     print(f"wrote {out}")

@@ -57,7 +57,8 @@ def make(out_dir: Path = PARITY_DIR, parity_dir: Path = PARITY_DIR) -> Path:
         "prompts": [{"frame": f, "label": p} for f, p in PROMPTS], "cost": list(COST),
         "window": WINDOW, "lead": L.LEAD, "promptLead": L.PROMPT_LEAD, "coast": L.COAST, "recentre": L.RECENTRE_M,
         "maxLead": L.MAX_LEAD, "leadSafety": L.LEAD_SAFETY, "leadStepDown": L.LEAD_STEP_DOWN,
-        "displayPad": L.DISPLAY_PAD, "displayFade": L.DISPLAY_FADE, "leadNow": core.lead_now,
+        "displayPad": L.DISPLAY_PAD, "displayFade": L.DISPLAY_FADE, "promptKeepFrom": L.PROMPT_KEEP_FROM,
+        "leadNow": core.lead_now,
         "base": core.base, "origin": list(core.origin), "underruns": core.underruns, "windows": windows,
     }
     return write_case(out_dir, NAME, meta, arrays)
