@@ -37,7 +37,8 @@ import os
 import sys
 from pathlib import Path
 
-from emdm.eval import editing_section, live_section, poses, realism, seams
+from emdm import paths
+from emdm.eval import editing_section, live_section, poses, realism, realism_bars, seams
 from emdm.eval.report_plots import plot_coverage, plot_fid_vs_steps, plot_time_vs_steps
 from emdm.eval.report_tables import (
     VARIANT_LABEL, ReportError, action_table, clips_per_row, coverage_section, headlines, models_table,
@@ -205,6 +206,9 @@ def _benchmarks(results: list[dict], plots: dict[str, str]) -> list[str]:
                 "`python -m emdm.eval.realism` generates the coverage benchmark's motions and sets each action's against "
                 "its real test clips: root speed, per-frame joint steps, airborne frames, and a kinematic rule per action "
                 "(independent of the classifier) beside the classifier's verdict.", ""]
+        manifest_path = paths.MODELS_DIR / "manifest.json"
+        if manifest_path.is_file():
+            out += realism_bars.section(real, json.loads(manifest_path.read_text()))
         out += realism.comparison(real) if len(real) > 1 else []
         for r in real:
             out += realism.section(r, plots.get("realism:" + r["_file"]))
