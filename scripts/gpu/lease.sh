@@ -20,6 +20,9 @@
 #                                           the next call of the same lease continues from it (7.6 MB carried,
 #                                           where the float32 file would take the tree over the limit); RUN may
 #                                           name a variant of lease-train.sh's VARIANTS: init t2m-crop FILE
+#   scripts/gpu/lease.sh next RUN OUTDIR    between two calls of one lease, in one step (the machine is released
+#                                           after 30 s idle): init RUN from OUTDIR/<model>.pt, or RUN-NAME from each
+#                                           OUTDIR/NAME/<model>.pt (VARIANTS), then restore, shrink RUN and size
 #
 # A slice, in order: prepare (once per machine), shrink t2m, size, then the device call
 #   run(command="bash scripts/gpu/lease-train.sh t2m", carry=[".lease"], timeout_s=560)
@@ -122,6 +125,27 @@ cmd_init() {
   "$py" -m emdm.checkpoints half "$src" "$lease/init-$run.pt" || exit 2
 }
 
+cmd_next() {
+  local run="${1:?next RUN OUTDIR}" dir="${2:?next RUN OUTDIR}" model f n=0
+  [[ -n "${run_model[$run]+x}" ]] || die "next: unknown run '$run' (t2m, a2m or ddim)"
+  [[ -d "$dir" ]] || die "next: $dir is not a folder (a device call's files_at)"
+  model="${run_model[$run]}"
+  if [[ -f "$dir/$model.pt" ]]; then
+    cmd_init "$run" "$dir/$model.pt"; n=1
+  else
+    for f in "$dir"/*/"$model.pt"; do
+      [[ -f "$f" ]] || continue
+      local v; v="$(basename "$(dirname "$f")")"
+      [[ "$v" =~ ^[a-z0-9]+$ ]] || die "next: $f: a variant's folder is named [a-z0-9]+, not '$v'"
+      cmd_init "$run-$v" "$f"; n=$((n + 1))
+    done
+  fi
+  (( n )) || die "next: no $model.pt in $dir or its variant folders"
+  cmd_restore >/dev/null
+  cmd_shrink "$run"
+  cmd_size
+}
+
 cmd_size() {
   local bytes
   bytes=$(travelling | tr '\n' '\0' | xargs -0 -r stat -c %s | awk '{s += $1} END {print s + 0}')
@@ -146,8 +170,9 @@ case "${1:-}" in
   shrink) shift; cmd_shrink "$@" ;;
   restore) cmd_restore ;;
   init) shift; cmd_init "$@" ;;
+  next) shift; cmd_next "$@" ;;
   size) cmd_size ;;
   files) travelling ;;
   stage) shift; cmd_stage "$@" ;;
-  *) echo "usage: $0 prepare [DATASET] | shrink [RUN] | size | files | stage DIR | init RUN FILE | restore" >&2; exit 2 ;;
+  *) echo "usage: $0 prepare [DATASET] | shrink [RUN] | size | files | stage DIR | init RUN FILE | next RUN OUTDIR | restore" >&2; exit 2 ;;
 esac

@@ -212,12 +212,17 @@ def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
     assert args["base"]["random_crop"] == 0.3 and args["crop"]["random_crop"] == 0.9 and args["crop"]["crop_min"] == 20
     assert args["base"]["balance_alpha"] == args["crop"]["balance_alpha"] == 0.25
 
-    # call 2: each variant from its own returned weights
+    # call 2: each variant from its own returned weights, made ready in one step (`next`: init each, shrink, size)
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    refused = lease(repo, "next", "t2m", str(empty))
+    assert refused.returncode == 2 and "no emdm-t2m-web.pt" in refused.stderr, refused.stderr
+    nxt = lease(repo, "next", "t2m", str(tmp_path / "OUT"))
+    assert nxt.returncode == 0, nxt.stdout + nxt.stderr
+    assert "would travel" in nxt.stdout
     for v in ("base", "crop"):
-        init = lease(repo, "init", f"t2m-{v}", str(tmp_path / "OUT" / v / "emdm-t2m-web.pt"))
-        assert init.returncode == 0, init.stderr
+        assert load_weights_file(repo / f".lease/init-t2m-{v}.pt")["meta"]["weights_dtype"] == "float16"
         shutil.copy2(repo / f".lease/init-t2m-{v}.pt", travel / f".lease/init-t2m-{v}.pt")
-    assert lease(repo, "shrink", "t2m").returncode == 0
     try:
         files = set(lease(repo, "files").stdout.splitlines())
         assert not any(f.endswith(".weights.f16.pt") for f in files), "the starts are in .lease now"
