@@ -124,3 +124,26 @@ def test_bad_capabilities_is_one_line_and_exit_2_before_anything_is_measured(tmp
     assert not (tmp_path / "out.json").exists()
     with pytest.raises(SystemExit):
         S.parse_args(["--live-changes", "-1"])
+
+
+def _session(file, seed, live_fails, alone_fails, n=100, train_steps=42104, keep=0.15):
+    row = {"n": n, "live": (n - live_fails) / n, "alone": (n - alone_fails) / n, "ratio": None,
+           "only_live_fails": live_fails, "only_alone_fails": alone_fails}
+    return {"_file": file, "name": "emdm-t2m-web", "train_steps": train_steps,
+            "live": {"seed": seed, "prompt_keep_from": keep, "cost_frames": 3, "gap_seconds": [4.0, 8.0],
+                     "rates": {"all": {"classifier": row}}}}
+
+
+def test_sessions_of_one_stream_and_weights_are_pooled_and_judged_together():
+    a, b = _session("a.json", 0, 15, 6), _session("b.json", 1, 6, 11)
+    other_weights, other_stream = _session("c.json", 2, 30, 0, train_steps=35000), _session("d.json", 3, 30, 0, keep=0.55)
+    (g,) = LM.pooled([a, b, other_weights, other_stream])
+    assert g["files"] == ["a.json", "b.json"]
+    c = g["rates"]["classifier"]
+    assert (c["n"], c["only_live_fails"], c["only_alone_fails"]) == (200, 21, 17)
+    assert abs(c["live"] - 179 / 200) < 1e-9 and abs(c["alone"] - 183 / 200) < 1e-9
+    assert g["verdict"]["met"] and abs(g["verdict"]["p_worse"]["classifier"] - LM.worse_p(21, 17)) < 1e-12
+    assert not LM.verdict(a["live"]["rates"]["all"])["met"]          # seed 0 alone: 15 vs 6 pairs, p 0.039
+    assert LM.pooled([a]) == [] and LM.pooled([a, {**a, "_file": "a2.json"}]) == []   # one seed is no pool
+    bad = LM.pooled([a, _session("e.json", 1, 40, 2)])[0]
+    assert not bad["verdict"]["met"]                                 # pooling does not hide a stream that is worse

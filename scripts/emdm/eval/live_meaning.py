@@ -239,6 +239,7 @@ def measure(model, bench, judged: list[str], prompts: dict[str, str], changes: i
     seam = [x for x in ratios if x is not None]
     placebo = placebo_ratios(sim.joints, cuts[1:], p95)
     out = {"changes": changes, "seed": seed, "cost_frames": cost, "gap_seconds": list(gap), "span": SPAN,
+           "prompt_keep_from": L.PROMPT_KEEP_FROM,
            "frames": len(sim.joints), "min_segment": MIN_SEGMENT, "segments": len(judged_rows),
            "no_segment": sum(r["blend"] is None for r in rows),
            "too_short": sum(r["blend"] is not None and "segment" not in r for r in rows),
@@ -294,6 +295,34 @@ def _judge_cell(x: dict | None, p: float | None) -> str:
             f"{x['only_alone_fails']}" + ("" if p is None else f", p {p:.3f}") + ")")
 
 
+def pooled(rs: list[dict]) -> list[dict]:
+    """Sessions of one stream on one model's weights (the same ``train_steps``, prompt keep-from, window cost and
+    gaps; only their seeds differ) pooled: their paired segments summed per judge, the sign test on the sum. One row
+    per group of two or more sessions: {"files", "rates": {judge: {...}}, "verdict"}."""
+    groups: dict[tuple, list[dict]] = {}
+    for r in rs:
+        v = r.get("live")
+        if not v or r.get("train_steps") is None or v.get("prompt_keep_from") is None:
+            continue
+        key = (r["name"], r["train_steps"], v["prompt_keep_from"], v["cost_frames"], tuple(v["gap_seconds"]))
+        groups.setdefault(key, []).append(r)
+    out = []
+    for group in groups.values():
+        if len({r["live"]["seed"] for r in group}) < 2:
+            continue
+        row = {}
+        for j in ("classifier", "kinematic"):
+            xs = [r["live"]["rates"]["all"][j] for r in group if j in r["live"]["rates"]["all"]]
+            if xs:
+                n = sum(x["n"] for x in xs)
+                live, alone = (sum(x[k] * x["n"] for x in xs) / n for k in ("live", "alone"))
+                row[j] = {"live": live, "alone": alone, "ratio": live / alone if alone else None, "n": n,
+                          "only_live_fails": sum(x["only_live_fails"] for x in xs),
+                          "only_alone_fails": sum(x["only_alone_fails"] for x in xs)}
+        out.append({"files": sorted(r["_file"] for r in group), "rates": row, "verdict": verdict(row)})
+    return out
+
+
 def section(rs: list[dict]) -> list[str]:
     """The live rows of RESULTS.md's "Seams and loops" section (results with a ``live`` part), and their per-action
     rates side by side."""
@@ -317,6 +346,12 @@ def section(rs: list[dict]) -> list[str]:
                      "**met**" if v["verdict"]["met"] else "**not met**",
                      f"{b['within']}/{len(b['ratios'])} (max {max(b['ratios']):.2f}×; p95 {b['p95']:.0f} m/s²)",
                      f"{b['placebo_within']}/{len(b['placebo'])} (max {max(b['placebo']):.2f}×)"])
+    for g in pooled(rs):
+        a, p = g["rates"], g["verdict"]["p_worse"]
+        rows.append([" + ".join(f"`{f}`" for f in g["files"]), f"the {len(g['files'])} sessions pooled (same weights "
+                     "and stream, other seeds): their paired segments summed", _judge_cell(a.get("classifier"), p.get("classifier")),
+                     _judge_cell(a.get("kinematic"), p.get("kinematic")), "", "",
+                     "**met**" if g["verdict"]["met"] else "**not met**", "", ""])
     pair = lambda x: "–" if x is None else f"{x['live']:.0%} / {x['alone']:.0%}"  # noqa: E731
     acts = sorted({a for r in rs for a in r["live"]["rates"]["per_action"]})
     per = [[a] + [" · ".join(pair(r["live"]["rates"]["per_action"].get(a, {}).get(j)) for j in ("classifier", "kinematic"))
@@ -327,4 +362,4 @@ def section(rs: list[dict]) -> list[str]:
             + table(["Action"] + [f"`{r['_file']}`" for r in rs], per) + [""])
 
 __all__ = ["LiveMeaningError", "blend_ratios", "covered_prompts", "halves", "judge", "measure", "placebo_ratios",
-           "prompt_blends", "rates", "run", "schedule", "section", "segments", "verdict", "worse_p"]
+           "pooled", "prompt_blends", "rates", "run", "schedule", "section", "segments", "verdict", "worse_p"]

@@ -45,6 +45,7 @@ from emdm.data.dataset import DatasetError
 from emdm.eval.coverage import PROMPTS_FILE, CoverageError
 from emdm.eval.editing_run import page_variant
 from emdm.eval.results import RESULTS_DIR, SCHEMA, hardware, write_result
+from emdm.eval.models_report import total_steps
 from emdm.model.open import open_model
 from emdm.motion import edit as E
 from emdm.motion.decode import decode_joints
@@ -243,6 +244,7 @@ def run(a, log=print) -> Path:
     report(fig, log)
     live = LM.run(model, a.dataset, a.classifier, capabilities, a.live_changes, a.seed, a.live_cost, log) if a.live_changes else None
     result = {"schema": SCHEMA, "task": "seams", "name": a.model, "variant": opened.variant,
+              "train_steps": total_steps(opened.meta) if opened.meta.get("training") else None,
               "steps": model.settings.steps, "decode": "page (smooth σ=1, foot cleanup)", "segment_seconds": a.seconds,
               "loop_seconds": a.loop_seconds, "seed": a.seed, "bars": BARS, "figures": fig,
               "rows": {"showcase": showcase, "changes": seams, "loops": loops}, **({"live": live} if live else {}),
