@@ -73,6 +73,34 @@ def test_the_classifier_recognises_a_segment_of_a_real_clip_as_its_action_and_no
     assert got["classifier"] == [True, True, False] and got["predicted"][2] == "raise-both-hands"
 
 
+def test_the_classifier_judge_reads_a_segment_mid_motion_as_its_action_and_not_as_another():
+    """The test above on any fresh clone (no prepared dataset, no trained evaluator): a small action classifier
+    trained here on synthetic actions whose content is known (tests/python/test_eval_evaluators.py's motions),
+    judging segments cut from the middle of longer motions, as live segments are."""
+    from emdm.eval import evaluators as E
+
+    rng = np.random.default_rng(0)
+    centres = np.eye(4)
+
+    def motion(k: int, frames: int) -> np.ndarray:
+        t = np.arange(frames)[:, None]
+        m = rng.normal(scale=0.05, size=(frames, 263)).astype(np.float32)
+        amp = centres[k] + rng.normal(scale=0.1, size=4)
+        m[:, 0:4] += amp[None] * np.sin(2 * np.pi * t / 20.0)
+        m[:, 4:8] += amp[None] * np.cos(2 * np.pi * t / 20.0)
+        return m
+
+    labels = rng.integers(0, 4, size=256)
+    model = E.train_classifier([motion(k, int(rng.integers(40, 80))) for k in labels], labels, 4,
+                               np.zeros(263, np.float32), np.ones(263, np.float32),
+                               E.TrainConfig(epochs=8, batch_size=32, lr=3e-3, hidden=32, emb_dim=32, dropout=0.0, seed=0))
+    predict = lambda feats: np.argmax(E.classify(model, feats)[0], axis=1)  # noqa: E731
+    names = ["a", "b", "c", "d"]
+    seg_b, seg_c = motion(1, 140)[30:110], motion(2, 140)[30:110]
+    got = LM.judge(names, ["b", "c", "b"], [seg_b, seg_c, seg_c], [np.zeros((80, 22, 3))] * 3, predict, judged=[])
+    assert got["classifier"] == [True, True, False] and got["predicted"][2] == "c"
+
+
 def test_rates_pair_each_segment_with_its_alone_motion():
     live = {"classifier": [True, False, False, True], "kinematic": [True, None, True, None]}
     alone = {"classifier": [True, True, True, False], "kinematic": [False, None, True, None]}
