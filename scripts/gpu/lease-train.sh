@@ -40,7 +40,7 @@ pack="$here/.lease/dataset.emdmpack"
 init="$here/.lease/init-$run.pt"
 [[ -f "$init" ]] || init="$here/public/models/$model.weights.f16.pt"
 # the runs of this call: one, or one per variant (run name -> its own flags, start and folder in $OUT)
-names=() variant_names=()
+names=()
 declare -A flags=() inits=() outs=()
 if [[ -z "${VARIANTS:-}" ]]; then
   names=("$run"); flags[$run]="${run_flags[$run]}"; inits[$run]="$init"; outs[$run]="$out"
@@ -51,7 +51,7 @@ else
     v="${spec%%:*}"; vflags=""; [[ "$spec" == *:* ]] && vflags="${spec#*:}"
     [[ "$v" =~ ^[a-z0-9]+$ ]] || { echo "lease-train.sh: VARIANTS: bad name '$v' in '$spec' (want [a-z0-9]+:flags)" >&2; exit 2; }
     [[ -n "${flags[$run-$v]+x}" ]] && { echo "lease-train.sh: VARIANTS: '$v' named twice" >&2; exit 2; }
-    n="$run-$v"; names+=("$n"); variant_names+=("$v")
+    n="$run-$v"; names+=("$n")
     flags[$n]="${run_flags[$run]} $vflags"; outs[$n]="$out/$v"
     inits[$n]="$here/.lease/init-$n.pt"; [[ -f "${inits[$n]}" ]] || inits[$n]="$init"
   done

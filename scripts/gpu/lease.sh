@@ -42,7 +42,9 @@ exclude="$(git rev-parse --git-path info/exclude)"
 hook="$(git rev-parse --git-path hooks)/pre-commit"
 # What a training run needs from public/models: the manifest (the caption cache's key names the encoder's sha256
 # there), the normalisation files and the weights a run continues from. Everything else stays behind.
-keep_re='^public/models/(manifest\.json|[^/]+\.meanstd\.f32|[^/]+\.weights\.f16\.pt)$'
+keep_re() {  # the public/models paths that travel; $1: whose weights file travels too (a regex; empty: none)
+  echo "^public/models/(manifest\\.json|[^/]+\\.meanstd\\.f32${1:+|$1\\.weights\\.f16\\.pt})\$"
+}
 drop_dirs=(public/models tests/fixtures)
 
 die() { echo "lease.sh: $*" >&2; exit 2; }
@@ -51,16 +53,12 @@ declare -A run_model=([t2m]=emdm-t2m-web [a2m]=emdm-a2m-web [ddim]=diffusion-t2m
 
 dropped() {  # tracked paths that do not travel (RUN given: only its weights travel, and not even those once
              # .lease has starts of its own for it)
-  local run="${1:-}" keep="$keep_re"
+  local run="${1:-}" weights='[^/]+'
   if [[ -n "$run" ]]; then
-    local model="${run_model[$run]}"
-    if compgen -G "$lease/init-$run*.pt" >/dev/null; then
-      keep='^public/models/(manifest\.json|[^/]+\.meanstd\.f32)$'
-    else
-      keep="^public/models/(manifest\\.json|[^/]+\\.meanstd\\.f32|$model\\.weights\\.f16\\.pt)\$"
-    fi
+    weights="${run_model[$run]}"
+    compgen -G "$lease/init-$run*.pt" >/dev/null && weights=""
   fi
-  git ls-files -- "${drop_dirs[@]}" | grep -Ev "$keep" || true
+  git ls-files -- "${drop_dirs[@]}" | grep -Ev "$(keep_re "$weights")" || true
 }
 
 travelling() {  # tracked + untracked-not-ignored files, then the carried .lease folder
