@@ -250,10 +250,9 @@ def _benchmarks(results: list[dict], plots: dict[str, str]) -> list[str]:
                 "(`PROMPT_KEEP_FROM`; it was kept from t ≤ 0.55 like the later windows'), on the text model of GPU "
                 "slice 2 (the stream's fix was measured on it: 85 % → 93 % of live segments recognised, seed 0); "
                 "`-seed1`: the same run as the plain file with seed 1 (other timelines, loops and live session). The "
-                "plain and `-seed1` files are on the shipped (slice 3) model: the classifier's verdict differs by "
-                "session (seed 0: 91 % live against 97 % alone, p 0.010; seed 1: 97 % against 94 %); over both sessions' "
-                "360 prompt changes, 94 % against 95.5 % (only live fails 21, only alone 15, p 0.20), the kinematic "
-                "rules 86.5 % against 86 %.", "",
+                "plain and `-seed1` files are on the shipped (slice 3) model, where the classifier's verdict differs by "
+                "session; the row that pools them (sessions of the same weights and stream, `live_meaning.pooled`) "
+                "judges their paired segments together.", "",
                 "Reading, meaning: kept from t ≤ 0.55 (`-prompt055`), the segments' first halves were recognised 78 % "
                 "against 91 % for the alone motions' first halves, their second halves 87 % against 90 %: the last second "
                 "of the previous action held the new prompt back past the blend. Being mid-motion is not what the "
