@@ -5,6 +5,7 @@ import { describe, expect, it } from 'vitest';
 import type { EditMotion, EditRequest } from '../../src/edit';
 import type { FramePose } from '../../src/live/poses';
 import { startLive } from '../../src/live/stream';
+import { framePair, framesOnOneStage } from '../../web/ui/live';
 import { walk } from './liveWalk';
 
 const limits = { fps: 20, maxFrames: 196 };
@@ -54,6 +55,36 @@ describe('live poses: once per window, read by frameAt', () => {
     expect(m.frame).toBe(10);
     for (let i = 0; i < 66; i++) expect(m.joints[i]).toBeCloseTo(a[i] + 0.25 * (b[i] - a[i]), 6);
     expect(Array.from(m.pose!.rootPos)).toEqual(Array.from(m.joints.subarray(0, 3)));
+    await s.close();
+  });
+
+  it('the page\'s two frames around now (web/ui/live.ts framePair) share one stage, also where reading the second moved it back', async () => {
+    let t = 0;
+    const s = await startLive(async (r: EditRequest) => walk(r), limits, { action: 'a', clock: () => t }, { solve: (j) => fakeSolve(j, 1), solveFrames: async (j, n) => fakeSolve(j, n) });
+    let moves = 0;
+    let origin = [0, 0];
+    for (let p = 0; p < 400; p++) {
+      t = p / 20;
+      const { track, shown } = framePair(s, p);
+      const o = s.frameAt(t).origin;
+      if (o[0] !== origin[0] || o[1] !== origin[1]) moves++;
+      origin = o;
+      // a walk's one frame step (0.065 m): never the whole metres the stage moved by
+      const step = Math.hypot(track.rootPos[3] - track.rootPos[0], track.rootPos[5] - track.rootPos[2]);
+      expect(step, `frame ${p}: pelvis step between the two frames (m)`).toBeLessThan(0.1);
+      expect(Array.from(track.rootPos.subarray(0, 3)), `frame ${p}: the shown frame's pelvis is the track's first root`).toEqual(Array.from(shown.joints.subarray(0, 3)));
+      await tick();
+    }
+    expect(moves, 'the stage moved back under the walker (1.3 m/s for 20 s)').toBeGreaterThan(3);
+    // the visitor's character's piece: every frame from now to what is made, read ahead (the stage moves meanwhile)
+    const to = Math.floor(s.stats().bufferedTo * 20);
+    const piece = framesOnOneStage(s, 400, to);
+    expect(to - 400).toBeGreaterThan(40);
+    for (let k = 1; k < piece.length; k++) {
+      const [a, b] = [piece[k - 1].joints, piece[k].joints];
+      expect(Math.hypot(b[0] - a[0], b[2] - a[2]), `piece frame ${k}: pelvis step (m)`).toBeLessThan(0.1);
+      expect(piece[k].origin).toEqual(piece[0].origin);
+    }
     await s.close();
   });
 

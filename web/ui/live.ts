@@ -6,7 +6,7 @@
 // keeps the focus); the strip lists the last prompts with their times on the live clock; "Record" makes the last 60 s
 // the page's motion (its downloads). Steps or guidance changed while live start a new stream (the old one plays until
 // it is ready); another mode turns live mode off, saying so. Nothing here runs a model: the worker does.
-import { type LiveStats, type LiveStream } from '../../src/index';
+import { type LiveFrame, type LiveStats, type LiveStream } from '../../src/index';
 import { type LiveHost, liveOn } from '../../src/createGenerator';
 import type { GenerateResult } from '../../src/openModel';
 import { resolveRequest } from '../../src/requests';
@@ -233,12 +233,9 @@ export class LivePanel implements PoseDriver {
     const t = s.now();
     const f = Math.floor(t * s.fps);
     try {
-      const fa = s.frameAt(f / s.fps);
-      const a = fa.pose!;
-      const b = s.frameAt((f + 1) / s.fps).pose!;
-      this.shownFrame = { frame: fa.frame, joints: fa.joints };
-      const joints = a.quats.length / 4;
-      track = { frames: 2, fps: s.fps, joints, rootPos: concat(a.rootPos, b.rootPos), quats: concat(a.quats, b.quats) };
+      const pair = framePair(s, f);
+      track = pair.track;
+      this.shownFrame = pair.shown;
     } catch (e) {
       this.notices.show('error', `Live mode stopped: ${describe(e)}`);
       this.stop();
@@ -296,7 +293,7 @@ export class LivePanel implements PoseDriver {
     const to = Math.floor(st.bufferedTo * s.fps);
     if (to - from < 2) return;
     const joints = new Float32Array((to - from) * 66);
-    for (let f = from; f < to; f++) joints.set(s.frameAt(f / s.fps).joints, (f - from) * 66);
+    framesOnOneStage(s, from, to).forEach((g, k) => joints.set(g.joints, k * 66));
     this.piece = { from: from / s.fps, to: to / s.fps, windows: made };
     picker.setMotion({ frames: to - from, fps: s.fps, joints, features: new Float32Array(0) }, 'emdm-live', from / s.fps);
   }
@@ -383,6 +380,44 @@ export class LivePanel implements PoseDriver {
       },
     };
   }
+}
+
+/**
+ * Stream frames from…to − 1, all on the stage of the last: reading a frame may move the stage back under the character
+ * (whole metres, src/live/core.ts) after earlier frames were read on the stage before; those are moved onto the last
+ * one's (world = stage + origin; joints and the pose's root), so nothing made of them jumps by those metres.
+ */
+export function framesOnOneStage(s: Pick<LiveStream, 'fps' | 'frameAt'>, from: number, to: number): LiveFrame[] {
+  const got: LiveFrame[] = [];
+  for (let f = from; f < to; f++) got.push(s.frameAt(f / s.fps));
+  const last = got[got.length - 1]?.origin;
+  for (const g of got) {
+    const dx = last[0] - g.origin[0];
+    const dz = last[1] - g.origin[1];
+    if (!dx && !dz) continue;
+    const moved = [Float32Array.from(g.joints), ...(g.pose ? [Float32Array.from(g.pose.rootPos)] : [])];
+    for (const a of moved) {
+      for (let i = 0; i < a.length; i += 3) {
+        a[i] -= dx;
+        a[i + 2] -= dz;
+      }
+    }
+    g.joints = moved[0];
+    if (g.pose) g.pose = { rootPos: moved[1], quats: g.pose.quats };
+    g.origin = [last[0], last[1]];
+  }
+  return got;
+}
+
+/** Stream frames f and f + 1 (on one stage) as a two-frame track; `shown` is frame f's joints on that stage. */
+export function framePair(s: Pick<LiveStream, 'fps' | 'frameAt'>, f: number): { track: PoseTrack; shown: { frame: number; joints: Float32Array } } {
+  const [a, b] = framesOnOneStage(s, f, f + 2);
+  if (!a.pose || !b.pose) throw new Error('the live stream gave a frame without its pose (the stream has no solver)');
+  const n = a.pose.quats.length / 4;
+  return {
+    track: { frames: 2, fps: s.fps, joints: n, rootPos: concat(a.pose.rootPos, b.pose.rootPos), quats: concat(a.pose.quats, b.pose.quats) },
+    shown: { frame: a.frame, joints: a.joints },
+  };
 }
 
 function concat(a: Float32Array, b: Float32Array): Float32Array {
