@@ -27,14 +27,15 @@ here="$(cd "$(dirname "$0")/../.." && pwd)"
 run="${1:?usage: lease-train.sh t2m|a2m|ddim}"
 out="${OUT:?OUT: the folder that comes back from the device}"
 budget="${LEASE_SECONDS:-480}"
-declare -A models=([t2m]=emdm-t2m-web [a2m]=emdm-a2m-web [ddim]=diffusion-t2m-web)
+# shellcheck source=scripts/gpu/runs.sh
+source "$here/scripts/gpu/runs.sh"
 declare -A run_flags=(
   [t2m]="--task text --lr-g 1e-4"
   [a2m]="--task action --lr-g 1.5e-4"
   [ddim]="--task text --lr-g 1e-4 --objective diffusion --supported-steps 1,2,4,5,8,10,20,50,100"
 )
-model="${models[$run]:-}"
-[[ -n "$model" ]] || { echo "lease-train.sh: unknown run '$run' (t2m, a2m or ddim)" >&2; exit 2; }
+model="${run_model[$run]:-}"
+[[ -n "$model" ]] || { echo "lease-train.sh: unknown run '$run' ($run_names)" >&2; exit 2; }
 pack="$here/.lease/dataset.emdmpack"
 [[ -f "$pack" ]] || { echo "lease-train.sh: $pack missing: run scripts/gpu/lease.sh prepare here and carry .lease" >&2; exit 2; }
 init="$here/.lease/init-$run.pt"

@@ -49,7 +49,8 @@ drop_dirs=(public/models tests/fixtures)
 
 die() { echo "lease.sh: $*" >&2; exit 2; }
 
-declare -A run_model=([t2m]=emdm-t2m-web [a2m]=emdm-a2m-web [ddim]=diffusion-t2m-web)
+# shellcheck source=scripts/gpu/runs.sh
+source "$root/scripts/gpu/runs.sh"
 
 dropped() {  # tracked paths that do not travel (RUN given: only its weights travel, and not even those once
              # .lease has starts of its own for it)
@@ -88,7 +89,7 @@ cmd_prepare() {
 
 cmd_shrink() {
   local run="${1:-}"
-  [[ -z "$run" || -n "${run_model[$run]+x}" ]] || die "shrink: unknown run '$run' (t2m, a2m or ddim)"
+  [[ -z "$run" || -n "${run_model[$run]+x}" ]] || die "shrink: unknown run '$run' ($run_names)"
   [[ -f "$marker" ]] && { echo "lease.sh: already shrunk ($(wc -l <"$marker") paths out); restore first to redo"; return; }
   git diff --cached --quiet || die "the index has staged changes; commit or unstage them first (shrink stages deletions)"
   local list; list="$(dropped "$run")"
@@ -118,14 +119,14 @@ cmd_restore() {
 
 cmd_init() {
   local run="${1:?init RUN FILE}" src="${2:?init RUN FILE}"
-  [[ "$run" =~ ^(t2m|a2m|ddim)(-[a-z0-9]+)?$ ]] || die "init: unknown run '$run' (t2m, a2m or ddim, or RUN-VARIANT)"
+  [[ "$run" =~ ^($run_re)(-[a-z0-9]+)?$ ]] || die "init: unknown run '$run' ($run_names, or RUN-VARIANT)"
   mkdir -p "$lease"
   "$py" -m emdm.checkpoints half "$src" "$lease/init-$run.pt" || exit 2
 }
 
 cmd_next() {
   local run="${1:?next RUN OUTDIR}" dir="${2:?next RUN OUTDIR}" model f n=0
-  [[ -n "${run_model[$run]+x}" ]] || die "next: unknown run '$run' (t2m, a2m or ddim)"
+  [[ -n "${run_model[$run]+x}" ]] || die "next: unknown run '$run' ($run_names)"
   [[ -d "$dir" ]] || die "next: $dir is not a folder (a device call's files_at)"
   model="${run_model[$run]}"
   if [[ -f "$dir/$model.pt" ]]; then
