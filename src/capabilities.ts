@@ -22,8 +22,11 @@ export interface ActionCapability {
   label: string;
   /** share of the benchmark's motions the action classifier recognised, at the model's default steps */
   rate: number;
-  /** rate ≥ thresholds.covered */
+  /** rate ≥ thresholds.covered and, where measured, moving ≥ thresholds.moving */
   covered: boolean;
+  /** share of its motions at the page's settings that move as its real clips do (the realism benchmark: peak joint speed at
+   * least a quarter of their 5th percentile); absent where not measured. A recognised pose that never moves is not covered. */
+  moving?: number;
   /** its best benchmark prompt, where one works (text models) */
   prompt?: string;
   /** its real test clips' speed (median horizontal root speed of each clip, m/s): their median and 5th–95th
@@ -41,7 +44,7 @@ export interface Capabilities {
   model: string;
   condition: 'text' | 'action';
   steps: number;
-  thresholds: { covered: number; chip?: number };
+  thresholds: { covered: number; chip?: number; moving?: number };
   /** best first */
   actions: ActionCapability[];
   encoder?: { id: string; onnx: string; sha256: string };

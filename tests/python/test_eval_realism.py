@@ -67,6 +67,32 @@ def test_measure_sets_motions_against_the_real_reference():
     assert "wave-right-hand" not in gen["per_action"]                        # no motions made for it: no row
 
 
+@needs_bandai
+def test_moving_tells_a_real_wave_from_the_same_figure_standing_still():
+    """A wave whose hand never leaves its pose (its first frame held) is no wave, whatever a classifier reads from
+    the pose: the real clip moves, the frozen copy and a copy moving 1/10 as much do not; a walk moves; a clip
+    holding its first frame but for one second of the wave (one gesture in a few seconds: a throw) moves."""
+    labels = ["walk", "wave-right-hand"]
+    waves = [real_clip(s) for s in ("dataset-2_wave-right-hand_active_001", "dataset-2_wave-right-hand_normal_001")]
+    walks = [real_clip(s) for s in WALKS]
+    real = R.measure(labels, np.array([0, 0, 0, 1, 1]), walks + waves)
+    wave = waves[0]
+    frozen = np.repeat(wave[:1], len(wave), axis=0)
+    tenth = wave[:1] + (wave - wave[:1]) * 0.1          # every joint's excursion from the first frame shrunk 10×
+    once = frozen.copy()
+    once[40:60] = wave[40:60]                           # the hand moves for one second, then snaps back to the pose
+    once[60:] = wave[59]
+    gen = R.measure(labels, np.array([1, 1, 1, 1, 0]), [wave, frozen, tenth, once, walks[1]], real)
+    g = gen["per_action"]["wave-right-hand"]
+    assert g["moving"] == pytest.approx(2 / 4)
+    peak = lambda j: K.descriptors(j)["peak_speed"]    # noqa: E731
+    ref = real["reference"]["peak_speed"]["wave-right-hand"]
+    assert peak(frozen) == 0.0
+    assert R.moving([peak(wave), peak(once)], ref).all() and not R.moving([peak(tenth)], ref)[0]
+    assert gen["per_action"]["walk"]["moving"] == 1.0
+    assert gen["per_action"]["walk"]["peak_ratio"] == pytest.approx(peak(walks[1]) / np.median([peak(w) for w in walks]))
+
+
 def test_cli_writes_the_json_and_the_report_renders_it(world, capsys):
     from emdm.eval import report
 

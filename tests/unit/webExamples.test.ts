@@ -43,6 +43,21 @@ describe('example chips', () => {
     }
   });
 
+  it('every chip\u2019s motions at the page\u2019s settings move, and its action is covered (the capabilities file)', () => {
+    // the realism result the shipped capabilities file took its moving shares from: the page's file, steps, guidance
+    const caps = read('public/models/capabilities-emdm-t2m-web.json') as {
+      movingSource: string; thresholds: { moving: number }; actions: { label: string; covered: boolean }[];
+    };
+    const realism = read(caps.movingSource) as { model: string; generated: { prompts: Record<string, { action: string; moving?: number }> } };
+    expect(realism.model).toBe('emdm-t2m-web');
+    for (const chip of examplePrompts(manifest, 'emdm-t2m-web', labels)) {
+      const p = realism.generated.prompts[chip];
+      expect(p, `chip "${chip}" was not measured by the realism benchmark`).toBeDefined();
+      expect(p.moving, `chip "${chip}": share of its motions that move`).toBeGreaterThanOrEqual(caps.thresholds.moving);
+      expect(caps.actions.find((a) => a.label === p.action)?.covered, `chip "${chip}" (${p.action}) covered`).toBe(true);
+    }
+  });
+
   it('the benchmark\u2019s plain prompts are the page\u2019s phrasing of every label', () => {
     expect(Object.keys(prompts.actions).sort()).toEqual([...labels].sort());
     for (const label of labels) expect(prompts.actions[label].plain, label).toBe(labelToPrompt(label));

@@ -13,14 +13,15 @@ function isStringList(v: unknown): v is string[] {
  * [action, prompt]: prompts the shipped emdm-t2m-web made recognisably (the action classifier named the
  * action in ≥ 75 % of the motions; each of the first six in 8 of 8) at its default 10 steps and guidance:
  * `python -m emdm.eval.coverage --model emdm-t2m-web --chips` (docs/results/json/coverage-emdm-t2m-web.json).
- * tests/unit/webExamples.test.ts fails when a chip is not among them. Kick, dance, jump and the waves are not: the
- * model does not make them reliably at 10 steps (docs/RESULTS.md, "Coverage per action").
+ * tests/unit/webExamples.test.ts fails when a chip is not among them, or when its motions at the page's settings do
+ * not move (the realism benchmark's `moving`: "a person punches" was recognised 8 of 8 from a boxer's guard that never
+ * throws a fist). Kick, dance, jump and the waves are not: the model does not make them reliably at 10 steps
+ * (docs/RESULTS.md, "Coverage per action").
  */
 const CHIPS: [string, string][] = [
   ['walk', 'a person walks'],
   ['run', 'a person runs'],
   ['bow', 'a person bows'],
-  ['punch', 'a person punches'],
   ['throw', 'a person throws a ball'],
   ['squat', 'a person squats down'],
   ['raise-both-hands', 'a person raises both hands'],

@@ -19,6 +19,12 @@ the first is used to build, the others are held apart. Held-apart paraphrases of
 of uncovered actions should be warned; the threshold maximises the mean of the two success rates under the rule
 above and the file records both error counts (``check``). Rebuild it whenever a model ships.
 
+An action is covered only if its motions also *move*: where the realism result is of this model, the share of its
+motions at the page's settings that move as the real clips of the action do (``moving``: peak joint speed at least a quarter of the
+real clips' 5th percentile, ``emdm.eval.realism``) must be at least ``MOVES``, and a chip's own motions likewise. A
+punch the classifier recognises from a boxer's guard that never throws a fist is not covered: the check names it and
+offers working prompts instead.
+
 Each action with real test clips also carries their speed (``realSpeed``: median horizontal root speed of each clip,
 m/s; the clips' median and 5th–95th percentile), read from the realism benchmark's real row
 (``docs/results/json/realism-*.json``, ``emdm.eval.realism``): the compare view shows a motion's speed beside the real
@@ -51,6 +57,7 @@ CAPTIONS = 16          # training captions per covered action kept as anchors
 # per uncovered action: enough that its paraphrases find it (8: "someone jumps up and down" → jump, not hop), few
 # enough to keep the page's download small (~1.6 × the covered-only file)
 UNCOVERED_CAPTIONS = 8
+MOVES = 0.5            # covered (and a chip) only where at least this share of its motions move (realism ``moving``)
 SCALE = 127            # int8 embedding = round(v · SCALE); unit vectors, so |q| ≤ 127
 # prompts a new visitor tried (issue 30) and covered ones: checked by both runtimes against the file's answers
 EXAMPLES = ["a person kicks", "bows", "throws a punch", "dances", "swims", "a person walks", "a person walks forward",
@@ -89,8 +96,21 @@ def calibrate(known: np.ndarray, unknown: np.ndarray) -> dict:
 
 # ----------------------------------------------------------------------------- building
 
-def actions_table(coverage: dict, prompts: dict[str, list[str]] | None) -> tuple[int, list[dict]]:
-    """(steps, [{label, rate, covered, prompt?}] best first) at the model's default step count."""
+def moving_shares(realism: dict, model: str) -> tuple[dict[str, float], dict[str, float]]:
+    """({action: share of its motions that move}, {prompt: the same}) of a realism result of ``model`` (the generated
+    motions' ``moving``); two empty dicts for a result of another model or one measured before ``moving`` existed."""
+    if realism.get("model") != model:
+        return {}, {}
+    gen = realism.get("generated", {})
+    acts = {a: v["moving"] for a, v in gen.get("per_action", {}).items() if "moving" in v}
+    return acts, {p: v["moving"] for p, v in gen.get("prompts", {}).items() if "moving" in v}
+
+
+def actions_table(coverage: dict, prompts: dict[str, list[str]] | None,
+                  moving: dict[str, float] | None = None, prompt_moving: dict[str, float] | None = None) -> tuple[int, list[dict]]:
+    """(steps, [{label, rate, covered, moving?, prompt?}] best first) at the model's default step count; ``moving``
+    (per action) and ``prompt_moving`` (per prompt): shares of motions that move, where measured (``moving_shares``)."""
+    moving, prompt_moving = moving or {}, prompt_moving or {}
     steps = int(coverage.get("default_steps", 10))
     run = next((r for r in coverage.get("runs", []) if r["steps"] == steps), None)
     if run is None:
@@ -100,8 +120,12 @@ def actions_table(coverage: dict, prompts: dict[str, list[str]] | None) -> tuple
     for label, v in run["per_action"].items():
         if not v["n"]:
             continue
-        row = {"label": label, "rate": round(v["rate"], 4), "covered": v["rate"] >= COVERED}
-        ps = sorted((p for p in (prompts or {}).get(label, []) if p in per_prompt), key=lambda p: -per_prompt[p]["rate"])
+        row = {"label": label, "rate": round(v["rate"], 4),
+               "covered": v["rate"] >= COVERED and moving.get(label, 1.0) >= MOVES}
+        if label in moving:
+            row["moving"] = round(moving[label], 4)
+        ps = sorted((p for p in (prompts or {}).get(label, []) if p in per_prompt and prompt_moving.get(p, 1.0) >= MOVES),
+                    key=lambda p: -per_prompt[p]["rate"])
         if ps and per_prompt[ps[0]]["rate"] >= COVERED:
             row["prompt"] = ps[0]
         out.append(row)
@@ -160,23 +184,27 @@ def build(coverage: dict, prompts: dict[str, list[str]] | None, captions: dict[s
     """The capabilities file (see the module doc) from a coverage result, the benchmark prompts, the training captions
     of its actions (covered and uncovered), an encoder (``encode``: texts → unit rows; ``encoder``: {id, sha256} of its file) and a
     realism result's real clips' speed per action (``real_speeds``, with ``source``: the result's file)."""
-    steps, table = actions_table(coverage, prompts)
+    moving, prompt_moving = (realism or {}).get("moving", {}), (realism or {}).get("promptMoving", {})
+    steps, table = actions_table(coverage, prompts, moving, prompt_moving)
     speeds = (realism or {}).get("speeds", {})
     for row in table:
         if row["label"] in speeds:
             row["realSpeed"] = speeds[row["label"]]
     out = {"schema": SCHEMA, "model": coverage["name"], "condition": coverage.get("condition", "text"),
            "source": coverage.get("_file"), "coverageCreated": coverage.get("created"), "steps": steps,
-           "thresholds": {"covered": COVERED, **({"chip": coverage["thresholds"]["chip"]} if "thresholds" in coverage else {})},
+           "thresholds": {"covered": COVERED, **({"chip": coverage["thresholds"]["chip"]} if "thresholds" in coverage else {}),
+                          **({"moving": MOVES} if moving else {})},
            "actions": table}
     if realism is not None:
         out["realSpeedSource"] = realism["source"]
+        if moving:
+            out["movingSource"] = realism["source"]
     if out["condition"] != "text":
         return out
     covered = {r["label"] for r in table if r["covered"]}
     labels = sorted(r["label"] for r in table)
     used, held = build_split(prompts)
-    good = set(chips(coverage, steps))
+    good = {p for p in chips(coverage, steps) if prompt_moving.get(p, 1.0) >= MOVES}
     texts, acts, suggest = [], [], []
     for a in labels:          # a covered action's used prompts only where they work (chips); an uncovered one's all
         for p in used.get(a, []):
@@ -249,14 +277,20 @@ def main(argv: list[str] | None = None) -> int:
         realism = read_result(real_path)
         if realism is None:
             raise CoverageError(f"{real_path} (--realism): not found; run python -m emdm.eval.realism")
-        realism = {"speeds": real_speeds(realism), "source": realism["_file"]}
+        speeds = real_speeds(realism)
+        moving, prompt_moving = moving_shares(realism, a.model)
+        if not moving:
+            print(f"note: {display_path(real_path)} is not a realism result of {a.model} with moving shares: covered "
+                  "goes by the classifier alone (pass --realism with this model's result)", file=sys.stderr)
+        realism = {"speeds": speeds, "source": realism["_file"], "moving": moving, "promptMoving": prompt_moving}
         manifest = mf.load(a.models_dir)
         entry = manifest["models"].get(a.model)
         if entry is None:
             raise CoverageError(f"{a.models_dir / mf.MANIFEST_NAME}: no model {a.model!r}")
         text = entry["condition"]["type"] == "text"
         prompts = load_prompts(a.prompts, coverage["labels"]) if text else None
-        covered = {r for r in next(r for r in coverage["runs"] if r["steps"] == coverage.get("default_steps", 10))["covered"]}
+        _, table = actions_table(coverage, prompts, moving, prompt_moving)
+        covered = {r["label"] for r in table if r["covered"]}
         captions = ({**training_captions(a.dataset, set(coverage["labels"]) - covered, a.uncovered_captions),
                      **training_captions(a.dataset, covered, a.captions)} if text else {})
         enc_id = entry["condition"].get("encoder", "")

@@ -58,6 +58,8 @@ DESCRIPTORS = {
     "airborne": "share of frames with both feet off the floor (lowest ankle/toe above 10 cm)",
     "arm_speed": "mean speed of the wrists relative to the pelvis, m/s",
     "leg_speed": "mean speed of the ankles relative to the pelvis, m/s",
+    "peak_speed": "95th percentile over frames of the fastest joint's speed, m/s: whether the body moves at all (a "
+                  "figure holding a pose: ≈ 0; one throw in 4 s: ≈ 2)",
 }
 
 # action: conditions (descriptor, ">=" | "<=", threshold), all of which must hold. Thresholds read off the train split.
@@ -145,6 +147,7 @@ def descriptors(joints, fps: float = FPS) -> dict[str, float]:
         "airborne": float((lowest > AIRBORNE).mean()),
         "arm_speed": limb([20, 21]),
         "leg_speed": limb([7, 8]),
+        "peak_speed": float(np.percentile(np.linalg.norm(np.diff(j, axis=0), axis=2).max(axis=1), 95) * fps),
     }
 
 
