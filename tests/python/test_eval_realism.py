@@ -93,6 +93,15 @@ def test_moving_tells_a_real_wave_from_the_same_figure_standing_still():
     assert gen["per_action"]["walk"]["peak_ratio"] == pytest.approx(peak(walks[1]) / np.median([peak(w) for w in walks]))
 
 
+def test_an_action_with_too_few_test_clips_takes_its_moving_floor_from_its_train_clips():
+    ref = {"peak_speed": {"walk": [4.0, 4.2, 3.9], "punch": [2.0]}}
+    desc = {"peak_speed": np.array([1.0, 2.5, 2.2, 2.4, 5.0, 0.9])}
+    R.train_peaks(ref, ["walk", "punch", "jump"], np.array([0, 1, 1, 1, 0, 2]), desc)
+    assert ref["peak_speed"]["walk"] == [4.0, 4.2, 3.9]                  # enough test clips: kept
+    assert ref["peak_speed"]["punch"] == [2.5, 2.2, 2.4]                 # 1 test clip: its 3 train clips instead
+    assert "jump" not in ref["peak_speed"] and ref["peak_from_train"] == ["punch"]   # 1 train clip: none
+
+
 def test_cli_writes_the_json_and_the_report_renders_it(world, capsys):
     from emdm.eval import report
 

@@ -365,7 +365,6 @@ def run(args) -> int:
     take_actions: dict[str, str] = {}
     for j in jobs:
         take_actions.setdefault(j.take, j.action)
-    split_of = split_takes(take_actions, seed=args.seed)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = temp_dir(out)
     try:
@@ -378,6 +377,10 @@ def run(args) -> int:
             print(skipped_report(skipped), file=sys.stderr)
             raise PrepareError(f"every one of the {len(jobs)} files was skipped (reasons above; "
                                f"{keep_skipped(out, skipped)}); nothing was written to {out}")
+        take_windows: dict[str, int] = defaultdict(int)       # the split holds out few of an action's windows
+        for r in results:
+            take_windows[r["job"]["take"]] += len(r["windows"])
+        split_of = split_takes(take_actions, seed=args.seed, windows=dict(take_windows))
         try:
             info = write_dataset(results, tmp, split_of, {
                 "sources": args.sources, "input_dir": args.input_dir or "", "fps": sk.FPS,
