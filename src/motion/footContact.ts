@@ -5,8 +5,8 @@
  *  1. Floor: each frame whose lowest foot joint is below y = 0 is lifted as a whole by that depth.
  *  2. Pinning: every contact run (≥ 2 frames with contact > 0.5, gaps of up to `gap` frames closed:
  *     the model's contacts flicker) of a foot joint is held at the run's mean position (y clamped to
- *     ≥ 0); the correction fades in/out linearly over `blend` frames on both sides, so there are no
- *     pops. A run whose joint strays more than `maxDrift` m (horizontally) from that mean is no plant
+ *     ≥ 0); the correction fades in/out over `blend` frames on both sides (smoothstep), so there are no
+ *     pops; where a fade-out and the next plant's fade-in overlap, the target is their weighted mean. A run whose joint strays more than `maxDrift` m (horizontally) from that mean is no plant
  *     but a contact the model got wrong (a foot sliding at walking speed): pinning it would hold the
  *     foot and then throw it up to a metre in one frame, so it is left as it is.
  *  3. Legs follow: a moved ankle re-solves its knee with two-bone IK (hip fixed, thigh and shin
@@ -97,6 +97,9 @@ export function plantContacts(joints: Float32Array, frames: number, contacts: Fl
   return out;
 }
 
+/** A pin's weight over its fade (u: 0 → 1 linearly): smoothstep, so the correction starts and ends without a kick. */
+export const fadeWeight = (u: number): number => u * u * (3 - 2 * u);
+
 export function cleanupFootContacts(
   joints: Float32Array,
   frames: number,
@@ -122,21 +125,24 @@ export function cleanupFootContacts(
   };
   floor();
 
-  // 2. pinned targets per foot joint: target[f] and weight[f] in [0, 1]
+  // 2. pinned targets per foot joint: target[f] and weight[f] in [0, 1]; where one plant's fade-out meets the next's
+  // fade-in (a run's short swing) the target is their weight-mixed mean, so it never jumps a stride in one frame
   const planted = plantRuns(out, frames, contacts, rig, { threshold, gap, maxDrift });
   const targets = rig.footJoints.map((j, c) => {
     const tgt: (V3 | null)[] = new Array(frames).fill(null);
     const wgt = new Float64Array(frames);
+    const sum = new Float64Array(frames * 3);
+    const wsum = new Float64Array(frames);
     for (const { first: s, last: e, mean } of planted[c]) {
       const m: V3 = [mean[0], Math.max(0, mean[1]), mean[2]];
       for (let f = Math.max(0, s - blend); f <= Math.min(frames - 1, e + blend); f++) {
-        const w = f < s ? 1 - (s - f) / (blend + 1) : f > e ? 1 - (f - e) / (blend + 1) : 1;
-        if (w > wgt[f]) {
-          wgt[f] = w;
-          tgt[f] = m;
-        }
+        const w = fadeWeight(f < s ? 1 - (s - f) / (blend + 1) : f > e ? 1 - (f - e) / (blend + 1) : 1);
+        for (let k = 0; k < 3; k++) sum[f * 3 + k] += w * m[k];
+        wsum[f] += w;
+        wgt[f] = Math.max(wgt[f], w);
       }
     }
+    for (let f = 0; f < frames; f++) if (wsum[f] > 0) tgt[f] = [sum[f * 3] / wsum[f], sum[f * 3 + 1] / wsum[f], sum[f * 3 + 2] / wsum[f]];
     return { j, tgt, wgt };
   });
 

@@ -3,6 +3,7 @@
 (tests/unit/decodeParity.test.ts) and Python's must still give (tests/python/test_motion_decode.py):
 
     .venv/bin/python -m emdm.motion.decode_fixture        # writes tests/fixtures/parity/decode.{json,bin}
+    .venv/bin/python -m emdm.motion.decode_fixture --keep-inputs   # after a decoding change: the committed inputs
 
 Cases (each: ``<case>_features`` (F, 263) input, then ``<case>_smooth`` (recovered and smoothed),
 ``<case>_cleanup`` (recovered, feet cleaned up) and ``<case>_both`` (both: the page's default)):
@@ -61,8 +62,15 @@ def build(features: dict[str, np.ndarray] | None = None) -> tuple[dict, dict[str
     return {"cases": cases, "modes": modes}, arrays
 
 
-def main() -> int:
-    meta, arrays = build()
+def main(argv: list[str] | None = None) -> int:
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="python -m emdm.motion.decode_fixture", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--keep-inputs", action="store_true",
+                    help="decode the committed fixture's input features again (a decoding change), instead of taking "
+                         "them from the other fixtures (which a new model changes)")
+    a = ap.parse_args(argv)
+    meta, arrays = build(committed_features() if a.keep_inputs else None)
     print(write_case(PARITY_DIR, NAME, meta, arrays))
     return 0
 

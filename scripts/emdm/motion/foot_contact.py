@@ -6,7 +6,8 @@ in contact it should neither skate nor sink:
 1. Floor: each frame whose lowest foot joint is below y = 0 is lifted as a whole by that depth.
 2. Pinning: every contact run (≥ 2 frames with contact > threshold, gaps of up to ``gap`` frames closed: the
    model's contacts flicker) of a foot joint is held at the run's mean position (y clamped to ≥ 0); the correction
-   fades in and out linearly over ``blend`` frames on both sides. A run whose joint strays more than ``max_drift``
+   fades in and out over ``blend`` frames on both sides (smoothstep); where one plant's fade-out overlaps the next's
+   fade-in (a run's short swing) the target is their weight-mixed mean, never a stride's jump in one frame. A run whose joint strays more than ``max_drift``
    m (horizontally) from that mean is no plant but a contact the model got wrong (a foot sliding at walking speed):
    pinning it would hold the foot and then throw it up to a metre in one frame, so it is left as it is.
 3. Legs follow: a moved ankle re-solves its knee with two-bone IK (hip fixed, that frame's thigh and shin lengths,
@@ -82,6 +83,11 @@ def two_bone_ik(a: np.ndarray, target: np.ndarray, pole: np.ndarray, l1: float, 
     return knee, a + direction * d
 
 
+def fade_weight(u: float) -> float:
+    """A pin's weight over its fade (u: 0 → 1 linearly): smoothstep (footContact.ts ``fadeWeight``)."""
+    return u * u * (3 - 2 * u)
+
+
 def _floor(out: np.ndarray, foot_joints) -> None:
     low = out[:, list(foot_joints), 1].min(axis=1)
     lift = np.where(low < 0, low, 0.0)
@@ -104,13 +110,18 @@ def cleanup_foot_contacts(joints: np.ndarray, contacts: np.ndarray, parents, foo
     for c, j in enumerate(foot_joints):
         tgt = np.zeros((frames, 3))
         wgt = np.zeros(frames)
+        acc = np.zeros((frames, 3))
+        wsum = np.zeros(frames)
         for s, e, mean in planted[c]:
             m = mean.copy()
             m[1] = max(0.0, m[1])
             for f in range(max(0, s - blend), min(frames - 1, e + blend) + 1):
-                w = 1 - (s - f) / (blend + 1) if f < s else (1 - (f - e) / (blend + 1) if f > e else 1.0)
-                if w > wgt[f]:
-                    wgt[f], tgt[f] = w, m
+                w = fade_weight(1 - (s - f) / (blend + 1) if f < s else (1 - (f - e) / (blend + 1) if f > e else 1.0))
+                acc[f] += w * m
+                wsum[f] += w
+                wgt[f] = max(wgt[f], w)
+        on = wsum > 0
+        tgt[on] = acc[on] / wsum[on, None]      # overlapping fades (a run's short swing): their weight-mixed mean
         targets.append((j, tgt, wgt))
     for ci, fi in ((0, 1), (2, 3)):
         ank_j, ank_t, ank_w = targets[ci]
