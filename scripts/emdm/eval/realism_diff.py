@@ -1,0 +1,96 @@
+"""Two realism results side by side, per action: the three checks of a model or sampling change (the classifier, the
+kinematic rule, the share of motions that move) and the speed against real, old → new; an action where any check
+drops by more than ``WORSE`` (one motion in 8) is flagged. How a GPU slice's candidates are judged against the shipped
+weights (docs/MODELS.md): a candidate that lifts the classifier while its punches stop moving is not a win.
+
+    python -m emdm.eval.realism_diff docs/results/json/realism-OLD.json runs/lease/realism-NEW.json
+    python -m emdm.eval.realism_diff OLD.json NEW.json --fail-on-worse       # exit 1 when an action got worse
+
+Both results must be of the same benchmark (prompts, seeds, steps): their ``key`` fields are compared and any
+difference is named (the decode and dataset may differ: a change of those is what one compares).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+WORSE = 1 / 8
+CHECKS = ("classifier", "kinematic", "moving")
+
+
+def checks(r: dict, action: str) -> dict[str, float | None]:
+    """The three checks and the speed ratio of ``action`` in result ``r`` (None where not measured)."""
+    g = r["generated"]
+    per = g["per_action"].get(action, {})
+    return {"classifier": g["classifier"].get(action), "kinematic": g["kinematic"].get(action),
+            "moving": per.get("moving"), "speed": per.get("speed_ratio")}
+
+
+def diff(old: dict, new: dict, worse: float = WORSE) -> list[dict]:
+    """Per action of either result: {action, old: checks, new: checks, worse: [checks that dropped by > worse],
+    better: [checks that rose by > worse]}."""
+    actions = sorted(set(old["generated"]["per_action"]) | set(new["generated"]["per_action"]))
+    rows = []
+    for a in actions:
+        o, n = checks(old, a), checks(new, a)
+        moved = {c: n[c] - o[c] for c in CHECKS if o[c] is not None and n[c] is not None}
+        rows.append({"action": a, "old": o, "new": n, "worse": [c for c, d in moved.items() if d < -worse],
+                     "better": [c for c, d in moved.items() if d > worse]})
+    return rows
+
+
+def key_differences(old: dict, new: dict) -> list[str]:
+    ko, kn = old.get("key", {}), new.get("key", {})
+    return [f"{k}: {ko.get(k)!r} → {kn.get(k)!r}" for k in sorted(set(ko) | set(kn)) if ko.get(k) != kn.get(k)]
+
+
+def _f(v) -> str:
+    return "   –" if v is None else f"{v:4.2f}"
+
+
+def report(old: dict, new: dict, rows: list[dict]) -> list[str]:
+    out = [f"{'action':18s} " + "  ".join(f"{c[:10]:>11s}" for c in (*CHECKS, "speed×real")) + "   verdict"]
+    for r in rows:
+        cells = "  ".join(f"{_f(r['old'][c])}→{_f(r['new'][c])}" for c in (*CHECKS, "speed"))
+        verdict = ("worse: " + ", ".join(r["worse"]) if r["worse"] else "") + \
+                  ("; " if r["worse"] and r["better"] else "") + ("better: " + ", ".join(r["better"]) if r["better"] else "")
+        out.append(f"{r['action']:18s} {cells}   {verdict}")
+    for c in CHECKS:
+        pairs = [(r["old"][c], r["new"][c]) for r in rows if r["old"][c] is not None and r["new"][c] is not None]
+        if pairs:
+            out.append(f"mean {c} over {len(pairs)} actions: {sum(p[0] for p in pairs) / len(pairs):.3f} → "
+                       f"{sum(p[1] for p in pairs) / len(pairs):.3f}")
+    worse = [r["action"] for r in rows if r["worse"]]
+    out.append(f"actions worse by more than 1 motion in {round(1 / WORSE)} on a check: {', '.join(worse) or 'none'}")
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m emdm.eval.realism_diff", description=__doc__.split("\n\n")[0])
+    ap.add_argument("old", type=Path)
+    ap.add_argument("new", type=Path)
+    ap.add_argument("--fail-on-worse", action="store_true", help="exit 1 when an action got worse on a check")
+    a = ap.parse_args(argv)
+    res = []
+    for p in (a.old, a.new):
+        try:
+            r = json.loads(p.read_text())
+            if r.get("task") != "realism":
+                raise ValueError(f"task is {r.get('task')!r}, not 'realism'")
+            res.append(r)
+        except (OSError, ValueError) as e:
+            print(f"error: {p}: not a realism result ({e}); make one with python -m emdm.eval.realism", file=sys.stderr)
+            return 2
+    old, new = res
+    for d in key_differences(old, new):
+        print(f"note: the two runs differ in {d}", file=sys.stderr)
+    rows = diff(old, new)
+    print("\n".join(report(old, new, rows)))
+    return 1 if a.fail_on_worse and any(r["worse"] for r in rows) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,41 @@
+"""python -m emdm.eval.realism_diff: two realism results per action on the three checks, a drop flagged."""
+
+import json
+
+from emdm.eval import realism_diff as D
+
+
+def _result(cls: float, kin: float, moving: float, key=None) -> dict:
+    return {"task": "realism", "key": key or {"seeds": 8}, "generated": {
+        "classifier": {"punch": cls, "walk": 0.9}, "kinematic": {"walk": kin},
+        "per_action": {"punch": {"moving": moving, "speed_ratio": 1.1}, "walk": {"moving": 1.0, "speed_ratio": 1.0}}}}
+
+
+def test_a_classifier_gain_with_punches_that_stop_moving_is_flagged(tmp_path, capsys):
+    old, new = _result(0.59, 0.8, 0.9), _result(0.75, 0.8, 0.0)
+    rows = {r["action"]: r for r in D.diff(old, new)}
+    assert rows["punch"]["worse"] == ["moving"] and rows["punch"]["better"] == ["classifier"]
+    assert rows["walk"]["worse"] == [] and rows["walk"]["better"] == []
+    a, b = tmp_path / "a.json", tmp_path / "b.json"
+    a.write_text(json.dumps(old))
+    b.write_text(json.dumps(new))
+    assert D.main([str(a), str(b)]) == 0
+    assert D.main([str(a), str(b), "--fail-on-worse"]) == 1
+    assert D.main([str(a), str(a), "--fail-on-worse"]) == 0
+    out = capsys.readouterr().out
+    assert "actions worse by more than 1 motion in 8 on a check: punch" in out
+    assert "worse: moving; better: classifier" in out
+
+
+def test_one_motion_in_eight_is_within_the_bar_and_other_benchmarks_are_named(tmp_path, capsys):
+    rows = D.diff(_result(0.5, 0.8, 1.0), _result(0.375, 0.8, 1.0))       # exactly 1/8 lower: not worse
+    assert all(not r["worse"] for r in rows)
+    a, b, bad = tmp_path / "a.json", tmp_path / "b.json", tmp_path / "c.json"
+    a.write_text(json.dumps(_result(0.5, 0.8, 1.0)))
+    b.write_text(json.dumps(_result(0.5, 0.8, 1.0, key={"seeds": 4})))
+    bad.write_text(json.dumps({"task": "coverage"}))
+    assert D.main([str(a), str(b)]) == 0
+    assert "note: the two runs differ in seeds: 8 → 4" in capsys.readouterr().err
+    assert D.main([str(a), str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "c.json" in err[0] and "not a realism result" in err[0]
