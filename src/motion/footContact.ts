@@ -143,6 +143,8 @@ export function cleanupFootContacts(
       }
     }
     for (let f = 0; f < frames; f++) if (wsum[f] > 0) tgt[f] = [sum[f * 3] / wsum[f], sum[f * 3 + 1] / wsum[f], sum[f * 3 + 2] / wsum[f]];
+    // a run's own frames keep its pin (a neighbour's fade reaches them only when blend > gap + 1)
+    for (const { first: s, last: e, mean } of planted[c]) for (let f = s; f <= e; f++) tgt[f] = [mean[0], Math.max(0, mean[1]), mean[2]];
     return { j, tgt, wgt };
   });
 

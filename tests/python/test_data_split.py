@@ -36,3 +36,15 @@ def test_a_take_holding_most_of_an_actions_windows_stays_in_training():
     assert sorted(split_takes(three, windows={"a/x": 10, "a/y": 10, "a/z": 10}).values()) == ["test", "train", "train"], \
         "three equal takes: one is a third of the windows, the most held out"
     assert set(split_takes(three, windows={"a/x": 10, "a/y": 10, "a/z": 11}).values()) >= {"test"}
+
+
+def test_a_take_that_made_no_window_never_holds_a_slot():
+    """HDM05's one-hop takes shorter than the minimum made no window; three of them held hop's test slots (and every
+    one of rotate-arms'), leaving those actions without test clips."""
+    takes = {f"hdm05/hop_{i:03d}": "hop" for i in range(20)}
+    windows = {t: (0 if i % 3 == 0 else 1) for i, t in enumerate(sorted(takes))}
+    for seed in range(8):
+        s = split_takes(takes, seed=seed, windows=windows)
+        held = [t for t, v in s.items() if v != "train"]
+        assert held and all(windows[t] == 1 for t in held), (seed, held)
+        assert sorted(v for v in s.values() if v != "train") == ["test", "test", "test", "val"]

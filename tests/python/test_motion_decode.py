@@ -95,3 +95,29 @@ def test_a_loop_is_decoded_as_it_plays_across_its_wrap():
     alone = decode_joints(clip, smooth=True, foot_cleanup=False)
     assert wrap_step(looped) < 0.8 * wrap_step(alone)
     assert wrap_step(looped) <= joint_steps(looped).max()
+
+
+def test_two_plants_a_short_swing_apart_hand_the_foot_over_without_a_jump():
+    """A run's foot: planted at z = 0 (frames 4–9), a 4-frame swing, planted at z = 1.2 (14–19); the fades overlap in
+    the swing. The target mixes the two pins by weight: the pins still pull the swing together (0.24 m steps become
+    up to 0.38), but the foot no longer switches from one target to the other in a frame (0.70 m before). With a
+    blend longer than the gap a neighbour's fade reaches a plant's own frames, which keep their own pin."""
+    z = np.concatenate([np.zeros(10), np.linspace(0.24, 0.96, 4), np.full(10, 1.2)])
+    joints = np.zeros((24, 22, 3), np.float32)
+    joints[:, :, 1] = 0.9
+    joints[:, :, 2] = z[:, None]                                  # the body travels with the foot
+    joints[:, [4, 5], 1] = 0.5                                    # knees half way down: the legs can reach
+    joints[:, sk.FOOT_JOINTS, 1] = 0.02
+    joints[:, [10, 11], 2] += 0.15                                # the balls of the feet ahead of the ankles
+    for j in (7, 10):
+        joints[:, j, 2] += 0.01 * np.sin(np.arange(24))           # the model's plants wobble by a centimetre
+    contacts = np.zeros((24, 4), np.float32)
+    contacts[4:10, :2] = contacts[14:20, :2] = 1
+    out = cleanup_foot_contacts(joints, contacts, sk.PARENTS, sk.FOOT_JOINTS)
+    step = np.abs(np.diff(out[:, 7, 2]))
+    assert step.max() < 0.45, step.round(3)                      # the switch between targets: 0.70
+    np.testing.assert_allclose(out[4:10, 7, 2], out[4, 7, 2], atol=1e-6)      # pinned: no wobble
+    wide = cleanup_foot_contacts(joints, contacts, sk.PARENTS, sk.FOOT_JOINTS, blend=6)
+    for s, e, at in ((4, 9, 0.0), (14, 19, 1.2)):               # held still, at its own plant (not pulled towards
+        assert np.ptp(wide[s:e + 1, 7, 2]) < 1e-5                 # the other: 1.2 m away)
+        assert abs(wide[s, 7, 2] - at) < 0.02

@@ -36,6 +36,13 @@ def test_one_motion_in_eight_is_within_the_bar_and_other_benchmarks_are_named(tm
     bad.write_text(json.dumps({"task": "coverage"}))
     assert D.main([str(a), str(b)]) == 0
     assert "note: the two runs differ in seeds: 8 → 4" in capsys.readouterr().err
+    listed = tmp_path / "list.json"
+    listed.write_text("[]")
+    half = tmp_path / "half.json"
+    half.write_text(json.dumps({"task": "realism", "generated": {"classifier": {}}}))
+    for f in (listed, half):
+        assert D.main([str(a), str(f)]) == 2
+    capsys.readouterr()
     assert D.main([str(a), str(bad)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "c.json" in err[0] and "not a realism result" in err[0]

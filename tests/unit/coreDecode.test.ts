@@ -100,6 +100,33 @@ describe('smoothing and foot-contact clean-up', () => {
     }
   });
 
+  it('hands a foot over between two plants a short swing apart without a jump; a plant keeps its own pin (as Python)', () => {
+    // the case of tests/python/test_motion_decode.py: planted at z 0 (frames 4–9), a 4-frame swing, planted at z 1.2
+    const frames = 24;
+    const joints = new Float32Array(frames * J * 3);
+    const z = (f: number) => (f < 10 ? 0 : f < 14 ? 0.24 * (f - 9) : 1.2);
+    for (let f = 0; f < frames; f++) {
+      for (let j = 0; j < J; j++) joints.set([0, 0.9, z(f)], (f * J + j) * 3);
+      for (const j of [4, 5]) joints[(f * J + j) * 3 + 1] = 0.5;
+      for (const j of sk.footJoints) joints[(f * J + j) * 3 + 1] = 0.02;
+      for (const j of [10, 11]) joints[(f * J + j) * 3 + 2] += 0.15;
+      for (const j of [7, 10]) joints[(f * J + j) * 3 + 2] += 0.01 * Math.sin(f);
+    }
+    const contacts = new Float32Array(frames * 4);
+    for (const f of [4, 5, 6, 7, 8, 9, 14, 15, 16, 17, 18, 19]) contacts[f * 4] = contacts[f * 4 + 1] = 1;
+    const rig = { parents: sk.parents, footJoints: sk.footJoints };
+    const zOf = (a: Float32Array, f: number) => a[(f * J + 7) * 3 + 2];
+    const out = cleanupFootContacts(joints, frames, contacts, rig);
+    let step = 0;
+    for (let f = 1; f < frames; f++) step = Math.max(step, Math.abs(zOf(out, f) - zOf(out, f - 1)));
+    expect(step).toBeLessThan(0.45); // switching from one target to the other: 0.70
+    const wide = cleanupFootContacts(joints, frames, contacts, rig, { blend: 6 });
+    for (const [s, e, at] of [[4, 9, 0], [14, 19, 1.2]]) {
+      for (let f = s; f <= e; f++) expect(Math.abs(zOf(wide, f) - zOf(wide, s))).toBeLessThan(1e-5);
+      expect(Math.abs(zOf(wide, s) - at)).toBeLessThan(0.02);
+    }
+  });
+
   it('reduces skating on a generated motion (model fixture)', (ctx) => {
     const name = modelFixtures()[0];
     if (!name) return ctx.skip('no model parity fixture yet: run `python -m emdm.fixtures` once models are shipped');

@@ -83,7 +83,6 @@ describe('live poses: once per window, read by frameAt', () => {
     for (let k = 1; k < piece.length; k++) {
       const [a, b] = [piece[k - 1].joints, piece[k].joints];
       expect(Math.hypot(b[0] - a[0], b[2] - a[2]), `piece frame ${k}: pelvis step (m)`).toBeLessThan(0.1);
-      expect(piece[k].origin).toEqual(piece[0].origin);
     }
     await s.close();
   });

@@ -51,6 +51,8 @@ export class KnowsPanel {
       const li = el('li');
       const name = el('span', 'knows-label', `${a.label.replace(/[_-]+/g, ' ')} `);
       li.append(name, el('span', 'knows-rate', pct(a.rate)));
+      const still = caps.thresholds.moving !== undefined && a.moving !== undefined && a.moving < caps.thresholds.moving;
+      if (still) li.append(el('span', 'knows-still', ` · holds a pose (${pct(a.moving!)} of its motions move)`));
       if (a.covered && a.prompt && caps.condition === 'text') {
         const chip = el('button', 'chip', a.prompt);
         chip.type = 'button';
@@ -60,7 +62,10 @@ export class KnowsPanel {
       (a.covered ? good : weak).append(li);
     }
     byId('knows-source').textContent = `Share of ${caps.steps}-step motions the project's action classifier recognised `
-      + `(coverage benchmark, ${caps.model}); “does well” is ${pct(caps.thresholds.covered)} or more.`;
+      + `(coverage benchmark, ${caps.model}); “does well” is ${pct(caps.thresholds.covered)} or more`
+      + (caps.thresholds.moving !== undefined
+        ? `, with at least ${pct(caps.thresholds.moving)} of its motions moving as real clips of the action do (realism benchmark).`
+        : '.');
     this.open.hidden = false;
   }
 

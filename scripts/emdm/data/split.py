@@ -15,9 +15,10 @@ def split_takes(take_actions: dict[str, str], val: float = 0.05, test: float = 0
                 windows: dict[str, int] | None = None, held_max: float = HELD_MAX) -> dict[str, str]:
     """{take: action} -> {take: 'train'|'val'|'test'}. Per action, takes are shuffled (seeded) and
     round(n*test) go to test (at least 1 when the action has >= 3 takes) and round(n*val) to val
-    (at least 1 when it has >= 8 takes); the rest train. With ``windows`` ({take: windows it made}), a take whose
-    windows would bring the action's held-out windows over ``held_max`` of its windows stays in training and the
-    next take in the shuffled order is held out instead (fewer held-out takes where none fits)."""
+    (at least 1 when it has >= 8 takes); the rest train. With ``windows`` ({take: windows it made}), a take that
+    made no window, or whose windows would bring the action's held-out windows over ``held_max`` of its windows,
+    stays in training and the next take in the shuffled order is held out instead (fewer held-out takes where none
+    fits)."""
     by_action: dict[str, list[str]] = defaultdict(list)
     for take, action in take_actions.items():
         by_action[action].append(take)
@@ -35,8 +36,8 @@ def split_takes(take_actions: dict[str, str], val: float = 0.05, test: float = 0
                 if want[split] <= 0:
                     continue
                 w = windows.get(t, 0) if windows is not None else 0
-                if windows is not None and held + w > held_max * total:
-                    break
+                if windows is not None and (w == 0 or held + w > held_max * total):
+                    break                  # a take that made no window would hold a slot out of nothing
                 out[t] = split
                 want[split] -= 1
                 held += w

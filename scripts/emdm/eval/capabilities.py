@@ -150,9 +150,22 @@ def real_speeds(realism: dict) -> dict[str, dict]:
     return out
 
 
-def realism_result(model: str, results: Path) -> Path:
-    """The newest realism result of ``model`` in ``results`` (its real row is the dataset's test clips, the same for
-    every model of that dataset), else the newest of any model."""
+def realism_result(model: str, results: Path, entry: dict | None = None) -> Path:
+    """The realism result to read: with the model's manifest ``entry``, the newest of its shipped weights at the
+    page's settings (``realism_bars.pick``: file, steps, guidance, x̂0 smoothing; the one the *moving* gate needs);
+    else the newest of ``model`` (its real row is the dataset's test clips, the same for every model of that
+    dataset), else the newest of any model."""
+    if entry is not None:
+        from emdm.eval.realism_bars import pick
+
+        rs = []
+        for f in sorted(results.glob(f"realism-{model}*.json")):
+            r = json.loads(f.read_text())
+            r["_path"] = f
+            rs.append(r)
+        default, _ = pick(rs, model, entry)
+        if default is not None:
+            return default["_path"]
     for pattern in (f"realism-{model}*.json", "realism-*.json"):
         found = sorted(results.glob(pattern), key=lambda p: (json.loads(p.read_text()).get("created", ""), p.name))
         if found:
@@ -264,7 +277,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--uncovered-captions", type=int, default=UNCOVERED_CAPTIONS,
                     help="training captions per uncovered action")
     ap.add_argument("--realism", type=Path, default=None,
-                    help="its real clips' speed per action; default the newest docs/results/json/realism-<model>*.json")
+                    help="its real clips' speed per action and its motions' moving shares (the gate on covered): a "
+                         "realism result of this model at the page's settings; default the newest such "
+                         "docs/results/json/realism-<model>*.json")
     ap.add_argument("--models-dir", type=Path, default=mf.DEFAULT_MODELS_DIR)
     ap.add_argument("--register", action="store_true", help="also list the file in manifest.json with its sha256")
     a = ap.parse_args(argv)
@@ -273,7 +288,11 @@ def main(argv: list[str] | None = None) -> int:
         coverage = read_result(cov_path)
         if coverage is None:
             raise CoverageError(f"{cov_path}: no coverage result; run python -m emdm.eval.coverage --model {a.model}")
-        real_path = a.realism or realism_result(a.model, RESULTS_DIR / "json")
+        manifest = mf.load(a.models_dir)
+        entry = manifest["models"].get(a.model)
+        if entry is None:
+            raise CoverageError(f"{a.models_dir / mf.MANIFEST_NAME}: no model {a.model!r}")
+        real_path = a.realism or realism_result(a.model, RESULTS_DIR / "json", entry)
         realism = read_result(real_path)
         if realism is None:
             raise CoverageError(f"{real_path} (--realism): not found; run python -m emdm.eval.realism")
@@ -283,10 +302,6 @@ def main(argv: list[str] | None = None) -> int:
             print(f"note: {display_path(real_path)} is not a realism result of {a.model} with moving shares: covered "
                   "goes by the classifier alone (pass --realism with this model's result)", file=sys.stderr)
         realism = {"speeds": speeds, "source": realism["_file"], "moving": moving, "promptMoving": prompt_moving}
-        manifest = mf.load(a.models_dir)
-        entry = manifest["models"].get(a.model)
-        if entry is None:
-            raise CoverageError(f"{a.models_dir / mf.MANIFEST_NAME}: no model {a.model!r}")
         text = entry["condition"]["type"] == "text"
         prompts = load_prompts(a.prompts, coverage["labels"]) if text else None
         _, table = actions_table(coverage, prompts, moving, prompt_moving)

@@ -6,8 +6,8 @@ weights (docs/MODELS.md): a candidate that lifts the classifier while its punche
     python -m emdm.eval.realism_diff docs/results/json/realism-OLD.json runs/lease/realism-NEW.json
     python -m emdm.eval.realism_diff OLD.json NEW.json --fail-on-worse       # exit 1 when an action got worse
 
-Both results must be of the same benchmark (prompts, seeds, steps): their ``key`` fields are compared and any
-difference is named (the decode and dataset may differ: a change of those is what one compares).
+Compare results of one benchmark (prompts, seeds, steps): their ``key`` fields are compared and any difference is
+named on stderr (the decode and dataset may differ: a change of those is what one compares).
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ def _f(v) -> str:
     return "   –" if v is None else f"{v:4.2f}"
 
 
-def report(old: dict, new: dict, rows: list[dict]) -> list[str]:
+def report(old: dict, new: dict, rows: list[dict], worse: float = WORSE) -> list[str]:
     out = [f"{'action':18s} " + "  ".join(f"{c[:10]:>11s}" for c in (*CHECKS, "speed×real")) + "   verdict"]
     for r in rows:
         cells = "  ".join(f"{_f(r['old'][c])}→{_f(r['new'][c])}" for c in (*CHECKS, "speed"))
@@ -63,8 +63,9 @@ def report(old: dict, new: dict, rows: list[dict]) -> list[str]:
         if pairs:
             out.append(f"mean {c} over {len(pairs)} actions: {sum(p[0] for p in pairs) / len(pairs):.3f} → "
                        f"{sum(p[1] for p in pairs) / len(pairs):.3f}")
-    worse = [r["action"] for r in rows if r["worse"]]
-    out.append(f"actions worse by more than 1 motion in {round(1 / WORSE)} on a check: {', '.join(worse) or 'none'}")
+    names = [r["action"] for r in rows if r["worse"]]
+    bar = f"1 motion in {round(1 / worse)}" if abs(1 / worse - round(1 / worse)) < 1e-9 else f"{worse:.3g}"
+    out.append(f"actions worse by more than {bar} on a check: {', '.join(names) or 'none'}")
     return out
 
 
@@ -78,8 +79,10 @@ def main(argv: list[str] | None = None) -> int:
     for p in (a.old, a.new):
         try:
             r = json.loads(p.read_text())
-            if r.get("task") != "realism":
-                raise ValueError(f"task is {r.get('task')!r}, not 'realism'")
+            if not isinstance(r, dict) or r.get("task") != "realism":
+                raise ValueError(f"task is {r.get('task') if isinstance(r, dict) else None!r}, not 'realism'")
+            if not all(isinstance(r.get("generated", {}).get(k), dict) for k in ("classifier", "kinematic", "per_action")):
+                raise ValueError("no generated.classifier / kinematic / per_action")
             res.append(r)
         except (OSError, ValueError) as e:
             print(f"error: {p}: not a realism result ({e}); make one with python -m emdm.eval.realism", file=sys.stderr)

@@ -122,6 +122,8 @@ def cleanup_foot_contacts(joints: np.ndarray, contacts: np.ndarray, parents, foo
                 wgt[f] = max(wgt[f], w)
         on = wsum > 0
         tgt[on] = acc[on] / wsum[on, None]      # overlapping fades (a run's short swing): their weight-mixed mean
+        for s, e, mean in planted[c]:           # a run's own frames keep its pin (a neighbour's fade reaches them
+            tgt[s:e + 1] = [mean[0], max(0.0, mean[1]), mean[2]]   # only when blend > gap + 1)
         targets.append((j, tgt, wgt))
     for ci, fi in ((0, 1), (2, 3)):
         ank_j, ank_t, ank_w = targets[ci]
