@@ -45,6 +45,7 @@ import numpy as np
 
 from emdm import manifest as mf
 from emdm.data.dataset import parse_text_file
+from emdm.eval import realism_bars
 from emdm.eval.coverage import COVERED, PROMPTS_FILE, CoverageError, chips, load_prompts, normalise, read_result
 from emdm.eval.results import RESULTS_DIR
 from emdm.prompt_check import (SCHEMA, SUGGESTIONS, CapabilitiesError, check, dequantise, file_name, load, notice,  # noqa: F401
@@ -156,14 +157,12 @@ def realism_result(model: str, results: Path, entry: dict | None = None) -> Path
     else the newest of ``model`` (its real row is the dataset's test clips, the same for every model of that
     dataset), else the newest of any model."""
     if entry is not None:
-        from emdm.eval.realism_bars import pick
-
         rs = []
         for f in sorted(results.glob(f"realism-{model}*.json")):
             r = json.loads(f.read_text())
             r["_path"] = f
             rs.append(r)
-        default, _ = pick(rs, model, entry)
+        default, _ = realism_bars.pick(rs, model, entry)
         if default is not None:
             return default["_path"]
     for pattern in (f"realism-{model}*.json", "realism-*.json"):
