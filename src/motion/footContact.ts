@@ -6,8 +6,8 @@
  *  2. Pinning: every contact run (≥ 2 frames with contact > 0.5, gaps of up to `gap` frames closed:
  *     the model's contacts flicker) of a foot joint is held at the run's mean position (y clamped to
  *     ≥ 0); the correction fades in/out over `blend` frames on both sides (smoothstep), so there are no
- *     pops; where a fade-out and the next plant's fade-in overlap, the target is their weighted mean. A run whose joint strays more than `maxDrift` m (horizontally) from that mean is no plant
- *     but a contact the model got wrong (a foot sliding at walking speed): pinning it would hold the
+ *     pops; where a fade-out and the next plant's fade-in overlap, the target is their weighted mean. A
+ *     run whose joint strays more than `maxDrift` m (horizontally) from that mean is no plant but a contact the model got wrong (a foot sliding at walking speed): pinning it would hold the
  *     foot and then throw it up to a metre in one frame, so it is left as it is.
  *  3. Legs follow: a moved ankle re-solves its knee with two-bone IK (hip fixed, thigh and shin
  *     lengths of that frame kept, bending in the original knee's plane); the ball-of-foot joint is
@@ -133,8 +133,8 @@ export function cleanupFootContacts(
     const wgt = new Float64Array(frames);
     const sum = new Float64Array(frames * 3);
     const wsum = new Float64Array(frames);
-    for (const { first: s, last: e, mean } of planted[c]) {
-      const m: V3 = [mean[0], Math.max(0, mean[1]), mean[2]];
+    const pins = planted[c].map(({ first: s, last: e, mean }) => ({ s, e, m: [mean[0], Math.max(0, mean[1]), mean[2]] as V3 }));
+    for (const { s, e, m } of pins) {
       for (let f = Math.max(0, s - blend); f <= Math.min(frames - 1, e + blend); f++) {
         const w = fadeWeight(f < s ? 1 - (s - f) / (blend + 1) : f > e ? 1 - (f - e) / (blend + 1) : 1);
         for (let k = 0; k < 3; k++) sum[f * 3 + k] += w * m[k];
@@ -144,7 +144,7 @@ export function cleanupFootContacts(
     }
     for (let f = 0; f < frames; f++) if (wsum[f] > 0) tgt[f] = [sum[f * 3] / wsum[f], sum[f * 3 + 1] / wsum[f], sum[f * 3 + 2] / wsum[f]];
     // a run's own frames keep its pin (a neighbour's fade reaches them only when blend > gap + 1)
-    for (const { first: s, last: e, mean } of planted[c]) for (let f = s; f <= e; f++) tgt[f] = [mean[0], Math.max(0, mean[1]), mean[2]];
+    for (const { s, e, m } of pins) for (let f = s; f <= e; f++) tgt[f] = m;
     return { j, tgt, wgt };
   });
 

@@ -31,15 +31,13 @@ def split_takes(take_actions: dict[str, str], val: float = 0.05, test: float = 0
         total = sum(windows.get(t, 0) for t in takes) if windows is not None else 0
         held = 0
         for t in takes:
-            out[t] = "train"
-            for split in ("test", "val"):
-                if want[split] <= 0:
-                    continue
-                w = windows.get(t, 0) if windows is not None else 0
-                if windows is not None and (w == 0 or held + w > held_max * total):
-                    break                  # a take that made no window would hold a slot out of nothing
-                out[t] = split
+            split = "test" if want["test"] > 0 else "val" if want["val"] > 0 else "train"
+            w = windows.get(t, 0) if windows is not None else 0
+            # a take that made no window would hold a slot out of nothing
+            if windows is not None and (w == 0 or held + w > held_max * total):
+                split = "train"
+            out[t] = split
+            if split != "train":
                 want[split] -= 1
                 held += w
-                break
     return out

@@ -180,10 +180,10 @@ def measure(labels, action, joints, real: dict | None = None) -> dict:
     for i, a in enumerate(labels):
         sel = np.flatnonzero(action == i)
         if sel.size:
-            speeds, act = ref["speeds"].get(a), ref.get("peak_speed", {}).get(a)
+            speeds, peaks = ref["speeds"].get(a), ref.get("peak_speed", {}).get(a)
             per[a] = group([joints[k] for k in sel], [rows[k] for k in sel], ref["max_step_all"],
                            ref["max_step"].get(a), None if speeds is None else np.asarray(speeds),
-                           None if act is None else np.asarray(act))
+                           None if peaks is None else np.asarray(peaks))
     every = group(joints, rows, ref["max_step_all"], None, None)
     return {"per_action": per, "all": every, "reference": ref, "rows": rows}
 

@@ -51,12 +51,12 @@ def _f(v) -> str:
     return "   –" if v is None else f"{v:4.2f}"
 
 
-def report(old: dict, new: dict, rows: list[dict], worse: float = WORSE) -> list[str]:
+def report(rows: list[dict], worse: float = WORSE) -> list[str]:
+    """The table of ``diff``'s rows, the mean of each check, and the actions worse by more than ``worse``."""
     out = [f"{'action':18s} " + "  ".join(f"{c[:10]:>11s}" for c in (*CHECKS, "speed×real")) + "   verdict"]
     for r in rows:
         cells = "  ".join(f"{_f(r['old'][c])}→{_f(r['new'][c])}" for c in (*CHECKS, "speed"))
-        verdict = ("worse: " + ", ".join(r["worse"]) if r["worse"] else "") + \
-                  ("; " if r["worse"] and r["better"] else "") + ("better: " + ", ".join(r["better"]) if r["better"] else "")
+        verdict = "; ".join(f"{k}: {', '.join(r[k])}" for k in ("worse", "better") if r[k])
         out.append(f"{r['action']:18s} {cells}   {verdict}")
     for c in CHECKS:
         pairs = [(r["old"][c], r["new"][c]) for r in rows if r["old"][c] is not None and r["new"][c] is not None]
@@ -91,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
     for d in key_differences(old, new):
         print(f"note: the two runs differ in {d}", file=sys.stderr)
     rows = diff(old, new)
-    print("\n".join(report(old, new, rows)))
+    print("\n".join(report(rows)))
     return 1 if a.fail_on_worse and any(r["worse"] for r in rows) else 0
 
 

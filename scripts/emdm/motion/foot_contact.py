@@ -7,8 +7,8 @@ in contact it should neither skate nor sink:
 2. Pinning: every contact run (≥ 2 frames with contact > threshold, gaps of up to ``gap`` frames closed: the
    model's contacts flicker) of a foot joint is held at the run's mean position (y clamped to ≥ 0); the correction
    fades in and out over ``blend`` frames on both sides (smoothstep); where one plant's fade-out overlaps the next's
-   fade-in (a run's short swing) the target is their weight-mixed mean, never a stride's jump in one frame. A run whose joint strays more than ``max_drift``
-   m (horizontally) from that mean is no plant but a contact the model got wrong (a foot sliding at walking speed):
+   fade-in (a run's short swing) the target is their weight-mixed mean, never a stride's jump in one frame. A run
+   whose joint strays more than ``max_drift`` m (horizontally) from that mean is no plant but a contact the model got wrong (a foot sliding at walking speed):
    pinning it would hold the foot and then throw it up to a metre in one frame, so it is left as it is.
 3. Legs follow: a moved ankle re-solves its knee with two-bone IK (hip fixed, that frame's thigh and shin lengths,
    bending in the original knee's plane); the ball of the foot is placed at its original distance from the ankle,
@@ -112,9 +112,8 @@ def cleanup_foot_contacts(joints: np.ndarray, contacts: np.ndarray, parents, foo
         wgt = np.zeros(frames)
         acc = np.zeros((frames, 3))
         wsum = np.zeros(frames)
-        for s, e, mean in planted[c]:
-            m = mean.copy()
-            m[1] = max(0.0, m[1])
+        pins = [(s, e, np.array([mean[0], max(0.0, mean[1]), mean[2]])) for s, e, mean in planted[c]]
+        for s, e, m in pins:
             for f in range(max(0, s - blend), min(frames - 1, e + blend) + 1):
                 w = fade_weight(1 - (s - f) / (blend + 1) if f < s else (1 - (f - e) / (blend + 1) if f > e else 1.0))
                 acc[f] += w * m
@@ -122,8 +121,8 @@ def cleanup_foot_contacts(joints: np.ndarray, contacts: np.ndarray, parents, foo
                 wgt[f] = max(wgt[f], w)
         on = wsum > 0
         tgt[on] = acc[on] / wsum[on, None]      # overlapping fades (a run's short swing): their weight-mixed mean
-        for s, e, mean in planted[c]:           # a run's own frames keep its pin (a neighbour's fade reaches them
-            tgt[s:e + 1] = [mean[0], max(0.0, mean[1]), mean[2]]   # only when blend > gap + 1)
+        for s, e, m in pins:                    # a run's own frames keep its pin (a neighbour's fade reaches them
+            tgt[s:e + 1] = m                    # only when blend > gap + 1)
         targets.append((j, tgt, wgt))
     for ci, fi in ((0, 1), (2, 3)):
         ank_j, ank_t, ank_w = targets[ci]
