@@ -8,7 +8,11 @@
  *     ≥ 0); the correction fades in/out over `blend` frames on both sides (smoothstep), so there are no
  *     pops; where a fade-out and the next plant's fade-in overlap, the target is their weighted mean. A
  *     run whose joint strays more than `maxDrift` m (horizontally) from that mean is no plant but a contact the model got wrong (a foot sliding at walking speed): pinning it would hold the
- *     foot and then throw it up to a metre in one frame, so it is left as it is.
+ *     foot and then throw it up to a metre in one frame, so it is left as it is. A *stance* (a run of at most
+ *     `stanceFrames` frames: a step's foot is down for under a second) may stray up to `stanceDrift` m: generated
+ *     runs' stances slide 20–40 cm (the model's runs outpace their strides), which 10 cm left sliding (runs' foot
+ *     skate 94 cm/s, real 37; 47 with it, no joint step past the real clips' largest). A longer contact that strays
+ *     is the body moving its foot (a pivot, a shuffle); held, its leg could not reach and the foot was dragged.
  *  3. Legs follow: a moved ankle re-solves its knee with two-bone IK (hip fixed, thigh and shin
  *     lengths of that frame kept, bending in the original knee's plane); the ball-of-foot joint is
  *     then placed at its original distance from the ankle, towards its pinned target; step 1 is
@@ -27,10 +31,13 @@ export interface FootCleanupOptions {
   gap?: number;
   /** a run whose joint strays farther than this (m, horizontally) from its mean is not pinned */
   maxDrift?: number;
+  /** ... unless it is a stance (at most `stanceFrames` frames long): then the larger of `maxDrift` and this */
+  stanceDrift?: number;
+  stanceFrames?: number;
 }
 
 /** Defaults of the clean-up (emdm.motion.foot_contact has the same). */
-export const FOOT_CLEANUP = { threshold: 0.5, blend: 3, gap: 2, maxDrift: 0.1 } as const;
+export const FOOT_CLEANUP = { threshold: 0.5, blend: 3, gap: 2, maxDrift: 0.1, stanceDrift: 0.2, stanceFrames: 20 } as const;
 
 /** The 4 contact channels of de-normalised features (frames × dim) → frames × 4. */
 export function contactsFromFeatures(features: Float32Array, frames: number, dim = 263): Float32Array {
@@ -67,7 +74,13 @@ export function plantRuns(
   frames: number,
   contacts: Float32Array,
   rig: FootRig,
-  { threshold = FOOT_CLEANUP.threshold, gap = FOOT_CLEANUP.gap, maxDrift = FOOT_CLEANUP.maxDrift }: FootCleanupOptions = {},
+  {
+    threshold = FOOT_CLEANUP.threshold,
+    gap = FOOT_CLEANUP.gap,
+    maxDrift = FOOT_CLEANUP.maxDrift,
+    stanceDrift = FOOT_CLEANUP.stanceDrift,
+    stanceFrames = FOOT_CLEANUP.stanceFrames,
+  }: FootCleanupOptions = {},
 ): { first: number; last: number; mean: V3 }[][] {
   const J = rig.parents.length;
   return rig.footJoints.map((j, c) => {
@@ -78,7 +91,8 @@ export function plantRuns(
       m = scale(m, 1 / (e - s + 1));
       let drift = 0;
       for (let f = s; f <= e; f++) drift = Math.max(drift, Math.hypot(joints[(f * J + j) * 3] - m[0], joints[(f * J + j) * 3 + 2] - m[2]));
-      if (drift <= maxDrift) out.push({ first: s, last: e, mean: m });
+      const limit = e - s + 1 <= stanceFrames ? Math.max(maxDrift, stanceDrift) : maxDrift;
+      if (drift <= limit) out.push({ first: s, last: e, mean: m });
     }
     return out;
   });
@@ -105,7 +119,14 @@ export function cleanupFootContacts(
   frames: number,
   contacts: Float32Array,
   rig: FootRig,
-  { threshold = FOOT_CLEANUP.threshold, blend = FOOT_CLEANUP.blend, gap = FOOT_CLEANUP.gap, maxDrift = FOOT_CLEANUP.maxDrift }: FootCleanupOptions = {},
+  {
+    threshold = FOOT_CLEANUP.threshold,
+    blend = FOOT_CLEANUP.blend,
+    gap = FOOT_CLEANUP.gap,
+    maxDrift = FOOT_CLEANUP.maxDrift,
+    stanceDrift = FOOT_CLEANUP.stanceDrift,
+    stanceFrames = FOOT_CLEANUP.stanceFrames,
+  }: FootCleanupOptions = {},
 ): Float32Array {
   const J = rig.parents.length;
   if (joints.length !== frames * J * 3) throw new RangeError(`cleanupFootContacts: joints has ${joints.length} values, expected ${frames} × ${J} × 3`);
@@ -127,7 +148,7 @@ export function cleanupFootContacts(
 
   // 2. pinned targets per foot joint: target[f] and weight[f] in [0, 1]; where one plant's fade-out meets the next's
   // fade-in (a run's short swing) the target is their weight-mixed mean, so it never jumps a stride in one frame
-  const planted = plantRuns(out, frames, contacts, rig, { threshold, gap, maxDrift });
+  const planted = plantRuns(out, frames, contacts, rig, { threshold, gap, maxDrift, stanceDrift, stanceFrames });
   const targets = rig.footJoints.map((j, c) => {
     const tgt: (V3 | null)[] = new Array(frames).fill(null);
     const wgt = new Float64Array(frames);

@@ -1,7 +1,7 @@
 import fs from 'node:fs';
 import path from 'node:path';
 import { describe, expect, it } from 'vitest';
-import { cleanupFootContacts, contactsFromFeatures, footSkate, plantContacts } from '../../src/motion/footContact';
+import { cleanupFootContacts, contactsFromFeatures, footSkate, plantContacts, plantRuns } from '../../src/motion/footContact';
 import { forwardKinematics } from '../../src/motion/ik';
 import { denormalize, parseMeanStd, recoverJoints } from '../../src/motion/recover';
 import { smoothJoints } from '../../src/motion/smooth';
@@ -136,7 +136,7 @@ describe('smoothing and foot-contact clean-up', () => {
     const contacts = contactsFromFeatures(fx.get('features'), frames);
     const rig = { parents: sk.parents, footJoints: sk.footJoints };
     const out = cleanupFootContacts(joints, frames, contacts, rig);
-    // on the runs that are plants (the foot strays ≤ 10 cm): held still; the rest is the model's own
+    // on the runs that are plants (the foot strays ≤ 10 cm, a stance ≤ 20 cm): held still; the rest is the model's own
     const planted = plantContacts(joints, frames, contacts, rig);
     expect(footSkate(out, frames, planted, rig)).toBeLessThan(1e-3);
     expect(footSkate(out, frames, planted, rig)).toBeLessThanOrEqual(footSkate(joints, frames, planted, rig) * 0.5 + 1e-6);
@@ -160,5 +160,55 @@ describe('smoothing and foot-contact clean-up', () => {
     const out2 = cleanupFootContacts(still.joints, frames, contacts, rig);
     expect(footSkate(out2, frames, plantContacts(still.joints, frames, contacts, rig), rig)).toBeLessThan(1e-4);
     expect(Math.abs(out2[(14 * J + 7) * 3 + 2] - out2[(13 * J + 7) * 3 + 2])).toBeLessThan(1e-6);
+  });
+  /** A run as the model makes it (twin of test_motion_decode.py ``sliding_run``): the body travels 3.6 m/s, the left
+   *  foot swings 0.3 m a frame and, in its stances (frames 4–9, 14–19, contacts on), still slides 5 cm a frame. */
+  function slidingRun(frames = 24) {
+    const joints = new Float32Array(frames * J * 3);
+    const z: number[] = [];
+    for (let k = 0, at = 0; k < frames; k++) {
+      z.push(at);
+      at += (k >= 4 && k < 9) || (k >= 14 && k < 19) ? 0.05 : 0.3;
+    }
+    for (let f = 0; f < frames; f++) {
+      const body = (z[frames - 1] * f) / (frames - 1);
+      for (let j = 0; j < J; j++) joints.set([0, 0.9, body], (f * J + j) * 3);
+      for (const j of [4, 5]) joints[(f * J + j) * 3 + 1] = 0.5;
+      for (const j of sk.footJoints) joints[(f * J + j) * 3 + 1] = 0.02;
+      joints[(f * J + 7) * 3 + 2] = z[f];
+      joints[(f * J + 10) * 3 + 2] = z[f] + 0.15;
+    }
+    const contacts = new Float32Array(frames * 4);
+    for (let f = 0; f < frames; f++) if ((f >= 4 && f <= 9) || (f >= 14 && f <= 19)) contacts[f * 4] = contacts[f * 4 + 1] = 1;
+    return { joints, contacts };
+  }
+
+  it("holds a run's stance that slides 25 cm (a stance may stray 20 cm, a longer contact 10 cm), as Python", () => {
+    const rig = { parents: sk.parents, footJoints: sk.footJoints };
+    const { joints, contacts } = slidingRun();
+    const spans = (o = {}) => plantRuns(joints, 24, contacts, rig, o)[0].map(({ first, last }) => [first, last]);
+    expect(spans({ stanceDrift: 0.1 })).toEqual([]); // the 10 cm limit of before left it sliding
+    expect(spans()).toEqual([[4, 9], [14, 19]]);
+    const out = cleanupFootContacts(joints, 24, contacts, rig);
+    const z = (a: Float32Array, f: number) => a[(f * J + 7) * 3 + 2];
+    for (const [s, e] of [[4, 9], [14, 19]]) {
+      const held = Array.from({ length: e - s + 1 }, (_, i) => z(out, s + i));
+      expect(Math.max(...held) - Math.min(...held)).toBeLessThan(0.01); // raw: 25 cm
+    }
+    let step = 0;
+    for (let f = 1; f < 24; f++) step = Math.max(step, Math.hypot(...[0, 1, 2].map((c) => out[(f * J + 7) * 3 + c] - out[((f - 1) * J + 7) * 3 + c])));
+    expect(step).toBeLessThan(0.65); // the swing makes up the 25 cm it no longer slides: 0.30 → up to 0.60
+    // a pivot over 3 s (60 frames, 30 cm) is the body moving its foot: not held; the same 30 cm within 20 frames is
+    const pivot = (n: number) => {
+      const j = new Float32Array(n * J * 3);
+      for (let f = 0; f < n; f++) {
+        for (let k = 0; k < J; k++) j[(f * J + k) * 3 + 1] = 0.9;
+        for (const k of sk.footJoints) j[(f * J + k) * 3 + 1] = 0.02;
+        for (const k of [7, 10]) j[(f * J + k) * 3 + 2] = (0.3 * f) / (n - 1);
+      }
+      return plantRuns(j, n, new Float32Array(n * 4).fill(1), rig)[0].map(({ first, last }) => [first, last]);
+    };
+    expect(pivot(60)).toEqual([]);
+    expect(pivot(20)).toEqual([[0, 19]]);
   });
 });
