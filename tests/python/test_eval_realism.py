@@ -93,6 +93,27 @@ def test_moving_tells_a_real_wave_from_the_same_figure_standing_still():
     assert gen["per_action"]["walk"]["peak_ratio"] == pytest.approx(peak(walks[1]) / np.median([peak(w) for w in walks]))
 
 
+@needs_bandai
+def test_feet_acceleration_is_the_real_walks_own_and_grows_where_a_foot_is_held_and_then_thrown():
+    """The feet's acceleration (95th percentile): a real walk against its own action is × 1; played 2× fast its
+    feet accelerate 2.5–4.5× as hard (4× were the motion smooth, 3.2× measured); a foot held still for a stance and then thrown to where the walk has it (what
+    pinning a skating stance does to the swing) accelerates harder than the real walk's."""
+    labels = ["walk"]
+    walks = [real_clip(s) for s in WALKS]
+    real = R.measure(labels, np.array([0, 0, 0]), walks)
+    assert real["per_action"]["walk"]["foot_acc_ratio"] == pytest.approx(1.0)
+    walk = walks[0]
+    own = R.foot_acceleration(walk)
+    assert 10 < own < 60                                            # m/s²: a real walk's feet
+    assert 2.5 * own < R.foot_acceleration(walk[::2]) < 4.5 * own       # 3.2× (4× were it smooth)
+    held = walk.copy()
+    for s in range(0, len(walk) - 12, 12):                          # every 12 frames: the left foot held 9 frames
+        held[s:s + 9, [7, 10], :] = walk[s, [7, 10], :]
+    assert R.foot_acceleration(held) > 1.5 * own
+    g = R.measure(labels, np.array([0]), [held], real)["per_action"]["walk"]
+    assert g["foot_acc_ratio"] > 1.5 and R.foot_acceleration(walk[:2]) == 0.0
+
+
 def test_an_action_with_too_few_test_clips_takes_its_moving_floor_from_its_train_clips():
     ref = {"peak_speed": {"walk": [4.0, 4.2, 3.9], "punch": [2.0]}}
     desc = {"peak_speed": np.array([1.0, 2.5, 2.2, 2.4, 5.0, 0.9])}

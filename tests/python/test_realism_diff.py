@@ -46,3 +46,16 @@ def test_one_motion_in_eight_is_within_the_bar_and_other_benchmarks_are_named(tm
     assert D.main([str(a), str(bad)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "c.json" in err[0] and "not a realism result" in err[0]
+
+
+def test_the_feet_lines_show_what_a_clean_up_trades_and_skip_what_a_result_lacks():
+    old, new = _result(0.5, 0.8, 1.0), _result(0.5, 0.8, 1.0)
+    old["generated"]["all"] = {"skate_cm_s": 23.28, "max_step": 0.45}                 # measured before foot_acc
+    new["generated"]["all"] = {"skate_cm_s": 17.8, "foot_acc": 31.4, "max_step": 0.499}
+    new["real"] = {"all": {"skate_cm_s": 19.26, "foot_acc": 27.0, "max_step": 0.55}}
+    assert D.feet(old, new) == ["all motions' foot skate: 23.3 → 17.8 cm/s (real clips 19.3)",
+                                "all motions' largest joint step: 0.450 → 0.499 m (real clips 0.550)"]
+    new_b = json.loads(json.dumps(new))
+    new_b["generated"]["all"]["foot_acc"] = 40.0
+    assert "all motions' feet acceleration: 31 → 40 m/s² (real clips 27)" in D.feet(new, new_b)
+    assert D.feet(_result(0.5, 0.8, 1.0), _result(0.5, 0.8, 1.0)) == []               # no "all" rows: nothing

@@ -18,6 +18,9 @@ test clips. Per action, against those real clips (the reference row):
   is one such step).
 * **ground**: share of airborne frames (both feet above ``kinematics.AIRBORNE``), penetration, floating, foot
   skate (``emdm.eval.plausibility``), and the largest bone-length error (``emdm.eval.poses.check_frames``).
+* **feet**: the feet's acceleration (ankles and balls of the feet, m/s², 95th percentile over a motion's frames;
+  mean over motions, as the skate) against the real clips': what holding a foot still costs the swing that follows (a foot
+  clean-up that stops a skate makes the swing make up the distance), beside the skate it trades against.
 * **moving**: the motions' median ``peak_speed`` (the fastest joint's speed, 95th percentile over frames) over the
   real clips' median, and the share of motions that *move* (peak speed at least ``STILL`` = a quarter of the 5th
   percentile of the action's real clips; an action with too few test clips takes its train clips': ``train_peaks``):
@@ -41,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
+from emdm import skeleton as sk
 from emdm.eval import coverage as C
 from emdm.eval import kinematics as K
 from emdm.eval.plausibility import batch_plausibility, flip_share
@@ -79,11 +83,21 @@ def joint_steps(joints) -> np.ndarray:
     return np.linalg.norm(np.diff(j, axis=0), axis=2)
 
 
+def foot_acceleration(joints, fps: float = K.FPS) -> float:
+    """The feet's (ankles', balls of the feet's) acceleration, m/s²: the 95th percentile over frames and those 4
+    joints of the second difference's length (0 for a motion under 3 frames)."""
+    j = np.asarray(joints, np.float64)[:, list(sk.FOOT_JOINTS)]
+    if len(j) < 3:
+        return 0.0
+    return float(np.percentile(np.linalg.norm(j[2:] - 2 * j[1:-1] + j[:-2], axis=2), 95) * fps * fps)
+
+
 def motion_row(joints) -> dict:
-    """The per-motion figures: speed, largest joint step, airborne share, largest bone error, descriptors."""
+    """The per-motion figures: speed, largest joint step, airborne share, largest bone error, feet acceleration,
+    descriptors."""
     d = K.descriptors(joints)
     return {"speed": d["speed"], "max_step": float(joint_steps(joints).max()), "airborne": d["airborne"],
-            "bone": check_frames(joints).worst_bone, "desc": d}
+            "bone": check_frames(joints).worst_bone, "foot_acc": foot_acceleration(joints), "desc": d}
 
 
 def speed_in_range(speed, real_speeds) -> np.ndarray:
@@ -101,7 +115,8 @@ def steps_ok(joints, real_max: float) -> bool:
 # ----------------------------------------------------------------------------- per action (pure)
 
 def group(joints: list[np.ndarray], rows: list[dict], real_max_all: float, real_max_action: float | None,
-          real_speeds: np.ndarray | None, real_peak: np.ndarray | None = None) -> dict:
+          real_speeds: np.ndarray | None, real_peak: np.ndarray | None = None,
+          real_foot_acc: np.ndarray | None = None) -> dict:
     """The figures of one action's motions (``joints`` with their ``motion_row``s) against the real reference."""
     steps = np.concatenate([joint_steps(j).ravel() for j in joints])
     speed = np.array([r["speed"] for r in rows])
@@ -114,13 +129,16 @@ def group(joints: list[np.ndarray], rows: list[dict], real_max_all: float, real_
            "airborne": float(np.mean([r["airborne"] for r in rows])),
            "penetration_mm": float(plaus["penetration_mm"].mean()), "floating_mm": float(plaus["floating_mm"].mean()),
            "skate_cm_s": float(plaus["skate_cm_s"].mean()), "skate_ratio": float(plaus["skate_ratio"].mean()),
-           "bone_worst": float(np.median([r["bone"] for r in rows]))}
+           "bone_worst": float(np.median([r["bone"] for r in rows])),
+           "foot_acc": float(np.mean([r["foot_acc"] for r in rows]))}
     if real_max_action is not None:
         out["over_action"] = float((steps > real_max_action).mean())
         out["motions_over_action"] = float(np.mean([not steps_ok(j, real_max_action) for j in joints]))
     if real_speeds is not None and len(real_speeds):
         out["speed_ratio"] = out["speed"] / max(float(np.median(real_speeds)), 1e-6)
         out["speed_in_range"] = float(speed_in_range(speed, real_speeds).mean())
+    if real_foot_acc is not None and len(real_foot_acc):
+        out["foot_acc_ratio"] = out["foot_acc"] / max(float(np.mean(real_foot_acc)), 1e-6)
     peak = np.array([r["desc"]["peak_speed"] for r in rows])
     out["peak_speed"] = float(np.median(peak))
     if real_peak is not None and len(real_peak):
@@ -167,23 +185,24 @@ def measure(labels, action, joints, real: dict | None = None) -> dict:
     action = np.asarray(action)
     if real is None:
         max_all = max(r["max_step"] for r in rows)
-        ref = {"max_step_all": max_all, "max_step": {}, "speeds": {}, "peak_speed": {}}
+        ref = {"max_step_all": max_all, "max_step": {}, "speeds": {}, "peak_speed": {}, "foot_acc": {}}
         for i, a in enumerate(labels):
             sel = np.flatnonzero(action == i)
             if sel.size:
                 ref["max_step"][a] = max(rows[k]["max_step"] for k in sel)
                 ref["speeds"][a] = [rows[k]["speed"] for k in sel]
                 ref["peak_speed"][a] = [rows[k]["desc"]["peak_speed"] for k in sel]
+                ref["foot_acc"][a] = [rows[k]["foot_acc"] for k in sel]
     else:
         ref = real["reference"]
     per = {}
     for i, a in enumerate(labels):
         sel = np.flatnonzero(action == i)
         if sel.size:
-            speeds, peaks = ref["speeds"].get(a), ref.get("peak_speed", {}).get(a)
+            speeds, peaks, acc = ref["speeds"].get(a), ref.get("peak_speed", {}).get(a), ref.get("foot_acc", {}).get(a)
             per[a] = group([joints[k] for k in sel], [rows[k] for k in sel], ref["max_step_all"],
                            ref["max_step"].get(a), None if speeds is None else np.asarray(speeds),
-                           None if peaks is None else np.asarray(peaks))
+                           None if peaks is None else np.asarray(peaks), None if acc is None else np.asarray(acc))
     every = group(joints, rows, ref["max_step_all"], None, None)
     return {"per_action": per, "all": every, "reference": ref, "rows": rows}
 
@@ -336,11 +355,18 @@ def _setting(r: dict) -> str:
             f", x̂0 smoothing σ {r.get('x0_smoothing', 0):g}, {k.get('seeds', '?')} seeds per prompt")
 
 
+def _foot_acc(g: dict, rv: dict | None) -> str:
+    """The feet-acceleration cell: generated (real), – for a result measured before it existed."""
+    if "foot_acc" not in g:
+        return "–"
+    return f"{g['foot_acc']:.0f} ({rv['foot_acc']:.0f})" if rv and "foot_acc" in rv else f"{g['foot_acc']:.0f}"
+
+
 def section(r: dict, plot: str | None = None) -> list[str]:
     """One realism result: per action, the generated figures beside the real clips' (in brackets)."""
     real, gen = r["real"], r["generated"]
     header = ["Action", "Real clips", "Speed m/s (real)", "× real", "In real range", "Step p99 m (real)",
-              "Motions with a step > real max (all / action)", "Steps > real max (all / action)", "Airborne (real)", "Moving: peak speed × real, motions that move", "Kinematic rule (real)", "Classifier (real)"]
+              "Motions with a step > real max (all / action)", "Steps > real max (all / action)", "Airborne (real)", "Feet accel. m/s² (real)", "Moving: peak speed × real, motions that move", "Kinematic rule (real)", "Classifier (real)"]
     rows = []
     for a in r["labels"] + ["all"]:
         g = gen["all"] if a == "all" else gen["per_action"].get(a)
@@ -353,6 +379,7 @@ def section(r: dict, plot: str | None = None) -> list[str]:
                      f"{g['step_p99']:.3f} ({rv['step_p99']:.3f})" if rv else f"{g['step_p99']:.3f}",
                      f"{_p(g['motions_over_all'])} / {_p(g.get('motions_over_action'))}", f"{g['over_all']:.2%} / {_p(g.get('over_action'), '{:.2%}')}",
                      f"{g['airborne']:.1%} ({rv['airborne']:.1%})" if rv else f"{g['airborne']:.1%}",
+                     _foot_acc(g, rv),
                      f"× {g['peak_ratio']:.2f}, {_p(g['moving'])}" if "moving" in g else "–",
                      f"{_p(gen['kinematic'].get(a))} ({_p(real['kinematic'].get(a))})" if a in r["judged"] else "not judged",
                      f"{_p(gen['classifier'].get(a))} ({_p(real['classifier'].get(a))})"])
@@ -362,14 +389,18 @@ def section(r: dict, plot: str | None = None) -> list[str]:
             f"motions); *in real range*: motions whose speed lies within the action's real 5th–95th percentile widened by "
             f"× {r['speed_slack']:g}. *Step*: every joint's displacement between consecutive frames; the real maximum is "
             f"{ref['max_step_all']:.3f} m over the real test clips of all actions. *Airborne*: frames with both feet "
-            f"higher than {100 * K.AIRBORNE:.0f} cm. *Moving*: the motions' median peak speed (the fastest joint's speed, 95th "
+            f"higher than {100 * K.AIRBORNE:.0f} cm. *Feet accel.*: the ankles' and balls of the feet's acceleration, 95th "
+            f"percentile over a motion's frames, mean over motions (holding a foot still makes the swing after it "
+            f"faster). *Moving*: the motions' median peak speed (the fastest joint's speed, 95th "
             f"percentile over frames) over the real clips', and the share of motions with at least {STILL:g} × the real "
             f"clips' 5th percentile (the rest hold a pose). *Kinematic rule*: share passing the action's rule (table below); "
             f"*classifier*: share the action classifier names as the action.", "",
             md.table(header, rows), "",
             f"All motions: penetration {gen['all']['penetration_mm']:.1f} mm (real {real['all']['penetration_mm']:.1f}), "
             f"floating {gen['all']['floating_mm']:.1f} mm (real {real['all']['floating_mm']:.1f}), foot skate "
-            f"{gen['all']['skate_cm_s']:.1f} cm/s (real {real['all']['skate_cm_s']:.1f}), median largest bone-length error "
+            f"{gen['all']['skate_cm_s']:.1f} cm/s (real {real['all']['skate_cm_s']:.1f}), " + (
+                f"feet acceleration {gen['all']['foot_acc']:.0f} m/s² (real {real['all']['foot_acc']:.0f}), "
+                if "foot_acc" in gen["all"] and "foot_acc" in real["all"] else "") + f"median largest bone-length error "
             f"{gen['all']['bone_worst']:.1%} (real {real['all']['bone_worst']:.1%}), joint steps over the real maximum "
             f"{gen['all']['over_all']:.2%}, frames with a one-frame flip {gen['flip_share']:.2%} (real {real['flip_share']:.2%}).",
             "", f"Measured on {r.get('hardware', '?')} in {gen['seconds'] / 60:.1f} min ({gen['generate_seconds'] / 60:.1f} "

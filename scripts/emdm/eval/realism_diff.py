@@ -1,6 +1,7 @@
 """Two realism results side by side, per action: the three checks of a model or sampling change (the classifier, the
 kinematic rule, the share of motions that move) and the speed against real, old → new; an action where any check
-drops by more than ``WORSE`` (one motion in 8) is flagged. How a GPU slice's candidates are judged against the shipped
+drops by more than ``WORSE`` (one motion in 8) is flagged; then all motions' foot skate, feet acceleration and
+largest joint step (``feet``). How a GPU slice's candidates are judged against the shipped
 weights (docs/MODELS.md): a candidate that lifts the classifier while its punches stop moving is not a win.
 
     python -m emdm.eval.realism_diff docs/results/json/realism-OLD.json runs/lease/realism-NEW.json
@@ -69,6 +70,24 @@ def report(rows: list[dict], worse: float = WORSE) -> list[str]:
     return out
 
 
+FEET = (("skate_cm_s", "foot skate", "cm/s", "{:.1f}"), ("foot_acc", "feet acceleration", "m/s²", "{:.0f}"),
+        ("max_step", "largest joint step", "m", "{:.3f}"))
+
+
+def feet(old: dict, new: dict) -> list[str]:
+    """All motions' foot skate, feet acceleration and largest joint step, old → new (real): what a foot clean-up
+    trades (a skate stopped makes the swing after it faster); a figure either result lacks is left out."""
+    out = []
+    for k, name, unit, fmt in FEET:
+        o, n = old["generated"].get("all", {}).get(k), new["generated"].get("all", {}).get(k)
+        if o is None or n is None:
+            continue
+        real = new.get("real", {}).get("all", {}).get(k)
+        out.append(f"all motions' {name}: {fmt.format(o)} → {fmt.format(n)} {unit}"
+                   + (f" (real clips {fmt.format(real)})" if real is not None else ""))
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m emdm.eval.realism_diff", description=__doc__.split("\n\n")[0])
     ap.add_argument("old", type=Path)
@@ -91,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
     for d in key_differences(old, new):
         print(f"note: the two runs differ in {d}", file=sys.stderr)
     rows = diff(old, new)
-    print("\n".join(report(rows)))
+    print("\n".join(report(rows) + feet(old, new)))
     return 1 if a.fail_on_worse and any(r["worse"] for r in rows) else 0
 
 
