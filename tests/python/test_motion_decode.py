@@ -1,6 +1,8 @@
 """emdm.motion.decode: the joints a motion is shown with, as the page decodes them (src/motion/decode.ts; the
 parity fixture tests/fixtures/parity/decode.* is checked from the TypeScript side by tests/unit/decodeParity.test.ts)."""
 
+import re
+
 import numpy as np
 
 from emdm import skeleton as sk
@@ -8,8 +10,9 @@ from emdm.eval.seams import joint_steps, wrap_step
 from emdm.motion import decode_fixture
 from emdm.motion.decode import decode_joints
 from emdm.motion.features import recover_joints, recover_root, rot_y
-from emdm.motion.foot_contact import cleanup_foot_contacts, plant_runs
+from emdm.motion.foot_contact import FOOT_CLEANUP, cleanup_foot_contacts, plant_runs
 from emdm.motion.ik_fixture import read_case_array
+from emdm.paths import REPO_ROOT
 
 REGENERATE = "regenerate with `.venv/bin/python -m emdm.motion.decode_fixture` and commit tests/fixtures/parity/decode.*"
 
@@ -124,7 +127,7 @@ def test_two_plants_a_short_swing_apart_hand_the_foot_over_without_a_jump():
 
 
 def sliding_run(frames: int = 24):
-    """A run as the model makes it (Python twin of coreDecode.test.ts ``slidingRun``): the body travels 3.6 m/s,
+    """A run as the model makes it (Python twin of coreDecode.test.ts ``slidingRun``): the body travels 3.8 m/s,
     the left foot swings 0.3 m a frame and, in its two stances (frames 4–9 and 14–19, contacts on), still slides
     5 cm a frame: 25 cm, up to 12.5 cm from the stance's mean."""
     z, at = [], 0.0
@@ -156,6 +159,8 @@ def test_a_run_stance_that_slides_a_hand_span_is_held():
     out = cleanup_foot_contacts(joints, contacts, sk.PARENTS, sk.FOOT_JOINTS)
     for s, e in ((4, 9), (14, 19)):
         assert np.ptp(out[s:e + 1, 7, 2]) < 0.01 < 0.2 < np.ptp(joints[s:e + 1, 7, 2])
+    slid = cleanup_foot_contacts(joints, contacts, sk.PARENTS, sk.FOOT_JOINTS, stance_drift=0.1)   # passed through
+    assert np.ptp(slid[4:10, 7, 2]) > 0.2
     assert np.linalg.norm(np.diff(out[:, 7], axis=0), axis=1).max() < 0.65
     long = np.zeros((60, 22, 3), np.float32)
     long[:, :, 1] = 0.9
@@ -165,3 +170,12 @@ def test_a_run_stance_that_slides_a_hand_span_is_held():
     assert plant_runs(long, on)[0] == []
     long[:20, 7, 2] = long[:20, 10, 2] = np.linspace(0, 0.3, 20)    # as far within a stance's 20 frames: held
     assert [(s, e) for s, e, _ in plant_runs(long[:20], on[:20])[0]] == [(0, 19)]
+
+
+def test_the_clean_up_defaults_are_the_typescript_twins():
+    """``FOOT_CLEANUP`` here and in src/motion/footContact.ts: the same keys (camelCase there) and values."""
+    ts = (REPO_ROOT / "src" / "motion" / "footContact.ts").read_text()
+    body = re.search(r"export const FOOT_CLEANUP = \{([^}]*)\}", ts).group(1)
+    theirs = {re.sub(r"[A-Z]", lambda m: "_" + m.group(0).lower(), k): float(v)
+              for k, v in re.findall(r"(\w+):\s*([\d.]+)", body)}
+    assert theirs == {k: float(v) for k, v in FOOT_CLEANUP.items()}

@@ -161,7 +161,7 @@ describe('smoothing and foot-contact clean-up', () => {
     expect(footSkate(out2, frames, plantContacts(still.joints, frames, contacts, rig), rig)).toBeLessThan(1e-4);
     expect(Math.abs(out2[(14 * J + 7) * 3 + 2] - out2[(13 * J + 7) * 3 + 2])).toBeLessThan(1e-6);
   });
-  /** A run as the model makes it (twin of test_motion_decode.py ``sliding_run``): the body travels 3.6 m/s, the left
+  /** A run as the model makes it (twin of test_motion_decode.py ``sliding_run``): the body travels 3.8 m/s, the left
    *  foot swings 0.3 m a frame and, in its stances (frames 4–9, 14–19, contacts on), still slides 5 cm a frame. */
   function slidingRun(frames = 24) {
     const joints = new Float32Array(frames * J * 3);
@@ -195,6 +195,8 @@ describe('smoothing and foot-contact clean-up', () => {
       const held = Array.from({ length: e - s + 1 }, (_, i) => z(out, s + i));
       expect(Math.max(...held) - Math.min(...held)).toBeLessThan(0.01); // raw: 25 cm
     }
+    const slid = cleanupFootContacts(joints, 24, contacts, rig, { stanceDrift: 0.1 }); // the option is passed through
+    expect(Math.max(...[4, 5, 6, 7, 8, 9].map((f) => z(slid, f))) - Math.min(...[4, 5, 6, 7, 8, 9].map((f) => z(slid, f)))).toBeGreaterThan(0.2);
     let step = 0;
     for (let f = 1; f < 24; f++) step = Math.max(step, Math.hypot(...[0, 1, 2].map((c) => out[(f * J + 7) * 3 + c] - out[((f - 1) * J + 7) * 3 + c])));
     expect(step).toBeLessThan(0.65); // the swing makes up the 25 cm it no longer slides: 0.30 → up to 0.60

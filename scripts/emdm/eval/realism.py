@@ -18,8 +18,8 @@ test clips. Per action, against those real clips (the reference row):
   is one such step).
 * **ground**: share of airborne frames (both feet above ``kinematics.AIRBORNE``), penetration, floating, foot
   skate (``emdm.eval.plausibility``), and the largest bone-length error (``emdm.eval.poses.check_frames``).
-* **feet**: the feet's acceleration (ankles and balls of the feet, m/s², 95th percentile over a motion's frames;
-  mean over motions, as the skate) against the real clips': what holding a foot still costs the swing that follows (a foot
+* **feet**: the feet's acceleration (ankles and balls of the feet, m/s², 95th percentile over a motion's frames
+  and those four joints pooled; mean over motions, as the skate) against the real clips': what holding a foot still costs the swing that follows (a foot
   clean-up that stops a skate makes the swing make up the distance), beside the skate it trades against.
 * **moving**: the motions' median ``peak_speed`` (the fastest joint's speed, 95th percentile over frames) over the
   real clips' median, and the share of motions that *move* (peak speed at least ``STILL`` = a quarter of the 5th
@@ -390,7 +390,7 @@ def section(r: dict, plot: str | None = None) -> list[str]:
             f"× {r['speed_slack']:g}. *Step*: every joint's displacement between consecutive frames; the real maximum is "
             f"{ref['max_step_all']:.3f} m over the real test clips of all actions. *Airborne*: frames with both feet "
             f"higher than {100 * K.AIRBORNE:.0f} cm. *Feet accel.*: the ankles' and balls of the feet's acceleration, 95th "
-            f"percentile over a motion's frames, mean over motions (holding a foot still makes the swing after it "
+            f"percentile over a motion's frames and those four joints, mean over motions (holding a foot still makes the swing after it "
             f"faster). *Moving*: the motions' median peak speed (the fastest joint's speed, 95th "
             f"percentile over frames) over the real clips', and the share of motions with at least {STILL:g} × the real "
             f"clips' 5th percentile (the rest hold a pose). *Kinematic rule*: share passing the action's rule (table below); "
