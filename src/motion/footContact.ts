@@ -119,15 +119,9 @@ export function cleanupFootContacts(
   frames: number,
   contacts: Float32Array,
   rig: FootRig,
-  {
-    threshold = FOOT_CLEANUP.threshold,
-    blend = FOOT_CLEANUP.blend,
-    gap = FOOT_CLEANUP.gap,
-    maxDrift = FOOT_CLEANUP.maxDrift,
-    stanceDrift = FOOT_CLEANUP.stanceDrift,
-    stanceFrames = FOOT_CLEANUP.stanceFrames,
-  }: FootCleanupOptions = {},
+  options: FootCleanupOptions = {},
 ): Float32Array {
+  const blend = options.blend ?? FOOT_CLEANUP.blend;
   const J = rig.parents.length;
   if (joints.length !== frames * J * 3) throw new RangeError(`cleanupFootContacts: joints has ${joints.length} values, expected ${frames} × ${J} × 3`);
   if (contacts.length !== frames * 4) throw new RangeError(`cleanupFootContacts: contacts has ${contacts.length} values, expected ${frames} × 4`);
@@ -148,7 +142,7 @@ export function cleanupFootContacts(
 
   // 2. pinned targets per foot joint: target[f] and weight[f] in [0, 1]; where one plant's fade-out meets the next's
   // fade-in (a run's short swing) the target is their weight-mixed mean, so it never jumps a stride in one frame
-  const planted = plantRuns(out, frames, contacts, rig, { threshold, gap, maxDrift, stanceDrift, stanceFrames });
+  const planted = plantRuns(out, frames, contacts, rig, options); // which runs are plants: its options, its defaults
   const targets = rig.footJoints.map((j, c) => {
     const tgt: (V3 | null)[] = new Array(frames).fill(null);
     const wgt = new Float64Array(frames);

@@ -117,7 +117,8 @@ def cleanup_foot_contacts(joints: np.ndarray, contacts: np.ndarray, parents, foo
         raise ValueError("cleanup_foot_contacts: foot_joints must list l_ankle, l_foot, r_ankle, r_foot")
     _floor(out, foot_joints)
     targets = []
-    planted = plant_runs(out, contacts, threshold, gap, max_drift, foot_joints, stance_drift, stance_frames)
+    planted = plant_runs(out, contacts, threshold, gap, max_drift, foot_joints=foot_joints, stance_drift=stance_drift,
+                         stance_frames=stance_frames)
     for c, j in enumerate(foot_joints):
         tgt = np.zeros((frames, 3))
         wgt = np.zeros(frames)
