@@ -83,6 +83,7 @@ class ModelSource:
     guidance: float = DEFAULT_GUIDANCE
     guidance_min_time: float | None = None   # guided only where t > this (None: the manifest's guidanceMinTime, else 0)
     x0_smoothing: float | None = None        # σ of x̂_0's smoothing along time (None: the manifest's x0Smoothing, else 0)
+    speed_cap: float = 0.0                   # the sampler's root speed cap (emdm.sampler.sampler; 0 = off)
     batch_size: int = 64
     threads: int = 1
     device: str = "cpu"                      # with ckpt=: "cuda" runs the generator on the GPU
@@ -119,14 +120,17 @@ class ModelSource:
         self.info = {"variant": variant, "sampler": sampler, "steps": self.steps, "guidance": self.guidance,
                      **({"guidance_min_time": self.guidance_min_time} if self.guidance_min_time else {}),
                      **({"x0_smoothing": self.x0_smoothing} if self.x0_smoothing else {}),
+                     **({"speed_cap": self.speed_cap} if self.speed_cap else {}),
                      "geo_weight": self.flags.get("geo_weight"), "d_cond": self.flags.get("d_cond"),
                      **self.origin, **self.info}
 
     @property
     def settings(self) -> SamplingSettings:
-        """How this source samples: its method, steps, guidance (and interval), x̂_0 smoothing and z size."""
+        """How this source samples: its method, steps, guidance (and interval), x̂_0 smoothing, root speed cap (with
+        the model's root velocity normalisation) and z size."""
+        norm = (float(self.mean[1]), float(self.mean[2]), float(self.std[1]), float(self.std[2]))
         return SamplingSettings(method_of(self.objective), self.steps, self.guidance, self.guidance_min_time,
-                                self.x0_smoothing, z_dim=self.z_dim)
+                                self.x0_smoothing, self.speed_cap, norm if self.speed_cap else None, z_dim=self.z_dim)
 
     def conditions_of(self, cond: Conditions) -> np.ndarray:
         spec = self.cond_spec

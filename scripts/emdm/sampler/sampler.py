@@ -32,6 +32,14 @@ those earlier steps out: the model sees frames [lead, frames) only, and they joi
 a_cum[k+1]·known + s_cum[k+1]·(their x_T draw). The random draws are the same either way (x_T and every ε are drawn
 for all frames; the rows left out go unused).
 
+Root speed cap (``speed_cap``, off by default; measured in docs/MODELS.md, "Where the run's speed comes from"): the
+first step's conditional x̂0 (t = 1: the mean motion of the condition) travels at the real clips' speed, and the
+steps at t = 0.9–0.7 make runs a fifth faster than it. With ``speed_cap`` c > 0, a motion whose first conditional
+x̂0 travels (median horizontal root speed ≥ ``CAP_MIN_SPEED``) and whose result goes faster than c times that speed
+has its root velocity channels (1, 2; de-normalised by ``root_norm``, scaled, normalised back) scaled to it, on the
+frames and channels not kept (inpainting). Never faster, and the heading and the pose are the model's. Python only
+for now: the TypeScript twin has no cap yet.
+
 ``sampling`` is the loop as a generator of the step model's inputs; ``drive`` runs it with a step function;
 ``emdm.sampler.lockstep`` runs several with one model call per step.
 """
@@ -42,6 +50,7 @@ from typing import Callable
 
 import numpy as np
 
+from emdm import skeleton as sk
 from emdm.motion.smooth import smooth_pose
 from emdm.sampler.registry import SAMPLERS
 from emdm.sampler.schedule import Schedule, make_schedule
@@ -50,6 +59,7 @@ from emdm.sampler.settings import SampleError, SamplingSettings
 StepFn = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 STOP = "stop"     # what ``sampling`` yields where it stops (``stop_at``): send it the known motion to go on
 DEFAULT = SamplingSettings()
+CAP_MIN_SPEED = 0.5 / sk.FPS   # m per frame (0.5 m/s): a first x̂0 slower than this does not travel; its motion is left alone
 
 
 def sample_features(step: StepFn, cond: np.ndarray, frames: int, settings: SamplingSettings = DEFAULT, seed: int = 0,
@@ -85,6 +95,7 @@ def sampling(cond: np.ndarray, frames: int, settings: SamplingSettings = DEFAULT
     # a deferred kept part: its leading whole-kept frames sit out the steps before it is imposed (``lead_frames``)
     lead = lead_frames(keep) if keep is not None and not imposed[s.steps - 1] else 0
     stop = stop_index(sch, stop_at, deferred, imposed)
+    cap_ref = None                   # per row: the first conditional x̂0's median root speed (m per frame), speed_cap only
     for k in range(s.steps - 1, -1, -1):
         if k == stop:
             given = yield STOP
@@ -103,6 +114,8 @@ def sampling(cond: np.ndarray, frames: int, settings: SamplingSettings = DEFAULT
         xin, zin = (np.concatenate([xs, xs]), np.concatenate([z, z])) if guided else (xs, z)
         t = np.full((xin.shape[0],), sch.time[k], np.float32)
         x0 = np.asarray((yield xin, zin, c, t, np.ones((xin.shape[0], frames - f0), np.float32)), np.float32)
+        if s.speed_cap > 0 and cap_ref is None:            # the conditional rows come first
+            cap_ref = root_speeds(x0[:num], s.root_norm, (frames if lengths is None else lengths) - f0)
         if guided:
             x0 = x0[num:] + np.float32(s.guidance) * (x0[:num] - x0[num:])
         if s.x0_smoothing > 0 and k > 0:
@@ -110,7 +123,32 @@ def sampling(cond: np.ndarray, frames: int, settings: SamplingSettings = DEFAULT
         if imposed[k]:
             x0 = np.where(keep, known, x0)
         x[:, f0:] = rule.update(xs, x0, k, sch, lambda: rng.standard_normal(x.shape, dtype=np.float32)[:, f0:])
+    if cap_ref is not None:
+        x = cap_root_speed(x, s.speed_cap * cap_ref, s.root_norm, frames if lengths is None else lengths, keep)
     return x.astype(np.float32)
+
+
+def root_speeds(x: np.ndarray, root_norm, lengths) -> np.ndarray:
+    """(B,) median horizontal root speed, m per frame, of normalised features x (B, F, D) over each row's first
+    ``lengths`` frames (an int or (B,))."""
+    m1, m2, s1, s2 = (float(v) for v in root_norm)
+    v = np.hypot(x[..., 1] * s1 + m1, x[..., 2] * s2 + m2)
+    n = np.broadcast_to(np.asarray(lengths), (len(x),))
+    return np.array([np.median(v[i, : max(int(n[i]), 1)]) for i in range(len(x))], np.float64)
+
+
+def cap_root_speed(x: np.ndarray, cap: np.ndarray, root_norm, lengths, keep: np.ndarray | None) -> np.ndarray:
+    """x (B, F, D) normalised with each travelling row's root velocity scaled so its median speed is at most ``cap``
+    (B,) m per frame; rows whose cap is under CAP_MIN_SPEED (the first x̂0 did not travel), or already slower, as
+    they are; entries ``keep`` keeps unchanged."""
+    m1, m2, s1, s2 = (np.float32(v) for v in root_norm)
+    cur = root_speeds(x, root_norm, lengths)
+    out = x.copy()
+    for i in np.flatnonzero((cap >= CAP_MIN_SPEED) & (cur > cap)):
+        r = np.float32(cap[i] / cur[i])
+        scaled = np.stack([((x[i, :, 1] * s1 + m1) * r - m1) / s1, ((x[i, :, 2] * s2 + m2) * r - m2) / s2], axis=-1)
+        out[i, :, 1:3] = scaled if keep is None else np.where(keep[:, 1:3] > 0, x[i, :, 1:3], scaled)
+    return out
 
 
 def enter_known(x: np.ndarray, keep: np.ndarray, known: np.ndarray, sch: Schedule, k: int, lead: int) -> np.ndarray:

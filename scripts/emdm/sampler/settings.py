@@ -35,7 +35,9 @@ class SamplingSettings:
     fresh z and ε every step; "ddim": DDIM, η = 0, z zeroed). ``guidance``: the classifier-free guidance scale (1 or
     an all-zero condition: one conditional row). ``guidance_min_time``: guide only the steps whose time is above it
     (the manifest's guidanceMinTime; 0 = every step). ``x0_smoothing``: σ in frames of x̂0's pose smoothing at every
-    step but the last (the manifest's x0Smoothing; 0 = off). Inpainting: ``known`` (frames, D) normalised features
+    step but the last (the manifest's x0Smoothing; 0 = off). ``speed_cap``: each motion's median root speed at most this
+    multiple of its first step's conditional x̂0's (``emdm.sampler.sampler``, "Root speed cap"; 0 = off), which needs
+    ``root_norm``: the mean and std of root velocity channels 1 and 2 (m1, m2, s1, s2; the model's meanstd). Inpainting: ``known`` (frames, D) normalised features
     and ``keep`` (frames, D) 0/1, imposed at the steps with t ≤ ``keep_from_time`` and the last. ``z_dim`` and
     ``feature_dim``: the model's latent and feature sizes (its manifest's zDim and featureDim)."""
     method: str = "ddgan"
@@ -43,6 +45,8 @@ class SamplingSettings:
     guidance: float = 1.0
     guidance_min_time: float = 0.0
     x0_smoothing: float = 0.0
+    speed_cap: float = 0.0
+    root_norm: tuple[float, float, float, float] | None = None
     known: np.ndarray | None = None
     keep: np.ndarray | None = None
     keep_from_time: float = 1.0
@@ -68,6 +72,7 @@ class SamplingSettings:
             raise SampleError(f"guidance_min_time must be a finite time ≥ 0 (0 = guide every step), "
                               f"got {self.guidance_min_time}")
         check_x0_smoothing(self.x0_smoothing)
+        check_speed_cap(self.speed_cap, self.root_norm)
         if not (math.isfinite(self.keep_from_time) and self.keep_from_time >= 0):
             raise SampleError(f"keep_from_time must be a finite time ≥ 0 (1 = impose the kept part at every step), "
                               f"got {self.keep_from_time}")
@@ -86,6 +91,18 @@ def check_x0_smoothing(sigma: float, name: str = "x0_smoothing") -> float:
             or not (math.isfinite(sigma) and 0 <= sigma <= MAX_X0_SMOOTHING)):
         raise SampleError(f"{name} must be a finite σ ≥ 0 in frames (0 = off), got {sigma!r} (at most {MAX_X0_SMOOTHING:g})")
     return float(sigma)
+
+
+def check_speed_cap(cap: float, root_norm) -> float:
+    """``speed_cap`` ≥ 0 (0 = off) and, when on, four finite ``root_norm`` values with positive stds."""
+    if isinstance(cap, bool) or not isinstance(cap, (int, float, np.floating)) or not (math.isfinite(cap) and cap >= 0):
+        raise SampleError(f"speed_cap must be a finite multiple ≥ 0 of the first step's root speed (0 = off), got {cap!r}")
+    if cap > 0:
+        norm = None if root_norm is None else np.asarray(root_norm, np.float64).ravel()
+        if norm is None or norm.size != 4 or not np.all(np.isfinite(norm)) or not (norm[2] > 0 and norm[3] > 0):
+            raise SampleError("speed_cap needs root_norm: the mean and std of root velocity channels 1 and 2 "
+                              f"(m1, m2, s1, s2; the model's meanstd, stds > 0), got {root_norm!r}")
+    return float(cap)
 
 
 def check_steps(steps: int | None, entry: dict, name: str) -> int:
