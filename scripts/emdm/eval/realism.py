@@ -281,7 +281,8 @@ def run(a) -> Path:
                 "seconds": round(time.time() - t_start, 1), "load_avg_1min_end": os.getloadavg()[0]})
     result = {"schema": SCHEMA, "task": "realism", "name": a.name or out.stem.removeprefix("realism-"),
               "model": opened.name, "variant": opened.variant, "condition": src.task,
-              "info": {k: v for k, v in src.info.items()}, "key": {**C._key(a, guidance, gmin, sigma), **({"speed_cap": a.speed_cap} if a.speed_cap else {})},
+              "info": {k: v for k, v in src.info.items()},
+              "key": {**C._key(a, guidance, gmin, sigma), **({"speed_cap": a.speed_cap} if a.speed_cap else {})},
               "steps": a.steps, "speed_cap": a.speed_cap,
               "x0_smoothing": sigma, "decode": a.decode, "labels": labels, "real": real, "generated": gen,
               "rules": {act: {"rule": v["rule"], "own": v["own"], "n": v["n"], "false_pass": v["false_pass"],

@@ -32,7 +32,7 @@ those earlier steps out: the model sees frames [lead, frames) only, and they joi
 a_cum[k+1]·known + s_cum[k+1]·(their x_T draw). The random draws are the same either way (x_T and every ε are drawn
 for all frames; the rows left out go unused).
 
-Root speed cap (``speed_cap``, off by default; measured in docs/MODELS.md, "Where the run's speed comes from"): the
+Root speed cap (``speed_cap``, off by default; measured in docs/MODELS.md, "A cap on the sampler's side"): the
 first step's conditional x̂0 (t = 1: the mean motion of the condition) travels at the real clips' speed, and the
 steps at t = 0.9–0.7 make runs a fifth faster than it. With ``speed_cap`` c > 0, a motion whose first conditional
 x̂0 travels (median horizontal root speed ≥ ``CAP_MIN_SPEED``) and whose result goes faster than c times that speed
@@ -59,7 +59,7 @@ from emdm.sampler.settings import SampleError, SamplingSettings
 StepFn = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 STOP = "stop"     # what ``sampling`` yields where it stops (``stop_at``): send it the known motion to go on
 DEFAULT = SamplingSettings()
-CAP_MIN_SPEED = 0.5 / sk.FPS   # m per frame (0.5 m/s): a first x̂0 slower than this does not travel; its motion is left alone
+CAP_MIN_SPEED = 0.5 / sk.FPS   # m per frame (0.5 m/s): a first x̂0 slower does not travel; its motion is left alone
 
 
 def sample_features(step: StepFn, cond: np.ndarray, frames: int, settings: SamplingSettings = DEFAULT, seed: int = 0,

@@ -35,11 +35,12 @@ class SamplingSettings:
     fresh z and ε every step; "ddim": DDIM, η = 0, z zeroed). ``guidance``: the classifier-free guidance scale (1 or
     an all-zero condition: one conditional row). ``guidance_min_time``: guide only the steps whose time is above it
     (the manifest's guidanceMinTime; 0 = every step). ``x0_smoothing``: σ in frames of x̂0's pose smoothing at every
-    step but the last (the manifest's x0Smoothing; 0 = off). ``speed_cap``: each motion's median root speed at most this
-    multiple of its first step's conditional x̂0's (``emdm.sampler.sampler``, "Root speed cap"; 0 = off), which needs
-    ``root_norm``: the mean and std of root velocity channels 1 and 2 (m1, m2, s1, s2; the model's meanstd). Inpainting: ``known`` (frames, D) normalised features
-    and ``keep`` (frames, D) 0/1, imposed at the steps with t ≤ ``keep_from_time`` and the last. ``z_dim`` and
-    ``feature_dim``: the model's latent and feature sizes (its manifest's zDim and featureDim)."""
+    step but the last (the manifest's x0Smoothing; 0 = off). ``speed_cap``: each motion's median root speed at most
+    this multiple of its first step's conditional x̂0's (``emdm.sampler.sampler``, "Root speed cap"; 0 = off; Python
+    only so far), which needs ``root_norm``: the mean and std of root velocity channels 1 and 2 (m1, m2, s1, s2; the
+    model's meanstd). Inpainting: ``known`` (frames, D) normalised features and ``keep`` (frames, D) 0/1, imposed at
+    the steps with t ≤ ``keep_from_time`` and the last. ``z_dim`` and ``feature_dim``: the model's latent and feature
+    sizes (its manifest's zDim and featureDim)."""
     method: str = "ddgan"
     steps: int = 10
     guidance: float = 1.0
