@@ -60,6 +60,8 @@ export interface ModelEntry {
   guidanceMinTime?: number;
   /** σ (frames) of x̂0's smoothing along time at every denoising step but the last; absent = none */
   x0Smoothing?: number;
+  /** the sampler's root speed cap: each motion at most this multiple of its first step's conditional root speed; absent = none */
+  speedCap?: number;
   defaultSteps: number;
   supportedSteps: number[];
   schedules: Record<string, Schedule>;
@@ -281,6 +283,10 @@ export function validateManifest(data: unknown): Manifest {
     const sm = entry.x0Smoothing;
     if (sm !== undefined && !(typeof sm === 'number' && Number.isFinite(sm) && sm >= 0 && sm <= MAX_X0_SMOOTHING)) {
       fail(`models.${name}.x0Smoothing`, `is ${JSON.stringify(sm)}; it must be a σ ≥ 0 in frames, at most ${MAX_X0_SMOOTHING} (smooth x̂0 along time at every step but the last), or absent for none`);
+    }
+    const cap = entry.speedCap;
+    if (cap !== undefined && !(typeof cap === 'number' && Number.isFinite(cap) && cap >= 0)) {
+      fail(`models.${name}.speedCap`, `is ${JSON.stringify(cap)}; it must be a multiple ≥ 0 of the first step's root speed (hold each motion to it; 0 = off), or absent for none`);
     }
     const steps = entry.supportedSteps;
     if (steps !== undefined && !(Array.isArray(steps) && steps.length > 0 && steps.every((t) => isIntIn(t, 1, MAX_STEPS)))) {

@@ -113,6 +113,8 @@ export interface SampleState {
   next: number;
   /** the seeded noise's state there (absent when the request gave its own noise source: pass the same one again) */
   rng?: RandomState;
+  /** with a speed cap (`speedCap`): the first step's conditional root speed, m per frame, that the finished run is held to */
+  speedRef?: number;
 }
 
 export interface Generator {
@@ -290,6 +292,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     const method = o.method ?? samplerName;
     const schedule = checkedSchedule(o, entry, model, method);
     const resume = 'resume' in o ? o.resume : undefined;
+    const speedCap = o.speedCap ?? entry.speedCap ?? 0;
     const cond = await condition.vector(o.condition);
     const prompt = o.condition.type === 'text' ? await condition.tokens(o.condition.text) : undefined;
     const check = o.condition.type === 'text' ? await condition.check(cond) : undefined;
@@ -298,8 +301,9 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
       options: {
         method, schedule, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance,
         guidanceMinTime: o.guidanceMinTime ?? entry.guidanceMinTime ?? 0, x0Smoothing: o.x0Smoothing ?? entry.x0Smoothing ?? 0, signal: o.signal, onStep: o.onStep,
+        ...(speedCap > 0 ? { speedCap, rootNorm: [mean[1], mean[2], std[1], std[2]] } : {}),
         ...inpaintingSettings(o.known, mean, std),
-        ...(resume ? { resume: { x: resume.x, next: resume.next } } : {}),
+        ...(resume ? { resume: { x: resume.x, next: resume.next, ...(resume.speedRef !== undefined ? { speedRef: resume.speedRef } : {}) } } : {}),
       },
     };
   }
@@ -323,7 +327,10 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     const done: Awaited<ReturnType<typeof sample>>[] = [];
     if (batchesExactly) done.push(...(await together(step, runs.map((r) => (st: StepFn) => sample({ ...r, step: st })))));
     else for (const r of runs) done.push(await sample({ ...r, step }));
-    return done.map((r, i) => ({ x: r.x, frames: os[i].frames, steps: os[i].steps, next: r.next!, ...(rngs[i] ? { rng: rngs[i]!.state() } : {}) }));
+    return done.map((r, i) => ({
+      x: r.x, frames: os[i].frames, steps: os[i].steps, next: r.next!,
+      ...(r.speedRef !== undefined ? { speedRef: r.speedRef } : {}), ...(rngs[i] ? { rng: rngs[i]!.state() } : {}),
+    }));
   }
 
   async function run(o: GenerateOptions): Promise<GenerateResult> {

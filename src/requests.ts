@@ -110,10 +110,11 @@ export function resolveRequest(manifest: Manifest, req: MotionRequest): { model:
 
 /** A request's settings with the manifest's steps and guidance filled in (the rest, when absent, openModel's defaults). */
 function settingsOf(req: Partial<RequestSettings>, entry: ModelEntry): RequestSettings {
-  const { method, steps = entry.defaultSteps, guidance = entry.guidance, guidanceMinTime, x0Smoothing } = req;
+  const { method, steps = entry.defaultSteps, guidance = entry.guidance, guidanceMinTime, x0Smoothing, speedCap } = req;
   return {
     ...(method !== undefined ? { method } : {}), steps, guidance,
     ...(guidanceMinTime !== undefined ? { guidanceMinTime } : {}), ...(x0Smoothing !== undefined ? { x0Smoothing } : {}),
+    ...(speedCap !== undefined ? { speedCap } : {}),
   };
 }
 

@@ -363,8 +363,8 @@ def make_files(a: argparse.Namespace, G: Generator, meta: dict, summary: dict, o
 
 
 def write_entry(a: argparse.Namespace, out: Path, meta: dict, summary: dict, files: dict, extra: dict) -> None:
-    """The manifest entry models.<name> (keeping the earlier entry's guidance, guidanceMinTime, x0Smoothing, defaultVariant
-    unless given)."""
+    """The manifest entry models.<name> (keeping the earlier entry's guidance, guidanceMinTime, x0Smoothing, speedCap,
+    defaultVariant unless given)."""
     var_err = extra.get("variantRelErr", {})
     earlier = mf.load(out, missing_ok=True)["models"].get(a.name, {})   # a re-export keeps what was chosen for it
     extra["guidance"] = float(earlier.get("guidance", 2.5) if a.guidance is None else a.guidance)
@@ -374,6 +374,8 @@ def write_entry(a: argparse.Namespace, out: Path, meta: dict, summary: dict, fil
     sigma = earlier.get("x0Smoothing", 0.0) if a.x0_smoothing is None else a.x0_smoothing
     if sigma:
         extra["x0Smoothing"] = float(sigma)
+    if earlier.get("speedCap"):         # chosen by the realism benchmark for this model (docs/MODELS.md)
+        extra["speedCap"] = float(earlier["speedCap"])
     dv = a.default_variant
     if dv is None:       # the earlier variant, while that file is still exported
         dv = earlier.get("defaultVariant")

@@ -42,6 +42,7 @@ from emdm import manifest as mf
 from emdm import paths
 from emdm.model.open import onnx_step
 from emdm.sampler import SamplingSettings, sample_features
+from emdm.sampler.sampler import cap_root_speed, root_speeds
 from emdm.sampler.schedule import make_schedule
 from emdm.sampler.settings import method_of
 from emdm.mocap.jointmap import load_joint_map
@@ -57,6 +58,8 @@ TINY_COND_DIM = 8
 TINY_DDIM_STEPS = 5
 TINY_GUIDANCE_MIN_TIME = 0.6   # of the tiny 4-step grid (0.25, 0.5005, 0.75, 1): guided at 1 and 0.75 only
 TINY_X0_SMOOTHING = 1.0        # σ (frames) of the tiny smoothed run
+TINY_SPEED_CAP = 0.8           # the tiny capped run: held to 0.8 × its first conditional x̂0's root speed
+TINY_ROOT_NORM = (0.0, 0.0, 1.0, 1.0)   # tiny.meanstd's root velocity channels (mean 0, std 1)
 DDIM_STEP_COUNTS = (1, 2, 4, 5, 8, 10, 20, 50, 100)   # the diffusion baseline's supportedSteps
 
 
@@ -104,16 +107,19 @@ def run_step(sess, x: np.ndarray, z: np.ndarray, cond: np.ndarray, t: np.ndarray
 
 def reference_sample(sess, x_T: np.ndarray, zs: list[np.ndarray], epss: list[np.ndarray | None],
                      cond: np.ndarray, guidance: float, sched, objective: str = "ddgan",
-                     guidance_min_time: float = 0.0, x0_smoothing: float = 0.0) -> np.ndarray:
+                     guidance_min_time: float = 0.0, x0_smoothing: float = 0.0, speed_cap: float = 0.0,
+                     root_norm=None) -> np.ndarray:
     """x_T (L, D); zs[k] (zDim,), epss[k] (L, D) or None, indexed by step k; cond (C,) -> x_0 (L, D).
 
     Guidance (s != 1 and a non-zero condition) at the steps whose time is above ``guidance_min_time`` (all
     of them for 0): one batched call with rows [cond, 0], same x and z, x0 = x0_u + s (x0_c - x0_u); at the
-    other steps one conditional call. ``x0_smoothing`` σ > 0: at every step but the last (k > 0), x0's pose channels ← the
+    other steps one conditional call. ``speed_cap`` c > 0 (with ``root_norm``): the result's root speed held to c times
+    the first step's conditional x̂0's (``emdm.sampler.sampler`` "Root speed cap"). ``x0_smoothing`` σ > 0: at every step but the last (k > 0), x0's pose channels ← the
     Gaussian along frames of ``emdm.motion.smooth.smooth_pose`` (src/motion/smooth.ts smoothPose). ``objective="diffusion"``: z = 0 (the drawn z is ignored) and the
     DDIM update (η = 0) of docs/ARCHITECTURE.md "DDIM sampling", in float32 like emdm.sampler."""
     x = x_T.astype(np.float32)[None]
     guided = bool(np.any(cond != 0)) and guidance != 1.0
+    first = None
     for k in range(sched.steps - 1, -1, -1):
         t = np.float32(sched.time[k])
         z = np.zeros_like(zs[k]) if objective == "diffusion" else zs[k]
@@ -121,8 +127,10 @@ def reference_sample(sess, x_T: np.ndarray, zs: list[np.ndarray], epss: list[np.
             out = run_step(sess, np.concatenate([x, x]), np.stack([z, z]),
                            np.stack([cond, np.zeros_like(cond)]), np.array([t, t], np.float32))
             x0 = out[1:2] + np.float32(guidance) * (out[0:1] - out[1:2])
+            first = out[0:1] if first is None else first
         else:
             x0 = run_step(sess, x, z[None], cond[None], np.array([t], np.float32))
+            first = x0 if first is None else first
         if x0_smoothing > 0 and k > 0:
             x0 = smooth_pose(x0, x0_smoothing)
         if objective == "diffusion":
@@ -136,6 +144,9 @@ def reference_sample(sess, x_T: np.ndarray, zs: list[np.ndarray], epss: list[np.
         if sched.sigma[k] != 0:
             x_new = x_new + sched.sigma[k] * epss[k][None].astype(np.float64)
         x = x_new.astype(np.float32)
+    if speed_cap > 0:
+        ref = root_speeds(first, root_norm, first.shape[1])
+        x = cap_root_speed(x, speed_cap * ref, root_norm, x.shape[1], None)
     return x[0]
 
 
@@ -232,12 +243,15 @@ def make_tiny(out_dir: Path, export: bool = True) -> dict[str, Any]:
     x_u = reference_sample(sess, x_T, zs, epss, np.zeros(C, np.float32), 2.5, sched)
     x_i = reference_sample(sess, x_T, zs, epss, cond, 2.5, sched, guidance_min_time=TINY_GUIDANCE_MIN_TIME)
     x_s = reference_sample(sess, x_T, zs, epss, cond, 2.5, sched, x0_smoothing=TINY_X0_SMOOTHING)
+    x_c = reference_sample(sess, x_T, zs, epss, cond, 2.5, sched, speed_cap=TINY_SPEED_CAP, root_norm=TINY_ROOT_NORM)
+    if np.array_equal(x_c, x):
+        raise AssertionError("fixtures tiny: the capped run was not capped; choose another TINY_SPEED_CAP")
     arrays = {"step_x_t": step_x, "step_z": step_z, "step_cond": step_c, "step_t": step_t, "step_x0": step_x0,
               "cond": cond, **noise_arrays(x_T, zs, epss), "final_x": x, "final_x_uncond": x_u, "final_x_interval": x_i,
-              "final_x_smooth": x_s}
+              "final_x_smooth": x_s, "final_x_cap": x_c}
     meta = {"model": "tiny-step.onnx", "frames": L, "featureDim": D, "zDim": Z, "condDim": C,
             "steps": sched.steps, "guidance": 2.5, "intervalGuidanceMinTime": TINY_GUIDANCE_MIN_TIME,
-            "smoothX0Smoothing": TINY_X0_SMOOTHING,
+            "smoothX0Smoothing": TINY_X0_SMOOTHING, "capSpeedCap": TINY_SPEED_CAP, "capRootNorm": list(TINY_ROOT_NORM),
             "schedule": schedule_meta(sched)}
     write_case(out_dir, "tiny", meta, arrays)
     # mean/std file in the manifest layout (float32 LE mean[263] then std[263]) for the browser harness
@@ -357,6 +371,7 @@ def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[s
     guidance = float(entry["guidance"])
     gmin = float(entry.get("guidanceMinTime", 0.0))
     sigma = float(entry.get("x0Smoothing", 0.0))
+    cap = float(entry.get("speedCap", 0.0))
     ms = np.fromfile(models_dir / entry["meanStd"], dtype="<f4")
     if ms.shape != (2 * D,):
         raise ValueError(f"{models_dir / entry['meanStd']}: {ms.size} floats, expected {2 * D}")
@@ -379,9 +394,11 @@ def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[s
     step_x0 = run_step(sess, step_x, step_z, cond[None], step_t)
     seed = 1000 + len(name)
     x_T, zs, epss = draw_noise(np.random.default_rng(seed), steps, L, D, Z, sched, objective)
-    x = reference_sample(sess, x_T, zs, epss, cond, guidance, sched, objective, gmin, sigma)
+    norm = (float(mean[1]), float(mean[2]), float(std[1]), float(std[2]))
+    x = reference_sample(sess, x_T, zs, epss, cond, guidance, sched, objective, gmin, sigma, cap, norm)
     # the fixture run must be what the Python pipeline itself samples with this seed
-    settings = SamplingSettings(method_of(objective), steps, guidance, gmin, sigma, z_dim=Z, feature_dim=D)
+    settings = SamplingSettings(method_of(objective), steps, guidance, gmin, sigma, cap, norm if cap else None,
+                                z_dim=Z, feature_dim=D)
     x_py = sample_features(onnx_step(onnx_path), cond, L, settings, seed)[0]
     # float32 rounding (the reference updates x in float64) grows over the steps, amplified by guidance:
     # compare relative to the motion's scale
@@ -400,7 +417,7 @@ def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[s
             "sampler": "ddim" if objective == "diffusion" else "ddgan", "frames": L, "featureDim": D, "zDim": Z,
             "condDim": C, "condition": cond_desc, "seed": seed, "steps": steps, "guidance": guidance,
             **({"guidanceMinTime": gmin} if gmin else {}), **({"x0Smoothing": sigma} if sigma else {}),
-            "schedule": schedule_meta(sched)}
+            **({"speedCap": cap} if cap else {}), "schedule": schedule_meta(sched)}
     write_case(out_dir, case, meta, arrays)
     return {"case": case, "model": name, "sha256": meta_file["sha256"]}
 

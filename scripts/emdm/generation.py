@@ -83,7 +83,8 @@ def generate(prompt: str, *, seconds: float = 6.0, seed: int = 0, steps: int | N
     g = float(entry.get("guidance", 2.5)) if guidance is None else guidance
     if not (math.isfinite(g) and g >= 0):
         raise SampleError(f"guidance must be a finite number ≥ 0, got {guidance!r}")
-    x = sample_features(opened.step, cond, frames, SamplingSettings.from_entry(entry, steps, g), seed)
+    x = sample_features(opened.step, cond, frames, SamplingSettings.from_entry(entry, steps, g, opened.mean, opened.std),
+                        seed)
     feats = denormalise(x[0], opened.mean, opened.std).astype(np.float32)
     if not np.isfinite(feats).all():
         raise SampleError(f"model {model!r} returned non-finite numbers; check its files against the manifest's sha256")

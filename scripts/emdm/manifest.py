@@ -175,8 +175,8 @@ def _number_in(v: Any, lo: float, hi: float) -> bool:
 
 def check_model_entry(entry: dict[str, Any], name: str, where: Path | str) -> dict[str, Any]:
     """A model entry that sampling can use: every field it reads has the right type and a bounded size (steps ≤
-    MAX_STEPS, maxFrames ≤ MAX_MODEL_FRAMES, zDim and condition.dim ≤ MAX_DIM, x0Smoothing ≤ MAX_X0_SMOOTHING frames),
-    else a ManifestError naming the field."""
+    MAX_STEPS, maxFrames ≤ MAX_MODEL_FRAMES, zDim and condition.dim ≤ MAX_DIM, x0Smoothing ≤ MAX_X0_SMOOTHING frames,
+    speedCap ≥ 0), else a ManifestError naming the field."""
     for key in ("task", "condition", "onnx", "meanStd"):
         if key not in entry:
             raise ManifestError(f"{where}: models.{name} lacks {key!r}")
@@ -189,6 +189,7 @@ def check_model_entry(entry: dict[str, Any], name: str, where: Path | str) -> di
         ("guidance", lambda v: _number_in(v, 0, 1e6), "a finite scale ≥ 0"),
         ("guidanceMinTime", lambda v: _number_in(v, 0, 1e6), "a finite time ≥ 0"),
         ("x0Smoothing", lambda v: _number_in(v, 0, MAX_X0_SMOOTHING), f"a σ ≥ 0 in frames, at most {MAX_X0_SMOOTHING:g}"),
+        ("speedCap", lambda v: _number_in(v, 0, 1e6), "a finite multiple ≥ 0 of the first step's root speed (0 = off)"),
         ("defaultSteps", lambda v: _int_in(v, 1, MAX_STEPS), f"an integer in 1..{MAX_STEPS}"),
         ("supportedSteps", lambda v: isinstance(v, list) and 0 < len(v) <= MAX_STEPS
          and all(_int_in(s, 1, MAX_STEPS) for s in v), f"a list of step counts in 1..{MAX_STEPS}"),

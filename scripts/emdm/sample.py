@@ -329,7 +329,7 @@ def run(a: argparse.Namespace) -> int:
     frames = 120 if a.frames is None else a.frames
     if not 1 <= frames <= max_frames:
         raise SampleError(f"--frames must be in 1..{max_frames}, got {frames}")
-    settings = settings_of(a, entry)
+    settings = settings_of(a, entry, mean, std)
     if edit_mode(a):
         editor = E.Editor.from_entry(step, entry, mean, std, models_dir=a.models_dir)
         feats, joints = run_edit(a, dataclasses.replace(editor, settings=settings), frames)
@@ -354,11 +354,12 @@ def run(a: argparse.Namespace) -> int:
     return write_motion(a, feats, joints)
 
 
-def settings_of(a: argparse.Namespace, entry: dict) -> SamplingSettings:
-    """The model's sampling settings (its manifest entry) with the flags given: --steps (checked against its
-    supportedSteps), --guidance, --guidance-min-time, --x0-smoothing."""
+def settings_of(a: argparse.Namespace, entry: dict, mean: np.ndarray | None = None,
+                std: np.ndarray | None = None) -> SamplingSettings:
+    """The model's sampling settings (its manifest entry, its mean/std for a speedCap) with the flags given: --steps
+    (checked against its supportedSteps), --guidance, --guidance-min-time, --x0-smoothing."""
     steps = check_steps(a.steps, entry, a.model or str(a.ckpt))
-    return with_flags(SamplingSettings.from_entry(entry, steps, a.guidance), a)
+    return with_flags(SamplingSettings.from_entry(entry, steps, a.guidance, mean, std), a)
 
 
 def write_motion(a: argparse.Namespace, feats: np.ndarray, joints: np.ndarray) -> int:

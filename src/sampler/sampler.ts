@@ -55,6 +55,11 @@ export interface SampleOptions extends Omit<SamplingSettings, 'steps'> {
   /** condition vector [C]; a zero vector means unconditional */
   cond: Float32Array;
   /**
+   * The model's mean and std of root velocity channels 1 and 2, [m1, m2, s1, s2] (Python's `root_norm`; openModel
+   * takes them from the model's meanstd): needed when `speedCap` > 0.
+   */
+  rootNorm?: readonly number[];
+  /**
    * Stop before the first step whose time is ≤ stopAt (at the latest before the last step; with one step, before
    * it) and return the state there (`SampleResult.next`): the first part of a run that `resume` finishes — a
    * timeline window's steps before its context joins, sampled together with the other windows' (src/edit.ts,
@@ -67,7 +72,7 @@ export interface SampleOptions extends Omit<SamplingSettings, 'steps'> {
    * on where the stopped run left off (the same object, or a SeededRandom restored from its state). The two parts
    * give the result of one whole run, bit for bit.
    */
-  resume?: { x: Float32Array; next: number };
+  resume?: { x: Float32Array; next: number; speedRef?: number };
   signal?: AbortSignal;
   onStep?: (done: number, total: number) => void;
   /**
@@ -84,6 +89,8 @@ export interface SampleResult {
   x: Float32Array;
   /** a run stopped by `stopAt`: the step to resume at (absent when every step ran, i.e. without stopAt) */
   next?: number;
+  /** a stopped run with `speedCap`: its first conditional x̂0's median root speed (m per frame), for `resume` */
+  speedRef?: number;
   stepMs: number[];
   modelCalls: number;
   /** steps that ran the unconditional row too (2 batch rows); the others ran 1 */
@@ -133,6 +140,9 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
   if (!Number.isFinite(gMin) || gMin < 0) throw new RangeError(`sampler: guidanceMinTime must be a finite time ≥ 0 (0 = guide every step), got ${gMin}`);
   const xs = o.x0Smoothing ?? 0;
   if (!Number.isFinite(xs) || xs < 0 || xs > MAX_X0_SMOOTHING) throw new RangeError(`sampler: x0Smoothing must be a finite σ ≥ 0 in frames (0 = off), got ${xs} (at most ${MAX_X0_SMOOTHING})`);
+  const cap = o.speedCap ?? 0;
+  if (!Number.isFinite(cap) || cap < 0) throw new RangeError(`sampler: speedCap must be a finite multiple ≥ 0 of the first step's root speed (0 = off), got ${cap}`);
+  const norm = cap > 0 ? checkRootNorm(o.rootNorm) : null;
   const s = o.guidance;
   const T = schedule.steps;
   // the steps this call runs: from T − 1 (or resume.next) down to just above the first step with t ≤ stopAt
@@ -176,6 +186,9 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
   };
   // x̂0 of a step whose output is combined (guidance) or changed (the kept part): one buffer for the run
   const x0buf = new Float32Array(n);
+  // speedCap: the first step's conditional x̂0's median root speed, from this run or from the part it resumes
+  let speedRef = norm ? o.resume?.speedRef : undefined;
+  if (norm && o.resume && speedRef === undefined) throw new Error('sampler: resume.speedRef is missing; a run with speedCap is resumed with the speedRef its first part returned');
   const stepMs: number[] = [];
   let modelCalls = 0;
   let guidedSteps = 0;
@@ -206,6 +219,7 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     modelCalls++;
     if (guidedK) guidedSteps++;
     checkLength(out, inputs.batch * nk, `model output x0 at step ${k}`);
+    if (norm && k === T - 1) speedRef = rootSpeed(out.subarray(0, nk), L - f0, D, norm); // row 0: the conditional one
     // x̂0 smoothed along time at every step but the last (x0Smoothing), before the kept part is replaced
     const smoothed = xs > 0 && k > 0 ? smoothPose(guidedK ? guidedX0(out, nk, s, x0buf) : out, L - f0, xs) : null;
     /** what onX0 sees: all L frames (the lead frames sitting out shown as their known motion) */
@@ -223,7 +237,51 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
     if (x0copy) o.onX0!(x0copy, schedule.steps - k, schedule.steps);
     o.onStep?.(schedule.steps - k, schedule.steps);
   }
-  return { x, ...(stop >= 0 ? { next: stop } : {}), stepMs, modelCalls, guidedSteps, sampler: rule.name };
+  if (norm && speedRef !== undefined && stop < 0) capRootSpeed(x, L, D, cap * speedRef, norm, constraint?.keep);
+  return {
+    x, ...(stop >= 0 ? { next: stop } : {}), ...(stop >= 0 && speedRef !== undefined ? { speedRef } : {}),
+    stepMs, modelCalls, guidedSteps, sampler: rule.name,
+  };
+}
+
+/** m per frame (0.5 m/s at 20 fps): a first x̂0 slower than this does not travel, and its motion is left alone (Python CAP_MIN_SPEED). */
+export const CAP_MIN_SPEED = 0.5 / 20;
+
+function checkRootNorm(norm: readonly number[] | undefined): readonly number[] {
+  if (!norm || norm.length !== 4 || !norm.every(Number.isFinite) || !(norm[2] > 0 && norm[3] > 0)) {
+    throw new RangeError(`sampler: speedCap needs rootNorm: the mean and std of root velocity channels 1 and 2 ([m1, m2, s1, s2], the model's meanstd, stds > 0), got ${JSON.stringify(norm)}`);
+  }
+  return norm.map(Math.fround);
+}
+
+/** The median horizontal root speed (m per frame) of normalised features x [frames, D], in float32 as numpy (Python `root_speeds`). */
+export function rootSpeed(x: Float32Array, frames: number, D: number, norm: readonly number[]): number {
+  const [m1, m2, s1, s2] = norm;
+  const f = Math.max(frames, 1);
+  const v = new Float32Array(f);
+  for (let i = 0; i < f; i++) {
+    const a = Math.fround(Math.fround(x[i * D + 1] * s1) + m1);
+    const b = Math.fround(Math.fround(x[i * D + 2] * s2) + m2);
+    v[i] = Math.fround(Math.hypot(a, b));
+  }
+  v.sort();
+  const h = f >> 1;
+  return f % 2 ? v[h] : Math.fround(Math.fround(v[h - 1] + v[h]) / 2);
+}
+
+/** x's root velocity channels scaled so its median speed is at most `capSpeed` (unless the reference did not travel), kept entries unchanged (Python `cap_root_speed`). */
+function capRootSpeed(x: Float32Array, L: number, D: number, capSpeed: number, norm: readonly number[], keep: Float32Array | undefined): void {
+  const cur = rootSpeed(x, L, D, norm);
+  if (!(capSpeed >= CAP_MIN_SPEED && cur > capSpeed)) return;
+  const r = Math.fround(capSpeed / cur);
+  const [m1, m2, s1, s2] = norm;
+  for (let i = 0; i < L; i++) {
+    for (const [c, m, sd] of [[1, m1, s1], [2, m2, s2]] as const) {
+      const j = i * D + c;
+      if (keep && keep[j] > 0) continue;
+      x[j] = Math.fround(Math.fround(Math.fround(Math.fround(Math.fround(x[j] * sd) + m) * r) - m) / sd);
+    }
+  }
 }
 
 /** ε of step k for all n values (frames sitting out included: the draws do not depend on who sits out), checked. */

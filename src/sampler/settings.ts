@@ -47,6 +47,15 @@ export interface SamplingSettings {
    */
   x0Smoothing?: number;
   /**
+   * Root speed cap (docs/MODELS.md "A cap on the sampler's side"): each motion goes at most this multiple of its first
+   * step's conditional x̂0's median horizontal root speed (t = 1: the condition's mean motion, which travels at the
+   * real clips' speed; the later steps made runs a fifth faster). A motion whose first x̂0 travels (≥ 0.5 m/s,
+   * `CAP_MIN_SPEED`) and whose result goes faster has its root velocity channels 1–2 scaled to the cap on the entries
+   * not kept (the model's `rootNorm` de-normalises them); never faster; heading, pose and the rest are the model's.
+   * Default: the model's manifest `speedCap`, else 0 = off, bit for bit; the random draws do not depend on it.
+   */
+  speedCap?: number;
+  /**
    * Inpainting (docs/ARCHITECTURE.md "Sampling with constraints"): a known motion [L, D] in NORMALISED feature space
    * (a request's de-normalised `KnownMotion.features` through the model's mean/std: `inpaintingSettings`), kept where
    * `keep` is 1. x_T's kept part becomes aCum[T]·known + sCum[T]·x_T and x̂0's kept part is replaced by `known` before

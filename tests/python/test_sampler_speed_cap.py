@@ -101,3 +101,18 @@ def test_rows_of_several_lengths_and_kept_entries():
 def test_bad_settings_are_named(cap, norm, msg):
     with pytest.raises(SampleError, match=msg):
         sample_features(model(0.1, 0.1), COND, F, settings(speed_cap=cap, root_norm=norm), seed=0)
+
+
+def test_a_manifest_entry_gives_the_cap_and_the_models_normalisation_its_root():
+    from emdm import manifest as mf
+    entry = {"objective": "ddgan", "defaultSteps": 10, "guidance": 1.5, "speedCap": 1.0, "zDim": 64, "featureDim": 263}
+    mean, std = np.arange(263, dtype=np.float32) / 100, np.full(263, 0.5, np.float32)
+    s = SamplingSettings.from_entry(entry, mean=mean, std=std)
+    assert s.speed_cap == 1.0 and s.root_norm == pytest.approx((0.01, 0.02, 0.5, 0.5))
+    with pytest.raises(SampleError, match="speed_cap needs root_norm"):       # a caller that forgot the mean/std
+        sample_features(model(0.1, 0.1), COND, F, dataclasses.replace(SamplingSettings.from_entry(entry), z_dim=Z,
+                                                                       feature_dim=D), seed=0)
+    assert SamplingSettings.from_entry({k: v for k, v in entry.items() if k != "speedCap"}).speed_cap == 0.0
+    with pytest.raises(mf.ManifestError, match="speedCap"):
+        shipped = mf.load()["models"]["emdm-t2m-web"]
+        mf.check_model_entry({**shipped, "speedCap": -1}, "m", "manifest.json")

@@ -211,6 +211,8 @@ describe('parity with Python on the shipped models', () => {
       expect(fx.meta.guidanceMinTime ?? 0, `fixture model-${name} was sampled with another guidanceMinTime: re-run \`.venv/bin/python -m emdm.fixtures --only models\``).toBe(entry.guidanceMinTime ?? 0);
       // …and its x0Smoothing (x̂0 smoothed along time)
       expect(fx.meta.x0Smoothing ?? 0, `fixture model-${name} was sampled with another x0Smoothing: re-run \`.venv/bin/python -m emdm.fixtures --only models\``).toBe(entry.x0Smoothing ?? 0);
+      // …and its speedCap (the root held to the first step's speed)
+      expect(fx.meta.speedCap ?? 0, `fixture model-${name} was sampled with another speedCap: re-run \`.venv/bin/python -m emdm.fixtures --only models\``).toBe(entry.speedCap ?? 0);
       const L = fx.meta.frames;
       // one step (x_t, z, c, t → x0̂)
       const bytes = fs.readFileSync(path.join(MODELS_DIR, entry.onnx));

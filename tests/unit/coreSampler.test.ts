@@ -95,6 +95,40 @@ describe('runtime + sampler on the tiny step model', () => {
       .rejects.toThrow(/schedule\.steps must be an integer in 1…1000, got 1001/);
   });
 
+  it('speedCap: the root held to the first conditional x̂0\'s speed, equal to the Python reference; a begun run resumes with it', async () => {
+    const step = await tinyStep();
+    const schedule = scheduleFromEntry(tiny.meta.schedule!, 4, 'tiny.schedule');
+    const cap = { speedCap: tiny.meta.capSpeedCap as number, rootNorm: tiny.meta.capRootNorm as number[] };
+    const base = { step, schedule, frames: L, featureDim: D, zDim: Z, cond: tiny.get('cond'), guidance: 2.5 };
+    const noise = fixtureNoise(tiny);
+    const r = await sample({ ...base, noise, ...cap });
+    expect(noise.calls).toEqual(['x_T', 'z_3', 'eps_3', 'z_2', 'eps_2', 'z_1', 'eps_1', 'z_0']);
+    expect(maxAbsDiff(r.x, tiny.get('final_x_cap'))).toBeLessThan(1e-4);
+    const plain = await sample({ ...base, noise: fixtureNoise(tiny) });
+    expect(maxAbsDiff(r.x, plain.x)).toBeGreaterThan(1e-3);
+    // only the root velocity channels 1-2 move
+    for (let i = 0; i < r.x.length; i++) if (i % D !== 1 && i % D !== 2) expect(r.x[i]).toBe(plain.x[i]);
+    // 0 is off, bit for bit
+    const zero = await sample({ ...base, noise: fixtureNoise(tiny), speedCap: 0 });
+    expect(Buffer.from(zero.x.buffer).equals(Buffer.from(plain.x.buffer))).toBe(true);
+    // stopped part way, the reference travels with the state; the finished run is the whole one's
+    const rng = new SeededRandom(5);
+    const first = await sample({ ...base, noise: rng, ...cap, stopAt: 0.6 });
+    expect(first.next).toBeDefined();
+    expect(first.speedRef).toBeGreaterThan(0);
+    const rest = await sample({ ...base, noise: rng, ...cap, resume: { x: first.x, next: first.next!, speedRef: first.speedRef } });
+    const whole = await sample({ ...base, noise: new SeededRandom(5), ...cap });
+    expect(Buffer.from(rest.x.buffer).equals(Buffer.from(whole.x.buffer))).toBe(true);
+    await expect(sample({ ...base, noise: new SeededRandom(5), ...cap, resume: { x: first.x, next: first.next! } }))
+      .rejects.toThrow(/resume\.speedRef is missing/);
+    for (const bad of [-1, Number.NaN, Infinity]) {
+      await expect(sample({ ...base, noise: new SeededRandom(1), speedCap: bad, rootNorm: cap.rootNorm })).rejects.toThrow(/speedCap must be a finite multiple ≥ 0/);
+    }
+    for (const bad of [undefined, [0, 0, 1], [0, 0, 0, 1], [0, Number.NaN, 1, 1]]) {
+      await expect(sample({ ...base, noise: new SeededRandom(1), speedCap: 1, rootNorm: bad })).rejects.toThrow(/speedCap needs rootNorm/);
+    }
+  });
+
   for (const method of ['ddgan', 'ddim'] as const) {
     it(`x0Smoothing (${method}): the previews show x̂0 smoothed before the last step and the model's own at it; kept entries stay known`, async () => {
       // a step model whose x̂0 is a spike train along frames: smoothing is visible in every pose channel

@@ -155,6 +155,7 @@ describe('refusals', () => {
     expect(bad((m) => (m.models[model].supportedSteps = [1, 100000]))).toContain(`field 'models.${model}.supportedSteps' is [1,100000]; it must be a list of step counts in 1…1000`);
     expect(bad((m) => (m.models[model].defaultSteps = 1e6))).toContain(`models.${model}.defaultSteps`);
     expect(bad((m) => (m.models[model].x0Smoothing = 1e9))).toContain(`field 'models.${model}.x0Smoothing' is 1000000000; it must be a σ ≥ 0 in frames, at most 50`);
+    expect(bad((m) => (m.models[model].speedCap = -1))).toContain(`field 'models.${model}.speedCap' is -1; it must be a multiple ≥ 0 of the first step's root speed`);
     expect(bad((m) => (m.models[model].maxFrames = 1e9))).toContain(`models.${model}.maxFrames`);
     const dir = fs.mkdtempSync(path.join(tmp, 'j-'));
     fs.writeFileSync(path.join(dir, 'manifest.json'), '{"schema": 1,');

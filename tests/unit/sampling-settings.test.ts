@@ -16,8 +16,8 @@ import { inpaintingSettings, methodOf } from '../../src/sampler/settings';
 import { tinyModels } from './coreFixtures';
 
 const ROOT = path.resolve(__dirname, '../..');
-/** Python's model shapes, which TypeScript's sampler takes as SampleOptions' fields (from the manifest, not a request). */
-const SHAPES = ['featureDim', 'zDim'];
+/** Python's model shapes and root normalisation, which TypeScript's sampler takes as SampleOptions' fields (from the manifest and meanstd, not a request). */
+const SHAPES = ['featureDim', 'zDim', 'rootNorm'];
 
 /** The fields of a Python dataclass, in order, read from its source: the annotated names of the class body before its first method. */
 function dataclassFields(source: string, cls: string, where: string): string[] {

@@ -214,7 +214,7 @@ def default_out(a) -> Path:
     sigma = "" if a.x0_smoothing is None else f"-x0s{a.x0_smoothing:g}"
     model = a.model or slug(Path(a.ckpt).parent.name, Path(a.ckpt).stem)
     raw = "-raw" if getattr(a, "decode", "page") == "raw" else ""
-    cap = f"-cap{a.speed_cap:g}" if getattr(a, "speed_cap", 0) else ""
+    cap = f"-cap{a.speed_cap:g}" if getattr(a, "speed_cap", None) is not None else ""
     name = a.name or slug(model, None if a.variant in (None, "fp32") else a.variant) + sigma + cap + raw
     return RESULTS_DIR / "json" / f"realism-{slug(name)}.json"
 
@@ -254,6 +254,7 @@ def run(a) -> Path:
     guidance = guidance if a.guidance is None else a.guidance
     gmin = float(opened.meta.get("guidanceMinTime", 0.0)) if a.guidance_min_time is None else a.guidance_min_time
     sigma = float(opened.meta.get("x0Smoothing", 0.0)) if a.x0_smoothing is None else a.x0_smoothing
+    cap = float(opened.meta.get("speedCap", 0.0)) if a.speed_cap is None else a.speed_cap
     bench = C.Benchmark(a.dataset, a.split, a.classifier, a.prompts, a.seeds, a.seed)
     labels = bench.labels
     real, validation = real_row(bench, labels)
@@ -263,7 +264,7 @@ def run(a) -> Path:
         on_train = K.validate(*train)
         train_peaks(real["reference"], *train)
     src = ModelSource(opened=opened, steps=a.steps, guidance=guidance, guidance_min_time=gmin, x0_smoothing=sigma,
-                      speed_cap=a.speed_cap,
+                      speed_cap=cap,
                       batch_size=a.batch, threads=a.threads)
     t0 = time.time()
     cond, action, prompt_of = bench.conditions(src)
@@ -282,8 +283,8 @@ def run(a) -> Path:
     result = {"schema": SCHEMA, "task": "realism", "name": a.name or out.stem.removeprefix("realism-"),
               "model": opened.name, "variant": opened.variant, "condition": src.task,
               "info": {k: v for k, v in src.info.items()},
-              "key": {**C._key(a, guidance, gmin, sigma), **({"speed_cap": a.speed_cap} if a.speed_cap else {})},
-              "steps": a.steps, "speed_cap": a.speed_cap,
+              "key": {**C._key(a, guidance, gmin, sigma), **({"speed_cap": cap} if cap else {})},
+              "steps": a.steps, "speed_cap": cap,
               "x0_smoothing": sigma, "decode": a.decode, "labels": labels, "real": real, "generated": gen,
               "rules": {act: {"rule": v["rule"], "own": v["own"], "n": v["n"], "false_pass": v["false_pass"],
                               "own_train": on_train.get(act, {}).get("own"), "n_train": on_train.get(act, {}).get("n"),
@@ -319,9 +320,9 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--guidance", type=float, default=None, help="default: the manifest's")
     add_sampling_settings(ap)
-    ap.add_argument("--speed-cap", type=float, default=0.0, metavar="C",
+    ap.add_argument("--speed-cap", type=float, default=None, metavar="C",
                     help="the sampler's root speed cap: each motion at most C times its first step's root speed "
-                         "(emdm.sampler.sampler; 0 = off, as the page)")
+                         "(emdm.sampler.sampler; default: the manifest's speedCap, else 0 = off)")
     ap.add_argument("--decode", choices=["page", "raw"], default="page",
                     help="judge the joints as the page shows them (page: σ = 1 smoothing and foot clean-up, "
                          "emdm.motion.decode) or as recovered (raw); the classifier reads the sampler's features")

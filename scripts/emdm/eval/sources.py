@@ -83,7 +83,7 @@ class ModelSource:
     guidance: float = DEFAULT_GUIDANCE
     guidance_min_time: float | None = None   # guided only where t > this (None: the manifest's guidanceMinTime, else 0)
     x0_smoothing: float | None = None        # σ of x̂_0's smoothing along time (None: the manifest's x0Smoothing, else 0)
-    speed_cap: float = 0.0                   # the sampler's root speed cap (emdm.sampler.sampler; 0 = off)
+    speed_cap: float | None = None           # the sampler's root speed cap (None: the manifest's speedCap, else 0 = off)
     batch_size: int = 64
     threads: int = 1
     device: str = "cpu"                      # with ckpt=: "cuda" runs the generator on the GPU
@@ -111,6 +111,8 @@ class ModelSource:
             self.guidance_min_time = float(m.meta.get("guidanceMinTime", 0.0))
         if self.x0_smoothing is None:
             self.x0_smoothing = float(m.meta.get("x0Smoothing", 0.0))
+        if self.speed_cap is None:
+            self.speed_cap = float(m.meta.get("speedCap", 0.0))
         variant = variant_of({"objective": self.objective, "args": self.flags})
         sampler = "DDIM" if self.objective == "diffusion" else "DDGAN"
         if not self.name:

@@ -57,7 +57,8 @@ def conditions(entry: dict, prompts: list[str] | None, models_dir: Path) -> list
 
 def bench_settings(entry: dict, T: int, guidance: float) -> SamplingSettings:
     """The model's method and sizes with T steps and ``guidance`` at every step, no x̂0 smoothing."""
-    return dataclasses.replace(SamplingSettings.from_entry(entry, T, guidance), guidance_min_time=0.0, x0_smoothing=0.0)
+    return dataclasses.replace(SamplingSettings.from_entry(entry, T, guidance), guidance_min_time=0.0, x0_smoothing=0.0,
+                               speed_cap=0.0)
 
 
 def per_step(step, conds, entry: dict, T: int, a) -> None:

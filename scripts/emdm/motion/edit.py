@@ -120,7 +120,7 @@ class Editor:
             return cache[prompt]
 
         return cls(step, np.asarray(mean, np.float32), np.asarray(std, np.float32), condition,
-                   SamplingSettings.from_entry(meta, steps, guidance), int(meta.get("maxFrames", 196)))
+                   SamplingSettings.from_entry(meta, steps, guidance, mean, std), int(meta.get("maxFrames", 196)))
 
     def sample(self, prompt: str, frames: int, seed: int, known: np.ndarray | None = None,
                keep: np.ndarray | None = None, keep_from_time: float = 1.0) -> np.ndarray:

@@ -37,8 +37,8 @@ first step's conditional x̂0 (t = 1: the mean motion of the condition) travels 
 steps at t = 0.9–0.7 make runs a fifth faster than it. With ``speed_cap`` c > 0, a motion whose first conditional
 x̂0 travels (median horizontal root speed ≥ ``CAP_MIN_SPEED``) and whose result goes faster than c times that speed
 has its root velocity channels (1, 2; de-normalised by ``root_norm``, scaled, normalised back) scaled to it, on the
-frames and channels not kept (inpainting). Never faster, and the heading and the pose are the model's. Python only
-for now: the TypeScript twin has no cap yet.
+frames and channels not kept (inpainting). Never faster, and the heading and the pose are the model's. The numbers
+are float32 as numpy computes them, so the TypeScript twin (``rootSpeed``/``capRootSpeed``) gives the same.
 
 ``sampling`` is the loop as a generator of the step model's inputs; ``drive`` runs it with a step function;
 ``emdm.sampler.lockstep`` runs several with one model call per step.

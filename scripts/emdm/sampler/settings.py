@@ -36,8 +36,8 @@ class SamplingSettings:
     an all-zero condition: one conditional row). ``guidance_min_time``: guide only the steps whose time is above it
     (the manifest's guidanceMinTime; 0 = every step). ``x0_smoothing``: σ in frames of x̂0's pose smoothing at every
     step but the last (the manifest's x0Smoothing; 0 = off). ``speed_cap``: each motion's median root speed at most
-    this multiple of its first step's conditional x̂0's (``emdm.sampler.sampler``, "Root speed cap"; 0 = off; Python
-    only so far), which needs ``root_norm``: the mean and std of root velocity channels 1 and 2 (m1, m2, s1, s2; the
+    this multiple of its first step's conditional x̂0's (``emdm.sampler.sampler``, "Root speed cap"; 0 = off), which
+    needs ``root_norm``: the mean and std of root velocity channels 1 and 2 (m1, m2, s1, s2; the
     model's meanstd). Inpainting: ``known`` (frames, D) normalised features and ``keep`` (frames, D) 0/1, imposed at
     the steps with t ≤ ``keep_from_time`` and the last. ``z_dim`` and ``feature_dim``: the model's latent and feature
     sizes (its manifest's zDim and featureDim)."""
@@ -55,15 +55,18 @@ class SamplingSettings:
     feature_dim: int = 263
 
     @classmethod
-    def from_entry(cls, entry: dict, steps: int | None = None, guidance: float | None = None) -> "SamplingSettings":
-        """A manifest model entry's own settings (defaultSteps, guidance, guidanceMinTime, x0Smoothing, zDim, its
-        objective's method); ``steps``/``guidance`` given override them."""
+    def from_entry(cls, entry: dict, steps: int | None = None, guidance: float | None = None,
+                   mean: np.ndarray | None = None, std: np.ndarray | None = None) -> "SamplingSettings":
+        """A manifest model entry's own settings (defaultSteps, guidance, guidanceMinTime, x0Smoothing, speedCap, zDim,
+        its objective's method); ``steps``/``guidance`` given override them. ``mean``/``std``: the model's
+        normalisation, whose root velocity channels a speedCap needs (``root_norm``)."""
+        norm = None if mean is None or std is None else (float(mean[1]), float(mean[2]), float(std[1]), float(std[2]))
         return cls(method=method_of(entry.get("objective", "ddgan")),
                    steps=int(entry.get("defaultSteps", 10)) if steps is None else steps,
                    guidance=float(entry.get("guidance", 2.5)) if guidance is None else guidance,
                    guidance_min_time=float(entry.get("guidanceMinTime", 0.0)),
-                   x0_smoothing=float(entry.get("x0Smoothing", 0.0)), z_dim=int(entry.get("zDim", 64)),
-                   feature_dim=int(entry.get("featureDim", 263)))
+                   x0_smoothing=float(entry.get("x0Smoothing", 0.0)), speed_cap=float(entry.get("speedCap", 0.0)),
+                   root_norm=norm, z_dim=int(entry.get("zDim", 64)), feature_dim=int(entry.get("featureDim", 263)))
 
     def check(self, methods) -> None:
         """Each field in its range (``methods``: the registered method names); a SampleError names the first bad one."""
