@@ -37,6 +37,15 @@ def test_pick_takes_the_shipped_weights_at_the_page_settings_newest_first():
     # a model whose default is plain sampling: one file is both
     d, p = rb.pick([plain], "m", {**ENTRY, "x0Smoothing": None})
     assert d is p and d["name"] == "plain"
+    # a speed cap is a page setting too: the default has the entry's, plain has neither smoothing nor cap
+    capped = {**result("capped", created="2026-11-27T10:00:00"), "speed_cap": 1.0}
+    capped_plain = {**result("capped-plain", sigma=0.0, created="2026-11-27T10:00:00"), "speed_cap": 1.0}
+    d, p = rb.pick([newest, plain, capped, capped_plain], "m", {**ENTRY, "speedCap": 1.0})
+    assert d["name"] == "capped" and p["name"] == "plain"
+    d, p = rb.pick([newest, plain, capped, capped_plain], "m", ENTRY)        # no cap in the entry: as before
+    assert d["name"] == "newest" and p["name"] == "plain"
+    d, p = rb.pick([capped_plain, plain], "m", {**ENTRY, "x0Smoothing": None, "speedCap": 1.0})
+    assert d["name"] == "capped-plain" and p["name"] == "plain"             # capped only: not plain any more
 
 
 def test_speed_bars():

@@ -5,7 +5,8 @@ page's sampling default no worse than plain sampling on either judge of meaning,
 A generator's results are those of ``python -m emdm.eval.realism`` whose model, file (the manifest's default
 variant), step count, guidance and decode are the page's, and whose weights are the shipped ones (``info.train_steps``
 equal to the manifest entry's training steps, continuations included): the newest with the manifest's x̂0 smoothing
-is the *default*, the newest with none is *plain* (the same file where the default is plain sampling). Results of
+and root speed cap is the *default*, the newest with neither is *plain* (the same file where the default is plain
+sampling; a result from before the cap had none). Results of
 older weights or other settings are left out, so a retrained model shows "not measured" until it is measured.
 """
 
@@ -40,10 +41,15 @@ def pick(results: list[dict], model: str, entry: dict) -> tuple[dict | None, dic
             and (entry.get("guidance") is None or _guidance(r) == entry.get("guidance"))
             and (trained is None or r.get("info", {}).get("train_steps") == trained)]
     mine.sort(key=lambda r: r.get("created", ""), reverse=True)
-    sigma = _sigma(entry.get("x0Smoothing"))
-    default = next((r for r in mine if _sigma(r.get("x0_smoothing")) == sigma), None)
-    plain = next((r for r in mine if _sigma(r.get("x0_smoothing")) == 0.0), None)
+    page = (_sigma(entry.get("x0Smoothing")), _sigma(entry.get("speedCap")))
+    default = next((r for r in mine if _settings(r) == page), None)
+    plain = next((r for r in mine if _settings(r) == (0.0, 0.0)), None)
     return default, plain
+
+
+def _settings(r: dict) -> tuple[float, float]:
+    """A result's (x̂0 smoothing σ, root speed cap); a result from before the cap has none."""
+    return _sigma(r.get("x0_smoothing")), _sigma(r.get("speed_cap"))
 
 
 def worst_drop(default: dict, plain: dict) -> dict[str, tuple[float, str | None]]:
@@ -96,8 +102,8 @@ def _mark(met: bool | None) -> str:
 def section(results: list[dict], manifest: dict) -> list[str]:
     """The "Where the bars stand" lines: one table per shipped generator of the manifest."""
     out = ["### Where the bars stand (issue 28), per shipped generator", "",
-           "Each shipped generator at the page's settings (its default file, steps, guidance and x̂0 smoothing), from "
-           "the newest realism result of its current weights, against plain sampling (no x̂0 smoothing) of the same "
+           "Each shipped generator at the page's settings (its default file, steps, guidance, x̂0 smoothing and root "
+           "speed cap), from the newest realism result of its current weights, against plain sampling (neither) of the same "
            "weights. `emdm.eval.realism_bars` picks the files; results of older weights are not used.", ""]
     for model, entry in manifest.get("models", {}).items():
         default, plain = pick(results, model, entry)
