@@ -254,6 +254,11 @@ async function openStep(bytes: ArrayBuffer, b: Backend, o: GeneratorOptions & { 
  * does not fit the manifest; a WebGPU session that cannot run fails with a plain Error (a backend
  * problem: src/loadModel.ts then opens WASM).
  */
+/** The sampler's speed cap options: `speedCap` with the model's root velocity normalisation, or none when 0. */
+function speedCapOptions(speedCap: number, mean: Float32Array, std: Float32Array): Pick<SampleOptions, 'speedCap' | 'rootNorm'> {
+  return speedCap > 0 ? { speedCap, rootNorm: [mean[1], mean[2], std[1], std[2]] } : {};
+}
+
 export async function openModel(opts: GeneratorOptions): Promise<Generator> {
   const { manifest, baseUrl, model } = opts;
   const entry = modelEntry(manifest, model);
@@ -292,7 +297,6 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     const method = o.method ?? samplerName;
     const schedule = checkedSchedule(o, entry, model, method);
     const resume = 'resume' in o ? o.resume : undefined;
-    const speedCap = o.speedCap ?? entry.speedCap ?? 0;
     const cond = await condition.vector(o.condition);
     const prompt = o.condition.type === 'text' ? await condition.tokens(o.condition.text) : undefined;
     const check = o.condition.type === 'text' ? await condition.check(cond) : undefined;
@@ -301,7 +305,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
       options: {
         method, schedule, noise, frames: o.frames, featureDim: D, zDim: entry.zDim, cond, guidance: o.guidance,
         guidanceMinTime: o.guidanceMinTime ?? entry.guidanceMinTime ?? 0, x0Smoothing: o.x0Smoothing ?? entry.x0Smoothing ?? 0, signal: o.signal, onStep: o.onStep,
-        ...(speedCap > 0 ? { speedCap, rootNorm: [mean[1], mean[2], std[1], std[2]] } : {}),
+        ...speedCapOptions(o.speedCap ?? entry.speedCap ?? 0, mean, std),
         ...inpaintingSettings(o.known, mean, std),
         ...(resume ? { resume: { x: resume.x, next: resume.next, ...(resume.speedRef !== undefined ? { speedRef: resume.speedRef } : {}) } } : {}),
       },
@@ -327,10 +331,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     const done: Awaited<ReturnType<typeof sample>>[] = [];
     if (batchesExactly) done.push(...(await together(step, runs.map((r) => (st: StepFn) => sample({ ...r, step: st })))));
     else for (const r of runs) done.push(await sample({ ...r, step }));
-    return done.map((r, i) => ({
-      x: r.x, frames: os[i].frames, steps: os[i].steps, next: r.next!,
-      ...(r.speedRef !== undefined ? { speedRef: r.speedRef } : {}), ...(rngs[i] ? { rng: rngs[i]!.state() } : {}),
-    }));
+    return done.map((r, i) => ({ x: r.x, frames: os[i].frames, steps: os[i].steps, next: r.next!, ...(r.speedRef !== undefined ? { speedRef: r.speedRef } : {}), ...(rngs[i] ? { rng: rngs[i]!.state() } : {}) }));
   }
 
   async function run(o: GenerateOptions): Promise<GenerateResult> {
