@@ -186,9 +186,10 @@ export async function sample(o: SampleOptions): Promise<SampleResult> {
   };
   // x̂0 of a step whose output is combined (guidance) or changed (the kept part): one buffer for the run
   const x0buf = new Float32Array(n);
-  // speedCap: the first step's conditional x̂0's median root speed, from this run or from the part it resumes
+  // speedCap: the first step's conditional x̂0's median root speed, from this run or from the part it resumes (a part
+  // that stopped before any step has none: this one runs the first step)
   let speedRef = norm ? o.resume?.speedRef : undefined;
-  if (norm && o.resume && speedRef === undefined) throw new Error('sampler: resume.speedRef is missing; a run with speedCap is resumed with the speedRef its first part returned');
+  if (norm && o.resume && start < T - 1 && speedRef === undefined) throw new Error('sampler: resume.speedRef is missing; a run with speedCap is resumed with the speedRef its first part returned');
   const stepMs: number[] = [];
   let modelCalls = 0;
   let guidedSteps = 0;

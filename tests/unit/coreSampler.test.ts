@@ -121,6 +121,13 @@ describe('runtime + sampler on the tiny step model', () => {
     expect(Buffer.from(rest.x.buffer).equals(Buffer.from(whole.x.buffer))).toBe(true);
     await expect(sample({ ...base, noise: new SeededRandom(5), ...cap, resume: { x: first.x, next: first.next! } }))
       .rejects.toThrow(/resume\.speedRef is missing/);
+    // a part that stopped before its first step (stopAt ≥ 1) has no reference yet: its resume runs that step
+    const none = new SeededRandom(5);
+    const early = await sample({ ...base, noise: none, ...cap, stopAt: 1 });
+    expect(early.next).toBe(3);
+    expect(early.speedRef).toBeUndefined();
+    const late = await sample({ ...base, noise: none, ...cap, resume: { x: early.x, next: early.next! } });
+    expect(Buffer.from(late.x.buffer).equals(Buffer.from(whole.x.buffer))).toBe(true);
     for (const bad of [-1, Number.NaN, Infinity]) {
       await expect(sample({ ...base, noise: new SeededRandom(1), speedCap: bad, rootNorm: cap.rootNorm })).rejects.toThrow(/speedCap must be a finite multiple ≥ 0/);
     }
