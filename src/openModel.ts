@@ -249,16 +249,16 @@ async function openStep(bytes: ArrayBuffer, b: Backend, o: GeneratorOptions & { 
   }
 }
 
-/**
- * Open a model on exactly `opts.backend`. Fails with ModelFileError when a file is missing, corrupt or
- * does not fit the manifest; a WebGPU session that cannot run fails with a plain Error (a backend
- * problem: src/loadModel.ts then opens WASM).
- */
 /** The sampler's speed cap options: `speedCap` with the model's root velocity normalisation, or none when 0. */
 function speedCapOptions(speedCap: number, mean: Float32Array, std: Float32Array): Pick<SampleOptions, 'speedCap' | 'rootNorm'> {
   return speedCap > 0 ? { speedCap, rootNorm: [mean[1], mean[2], std[1], std[2]] } : {};
 }
 
+/**
+ * Open a model on exactly `opts.backend`. Fails with ModelFileError when a file is missing, corrupt or
+ * does not fit the manifest; a WebGPU session that cannot run fails with a plain Error (a backend
+ * problem: src/loadModel.ts then opens WASM).
+ */
 export async function openModel(opts: GeneratorOptions): Promise<Generator> {
   const { manifest, baseUrl, model } = opts;
   const entry = modelEntry(manifest, model);

@@ -44,7 +44,7 @@ from emdm.model.open import onnx_step
 from emdm.sampler import SamplingSettings, sample_features
 from emdm.sampler.sampler import cap_root_speed, root_speeds
 from emdm.sampler.schedule import make_schedule
-from emdm.sampler.settings import method_of
+from emdm.sampler.settings import method_of, root_norm_of
 from emdm.mocap.jointmap import load_joint_map
 from emdm.mocap.load import load_bvh_clip
 from emdm.motion.features import extract_features, recover_joints
@@ -394,7 +394,7 @@ def make_model(out_dir: Path, name: str, entry: dict[str, Any], manifest: dict[s
     step_x0 = run_step(sess, step_x, step_z, cond[None], step_t)
     seed = 1000 + len(name)
     x_T, zs, epss = draw_noise(np.random.default_rng(seed), steps, L, D, Z, sched, objective)
-    norm = (float(mean[1]), float(mean[2]), float(std[1]), float(std[2]))
+    norm = root_norm_of(mean, std)
     x = reference_sample(sess, x_T, zs, epss, cond, guidance, sched, objective, gmin, sigma, cap, norm)
     # the fixture run must be what the Python pipeline itself samples with this seed
     settings = SamplingSettings(method_of(objective), steps, guidance, gmin, sigma, cap, norm if cap else None,

@@ -254,7 +254,6 @@ def run(a) -> Path:
     guidance = guidance if a.guidance is None else a.guidance
     gmin = float(opened.meta.get("guidanceMinTime", 0.0)) if a.guidance_min_time is None else a.guidance_min_time
     sigma = float(opened.meta.get("x0Smoothing", 0.0)) if a.x0_smoothing is None else a.x0_smoothing
-    cap = float(opened.meta.get("speedCap", 0.0)) if a.speed_cap is None else a.speed_cap
     bench = C.Benchmark(a.dataset, a.split, a.classifier, a.prompts, a.seeds, a.seed)
     labels = bench.labels
     real, validation = real_row(bench, labels)
@@ -264,7 +263,7 @@ def run(a) -> Path:
         on_train = K.validate(*train)
         train_peaks(real["reference"], *train)
     src = ModelSource(opened=opened, steps=a.steps, guidance=guidance, guidance_min_time=gmin, x0_smoothing=sigma,
-                      speed_cap=cap,
+                      speed_cap=a.speed_cap,
                       batch_size=a.batch, threads=a.threads)
     t0 = time.time()
     cond, action, prompt_of = bench.conditions(src)
@@ -283,8 +282,8 @@ def run(a) -> Path:
     result = {"schema": SCHEMA, "task": "realism", "name": a.name or out.stem.removeprefix("realism-"),
               "model": opened.name, "variant": opened.variant, "condition": src.task,
               "info": {k: v for k, v in src.info.items()},
-              "key": {**C._key(a, guidance, gmin, sigma), **({"speed_cap": cap} if cap else {})},
-              "steps": a.steps, "speed_cap": cap,
+              "key": {**C._key(a, guidance, gmin, sigma), **({"speed_cap": src.speed_cap} if src.speed_cap else {})},
+              "steps": a.steps, "speed_cap": src.speed_cap,
               "x0_smoothing": sigma, "decode": a.decode, "labels": labels, "real": real, "generated": gen,
               "rules": {act: {"rule": v["rule"], "own": v["own"], "n": v["n"], "false_pass": v["false_pass"],
                               "own_train": on_train.get(act, {}).get("own"), "n_train": on_train.get(act, {}).get("n"),

@@ -21,7 +21,7 @@ from emdm.eval.data import TEXT_ENCODER
 from emdm.eval.protocol import Conditions
 from emdm.model.open import DEFAULT_GUIDANCE, OpenedModel, open_model
 from emdm.sampler import SamplingSettings, sample_features
-from emdm.sampler.settings import method_of
+from emdm.sampler.settings import method_of, root_norm_of
 from emdm import text as text_encoders      # .encode_texts looked up at each call: tests replace it
 
 
@@ -130,9 +130,9 @@ class ModelSource:
     def settings(self) -> SamplingSettings:
         """How this source samples: its method, steps, guidance (and interval), x̂_0 smoothing, root speed cap (with
         the model's root velocity normalisation) and z size."""
-        norm = (float(self.mean[1]), float(self.mean[2]), float(self.std[1]), float(self.std[2]))
+        norm = root_norm_of(self.mean, self.std) if self.speed_cap else None
         return SamplingSettings(method_of(self.objective), self.steps, self.guidance, self.guidance_min_time,
-                                self.x0_smoothing, self.speed_cap, norm if self.speed_cap else None, z_dim=self.z_dim)
+                                self.x0_smoothing, self.speed_cap, norm, z_dim=self.z_dim)
 
     def conditions_of(self, cond: Conditions) -> np.ndarray:
         spec = self.cond_spec

@@ -96,6 +96,7 @@ def sampling(cond: np.ndarray, frames: int, settings: SamplingSettings = DEFAULT
     lead = lead_frames(keep) if keep is not None and not imposed[s.steps - 1] else 0
     stop = stop_index(sch, stop_at, deferred, imposed)
     cap_ref = None                   # per row: the first conditional x̂0's median root speed (m per frame), speed_cap only
+    row_frames = frames if lengths is None else lengths
     for k in range(s.steps - 1, -1, -1):
         if k == stop:
             given = yield STOP
@@ -115,7 +116,7 @@ def sampling(cond: np.ndarray, frames: int, settings: SamplingSettings = DEFAULT
         t = np.full((xin.shape[0],), sch.time[k], np.float32)
         x0 = np.asarray((yield xin, zin, c, t, np.ones((xin.shape[0], frames - f0), np.float32)), np.float32)
         if s.speed_cap > 0 and cap_ref is None:            # the conditional rows come first
-            cap_ref = root_speeds(x0[:num], s.root_norm, (frames if lengths is None else lengths) - f0)
+            cap_ref = root_speeds(x0[:num], s.root_norm, row_frames - f0)
         if guided:
             x0 = x0[num:] + np.float32(s.guidance) * (x0[:num] - x0[num:])
         if s.x0_smoothing > 0 and k > 0:
@@ -124,7 +125,7 @@ def sampling(cond: np.ndarray, frames: int, settings: SamplingSettings = DEFAULT
             x0 = np.where(keep, known, x0)
         x[:, f0:] = rule.update(xs, x0, k, sch, lambda: rng.standard_normal(x.shape, dtype=np.float32)[:, f0:])
     if cap_ref is not None:
-        x = cap_root_speed(x, s.speed_cap * cap_ref, s.root_norm, frames if lengths is None else lengths, keep)
+        x = cap_root_speed(x, s.speed_cap * cap_ref, s.root_norm, row_frames, keep)
     return x.astype(np.float32)
 
 

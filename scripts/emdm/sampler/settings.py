@@ -60,7 +60,7 @@ class SamplingSettings:
         """A manifest model entry's own settings (defaultSteps, guidance, guidanceMinTime, x0Smoothing, speedCap, zDim,
         its objective's method); ``steps``/``guidance`` given override them. ``mean``/``std``: the model's
         normalisation, whose root velocity channels a speedCap needs (``root_norm``)."""
-        norm = None if mean is None or std is None else (float(mean[1]), float(mean[2]), float(std[1]), float(std[2]))
+        norm = None if mean is None or std is None else root_norm_of(mean, std)
         return cls(method=method_of(entry.get("objective", "ddgan")),
                    steps=int(entry.get("defaultSteps", 10)) if steps is None else steps,
                    guidance=float(entry.get("guidance", 2.5)) if guidance is None else guidance,
@@ -95,6 +95,11 @@ def check_x0_smoothing(sigma: float, name: str = "x0_smoothing") -> float:
             or not (math.isfinite(sigma) and 0 <= sigma <= MAX_X0_SMOOTHING)):
         raise SampleError(f"{name} must be a finite σ ≥ 0 in frames (0 = off), got {sigma!r} (at most {MAX_X0_SMOOTHING:g})")
     return float(sigma)
+
+
+def root_norm_of(mean: np.ndarray, std: np.ndarray) -> tuple[float, float, float, float]:
+    """A model's normalisation of root velocity channels 1 and 2, (m1, m2, s1, s2): what ``speed_cap`` needs."""
+    return float(mean[1]), float(mean[2]), float(std[1]), float(std[2])
 
 
 def check_speed_cap(cap: float, root_norm) -> float:
