@@ -59,3 +59,20 @@ def test_the_feet_lines_show_what_a_clean_up_trades_and_skip_what_a_result_lacks
     new_b["generated"]["all"]["foot_acc"] = 40.0
     assert "all motions' feet acceleration: 31 → 40 m/s² (real clips 27)" in D.feet(new, new_b)
     assert D.feet(_result(0.5, 0.8, 1.0), _result(0.5, 0.8, 1.0)) == []               # no "all" rows: nothing
+
+
+def test_the_rules_lines_name_what_a_failing_rule_misses_against_the_real_clips():
+    """A wave that raises the hand and holds it still: the rule's wrist-speed condition is named with the real
+    clips' median; conditions the median motion meets, actions passing in most motions and results without the
+    descriptor medians (measured before them) are left out."""
+    old, new = _result(0.5, 0.8, 1.0), _result(0.5, 0.8, 1.0)
+    new["generated"]["kinematic"] = {"wave-right-hand": 0.0, "walk": 1.0, "bow": 0.25}
+    new["generated"]["per_action"]["wave-right-hand"] = {"desc": {"hand_up_r": 0.3, "hand_up_l": -0.5, "wave_r": 0.07,
+                                                                 "leg_speed": 0.05}}
+    new["generated"]["per_action"]["walk"]["desc"] = {"speed": 0.1, "forward": 1.0}       # passes in most: not named
+    new["real"] = {"per_action": {"wave-right-hand": {"desc": {"wave_r": 1.9}}}}
+    old["generated"]["per_action"]["wave-right-hand"] = {"desc": {"wave_r": 0.05}}
+    assert D.rules(old, new) == ["wave-right-hand (rule passed by 0.00) misses wave_r >= 0.2: real 1.90, 0.05 → 0.07"]
+    del old["generated"]["per_action"]["wave-right-hand"]["desc"]
+    assert D.rules(old, new) == ["wave-right-hand (rule passed by 0.00) misses wave_r >= 0.2: real 1.90, – → 0.07"]
+    assert D.rules(new, old) == []                       # bow fails but has no medians; old has no kinematic failures

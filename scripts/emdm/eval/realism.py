@@ -141,6 +141,8 @@ def group(joints: list[np.ndarray], rows: list[dict], real_max_all: float, real_
         out["foot_acc_ratio"] = out["foot_acc"] / max(float(np.mean(real_foot_acc)), 1e-6)
     peak = np.array([r["desc"]["peak_speed"] for r in rows])
     out["peak_speed"] = float(np.median(peak))
+    # every kinematic descriptor's median: why a rule fails (realism_diff's "rules" lines: a wave whose wrist is still)
+    out["desc"] = {k: float(np.median([r["desc"][k] for r in rows])) for k in K.DESCRIPTORS}
     if real_peak is not None and len(real_peak):
         out["peak_ratio"] = out["peak_speed"] / max(float(np.median(real_peak)), 1e-6)
         out["moving"] = float(moving(peak, real_peak).mean())

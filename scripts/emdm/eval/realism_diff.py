@@ -1,8 +1,11 @@
 """Two realism results side by side, per action: the three checks of a model or sampling change (the classifier, the
 kinematic rule, the share of motions that move) and the speed against real, old → new; an action where any check
 drops by more than ``WORSE`` (one motion in 8) is flagged; then all motions' foot skate, feet acceleration and
-largest joint step (``feet``). How a GPU slice's candidates are judged against the shipped
-weights (docs/MODELS.md): a candidate that lifts the classifier while its punches stop moving is not a win.
+largest joint step (``feet``); then, for each action the new result's kinematic rule fails in most motions, the
+rule's conditions its median motion misses, against the real clips' median (``rules``: "a person waves" that
+raises the hand and holds it still, the shipped text model's of GPU slice 4 against slice 3's, whose result predates
+the medians: ``wave-right-hand (rule passed by 0.00) misses wave_r >= 0.2: real 0.74, – → 0.08``). How a GPU
+slice's candidates are judged against the shipped weights (docs/MODELS.md): a candidate that lifts the classifier while its punches stop moving is not a win.
 
     python -m emdm.eval.realism_diff docs/results/json/realism-OLD.json runs/lease/realism-NEW.json
     python -m emdm.eval.realism_diff OLD.json NEW.json --fail-on-worse       # exit 1 when an action got worse
@@ -17,6 +20,8 @@ import argparse
 import json
 import sys
 from pathlib import Path
+
+from emdm.eval.kinematics import RULES
 
 WORSE = 1 / 8
 CHECKS = ("classifier", "kinematic", "moving")
@@ -88,6 +93,31 @@ def feet(old: dict, new: dict) -> list[str]:
     return out
 
 
+def _desc(r: dict, side: str, action: str) -> dict:
+    return r.get(side, {}).get("per_action", {}).get(action, {}).get("desc") or {}
+
+
+def rules(old: dict, new: dict) -> list[str]:
+    """Per action whose kinematic rule the new result passes in fewer than half its motions: each condition of the
+    rule its median motion misses, ``descriptor op threshold: real R, old O → new N`` (the real clips' median and
+    the old result's, "–" where a result predates the descriptor medians)."""
+    out = []
+    for a, share in sorted(new["generated"].get("kinematic", {}).items()):
+        med = _desc(new, "generated", a)
+        if share is None or share >= 0.5 or a not in RULES or not med:
+            continue
+        missed = [(d, op, t) for d, op, t in RULES[a] if d in med and not (med[d] >= t if op == ">=" else med[d] <= t)]
+        if missed:
+            real, was = _desc(new, "real", a), _desc(old, "generated", a)
+            out.append(f"{a} (rule passed by {share:.2f}) misses " + "; ".join(
+                f"{d} {op} {t:g}: real {_g(real.get(d))}, {_g(was.get(d))} → {_g(med[d])}" for d, op, t in missed))
+    return out
+
+
+def _g(v) -> str:
+    return "–" if v is None else f"{v:.2f}"
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m emdm.eval.realism_diff", description=__doc__.split("\n\n")[0])
     ap.add_argument("old", type=Path)
@@ -110,7 +140,7 @@ def main(argv: list[str] | None = None) -> int:
     for d in key_differences(old, new):
         print(f"note: the two runs differ in {d}", file=sys.stderr)
     rows = diff(old, new)
-    print("\n".join(report(rows) + feet(old, new)))
+    print("\n".join(report(rows) + feet(old, new) + rules(old, new)))
     return 1 if a.fail_on_worse and any(r["worse"] for r in rows) else 0
 
 
