@@ -9,8 +9,9 @@
 # written every WEIGHTS_MINUTES and at the end, so a run cut short still returns its latest weights), log.csv,
 # train.out and env.txt. The whole call keeps within LEASE_SECONDS (default 480) from its start: training gets
 # what is left after the unpack, less a margin for the last write.
-# Settings (environment): as train-balanced.sh (BATCH 256, LR_SCALE sqrt, AMP bf16, W_BONE 300, TIME_DRAW steps,
-# COMPILE 0) but ALPHA 0.25 (it won slice 3: rare actions drawn more often), WEIGHTS_MINUTES (2), LEASE_SECONDS (480), PROBE_STEPS (25: the steps timed to set
+# Settings (environment): as train-balanced.sh (BATCH 256, LR_SCALE sqrt, AMP bf16, W_BONE 300, COMPILE 0) but
+# ALPHA 0.25 (it won slice 3: rare actions drawn more often) and TIME_DRAW pairs (it won slice 4: every (step count,
+# step) pair equally often, so 10 steps' middle steps get more samples; train-balanced.sh's is steps), WEIGHTS_MINUTES (2), LEASE_SECONDS (480), PROBE_STEPS (25: the steps timed to set
 # the cosine horizon), MAX_STEPS (no cap), MARGIN_SECONDS (30, plus 15 per run), VARIANTS (below), PYTHON (python3)
 # and EMDM_TRAIN_EXTRA. The CPU rehearsal in CI runs this
 # same script with EMDM_TRAIN_EXTRA="--device cpu --d-width 32 ...", AMP=off, BATCH=2, PROBE_STEPS=2, MAX_STEPS=4.
@@ -88,7 +89,7 @@ source "$here/scripts/gpu/common.sh"
   "$py" -c 'import torch; print("torch", torch.__version__, "cuda", torch.cuda.is_available())'; } >"$out/env.txt" 2>&1
 seed_cache
 common+=(--balance-alpha "${ALPHA:-0.25}" --batch "${BATCH:-256}" --lr-scale "${LR_SCALE:-sqrt}" --amp "${AMP:-bf16}"
-         --w-bone "${W_BONE:-300}" --time-draw "${TIME_DRAW:-steps}")
+         --w-bone "${W_BONE:-300}" --time-draw "${TIME_DRAW:-pairs}")
 [[ "${COMPILE:-0}" == 1 ]] && common+=(--compile)
 left=$(( budget - ($(date +%s) - t_begin) - 30 ))
 (( left > 30 )) || { echo "lease-train.sh: only ${left} s left after the unpack; nothing trained" >&2; exit 1; }

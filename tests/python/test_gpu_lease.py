@@ -188,7 +188,7 @@ def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
     finally:
         assert lease(repo, "restore").returncode == 0
     env = {**os.environ, "PYTHON": sys.executable, "AMP": "off", "BATCH": "2", "PROBE_STEPS": "2", "MAX_STEPS": "3",
-           "WEIGHTS_MINUTES": "0", "LEASE_SECONDS": "300", "VARIANTS": "base:;pairs:--time-draw pairs --random-crop 0.9 --crop-min 20",
+           "WEIGHTS_MINUTES": "0", "LEASE_SECONDS": "300", "VARIANTS": "base:;geo:--geo-weight 30 --random-crop 0.9 --crop-min 20",
            "EMDM_TRAIN_EXTRA": "--device cpu --d-width 32 --threads 1 --log-every 1"}
     env.pop("PYTHONPATH", None)
 
@@ -200,7 +200,7 @@ def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
 
     first = call(tmp_path / "OUT", "w1")
     args = {}
-    for v in ("base", "pairs"):
+    for v in ("base", "geo"):
         st = load_weights_file(tmp_path / "OUT" / v / "emdm-t2m-web.pt")
         assert st["step"] == 3 and st["meta"]["init"]["runs"]
         args[v] = st["meta"]["args"]
@@ -209,9 +209,10 @@ def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
         assert f"[t2m-{v}] emdm-t2m-web from emdm-t2m-web.weights.f16.pt" in first.stdout
     # a device call returns at most 8 files: env.txt, train.out and two per variant (three variants fit)
     assert len([f for f in (tmp_path / "OUT").rglob("*") if f.is_file()]) == 6
-    assert args["base"]["random_crop"] == 0.3 and args["pairs"]["random_crop"] == 0.9 and args["pairs"]["crop_min"] == 20
-    assert args["base"]["time_draw"] == "steps" and args["pairs"]["time_draw"] == "pairs"   # the next slice's variant
-    assert args["base"]["balance_alpha"] == args["pairs"]["balance_alpha"] == 0.25
+    assert args["base"]["random_crop"] == 0.3 and args["geo"]["random_crop"] == 0.9 and args["geo"]["crop_min"] == 20
+    assert args["base"]["time_draw"] == args["geo"]["time_draw"] == "pairs"      # the recipe's since slice 4
+    assert args["base"]["geo_weight"] == 100 and args["geo"]["geo_weight"] == 30      # the next slice's variant
+    assert args["base"]["balance_alpha"] == args["geo"]["balance_alpha"] == 0.25
 
     # call 2: each variant from its own returned weights, made ready in one step (`next`: init each, shrink, size)
     empty = tmp_path / "empty"
@@ -221,19 +222,19 @@ def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
     nxt = lease(repo, "next", "t2m", str(tmp_path / "OUT"))
     assert nxt.returncode == 0, nxt.stdout + nxt.stderr
     assert "would travel" in nxt.stdout
-    for v in ("base", "pairs"):
+    for v in ("base", "geo"):
         assert load_weights_file(repo / f".lease/init-t2m-{v}.pt")["meta"]["weights_dtype"] == "float16"
         shutil.copy2(repo / f".lease/init-t2m-{v}.pt", travel / f".lease/init-t2m-{v}.pt")
     try:
         files = set(lease(repo, "files").stdout.splitlines())
         assert not any(f.endswith(".weights.f16.pt") for f in files), "the starts are in .lease now"
-        assert {".lease/init-t2m-base.pt", ".lease/init-t2m-pairs.pt"} <= files
+        assert {".lease/init-t2m-base.pt", ".lease/init-t2m-geo.pt"} <= files
     finally:
         assert lease(repo, "restore").returncode == 0
         for f in (repo / ".lease").glob("init-*.pt"):
             f.unlink()
     second = call(tmp_path / "OUT2", "w2")
-    for v in ("base", "pairs"):
+    for v in ("base", "geo"):
         assert f"[t2m-{v}] emdm-t2m-web from init-t2m-{v}.pt" in second.stdout
         runs = load_weights_file(tmp_path / "OUT2" / v / "emdm-t2m-web.pt")["meta"]["init"]["runs"]
         assert runs[-1]["file"] == f"init-t2m-{v}.pt" and runs[-1]["steps"] == 3

@@ -250,7 +250,7 @@ def _benchmarks(results: list[dict], plots: dict[str, str]) -> list[str]:
                 "(`PROMPT_KEEP_FROM`; it was kept from t ≤ 0.55 like the later windows'), on the text model of GPU "
                 "slice 2 (the stream's fix was measured on it: 85 % → 93 % of live segments recognised, seed 0); "
                 "`-seed1`: the same run as the plain file with seed 1 (other timelines, loops and live session). The "
-                "plain and `-seed1` files are on the shipped (slice 3) model, where the classifier's verdict differs by "
+                "plain and `-seed1` files are on the shipped (slice 4) model, where the classifier's verdict differs by "
                 "session; the row that pools them (sessions of the same weights and stream, `live_meaning.pooled`) "
                 "judges their paired segments together.", "",
                 "Reading, meaning: kept from t ≤ 0.55 (`-prompt055`), the segments' first halves were recognised 78 % "
@@ -333,8 +333,8 @@ REGENERATE = ["## Regenerate", "",
               "    --diffusion runs/t2m-diffusion/ckpt.pt --naive runs/t2m-naive/ckpt.pt --nodcond runs/t2m-nodcond/ckpt.pt",
               "python -m emdm.eval.coverage --model emdm-t2m-web   # coverage per action, 1/2/4/10 steps (--seeds, default 8)",
               "python -m emdm.eval.coverage --model emdm-a2m-web",
-              "python -m emdm.eval.realism --model emdm-t2m-web --variant int8 --name emdm-t2m-web-slice3-int8   # realism per action at the page's settings (issue 28; the shipped slice-3 weights)",
-              "python -m emdm.eval.realism --model emdm-t2m-web --variant int8 --x0-smoothing 0 --speed-cap 0 --name emdm-t2m-web-slice3-int8-plain   # ... plain sampling (no x̂0 smoothing, no speed cap)",
+              "python -m emdm.eval.realism --model emdm-t2m-web --variant int8 --name emdm-t2m-web-slice4-int8   # realism per action at the page's settings (issue 28; the shipped slice-4 weights)",
+              "python -m emdm.eval.realism --model emdm-t2m-web --variant int8 --x0-smoothing 0 --speed-cap 0 --name emdm-t2m-web-slice4-int8-plain   # ... plain sampling (no x̂0 smoothing, no speed cap)",
               "python -m emdm.eval.realism_diff docs/results/json/realism-OLD.json docs/results/json/realism-NEW.json   # a change, per action and for the feet",
               "python -m emdm.eval.realism --model emdm-t2m-web --variant int8 --x0-smoothing 0 --decode raw --name emdm-t2m-web-int8-x0s0-raw   # ... the model's own joints",
               "python -m emdm.eval.realism --model emdm-a2m-web --variant int8 --name emdm-a2m-web-int8-pose0   # the action model (--speed-cap 0: plain; --x0-smoothing 2: pose2; --decode raw: raw)",
