@@ -11,13 +11,15 @@
 # what is left after the unpack, less a margin for the last write.
 # Settings (environment): as train-balanced.sh (BATCH 256, LR_SCALE sqrt, AMP bf16, W_BONE 300, COMPILE 0) but
 # ALPHA 0.25 (it won slice 3: rare actions drawn more often) and TIME_DRAW pairs (it won slice 4: every (step count,
-# step) pair equally often, so 10 steps' middle steps get more samples; train-balanced.sh's is steps), WEIGHTS_MINUTES (2), LEASE_SECONDS (480), PROBE_STEPS (25: the steps timed to set
-# the cosine horizon), MAX_STEPS (no cap), MARGIN_SECONDS (30, plus 15 per run), VARIANTS (below), PYTHON (python3)
-# and EMDM_TRAIN_EXTRA. The CPU rehearsal in CI runs this
-# same script with EMDM_TRAIN_EXTRA="--device cpu --d-width 32 ...", AMP=off, BATCH=2, PROBE_STEPS=2, MAX_STEPS=4.
+# step) pair equally often, so 10 steps' middle steps get more samples; train-balanced.sh's is steps),
+# WEIGHTS_MINUTES (2), LEASE_SECONDS (480), PROBE_STEPS (25: the steps timed to set the cosine horizon), MAX_STEPS
+# (no cap), MARGIN_SECONDS (30, plus 15 per run), VARIANTS (below), PYTHON (python3) and EMDM_TRAIN_EXTRA. The CPU
+# rehearsal in CI runs this same script with EMDM_TRAIN_EXTRA="--device cpu --d-width 32 ...", AMP=off, BATCH=2,
+# PROBE_STEPS=2, MAX_STEPS=4.
 #
 # VARIANTS="name:flags;name:flags" trains several recipes side by side on the one device, from the same start, in
-# the same time (1.7x the steps of one run in all, measured with three on an H200; a comparison judged afterwards on the CPU, so the lease is not spent waiting): each variant's
+# the same time (1.7x the steps of one run in all with three on an H200, 1.5x with two; a comparison judged
+# afterwards on the CPU, so the lease is not spent waiting): each variant's
 # flags are appended to the recipe's (the last of a repeated flag wins), each continues from
 # .lease/init-<run>-<name>.pt if present (a second call of the same lease: `lease.sh init <run>-<name> FILE`),
 # else from the common start above, and each leaves its weights and log.csv in $OUT/<name>/ (train.out: all of them
