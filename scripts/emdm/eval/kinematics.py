@@ -161,12 +161,17 @@ def rule_text(action: str) -> str:
     return " and ".join(f"{d} {'≥' if op == '>=' else '≤'} {t:g}" for d, op, t in RULES[action])
 
 
+def holds(value, op: str, threshold: float):
+    """Whether ``value`` (a number or an array of them) meets one condition of a rule, ``op`` ">=" or "<="."""
+    return value >= threshold if op == ">=" else value <= threshold
+
+
 def passes(action: str, desc: dict[str, np.ndarray]) -> np.ndarray:
     """(N,) bool: which motions (descriptor table ``desc``) pass ``action``'s rule."""
     n = len(next(iter(desc.values())))
     ok = np.ones(n, bool)
     for d, op, t in RULES[action]:
-        ok &= desc[d] >= t if op == ">=" else desc[d] <= t
+        ok &= holds(desc[d], op, t)
     return ok
 
 

@@ -21,7 +21,7 @@ import json
 import sys
 from pathlib import Path
 
-from emdm.eval.kinematics import RULES
+from emdm.eval.kinematics import RULES, holds
 
 WORSE = 1 / 8
 CHECKS = ("classifier", "kinematic", "moving")
@@ -106,7 +106,7 @@ def rules(old: dict, new: dict) -> list[str]:
         med = _desc(new, "generated", a)
         if share is None or share >= 0.5 or a not in RULES or not med:
             continue
-        missed = [(d, op, t) for d, op, t in RULES[a] if d in med and not (med[d] >= t if op == ">=" else med[d] <= t)]
+        missed = [(d, op, t) for d, op, t in RULES[a] if d in med and not holds(med[d], op, t)]
         if missed:
             real, was = _desc(new, "real", a), _desc(old, "generated", a)
             out.append(f"{a} (rule passed by {share:.2f}) misses " + "; ".join(
