@@ -38,6 +38,10 @@ from emdm.outdir import OutputRefused, check_writable
 
 PARITY_CASES = ((1, 1), (1, 60), (2, 17), (3, 120), (2, 196))
 NAME = re.compile(r"[A-Za-z0-9._-]{1,100}")     # a model id: a file stem in --out and the manifest key
+# the training flags a manifest entry records (its "training"."flags"; a flag the checkpoint predates is null)
+TRAINING_FLAGS = ("geo_weight", "geo_weight_t1", "lambda_geo", "w_pos", "w_vel", "w_foot", "w_bone", "lr_g", "lr_d",
+                  "lr_min", "warmup", "ema", "d_cond", "d_width", "cond_drop", "random_crop", "min_frames", "objective",
+                  "steps")
 
 
 class ExportError(RuntimeError):
@@ -225,11 +229,7 @@ def manifest_entry(name: str, meta: dict, summary: dict, files: dict[str, str], 
                      "dataset": meta["dataset"], "clips": meta.get("clips"), "device": meta["device"],
                      "batch": meta.get("batch"), "losses": summary["losses"],
                      **({"continuedFrom": meta["init"]} if meta.get("init") else {}),
-                     "flags": {k: meta["args"].get(k) for k in ("geo_weight", "lambda_geo", "w_pos", "w_vel", "w_foot",
-                                                                "w_bone",
-                                                                "lr_g", "lr_d", "lr_min", "warmup", "ema", "d_cond",
-                                                                "d_width", "cond_drop", "random_crop", "min_frames",
-                                                                "objective", "steps")}},
+                     "flags": {k: meta["args"].get(k) for k in TRAINING_FLAGS}},
         "files": sorted(files.values()),
     }
     entry.update(extra)

@@ -146,7 +146,7 @@ class Trainer:
             d_fwd = torch.compile(self.D, dynamic=True) if self.D is not None else None
         self.nets = Nets(self.G, self.opt_g, self.D, self.opt_d, g_fwd, d_fwd, self.dist.average_grads,
                          torch.bfloat16 if a.amp == "bf16" else None)
-        self.gan = GanWeights(a.geo_weight, a.adv_weight, a.r1_gamma, a.r1_every)
+        self.gan = GanWeights(a.geo_weight, a.adv_weight, a.r1_gamma, a.r1_every, a.geo_weight_t1)
         self._ema_pairs = (list(self.G_ema.parameters()), list(self.G.parameters()))
 
     def init_from(self, path: Path) -> None:
@@ -436,6 +436,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.weights_minutes is not None and (args.weights_out is None or not args.weights_minutes >= 0):
         parser.error("--weights-minutes needs --weights-out and a number of minutes ≥ 0")
+    if args.geo_weight_t1 is not None and not (args.geo_weight_t1 > 0 and args.geo_weight > 0
+                                               and args.objective == "ddgan"):
+        parser.error(f"--geo-weight-t1 {args.geo_weight_t1:g}: needs a number > 0, --geo-weight > 0 and the ddgan "
+                     "objective (it sets how L_geo's weight changes with t)")
     trainer = None
     try:
         trainer = Trainer(args)

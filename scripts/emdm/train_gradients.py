@@ -37,7 +37,8 @@ GROUPS = ("all", "t=1", "t<1")
 
 
 def term_weights(args) -> dict[str, float]:
-    """Each term's factor in the G loss under ``args`` (emdm.model.objectives: R·(L_recon + λ·Σ w·L))."""
+    """Each term's factor in the G loss under ``args`` (emdm.model.objectives: R·(L_recon + λ·Σ w·L)); with
+    --geo-weight-t1 each sample's terms carry GanWeights.geo_scale(t) on top, as in training."""
     r, lam = args.geo_weight, args.lambda_geo
     return {"recon": r, "pos": r * lam * args.w_pos, "vel": r * lam * args.w_vel,
             "foot": r * lam * args.w_foot, "bone": r * lam * args.w_bone}
@@ -65,7 +66,7 @@ def measure(trainer: Trainer, batches: int) -> dict:
             if not bool(sel.any()):
                 continue
             pred = G(x_k1[sel], z[sel], c[sel], t_cur[sel], mask[sel]).float()
-            terms = trainer.geo.terms(pred, x0[sel], mask[sel])
+            terms = trainer.geo.terms(pred, x0[sel], mask[sel], trainer.gan.geo_scale(t_cur[sel]))
             summed = None
             for name in TERMS:
                 if name not in terms:            # λ = 0 or every joint weight 0: only recon is computed

@@ -33,6 +33,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--ema-warmup", action=argparse.BooleanOptionalAction, default=True,
                    help="use decay min(ema, (1+n)/(10+n)) so short runs do not keep the initial weights")
     p.add_argument("--geo-weight", type=float, default=100.0, help="R: weight of L_geo in the G loss (0 = naive DDGAN)")
+    p.add_argument("--geo-weight-t1", type=float, default=None, metavar="R1",
+                   help="R at t = 1 (DDGAN): a sample's L_geo weight is R^(1−t)·R1^t, so the steps with a small "
+                        "R lean on the discriminator more than on the mean motion MSE asks for (default: R at every t)")
     p.add_argument("--lambda-geo", type=float, default=1.0, help="λ: weight of the joint terms inside L_geo")
     p.add_argument("--w-pos", type=float, default=1.0)
     p.add_argument("--w-vel", type=float, default=1.0)

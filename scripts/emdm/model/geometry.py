@@ -47,12 +47,16 @@ def recover_joints(feats: torch.Tensor) -> torch.Tensor:
     return torch.cat([root.unsqueeze(-2), world + offset], dim=-2)
 
 
-def _masked_mean(err: torch.Tensor, weight: torch.Tensor) -> torch.Tensor:
-    """Mean of err (B, N, ...) over entries where weight (B, N) (broadcast) is nonzero."""
+def _masked_mean(err: torch.Tensor, weight: torch.Tensor, scale: torch.Tensor | None = None) -> torch.Tensor:
+    """Mean of err (B, N, ...) over entries where weight (B, N) (broadcast) is nonzero; with ``scale`` (B,), each
+    sample's entries count ``scale`` times in the sum (the divisor stays the entries' count, so scale 1 is the mean)."""
     while weight.dim() < err.dim():
         weight = weight.unsqueeze(-1)
     w = weight.expand_as(err)
-    return (err * w).sum() / w.sum().clamp_min(1.0)
+    num = err * w
+    if scale is not None:
+        num = num * scale.reshape(-1, *([1] * (err.dim() - 1)))
+    return num.sum() / w.sum().clamp_min(1.0)
 
 
 def bone_lengths(joints: torch.Tensor) -> torch.Tensor:
@@ -60,8 +64,10 @@ def bone_lengths(joints: torch.Tensor) -> torch.Tensor:
     return torch.linalg.vector_norm(joints[..., 1:, :] - joints[..., PARENTS[1:], :], dim=-1)
 
 
-def geometric_losses(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor) -> dict[str, torch.Tensor]:
-    """L_pos, L_vel, L_foot, L_bone on de-normalised features (B, L, 263) with mask (B, L).
+def geometric_losses(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor,
+                     scale: torch.Tensor | None = None) -> dict[str, torch.Tensor]:
+    """L_pos, L_vel, L_foot, L_bone on de-normalised features (B, L, 263) with mask (B, L); ``scale`` (B,) weights
+    each sample's share (``_masked_mean``; None: every sample alike).
 
     pos: MSE of recovered joints (m²); vel: MSE of joint velocities between consecutive real frames;
     foot: squared velocity of the predicted foot joints on the target's contact frames (MDM's foot loss);
@@ -71,12 +77,12 @@ def geometric_losses(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tenso
     """
     jp, jt = recover_joints(pred), recover_joints(target)
     bt = bone_lengths(jt)
-    bone = _masked_mean((bone_lengths(jp) / bt.clamp_min(1e-3) - 1.0) ** 2, mask)
-    pos = _masked_mean((jp - jt) ** 2, mask)
+    bone = _masked_mean((bone_lengths(jp) / bt.clamp_min(1e-3) - 1.0) ** 2, mask, scale)
+    pos = _masked_mean((jp - jt) ** 2, mask, scale)
     pair = mask[:, 1:] * mask[:, :-1]
     vp, vt = jp[:, 1:] - jp[:, :-1], jt[:, 1:] - jt[:, :-1]
-    vel = _masked_mean((vp - vt) ** 2, pair)
+    vel = _masked_mean((vp - vt) ** 2, pair, scale)
     contact = (target[:, :-1, CONTACT_CHANNELS] > 0.5).float() * pair.unsqueeze(-1)     # (B, L-1, 4)
     foot_v = vp[:, :, list(FOOT_JOINTS)]                                                 # (B, L-1, 4, 3)
-    foot = _masked_mean(foot_v ** 2, contact)
+    foot = _masked_mean(foot_v ** 2, contact, scale)
     return {"pos": pos, "vel": vel, "foot": foot, "bone": bone}

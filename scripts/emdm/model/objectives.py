@@ -64,8 +64,13 @@ def bcast(v: torch.Tensor) -> torch.Tensor:
     return v[:, None, None]
 
 
-def masked_mse(a: torch.Tensor, b: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
-    return (((a - b) ** 2).mean(-1) * mask).sum() / mask.sum().clamp_min(1.0)
+def masked_mse(a: torch.Tensor, b: torch.Tensor, mask: torch.Tensor, scale: torch.Tensor | None = None) -> torch.Tensor:
+    """Mean squared error over the frames of ``mask`` (B, L); ``scale`` (B,): each sample's frames count that many
+    times in the sum (the divisor stays the frames' count)."""
+    err = ((a - b) ** 2).mean(-1) * mask
+    if scale is not None:
+        err = err * scale[:, None]
+    return err.sum() / mask.sum().clamp_min(1.0)
 
 
 def pairs(tables: ScheduleTables, x0: torch.Tensor, mask: torch.Tensor):
@@ -98,12 +103,14 @@ class Geo:
     w_foot: float = 1.0
     w_bone: float = 0.0
 
-    def terms(self, x0_pred: torch.Tensor, x0: torch.Tensor, mask: torch.Tensor) -> dict[str, torch.Tensor]:
+    def terms(self, x0_pred: torch.Tensor, x0: torch.Tensor, mask: torch.Tensor,
+              scale: torch.Tensor | None = None) -> dict[str, torch.Tensor]:
+        """Each term's batch mean; ``scale`` (B,) weights each sample's share (GanWeights.geo_scale)."""
         x0_pred = x0_pred.float()                     # the losses in float32 also under bf16 autocast
-        out = {"recon": masked_mse(x0_pred, x0, mask)}
+        out = {"recon": masked_mse(x0_pred, x0, mask, scale)}
         if self.lambda_geo > 0 and (self.w_pos or self.w_vel or self.w_foot or self.w_bone):
             with _no_autocast(x0.device):
-                out.update(geometric_losses(x0_pred * self.std + self.mean, x0 * self.std + self.mean, mask))
+                out.update(geometric_losses(x0_pred * self.std + self.mean, x0 * self.std + self.mean, mask, scale))
         return out
 
     def total(self, terms: dict[str, torch.Tensor]) -> torch.Tensor:
@@ -163,6 +170,14 @@ class GanWeights:
     adv_weight: float = 1.0
     r1_gamma: float = 0.02
     r1_every: int = 15
+    geo_weight_t1: float | None = None   # R at t = 1 (None: R at every t); between, R^(1−t)·R1^t
+
+    def geo_scale(self, t: torch.Tensor) -> torch.Tensor | None:
+        """Per sample (t: its step's time, (B,)), the factor on R that gives R^(1−t)·geo_weight_t1^t: 1 at t = 0,
+        geo_weight_t1 / R at t = 1, geometric between. None where the weight is the same at every t."""
+        if self.geo_weight_t1 is None or self.geo_weight_t1 == self.geo_weight:
+            return None
+        return (self.geo_weight_t1 / self.geo_weight) ** t.float()
 
 
 def ddgan_step(nets: Nets, geo: Geo, w: GanWeights, tables: ScheduleTables, x0: torch.Tensor, mask: torch.Tensor,
@@ -211,7 +226,7 @@ def ddgan_step(nets: Nets, geo: Geo, w: GanWeights, tables: ScheduleTables, x0: 
     loss_g = w.adv_weight * g_adv
     terms: dict[str, torch.Tensor] = {}
     if w.geo_weight > 0:
-        terms = geo.terms(x0_pred, x0, mask)
+        terms = geo.terms(x0_pred, x0, mask, w.geo_scale(t_cur))
         loss_g = loss_g + w.geo_weight * geo.total(terms)
     nets.opt_g.zero_grad(set_to_none=True)
     loss_g.backward()
