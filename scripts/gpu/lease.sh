@@ -45,7 +45,8 @@ hook="$(git rev-parse --git-path hooks)/pre-commit"
 keep_re() {  # the public/models paths that travel; $1: whose weights file travels too (a regex; empty: none)
   echo "^public/models/(manifest\\.json|[^/]+\\.meanstd\\.f32${1:+|$1\\.weights\\.f16\\.pt})\$"
 }
-drop_dirs=(public/models tests/fixtures)
+# Nor does a run need the test fixtures or the results' figures (docs/results, 5 MB: room for a third variant's start)
+drop_dirs=(public/models tests/fixtures docs/results)
 
 die() { echo "lease.sh: $*" >&2; exit 2; }
 

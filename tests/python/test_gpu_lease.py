@@ -168,6 +168,12 @@ def test_the_slice_says_what_is_missing(tmp_path):
     assert bad.returncode == 2 and "unknown run 't2x'" in bad.stderr
 
 
+# the next slice's call (MODELS, "Slice 5"): L_geo's weight falling from 100 at t = 0 to 10 at t = 1 (hi), or rising
+# from 10 to 100 (lo), beside the recipe as it is; hi also checks that a variant's flags override the recipe's
+VARIANTS = "base:;hi:--geo-weight-t1 10 --random-crop 0.9 --crop-min 20;lo:--geo-weight 10 --geo-weight-t1 100"
+NAMES = ("base", "hi", "lo")
+
+
 def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
     """VARIANTS: two recipes from the same start in one call, each its own weights and logs in $OUT/<name>/, its
     flags on top of the recipe's; a second call continues each from its own float16 start, and `shrink t2m` then
@@ -188,7 +194,7 @@ def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
     finally:
         assert lease(repo, "restore").returncode == 0
     env = {**os.environ, "PYTHON": sys.executable, "AMP": "off", "BATCH": "2", "PROBE_STEPS": "2", "MAX_STEPS": "3",
-           "WEIGHTS_MINUTES": "0", "LEASE_SECONDS": "300", "VARIANTS": "base:;geo:--geo-weight 30 --random-crop 0.9 --crop-min 20",
+           "WEIGHTS_MINUTES": "0", "LEASE_SECONDS": "300", "VARIANTS": VARIANTS,
            "EMDM_TRAIN_EXTRA": "--device cpu --d-width 32 --threads 1 --log-every 1"}
     env.pop("PYTHONPATH", None)
 
@@ -200,7 +206,7 @@ def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
 
     first = call(tmp_path / "OUT", "w1")
     args = {}
-    for v in ("base", "geo"):
+    for v in NAMES:
         st = load_weights_file(tmp_path / "OUT" / v / "emdm-t2m-web.pt")
         assert st["step"] == 3 and st["meta"]["init"]["runs"]
         args[v] = st["meta"]["args"]
@@ -208,11 +214,14 @@ def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
         assert f"== t2m-{v}" in (tmp_path / "OUT/train.out").read_text()
         assert f"[t2m-{v}] emdm-t2m-web from emdm-t2m-web.weights.f16.pt" in first.stdout
     # a device call returns at most 8 files: env.txt, train.out and two per variant (three variants fit)
-    assert len([f for f in (tmp_path / "OUT").rglob("*") if f.is_file()]) == 6
-    assert args["base"]["random_crop"] == 0.3 and args["geo"]["random_crop"] == 0.9 and args["geo"]["crop_min"] == 20
-    assert args["base"]["time_draw"] == args["geo"]["time_draw"] == "pairs"      # the recipe's since slice 4
-    assert args["base"]["geo_weight"] == 100 and args["geo"]["geo_weight"] == 30      # the next slice's variant
-    assert args["base"]["balance_alpha"] == args["geo"]["balance_alpha"] == 0.25
+    assert len([f for f in (tmp_path / "OUT").rglob("*") if f.is_file()]) == 8
+    assert args["base"]["random_crop"] == 0.3 and args["hi"]["random_crop"] == 0.9 and args["hi"]["crop_min"] == 20
+    for v in NAMES:
+        assert args[v]["time_draw"] == "pairs" and args[v]["balance_alpha"] == 0.25, v     # the recipe's since slice 4
+    # the next slice's variants: L_geo's weight falling towards t = 1 (hi: 100 -> 10) or rising (lo: 10 -> 100)
+    assert (args["base"]["geo_weight"], args["base"]["geo_weight_t1"]) == (100, None)
+    assert (args["hi"]["geo_weight"], args["hi"]["geo_weight_t1"]) == (100, 10)
+    assert (args["lo"]["geo_weight"], args["lo"]["geo_weight_t1"]) == (10, 100)
 
     # call 2: each variant from its own returned weights, made ready in one step (`next`: init each, shrink, size)
     empty = tmp_path / "empty"
@@ -222,19 +231,20 @@ def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
     nxt = lease(repo, "next", "t2m", str(tmp_path / "OUT"))
     assert nxt.returncode == 0, nxt.stdout + nxt.stderr
     assert "would travel" in nxt.stdout
-    for v in ("base", "geo"):
+    for v in NAMES:
         assert load_weights_file(repo / f".lease/init-t2m-{v}.pt")["meta"]["weights_dtype"] == "float16"
         shutil.copy2(repo / f".lease/init-t2m-{v}.pt", travel / f".lease/init-t2m-{v}.pt")
     try:
         files = set(lease(repo, "files").stdout.splitlines())
         assert not any(f.endswith(".weights.f16.pt") for f in files), "the starts are in .lease now"
-        assert {".lease/init-t2m-base.pt", ".lease/init-t2m-geo.pt"} <= files
+        assert {f".lease/init-t2m-{v}.pt" for v in NAMES} <= files
+        assert not any(f.startswith("docs/results/") for f in files)
     finally:
         assert lease(repo, "restore").returncode == 0
         for f in (repo / ".lease").glob("init-*.pt"):
             f.unlink()
     second = call(tmp_path / "OUT2", "w2")
-    for v in ("base", "geo"):
+    for v in NAMES:
         assert f"[t2m-{v}] emdm-t2m-web from init-t2m-{v}.pt" in second.stdout
         runs = load_weights_file(tmp_path / "OUT2" / v / "emdm-t2m-web.pt")["meta"]["init"]["runs"]
         assert runs[-1]["file"] == f"init-t2m-{v}.pt" and runs[-1]["steps"] == 3
