@@ -197,6 +197,41 @@ def load_weights_file(path: Path | str) -> dict:
     return st
 
 
+# the options of emdm.train whose values are paths on the machine that ran it (tests/python/test_checkpoints_portable.py
+# checks this is all of them)
+PATH_ARGS = ("data", "out", "init_weights", "weights_out")
+
+
+def portable_meta(meta: dict) -> dict:
+    """``meta`` for a file that leaves the machine it was made on (a shipped weights file): the run's path-valued
+    options (``args``, PATH_ARGS) and its dataset's path (``data.path``) cut to their last name, so no machine's
+    folders travel. Nothing that reads a weights file (``--init-weights``, export, the evaluation) reads those paths;
+    a resume compares the dataset by its sha256."""
+    out = dict(meta)
+
+    def name(v):
+        return Path(v).name if isinstance(v, str) and v else v
+    if isinstance(meta.get("args"), dict):
+        out["args"] = {k: (name(v) if k in PATH_ARGS else v) for k, v in meta["args"].items()}
+    if isinstance(meta.get("data"), dict):
+        out["data"] = {**meta["data"], "path": name(meta["data"].get("path"))}
+    return out
+
+
+def portable_weights_file(src: Path | str, dst: Path | str) -> Path:
+    """A --weights-out file with ``portable_meta``; weights, their dtype, step, wall and losses as they were."""
+    st = load_file(src, WEIGHTS_KEYS[:3] + ("G_ema",), what="--weights-out file or emdm.train checkpoint")
+    if not isinstance(st["G_ema"], dict):
+        raise CheckpointError(f"{src}: 'G_ema' is not a state dict")
+    dtypes = {v.dtype for v in st["G_ema"].values()}
+    if len(dtypes) != 1:
+        raise CheckpointError(f"{src}: its weights mix dtypes {sorted(map(str, dtypes))}")
+    dst = Path(dst)
+    save_weights_file(dst, st["G_ema"], step=st["step"], wall=st["wall"], meta=portable_meta(st["meta"]),
+                      last_losses=st.get("last_losses", {}), dtype=str(dtypes.pop()).removeprefix("torch."))
+    return dst
+
+
 def half_weights_file(src: Path | str, dst: Path | str) -> Path:
     """A --weights-out file (or ckpt.pt) as a float16 --weights-out file: the next call of a GPU lease continues
     from what the last one returned, at half the size it travels (scripts/gpu/lease.sh init). Read with every
@@ -209,19 +244,21 @@ def half_weights_file(src: Path | str, dst: Path | str) -> Path:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m emdm.checkpoints half SRC DST``: see half_weights_file."""
+    """``python -m emdm.checkpoints half SRC DST`` (half_weights_file) or ``portable SRC DST`` (portable_weights_file;
+    SRC may be DST)."""
     import argparse
     ap = argparse.ArgumentParser(prog="python -m emdm.checkpoints", description=main.__doc__)
-    ap.add_argument("command", choices=["half"])
+    ap.add_argument("command", choices=["half", "portable"])
     ap.add_argument("src")
     ap.add_argument("dst")
     a = ap.parse_args(argv)
     try:
-        out = half_weights_file(a.src, a.dst)
+        out = (half_weights_file if a.command == "half" else portable_weights_file)(a.src, a.dst)
     except CheckpointError as e:
         print(f"emdm.checkpoints: {e}", file=sys.stderr)
         return 2
-    print(f"emdm.checkpoints: {display_path(out)} ({out.stat().st_size / 2**20:.1f} MiB, float16)")
+    dtype = load_weights_file(out)["meta"]["weights_dtype"]
+    print(f"emdm.checkpoints: {display_path(out)} ({out.stat().st_size / 2**20:.1f} MiB, {dtype})")
     return 0
 
 

@@ -29,7 +29,7 @@ import torch
 
 from emdm import manifest as mf
 from emdm import paths
-from emdm.checkpoints import first_non_finite, save_weights_file
+from emdm.checkpoints import first_non_finite, portable_meta, save_weights_file
 from emdm.manifest import ManifestError
 from emdm.model.generator import Generator
 from emdm.model.open import INPUTS, ModelError, load_generator as open_generator, ort_session
@@ -348,7 +348,7 @@ def make_files(a: argparse.Namespace, G: Generator, meta: dict, summary: dict, o
     files["meanStd"] = ms_path.name
     if a.ship_weights:
         dst = out / f"{a.name}.weights.f16.pt"
-        save_weights_file(dst, G.state_dict(), step=summary["steps"], wall=summary["wall_s"], meta=meta,
+        save_weights_file(dst, G.state_dict(), step=summary["steps"], wall=summary["wall_s"], meta=portable_meta(meta),
                           last_losses=summary["losses"], dtype="float16")
         files["weights"] = dst.name
         print(f"{dst.name}: {dst.stat().st_size / 1e6:.2f} MB (float16 EMA weights for --init-weights)")

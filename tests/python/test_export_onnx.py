@@ -185,3 +185,18 @@ def test_guidance_is_written_and_kept_by_a_re_export(checkpoint, tmp_path, capsy
     assert export_main(base + ["--guidance", "inf"]) == 2
     assert "--guidance must be a finite scale in 0..20" in capsys.readouterr().err
     assert entry()["guidance"] == 1.5                        # nothing written on bad input
+
+
+def test_shipped_weights_name_the_run_s_files_by_name_only(checkpoint, tmp_path):
+    """--ship-weights writes <name>.weights.f16.pt for --init-weights; its meta keeps the run's options but not the
+    folders of the machine it ran on (emdm.checkpoints.portable_meta)."""
+    from emdm.checkpoints import load_weights_file
+
+    out = tmp_path / "m"
+    assert export_main(["--ckpt", str(checkpoint), "--name", "emdm-a2m-test", "--out", str(out), "--variants", "",
+                        "--ship-weights"]) == 0
+    meta = load_weights_file(out / "emdm-a2m-test.weights.f16.pt")["meta"]
+    assert meta["args"]["out"] == checkpoint.parent.name and meta["args"]["data"] == meta["data"]["path"]
+    assert "/" not in meta["args"]["data"] and "/" not in meta["data"]["path"]
+    assert json.loads((out / "manifest.json").read_text())["models"]["emdm-a2m-test"]["trainingWeights"] == \
+        "emdm-a2m-test.weights.f16.pt"

@@ -173,6 +173,28 @@ def test_unconditional_generation_works(generated):
     assert np.isfinite(joints).all()
 
 
+def test_shipped_training_weights_carry_no_machine_paths(model):
+    # the meta of a shipped weights file names its run's files by name only (emdm.checkpoints.portable_meta)
+    name, entry = model
+    if "trainingWeights" not in entry:
+        pytest.skip(f"{name} ships no training weights")
+    import torch
+
+    meta = torch.load(paths.MODELS_DIR / entry["trainingWeights"], weights_only=True)["meta"]
+
+    def strings(o):
+        if isinstance(o, dict):
+            for v in o.values():
+                yield from strings(v)
+        elif isinstance(o, (list, tuple)):
+            for v in o:
+                yield from strings(v)
+        elif isinstance(o, str):
+            yield o
+    found = [s for s in strings(meta) if "/" in s or "\\" in s]
+    assert not found, f"{entry['trainingWeights']}: paths in its meta: {found[:5]}"
+
+
 def test_shipped_training_weights_are_the_onnx_model(model):
     # <name>.weights.f16.pt lets training continue from the shipped model (train --init-weights): it must be
     # the same network as the ONNX file, up to float16 rounding of the weights
