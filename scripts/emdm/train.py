@@ -119,12 +119,35 @@ class Trainer:
         else:
             if not self.ms.action_labels:
                 raise SystemExit(f"{self.data_dir}: --task action needs actions.json and metadata.csv")
+            if a.init_weights is not None:
+                self.take_labels_of(a.init_weights)
             self.cond_dim = len(self.ms.action_labels)
         self.clips = DeviceClips(self.ms, self.device, clip_caps)
         if a.task == "action":      # per clip, once: F.one_hot checks its indices with a host sync on every call
             self.action_onehot = F.one_hot(self.clips.actions, self.cond_dim).float()
         self.geo = Geo(torch.from_numpy(self.ms.mean).to(self.device), torch.from_numpy(self.ms.std).to(self.device),
                        a.lambda_geo, a.w_pos, a.w_vel, a.w_foot, a.w_bone)
+
+    def take_labels_of(self, path: Path) -> None:
+        """An action model continued (--init-weights) keeps its one-hot labels: this dataset's actions are renumbered
+        to the model's order (a dataset of some of its actions, or the same ones listed otherwise, trains the
+        model's own inputs); an action the model does not know is a CheckpointError naming it."""
+        cond = load_weights_file(path)["meta"].get("condition") or {}
+        labels = cond.get("labels") if cond.get("type") == "action" else None
+        if not isinstance(labels, list):
+            return                                     # not an action model's file: check_same_model says so
+        unknown = [x for x in self.ms.action_labels if x not in labels]
+        if unknown:
+            raise CheckpointError(f"{path}: its action model does not know this dataset's action(s) "
+                                  f"{', '.join(unknown[:5])}{' …' if len(unknown) > 5 else ''} ({len(labels)} labels: "
+                                  f"{', '.join(labels[:5])} …); --init-weights needs the dataset's actions among them")
+        if self.ms.action_labels != labels:
+            to = np.array([labels.index(x) for x in self.ms.action_labels], dtype=np.int64)
+            self.ms.actions = np.where(self.ms.actions >= 0, to[np.maximum(self.ms.actions, 0)], -1)
+            if self.dist.main:
+                print(f"actions: this dataset's {len(self.ms.action_labels)} renumbered to the {len(labels)} labels of "
+                      f"{path.name}", file=sys.stderr)
+            self.ms.action_labels = list(labels)
 
     def build_models(self) -> None:
         a = self.args
@@ -154,6 +177,10 @@ class Trainer:
         m = st["meta"]
         check_same_model(path, m, self.G.config(), self.args.task, self.args.objective,
                          "--init-weights needs the same")
+        enc = (m.get("condition") or {}).get("encoder")
+        if self.args.task == "text" and enc is not None and enc != self.args.encoder:
+            raise CheckpointError(f"{path}: its text model reads {enc!r} embeddings, this run --encoder "
+                                  f"{self.args.encoder!r}; --init-weights needs the same encoder")
         load_state_dict(path, self.G, st["G_ema"], "G_ema")
         self.G_ema.load_state_dict(st["G_ema"])
         bad = first_non_finite(self.G_ema)

@@ -253,3 +253,39 @@ def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
                          env={**env, "OUT": str(tmp_path / "OUT3"), "VARIANTS": "Crop!:--random-crop 0.5"})
     assert bad.returncode == 2 and "bad name 'Crop!'" in bad.stderr
     assert lease(repo, "shrink", "t2x").returncode == 2
+
+
+@pytest.mark.parametrize("run, model, task", [("a2m", "emdm-a2m-web", "action"),
+                                              ("ddim", "diffusion-t2m-web", "text")])
+def test_the_later_slices_run_from_what_travels(repo, tmp_path, run, model, task):
+    """The slices after the text model's (issue 27, step 3): the action model and the DDIM baseline, each through
+    `shrink RUN` and the same device command, continue their own shipped weights with their own objective."""
+    if not (repo / ".lease/dataset.emdmpack").is_file():
+        data = _run(tmp_path, *_user_folder(tmp_path))
+        prep = lease(repo, "prepare", str(data))
+        assert prep.returncode == 0, prep.stdout[-2000:] + prep.stderr[-2000:]
+    for f in (repo / ".lease").glob("init-*.pt"):
+        f.unlink()
+    assert lease(repo, "shrink", run).returncode == 0
+    try:
+        travel = tmp_path / "travel"
+        assert lease(repo, "stage", str(travel)).returncode == 0
+        files = set(lease(repo, "files").stdout.splitlines())
+        assert f"public/models/{model}.weights.f16.pt" in files
+        assert not any(f.endswith(".weights.f16.pt") and model not in f for f in files)   # the others stay behind
+    finally:
+        assert lease(repo, "restore").returncode == 0
+    out = tmp_path / "OUT"
+    env = {**os.environ, "PYTHON": sys.executable, "OUT": str(out), "AMP": "off", "BATCH": "2", "PROBE_STEPS": "2",
+           "MAX_STEPS": "3", "WEIGHTS_MINUTES": "0", "LEASE_SECONDS": "300", "LEASE_WORK": str(tmp_path / "work"),
+           "EMDM_TRAIN_EXTRA": "--device cpu --d-width 32 --threads 1 --log-every 1"}
+    env.pop("PYTHONPATH", None)
+    r = subprocess.run(["bash", "scripts/gpu/lease-train.sh", run], cwd=travel, env=env, capture_output=True,
+                       text=True, timeout=900)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    assert f"[{run}] {model} from {model}.weights.f16.pt" in r.stdout
+    st = load_weights_file(out / f"{model}.pt")
+    assert st["step"] == 3 and st["meta"]["task"] == task and st["meta"]["init"]["runs"]
+    assert st["meta"]["args"]["objective"] == ("diffusion" if run == "ddim" else "ddgan")
+    assert all(torch.isfinite(v).all() for v in st["G_ema"].values())
+    assert (out / f"{model}.pt").stat().st_size <= 16 * 2**20

@@ -118,6 +118,52 @@ def test_weights_out_and_init_weights_continue_a_run(dataset, tmp_path, capsys):
     assert rc == 2 and "a.pt: trained with another model/task/objective (objective 'ddgan', this run 'diffusion')" in err
 
 
+def test_an_action_model_continued_keeps_its_labels_and_renumbers_the_dataset(dataset, tmp_path, capsys):
+    """--init-weights of an action model: the run's one-hot inputs are the model's labels in the model's order (the
+    dataset's actions renumbered to them); a dataset action the model does not know is refused, naming it."""
+    from emdm.checkpoints import save_weights_file
+    from emdm.train import Trainer
+    from emdm.train_options import build_parser
+
+    common = ["--data", str(dataset), "--task", "action", *TINY]
+    assert train_main([*common, "--out", str(tmp_path / "a"), "--steps", "1",
+                       "--weights-out", str(tmp_path / "a.pt")]) == 0
+    st = torch.load(tmp_path / "a.pt", weights_only=True)
+    assert st["meta"]["condition"]["labels"] == ["walk", "wave", "turn"]
+    for name, labels in (("perm.pt", ["turn", "walk", "wave"]), ("other.pt", ["walk", "wave", "jump"])):
+        meta = {**st["meta"], "condition": {**st["meta"]["condition"], "labels": labels}}
+        save_weights_file(tmp_path / name, st["G_ema"], step=1, wall=0.0, meta=meta, last_losses={})
+    args = build_parser().parse_args([*common, "--out", str(tmp_path / "b"), "--steps", "1",
+                                      "--init-weights", str(tmp_path / "perm.pt")])
+    plain = Trainer(build_parser().parse_args([*common, "--out", str(tmp_path / "c"), "--steps", "1"]))
+    t = Trainer(args)
+    assert t.ms.action_labels == ["turn", "walk", "wave"]
+    # every clip keeps its action by name: walk 0 -> 1, wave 1 -> 2, turn 2 -> 0
+    names = lambda tr: [tr.ms.action_labels[i] for i in tr.ms.actions]      # noqa: E731
+    assert names(t) == names(plain) and list(t.ms.actions) != list(plain.ms.actions)
+    assert "renumbered to the 3 labels of perm.pt" in capsys.readouterr().err
+    t.dist.close(); plain.dist.close()
+    rc = train_main([*common, "--out", str(tmp_path / "d"), "--steps", "1",
+                     "--init-weights", str(tmp_path / "other.pt")])
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert rc == 2 and "other.pt: its action model does not know this dataset's action(s) turn" in err, err
+
+
+def test_a_text_model_continued_needs_its_own_encoder(dataset, tmp_path, monkeypatch, capsys):
+    from emdm.checkpoints import save_weights_file
+
+    fake_text_encoder(monkeypatch, dim=16)
+    common = ["--data", str(dataset), "--task", "text", *TINY, "--steps", "1"]
+    assert train_main([*common, "--out", str(tmp_path / "a"), "--weights-out", str(tmp_path / "a.pt")]) == 0
+    st = torch.load(tmp_path / "a.pt", weights_only=True)
+    meta = {**st["meta"], "condition": {**st["meta"]["condition"], "encoder": "another-encoder"}}
+    save_weights_file(tmp_path / "b.pt", st["G_ema"], step=1, wall=0.0, meta=meta, last_losses={})
+    assert train_main([*common, "--out", str(tmp_path / "c"), "--init-weights", str(tmp_path / "a.pt")]) == 0
+    rc = train_main([*common, "--out", str(tmp_path / "d"), "--init-weights", str(tmp_path / "b.pt")])
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert rc == 2 and "b.pt: its text model reads 'another-encoder' embeddings" in err, err
+
+
 def test_bf16_autocast_and_lr_scaling(dataset, tmp_path):
     out = tmp_path / "run"
     assert train_main(["--data", str(dataset), "--task", "action", "--out", str(out), "--steps", "2", *TINY,
