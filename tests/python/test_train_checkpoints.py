@@ -26,9 +26,9 @@ def test_nan_loss_stops_without_overwriting_the_last_good_checkpoint(dataset, tm
     calls = {"n": 0}
     real = objectives.masked_mse
 
-    def poisoned(a, b, mask):                       # the recon term of the 3rd step goes NaN
+    def poisoned(a, b, mask, scale=None):           # the recon term of the 3rd step goes NaN
         calls["n"] += 1
-        out = real(a, b, mask)
+        out = real(a, b, mask, scale)
         return out * float("nan") if calls["n"] == 3 else out
     monkeypatch.setattr(objectives, "masked_mse", poisoned)
     out = tmp_path / "run"
@@ -52,9 +52,9 @@ def test_nan_is_caught_between_log_rows_before_a_checkpoint(dataset, tmp_path, m
     calls = {"n": 0}
     real = objectives.masked_mse
 
-    def poisoned(a, b, mask):
+    def poisoned(a, b, mask, scale=None):
         calls["n"] += 1
-        return real(a, b, mask) * (float("inf") if calls["n"] == 2 else 1.0)
+        return real(a, b, mask, scale) * (float("inf") if calls["n"] == 2 else 1.0)
     monkeypatch.setattr(objectives, "masked_mse", poisoned)
     rc = train_main(["--data", str(dataset), "--out", str(tmp_path / "r"), "--steps", "3", "--log-every", "1000",
                      "--ckpt-every", "3", *TINY])

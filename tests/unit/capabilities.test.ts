@@ -43,9 +43,10 @@ describe('capabilities', () => {
   });
 
   test('a prompt for an action the model does not do finds that action and is unknown; covered ones are known', async () => {
-    // under schema 1 (anchors of covered actions only) "a person jumps" passed as climb (0.79 ≥ 0.76)
+    // under schema 1 (anchors of covered actions only) "a person jumps" passed as climb (0.79 ≥ 0.76) when jump was not
+    // covered; since GPU slice 5 it is, and "jumps up and down" reads as hop, which is not
     const cases: [string, boolean, string?][] = [
-      ['a person jumps', false, 'jump'], ['someone jumps up and down', false, 'jump'], ['a person kicks', false, 'kick'],
+      ['a person jumps', true, 'jump'], ['someone jumps up and down', false, 'hop'], ['a person kicks', false, 'kick'],
       ['dances', false, 'dance'], ['swims', false], ['a person walks', true, 'walk'],
       ['a person raises the left hand', true, 'raise-left-hand'], ['a person bows', true, 'bow'], ['a person punches', false, 'punch'],
     ];
