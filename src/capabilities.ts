@@ -5,7 +5,7 @@
  * ```ts
  * const caps = await loadCapabilities(manifest, baseUrl, 'emdm-t2m-web');   // null when the model has none
  * caps?.actions.filter((a) => !a.covered);                                  // what it does not do yet
- * checkPrompt(caps!, embedding);   // {known: false, score: 0.86, action: 'jump', covered: false, nearest: [...]}
+ * checkPrompt(caps!, embedding);   // {known: false, score: 0.83, action: 'hop', covered: false, nearest: [...]}
  * ```
  *
  * The check: the file's anchors (int8) are well-covered benchmark prompts and training captions of the covered actions,
