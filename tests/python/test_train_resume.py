@@ -99,12 +99,20 @@ def test_a_flipped_byte_in_a_checkpoint_is_refused_naming_the_file(dataset, tmp_
     assert f"{out / 'ckpt.pt'}: checksum mismatch" in _last_line(capsys)
 
 
-def test_the_shipped_weights_are_checked_against_the_manifest(tmp_path):
-    """The committed *.weights.f16.pt carry no checksum of their own: the manifest beside them lists their sha256."""
-    models = paths.MODELS_DIR
+def test_a_weights_file_without_its_own_checksum_is_checked_against_the_manifest(tmp_path):
+    """A *.weights.f16.pt written before files carried a checksum of their own (the shipped ones did until GPU slice
+    5) is checked against the sha256 that the manifest.json beside it lists."""
+    import json
+
+    from emdm import manifest as mf
+
     name = "emdm-a2m-web.weights.f16.pt"
-    shutil.copy(models / "manifest.json", tmp_path / "manifest.json")
-    shutil.copy(models / name, tmp_path / name)
+    st = torch.load(paths.MODELS_DIR / name, weights_only=True)
+    del st[checkpoints.CHECKSUM_KEY]
+    torch.save(st, tmp_path / name)
+    man = json.loads((paths.MODELS_DIR / "manifest.json").read_text())
+    man["files"][name] = {"bytes": (tmp_path / name).stat().st_size, "sha256": mf.sha256_file(tmp_path / name)}
+    (tmp_path / "manifest.json").write_text(json.dumps(man))
     st = checkpoints.load_weights_file(tmp_path / name)
     assert checkpoints.CHECKSUM_KEY not in st and st["G_ema"]
     _flip_tensor_byte(tmp_path / name)
