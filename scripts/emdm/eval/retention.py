@@ -22,12 +22,14 @@ import numpy as np
 
 from emdm import paths
 from emdm.data.dataset import DatasetError
-from emdm.eval.coverage import PROMPTS_FILE, CoverageError, load_prompts
+from emdm.eval.args import add_model_source
+from emdm.eval.coverage import PROMPTS_FILE, CoverageError, load_prompts, model_defaults
 from emdm.eval.data import load_split
 from emdm.eval.kinematics import descriptors
 from emdm.model.open import ModelError, open_model
 from emdm.motion.features import recover_joints
 from emdm.sampler.condition import make_condition
+from emdm.sampler.flags import add_guidance_min_time
 from emdm.sampler.schedule import make_schedule
 
 ACTIONS = ("wave-right-hand", "wave-left-hand", "wave-both-hands", "dance", "walk")
@@ -106,16 +108,13 @@ def table(action: str, prompt: str, n: int, summ: dict, levels: list[dict]) -> s
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m emdm.eval.retention", description=__doc__.split("\n\n")[0])
-    who = ap.add_mutually_exclusive_group()
-    who.add_argument("--model", default=None, help="a shipped model (default emdm-t2m-web; its ONNX file)")
-    who.add_argument("--ckpt", type=Path, default=None, help="an emdm.train checkpoint or weights file")
-    ap.add_argument("--models-dir", type=Path, default=None)
-    ap.add_argument("--variant", default=None, help="the shipped model's ONNX variant (int8: the page's file)")
+    add_model_source(ap, required=False,
+                     model_help="a shipped model of public/models/manifest.json (default emdm-t2m-web; ONNX Runtime)")
     ap.add_argument("--actions", default=",".join(ACTIONS))
     ap.add_argument("--clips", type=int, default=10, help="real test clips per action (a seeded choice)")
-    ap.add_argument("--steps", type=int, default=10)
+    ap.add_argument("--steps", type=int, default=10, help="the schedule whose noise levels are measured")
     ap.add_argument("--guidance", type=float, default=None, help="default: the manifest's (2.5 for checkpoints)")
-    ap.add_argument("--guidance-min-time", type=float, default=None, help="default: the manifest's (0 for checkpoints)")
+    add_guidance_min_time(ap)
     ap.add_argument("--dataset", type=Path, default=paths.DATASET_DIR)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--all", action="store_true", help="every descriptor, not only the action's")
@@ -133,7 +132,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"emdm.eval.retention: --steps {a.steps}: the model supports "
               f"{m.meta.get('supportedSteps') or m.meta.get('supported_steps')}", file=sys.stderr)
         return 2
-    g = float(m.meta.get("guidance", 2.5)) if a.guidance is None else a.guidance
+    g = model_defaults(m)[0] if a.guidance is None else a.guidance
     gmin = float(m.meta.get("guidanceMinTime", 0.0)) if a.guidance_min_time is None else a.guidance_min_time
     try:
         split = load_split(a.dataset, "test", require_action=True)

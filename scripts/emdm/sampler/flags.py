@@ -9,11 +9,17 @@ import dataclasses
 from emdm.sampler.settings import SamplingSettings
 
 
-def add_sampling_settings(ap: argparse.ArgumentParser) -> None:
-    """--guidance-min-time and --x0-smoothing (default None: the model's manifest entry)."""
+def add_guidance_min_time(ap: argparse.ArgumentParser) -> None:
+    """--guidance-min-time alone (default None: the model's manifest entry), for a command of single steps, which
+    has no x̂0 smoothing between steps."""
     ap.add_argument("--guidance-min-time", type=float, default=None, metavar="T",
                     help="guide only steps whose time is above T, one batch row below (guidance in a limited "
                          "interval; default: the manifest's guidanceMinTime, else 0 = every step)")
+
+
+def add_sampling_settings(ap: argparse.ArgumentParser) -> None:
+    """--guidance-min-time and --x0-smoothing (default None: the model's manifest entry)."""
+    add_guidance_min_time(ap)
     ap.add_argument("--x0-smoothing", type=float, default=None, metavar="SIGMA",
                     help="smooth x̂0 along time (Gaussian, σ frames) at every step but the last (default: the "
                          "manifest's x0Smoothing, else 0 = off)")
