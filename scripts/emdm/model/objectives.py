@@ -226,7 +226,7 @@ def ddgan_step(nets: Nets, geo: Geo, w: GanWeights, tables: ScheduleTables, x0: 
     loss_g = w.adv_weight * g_adv
     terms: dict[str, torch.Tensor] = {}
     if w.geo_weight > 0:
-        terms = geo.terms(x0_pred, x0, mask, w.geo_scale(t_cur))
+        terms = geo.terms(x0_pred, x0, mask, w.geo_scale(t_cur))   # with geo_weight_t1 logged as weighted per sample
         loss_g = loss_g + w.geo_weight * geo.total(terms)
     nets.opt_g.zero_grad(set_to_none=True)
     loss_g.backward()
