@@ -55,6 +55,27 @@ def travel_bytes(repo: Path) -> int:
     return sum((repo / f).stat().st_size for f in out.stdout.splitlines())
 
 
+def cpu_env(**extra: str) -> dict:
+    """The device command's environment for a CPU rehearsal: a tiny model, batch and step count, weights written at
+    every step (WEIGHTS_MINUTES 0), the checkout's PYTHONPATH left out (the script sets its own); ``extra`` on top."""
+    env = {**os.environ, "PYTHON": sys.executable, "AMP": "off", "BATCH": "2", "PROBE_STEPS": "2", "MAX_STEPS": "3",
+           "WEIGHTS_MINUTES": "0", "LEASE_SECONDS": "300",
+           "EMDM_TRAIN_EXTRA": "--device cpu --d-width 32 --threads 1 --log-every 1", **extra}
+    env.pop("PYTHONPATH", None)
+    return env
+
+
+def prepared_without_starts(repo: Path, tmp_path: Path) -> None:
+    """.lease holds a packed dataset (a small one prepared here if the checkout has none) and no init-*.pt: a run
+    continues from the shipped weights."""
+    if not (repo / ".lease/dataset.emdmpack").is_file():
+        data = _run(tmp_path, *_user_folder(tmp_path))
+        prep = lease(repo, "prepare", str(data))
+        assert prep.returncode == 0, prep.stdout[-2000:] + prep.stderr[-2000:]
+    for f in (repo / ".lease").glob("init-*.pt"):
+        f.unlink()
+
+
 def test_shrink_fits_the_lease_and_restore_puts_everything_back(repo):
     before = git(repo, "ls-files")
     assert travel_bytes(repo) > LIMIT                         # today's tree would be refused
@@ -114,10 +135,7 @@ def test_the_slice_runs_from_exactly_what_travels(repo, tmp_path):
         assert lease(repo, "restore").returncode == 0
     assert not (travel / "public/models/text").exists() and (travel / ".lease/dataset.emdmpack").is_file()
     out_dir = tmp_path / "OUT"
-    env = {**os.environ, "PYTHON": sys.executable, "OUT": str(out_dir), "AMP": "off", "BATCH": "2", "PROBE_STEPS": "2",
-           "MAX_STEPS": "4", "WEIGHTS_MINUTES": "0", "LEASE_SECONDS": "300", "LEASE_WORK": str(tmp_path / "work"),
-           "EMDM_TRAIN_EXTRA": "--device cpu --d-width 32 --threads 1 --log-every 1"}
-    env.pop("PYTHONPATH", None)
+    env = cpu_env(OUT=str(out_dir), MAX_STEPS="4", LEASE_WORK=str(tmp_path / "work"))
     run = subprocess.run(["bash", "scripts/gpu/lease-train.sh", "t2m"], cwd=travel, env=env, capture_output=True,
                          text=True, timeout=900)
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
@@ -178,12 +196,7 @@ def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
     """VARIANTS: two recipes from the same start in one call, each its own weights and logs in $OUT/<name>/, its
     flags on top of the recipe's; a second call continues each from its own float16 start, and `shrink t2m` then
     leaves every shipped weights file behind (room for several starts in 64 MiB)."""
-    if not (repo / ".lease/dataset.emdmpack").is_file():
-        data = _run(tmp_path, *_user_folder(tmp_path))
-        prep = lease(repo, "prepare", str(data))
-        assert prep.returncode == 0, prep.stdout[-2000:] + prep.stderr[-2000:]
-    for f in (repo / ".lease").glob("init-*.pt"):
-        f.unlink()
+    prepared_without_starts(repo, tmp_path)
     assert lease(repo, "shrink", "t2m").returncode == 0
     try:
         travel = tmp_path / "travel"
@@ -193,10 +206,7 @@ def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
         assert "public/models/emdm-a2m-web.weights.f16.pt" not in files        # another run's start stays behind
     finally:
         assert lease(repo, "restore").returncode == 0
-    env = {**os.environ, "PYTHON": sys.executable, "AMP": "off", "BATCH": "2", "PROBE_STEPS": "2", "MAX_STEPS": "3",
-           "WEIGHTS_MINUTES": "0", "LEASE_SECONDS": "300", "VARIANTS": VARIANTS,
-           "EMDM_TRAIN_EXTRA": "--device cpu --d-width 32 --threads 1 --log-every 1"}
-    env.pop("PYTHONPATH", None)
+    env = cpu_env(VARIANTS=VARIANTS)
 
     def call(out: Path, work: str) -> subprocess.CompletedProcess:
         r = subprocess.run(["bash", "scripts/gpu/lease-train.sh", "t2m"], cwd=travel, capture_output=True, text=True,
@@ -260,12 +270,7 @@ def test_variants_train_side_by_side_from_one_call(repo, tmp_path):
 def test_the_later_slices_run_from_what_travels(repo, tmp_path, run, model, task):
     """The slices after the text model's (issue 27, step 3): the action model and the DDIM baseline, each through
     `shrink RUN` and the same device command, continue their own shipped weights with their own objective."""
-    if not (repo / ".lease/dataset.emdmpack").is_file():
-        data = _run(tmp_path, *_user_folder(tmp_path))
-        prep = lease(repo, "prepare", str(data))
-        assert prep.returncode == 0, prep.stdout[-2000:] + prep.stderr[-2000:]
-    for f in (repo / ".lease").glob("init-*.pt"):
-        f.unlink()
+    prepared_without_starts(repo, tmp_path)
     assert lease(repo, "shrink", run).returncode == 0
     try:
         travel = tmp_path / "travel"
@@ -276,10 +281,7 @@ def test_the_later_slices_run_from_what_travels(repo, tmp_path, run, model, task
     finally:
         assert lease(repo, "restore").returncode == 0
     out = tmp_path / "OUT"
-    env = {**os.environ, "PYTHON": sys.executable, "OUT": str(out), "AMP": "off", "BATCH": "2", "PROBE_STEPS": "2",
-           "MAX_STEPS": "3", "WEIGHTS_MINUTES": "0", "LEASE_SECONDS": "300", "LEASE_WORK": str(tmp_path / "work"),
-           "EMDM_TRAIN_EXTRA": "--device cpu --d-width 32 --threads 1 --log-every 1"}
-    env.pop("PYTHONPATH", None)
+    env = cpu_env(OUT=str(out), LEASE_WORK=str(tmp_path / "work"))
     r = subprocess.run(["bash", "scripts/gpu/lease-train.sh", run], cwd=travel, env=env, capture_output=True,
                        text=True, timeout=900)
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
