@@ -83,6 +83,7 @@ class Trainer:
         self.lr_scale = lr_factor(args.lr_scale, args.batch * self.dist.world)
         self.lr_g = (args.lr_g if args.lr_g is not None else DEFAULT_LR_G[args.task]) * self.lr_scale
         self.lr_d = args.lr_d * self.lr_scale
+        self._init_st: dict | None = None          # the --init-weights file once read (init_state)
         self.load_data()
         self.build_models()
         self.batcher = BucketBatcher(self.ms.lengths, args.batch, seed=args.seed, rank=self.dist.rank,
@@ -120,7 +121,7 @@ class Trainer:
             if not self.ms.action_labels:
                 raise SystemExit(f"{self.data_dir}: --task action needs actions.json and metadata.csv")
             if a.init_weights is not None:
-                self.take_labels_of(a.init_weights)
+                self.take_labels_of(a.init_weights, self.init_state()["meta"])
             self.cond_dim = len(self.ms.action_labels)
         self.clips = DeviceClips(self.ms, self.device, clip_caps)
         if a.task == "action":      # per clip, once: F.one_hot checks its indices with a host sync on every call
@@ -128,11 +129,18 @@ class Trainer:
         self.geo = Geo(torch.from_numpy(self.ms.mean).to(self.device), torch.from_numpy(self.ms.std).to(self.device),
                        a.lambda_geo, a.w_pos, a.w_vel, a.w_foot, a.w_bone)
 
-    def take_labels_of(self, path: Path) -> None:
-        """An action model continued (--init-weights) keeps its one-hot labels: this dataset's actions are renumbered
-        to the model's order (a dataset of some of its actions, or the same ones listed otherwise, trains the
-        model's own inputs); an action the model does not know is a CheckpointError naming it."""
-        cond = load_weights_file(path)["meta"].get("condition") or {}
+    def init_state(self) -> dict:
+        """The --init-weights file, read once: an action model's labels are needed before the models are built
+        (take_labels_of), its weights after (init_from)."""
+        if self._init_st is None:
+            self._init_st = load_weights_file(self.args.init_weights)   # tensors and plain values only
+        return self._init_st
+
+    def take_labels_of(self, path: Path, meta: dict) -> None:
+        """An action model continued (--init-weights ``path``, its ``meta``) keeps its one-hot labels: this dataset's
+        actions are renumbered to the model's order (a dataset of some of its actions, or the same ones listed
+        otherwise, trains the model's own inputs); an action the model does not know is a CheckpointError naming it."""
+        cond = meta.get("condition") or {}
         labels = cond.get("labels") if cond.get("type") == "action" else None
         if not isinstance(labels, list):
             return                                     # not an action model's file: check_same_model says so
@@ -173,7 +181,7 @@ class Trainer:
         self._ema_pairs = (list(self.G_ema.parameters()), list(self.G.parameters()))
 
     def init_from(self, path: Path) -> None:
-        st = load_weights_file(path)                   # tensors and plain values only: no code runs from the file
+        st, self._init_st = self.init_state(), None    # read once; not kept after the weights are in G
         m = st["meta"]
         check_same_model(path, m, self.G.config(), self.args.task, self.args.objective,
                          "--init-weights needs the same")
