@@ -31,7 +31,7 @@ from emdm import paths
 from emdm.checkpoints import portable_meta, save_weights_file
 from emdm.export import parity
 from emdm.model.generator import Generator, Preset
-from emdm.model.open import ModelError, read_meanstd
+from emdm.model.open import ModelError, read_meanstd, verified_file
 from emdm.paths import display_path
 
 TOLERANCE = 1e-4
@@ -122,20 +122,13 @@ def recover(name: str, models_dir: Path | str = paths.MODELS_DIR, tolerance: flo
         raise RecoverError(f"{models_dir / mf.MANIFEST_NAME}: no model {name!r} (have: {', '.join(man['models'])})")
     if entry.get("trainingWeights"):
         raise RecoverError(f"model {name!r} already ships training weights ({entry['trainingWeights']}); nothing to do")
-    try:
-        onnx_path = mf.file_path(models_dir, entry["onnx"], "onnx")
-        ms_path = mf.file_path(models_dir, entry["meanStd"], "meanStd")
-    except mf.ManifestError as e:
-        raise RecoverError(str(e)) from None
-    listed = man.get("files", {}).get(entry["onnx"], {})
-    sha = mf.sha256_file(onnx_path) if onnx_path.is_file() else None
-    if sha is None or sha != listed.get("sha256"):
-        raise RecoverError(f"{onnx_path}: missing or not the file {models_dir / mf.MANIFEST_NAME} lists (sha256); "
-                           "restore it first")
-    try:
-        mean, std = read_meanstd(ms_path)
+    try:       # both as the manifest lists them (size and sha256), as a model is opened
+        onnx_path = verified_file(man, models_dir, entry["onnx"], f"model {name!r}'s ONNX file", "onnx")
+        mean, std = read_meanstd(verified_file(man, models_dir, entry["meanStd"], f"model {name!r}'s meanStd file",
+                                               "meanStd"))
     except ModelError as e:
         raise RecoverError(str(e)) from None
+    sha = man["files"][entry["onnx"]]["sha256"]
     G, worst = generator_from_onnx(onnx_path, entry, tolerance)
     tr = entry.get("training", {})
     dst = models_dir / f"{name}.weights.f16.pt"

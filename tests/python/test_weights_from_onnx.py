@@ -81,9 +81,15 @@ def test_bad_requests_are_named(exported, tmp_path, capsys):
     assert recover_main(["no-such-model", "--models-dir", str(exported)]) == 2
     assert "no model 'no-such-model'" in capsys.readouterr().err
     onnx_file = exported / "emdm-a2m-test.onnx"
-    onnx_file.write_bytes(onnx_file.read_bytes()[:1000])                  # truncated: not the file the manifest lists
+    data = bytearray(onnx_file.read_bytes())
+    data[-1] ^= 0xFF                                                       # one byte changed: not the file listed
+    onnx_file.write_bytes(bytes(data))
     assert recover_main(["emdm-a2m-test", "--models-dir", str(exported)]) == 2
     err = capsys.readouterr().err
     assert "emdm-a2m-test.onnx" in err and "sha256" in err
+    onnx_file.write_bytes(bytes(data[:1000]))                             # truncated: its size is not the one listed
+    assert recover_main(["emdm-a2m-test", "--models-dir", str(exported)]) == 2
+    err = capsys.readouterr().err
+    assert "emdm-a2m-test.onnx" in err and "bytes" in err
     assert not (exported / "emdm-a2m-test.weights.f16.pt").exists()
     assert recover_main(["x", "--models-dir", str(tmp_path / "none")]) == 2
