@@ -23,6 +23,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { expect, test, type Page } from '@playwright/test';
+import { LIVE_DEFAULTS } from '../../src/live/core';
 
 /** One prompt in each slot of this length, at a random moment of it. */
 const SLOT_MS = 5000;
@@ -163,7 +164,7 @@ test('benchmark: live mode — prompt latency, underruns, repeated frames, frame
   fs.writeFileSync(test.info().outputPath('bench-live.json'), JSON.stringify({ summary, latencies: lat, prompts: r.prompts }, null, 1));
   writeResults(process.env.EMDM_BENCH_OUT, {
     task: 'live-page', name: `live-${model}-page-wasm`, model, ...where(page, [load0, load1]), steps: env.steps,
-    threads: env.env?.threads ?? null, summary, latencies: lat,
+    threads: env.env?.threads ?? null, live: LIVE_DEFAULTS, summary, latencies: lat,
   });
 });
 

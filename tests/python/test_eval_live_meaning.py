@@ -12,6 +12,7 @@ import pytest
 from emdm import paths
 from emdm.eval import live_meaning as LM
 from emdm.eval import seams as S
+from emdm.motion import edit as E
 from emdm.motion import live as L
 from emdm.motion.edit_fixture import LABELS, tiny_editor
 from emdm.motion.synthetic import synthetic_walk
@@ -46,6 +47,14 @@ def test_each_prompt_segment_runs_from_its_blend_end_to_the_next_prompt():
     assert blends == [0, joined[100], None, joined[200]] and joined[100] >= 100 + L.PROMPT_LEAD
     cuts = LM.segments(sched, blends, len(feats))
     assert cuts == [(LM.SPAN, 100), (joined[100] + LM.SPAN, 190), None, (joined[200] + LM.SPAN, 320)]
+
+
+def test_a_session_runs_windows_of_the_length_asked_for():
+    model, prompts = tiny_editor(), {a: a for a in LABELS[:2]}
+    sim, *_ = LM.session(model, [(0, "a"), (60, "b")], prompts, seed=1, cost=3, tail=80, window=24)
+    assert {w[0].frames for w in sim.windows} == {E.OVERLAP + 24}
+    sim, *_ = LM.session(model, [(0, "a"), (60, "b")], prompts, seed=1, cost=3, tail=80)
+    assert {w[0].frames for w in sim.windows} == {E.OVERLAP + L.WINDOW}
 
 
 # ----------------------------------------------------------------------------------------------- the judges
@@ -152,14 +161,17 @@ def test_bad_capabilities_is_one_line_and_exit_2_before_anything_is_measured(tmp
     assert not (tmp_path / "out.json").exists()
     with pytest.raises(SystemExit):
         S.parse_args(["--live-changes", "-1"])
+    with pytest.raises(SystemExit):
+        S.parse_args(["--live-window", "0"])
 
 
-def _session(file, seed, live_fails, alone_fails, n=100, train_steps=42104, keep=0.15):
+def _session(file, seed, live_fails, alone_fails, n=100, train_steps=42104, keep=0.15, window=None):
     row = {"n": n, "live": (n - live_fails) / n, "alone": (n - alone_fails) / n, "ratio": None,
            "only_live_fails": live_fails, "only_alone_fails": alone_fails}
+    live = {"seed": seed, "prompt_keep_from": keep, "cost_frames": 3, "gap_seconds": [4.0, 8.0],
+            "rates": {"all": {"classifier": row}}}
     return {"_file": file, "name": "emdm-t2m-web", "train_steps": train_steps,
-            "live": {"seed": seed, "prompt_keep_from": keep, "cost_frames": 3, "gap_seconds": [4.0, 8.0],
-                     "rates": {"all": {"classifier": row}}}}
+            "live": live if window is None else {**live, "window": window}}
 
 
 def test_sessions_of_one_stream_and_weights_are_pooled_and_judged_together():
@@ -175,3 +187,7 @@ def test_sessions_of_one_stream_and_weights_are_pooled_and_judged_together():
     assert LM.pooled([a]) == [] and LM.pooled([a, {**a, "_file": "a2.json"}]) == []   # one seed is no pool
     bad = LM.pooled([a, _session("e.json", 1, 40, 2)])[0]
     assert not bad["verdict"]["met"]                                 # pooling does not hide a stream that is worse
+    # another window length is another stream; a session without the field ran with windows of 40 new frames
+    w60 = _session("f.json", 1, 6, 11, window=60)
+    assert LM.pooled([a, w60]) == []
+    assert LM.pooled([a, _session("g.json", 1, 6, 11, window=40)])[0]["files"] == ["a.json", "g.json"]

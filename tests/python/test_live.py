@@ -65,7 +65,9 @@ def _soak_run(**summary):
 def test_page_and_soak_rows_say_which_bars_are_met():
     from emdm.eval import live_section
     text = "\n".join(live_section.section([_page_run(), _soak_run()]))
-    assert "**0.39 / 0.40 s** over 32 of 32 prompts (met)" in text
+    assert "| 10; W 40 | **0.39 / 0.40 s** over 32 of 32 prompts (met)" in text    # no settings recorded: W 40
+    with_settings = _page_run(windowMsMedian=300) | {"live": {"window": 60}}
+    assert "| 10; W 60, 300 ms median |" in live_section.page_row(with_settings)
     assert "**0** in 160 s (met)" in text
     assert "30.0 / 20.0, after 25.0 ms (1.50× the smaller idle)" in text
     assert "**+1.2 MB** (30.2 → 31.4; met)" in text
@@ -106,7 +108,7 @@ def test_a_prompts_window_leaves_more_of_its_steps_to_the_new_prompt():
             return super().sample(prompt, frames, seed, known, keep, keep_from_time)
 
     spy = Spy(**{f.name: getattr(model, f.name) for f in dataclasses.fields(model)})
-    L.simulate(L.LiveCore(spy, "b", seed=3), 120, [(45, "e")], [6])
+    L.simulate(L.LiveCore(spy, "b", seed=3), 3 * L.WINDOW, [(L.WINDOW + 15, "e")], [6])   # "b" continued once first
     later = lambda p: [s[2] for s in seen if s[0] == p][1:]             # noqa: E731
     assert seen[0] == ("b", False, 1.0)                                   # the first window: nothing kept
     assert later("b") and set(later("b")) == {TIMELINE_KEEP_FROM}        # the same prompt continued

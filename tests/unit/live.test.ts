@@ -8,7 +8,9 @@ import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
 import { createGenerator } from '../../src/createGenerator';
 import { type EditMotion, type EditRequest, EditError, TIMELINE_KEEP_FROM } from '../../src/edit';
-import { LIVE_PROMPT_KEEP_FROM, LIVE_PROMPT_LEAD_FRAMES, LiveCore, RECENTRE_M } from '../../src/live/core';
+import {
+  LIVE_PROMPT_KEEP_FROM, LIVE_PROMPT_LEAD_FRAMES, LIVE_WINDOW_FRAMES, LiveCore, RECENTRE_M,
+} from '../../src/live/core';
 import { simulateLive } from '../../src/live/simulate';
 import { startLive } from '../../src/live/stream';
 import { recoverJoints } from '../../src/motion/recover';
@@ -22,7 +24,8 @@ describe('live stream behaviour (a walking generator, a simulated or a hand-driv
     let t = 0;
     const calls: { r: EditRequest; signal: AbortSignal; done: () => void }[] = [];
     const gen = (r: EditRequest & { signal: AbortSignal }) => new Promise<EditMotion>((res) => calls.push({ r, signal: r.signal, done: () => res(walk(r)) }));
-    const started = startLive(gen, limits, { action: 'a', seed: 3, clock: () => t });
+    // windows of 40 new frames (the frame numbers below are scripted for them)
+    const started = startLive(gen, limits, { action: 'a', seed: 3, window: 40, clock: () => t });
     calls[0].done();
     const s = await started;
     expect(calls).toHaveLength(1); // 60 frames buffered: no window needed yet
@@ -68,11 +71,12 @@ describe('live stream behaviour (a walking generator, a simulated or a hand-driv
     let first = true;
     const gen = (r: EditRequest) => (first ? ((first = false), Promise.resolve(walk(r))) : new Promise<EditMotion>(() => undefined));
     const s = await startLive(gen, limits, { action: 'b', clock: () => 0 });
-    expect(s.stats().bufferedTo).toBe(60 / 20); // the first window: 20 kept + 40 new frames
-    s.frameAt(59 / 20);
-    expect(s.stats()).toMatchObject({ underruns: 0, bufferedTo: 3 });
-    s.frameAt(60 / 20);
-    expect(s.stats()).toMatchObject({ underruns: 1, bufferedTo: 70 / 20 }); // 10 frames played back
+    const made = 20 + LIVE_WINDOW_FRAMES; // the first window: 20 kept + the window's new frames
+    expect(s.stats().bufferedTo).toBe(made / 20);
+    s.frameAt((made - 1) / 20);
+    expect(s.stats()).toMatchObject({ underruns: 0, bufferedTo: made / 20 });
+    s.frameAt(made / 20);
+    expect(s.stats()).toMatchObject({ underruns: 1, bufferedTo: (made + 10) / 20 }); // 10 frames played back
     await s.close();
   });
 
@@ -86,7 +90,7 @@ describe('live stream behaviour (a walking generator, a simulated or a hand-driv
       return walk(r);
     };
     const sim = await simulateLive(core, gen, frames, prompts, [6, 14, 35]);
-    expect(Math.max(...held)).toBeLessThanOrEqual(10 * 20 + 20 + 40 + 30 + 35 + 20);
+    expect(Math.max(...held)).toBeLessThanOrEqual(10 * 20 + 20 + LIVE_WINDOW_FRAMES + 30 + 35 + 20);
     expect(core.features.length).toBe(core.frames * D);
     expect(core.base).toBeGreaterThan(frames - 400);
     // walking 1.3 m/s for 20 min: ~1.5 km in the world, within a few metres of the stage's centre on it

@@ -4,6 +4,7 @@
 import { describe, expect, it } from 'vitest';
 import type { EditMotion, EditRequest } from '../../src/edit';
 import type { FramePose } from '../../src/live/poses';
+import { LIVE_LEAD_FRAMES, LIVE_WINDOW_FRAMES } from '../../src/live/core';
 import { startLive } from '../../src/live/stream';
 import { framePair, framesOnOneStage } from '../../web/ui/live';
 import { walk } from './liveWalk';
@@ -41,7 +42,8 @@ describe('live poses: once per window, read by frameAt', () => {
     expect(s.stats().poseFallbacks).toBe(0);
     expect(s.stats().windows).toBeGreaterThan(12);
     expect(windows.length).toBe(s.stats().windows); // the first included
-    expect(Math.max(...windows.slice(1))).toBeLessThanOrEqual(40 + 3); // a window's new frames and the display pad
+    // a window's new frames and the display pad
+    expect(Math.max(...windows.slice(1))).toBeLessThanOrEqual(LIVE_WINDOW_FRAMES + 3);
     await s.close();
   });
 
@@ -79,7 +81,7 @@ describe('live poses: once per window, read by frameAt', () => {
     // the visitor's character's piece: every frame from now to what is made, read ahead (the stage moves meanwhile)
     const to = Math.floor(s.stats().bufferedTo * 20);
     const piece = framesOnOneStage(s, 400, to);
-    expect(to - 400).toBeGreaterThan(40);
+    expect(to - 400).toBeGreaterThanOrEqual(LIVE_LEAD_FRAMES); // at least the lead is made ahead
     for (let k = 1; k < piece.length; k++) {
       const [a, b] = [piece[k - 1].joints, piece[k].joints];
       expect(Math.hypot(b[0] - a[0], b[2] - a[2]), `piece frame ${k}: pelvis step (m)`).toBeLessThan(0.1);
@@ -99,7 +101,9 @@ describe('live poses: once per window, read by frameAt', () => {
       return p;
     };
     let perFrame = 0;
-    const started = startLive(gen, limits, { action: 'a', clock: () => t }, { solve: (j) => (perFrame++, fakeSolve(j, 1)), solveFrames });
+    // windows of 40 new frames (the frame numbers below are scripted for them)
+    const hooks = { solve: (j: Float32Array) => (perFrame++, fakeSolve(j, 1)), solveFrames };
+    const started = startLive(gen, limits, { action: 'a', window: 40, clock: () => t }, hooks);
     gens[0].done();
     await tick();
     solves[0].done();

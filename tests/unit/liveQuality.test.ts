@@ -3,7 +3,7 @@
 // machine buys buffer instead of underruns. LiveCore on simulateLive's clock with the walking generator.
 import { describe, expect, it } from 'vitest';
 import type { EditRequest } from '../../src/edit';
-import { LIVE_LEAD_FRAMES, LIVE_MAX_LEAD_FRAMES, LiveCore, RECENTRE_M } from '../../src/live/core';
+import { LIVE_LEAD_FRAMES, LIVE_MAX_LEAD_FRAMES, LIVE_WINDOW_FRAMES, LiveCore, RECENTRE_M } from '../../src/live/core';
 import { simulateLive } from '../../src/live/simulate';
 import { decodeJoints } from '../../src/motion/decode';
 import { FOOT_JOINT_NAMES, JOINT_NAMES, PARENTS } from '../../src/skeleton';
@@ -26,9 +26,10 @@ describe('live display: every window decoded like a generated motion, joined con
 
   it('plays the first window as decodeJoints shows it (smoothed: a 3 cm frame-to-frame shake mostly gone)', async () => {
     const core = new LiveCore(limits, { action: 'a' }, 1);
-    const first = walk({ action: 'a', frames: 60, seed: 1 } as EditRequest, 0.03);
+    const n = 20 + LIVE_WINDOW_FRAMES;
+    const first = walk({ action: 'a', frames: n, seed: 1 } as EditRequest, 0.03);
     const sim = await simulateLive(core, jittery, 600, prompts, [6, 14, 35]);
-    const shown = decodeJoints(first.features, 60, rig, { smooth: true, footCleanup: true });
+    const shown = decodeJoints(first.features, n, rig, { smooth: true, footCleanup: true });
     let diff = 0;
     for (let i = 0; i < 20 * JV; i++) diff = Math.max(diff, Math.abs(sim.joints[i] - shown[i]));
     expect(diff).toBeLessThan(1e-5);
@@ -38,12 +39,13 @@ describe('live display: every window decoded like a generated motion, joined con
       for (let t = 1; t < frames - 1; t++) for (let i = 2; i < JV; i += 3) s += Math.abs(j[(t + 1) * JV + i] - 2 * j[t * JV + i] + j[(t - 1) * JV + i]);
       return s / ((frames - 2) * 22);
     };
-    expect(shake(first.joints, 60)).toBeGreaterThan(0.11); // raw: 4 × 3 cm
+    expect(shake(first.joints, n)).toBeGreaterThan(0.11); // raw: 4 × 3 cm
     expect(shake(sim.joints, 600)).toBeLessThan(0.05);
   });
 
   it('the display has no jump where windows join (on time, late, after an underrun): each join step within the run\'s steps', async () => {
-    const core = new LiveCore(limits, { action: 'a' }, 1);
+    // windows of 40 new frames: the costs (35 frames) then outrun them, so joins come late and after underruns
+    const core = new LiveCore(limits, { action: 'a' }, 1, { window: 40 });
     const sim = await simulateLive(core, jittery, 600, prompts, [6, 14, 35]);
     const joins = new Set(sim.windows.filter((w) => !w.dropped && w.from! > 0).map((w) => w.from!));
     expect(joins.size).toBeGreaterThan(8);

@@ -43,7 +43,7 @@ from emdm.motion.seams import SEAM_BLEND_EXTRA, SEAM_EASE, joint_acceleration
 from emdm.paths import display_path
 
 SPAN = SEAM_EASE + SEAM_BLEND_EXTRA     # a blend's eased span (frames): src/motion/seams.ts's SEAM_EASE_FRAMES + SEAM_BLEND_EXTRA
-COST = 3                # frames a window costs (128 ms median for 40 new frames, Node WASM on 2 cores: ⌈128 / 50⌉)
+COST = 5                # frames a window costs (60 new frames: 228 ms median, Node WASM, 1 thread, 2 cores: ⌈228 / 50⌉)
 GAP = (4.0, 8.0)        # seconds between prompt changes
 LATE = 20               # frames: the alone motion read after its first second (the live segment is mid-motion)
 MIN_SEGMENT = 20        # frames: a shorter segment is not judged (counted apart)
@@ -186,11 +186,12 @@ def placebo_ratios(joints: np.ndarray, cuts, p95: float, span: int = SPAN) -> li
 
 # ----------------------------------------------------------------------------------------------- the run
 
-def session(model, sched: list[tuple[int, str]], prompts: dict[str, str], seed: int, cost: int, tail: int):
-    """Run the stream for the schedule and ``tail`` frames after its last prompt: (Simulated, its features (frames,
-    263) as played, the prompts' blends, underruns)."""
+def session(model, sched: list[tuple[int, str]], prompts: dict[str, str], seed: int, cost: int, tail: int,
+            window: int = L.WINDOW):
+    """Run the stream (windows of ``window`` new frames) for the schedule and ``tail`` frames after its last prompt:
+    (Simulated, its features (frames, 263) as played, the prompts' blends, underruns)."""
     frames = sched[-1][0] + tail
-    core = L.LiveCore(model, prompts[sched[0][1]], seed=seed, record_seconds=frames / FPS + 10)
+    core = L.LiveCore(model, prompts[sched[0][1]], seed=seed, window=window, record_seconds=frames / FPS + 10)
     sim = L.simulate(core, frames, [(p, prompts[a]) for p, a in sched[1:]], [cost])
     if core.base != 0:
         raise LiveMeaningError(f"live session: the stream dropped its first {core.base} frames; raise record_seconds")
@@ -199,7 +200,7 @@ def session(model, sched: list[tuple[int, str]], prompts: dict[str, str], seed: 
 
 
 def measure(model, bench, judged: list[str], prompts: dict[str, str], changes: int, seed: int, cost: int = COST,
-            gap=GAP, log=print) -> dict:
+            gap=GAP, log=print, window: int = L.WINDOW) -> dict:
     """The live session, its blends' figures and its segments judged against the same prompts generated alone."""
     missing = [a for a in prompts if a not in bench.labels]
     if missing:
@@ -207,7 +208,7 @@ def measure(model, bench, judged: list[str], prompts: dict[str, str], changes: i
     rng = np.random.default_rng(seed)
     sched = schedule(sorted(prompts), changes, rng, gap)
     tail = round(gap[1] * FPS)
-    sim, feats, blends, underruns = session(model, sched, prompts, seed, cost, tail)
+    sim, feats, blends, underruns = session(model, sched, prompts, seed, cost, tail, window)
     ratios, p95 = blend_ratios(sim.joints, blends[1:])
     cuts = segments(sched, blends, len(sim.joints))
     rows, live_f, live_j, alone_f, alone_j, late_f, late_j = [], [], [], [], [], [], []
@@ -238,7 +239,8 @@ def measure(model, bench, judged: list[str], prompts: dict[str, str], changes: i
     rt = rates(acts, live, alone)
     seam = [x for x in ratios if x is not None]
     placebo = placebo_ratios(sim.joints, cuts[1:], p95)
-    out = {"changes": changes, "seed": seed, "cost_frames": cost, "gap_seconds": list(gap), "span": SPAN,
+    out = {"changes": changes, "seed": seed, "window": window, "cost_frames": cost, "gap_seconds": list(gap),
+           "span": SPAN,
            "prompt_keep_from": L.PROMPT_KEEP_FROM,
            "frames": len(sim.joints), "min_segment": MIN_SEGMENT, "segments": len(judged_rows),
            "no_segment": sum(r["blend"] is None for r in rows),
@@ -257,7 +259,7 @@ def measure(model, bench, judged: list[str], prompts: dict[str, str], changes: i
 
 
 def run(model, dataset: Path, classifier: Path, capabilities: Path, changes: int, seed: int, cost: int = COST,
-        log=print) -> dict:
+        log=print, window: int = L.WINDOW) -> dict:
     """``measure`` with the coverage judges of ``dataset``'s test clips: the classifier (``coverage.Benchmark``) and
     the kinematic rules that judge their action there (``kinematics.judged``)."""
     prompts = covered_prompts(capabilities)
@@ -265,7 +267,7 @@ def run(model, dataset: Path, classifier: Path, capabilities: Path, changes: int
     desc = K.table([recover_joints(m) for m in bench.test.motions])
     judged = K.judged(K.validate(bench.labels, bench.test.actions, desc))
     t0 = time.time()
-    out = measure(model, bench, judged, prompts, changes, seed, cost, log=log)
+    out = measure(model, bench, judged, prompts, changes, seed, cost, log=log, window=window)
     return {**out, "capabilities": display_path(capabilities), "seconds": round(time.time() - t0, 1),
             "load_avg_1min_end": os.getloadavg()[0]}
 
@@ -296,15 +298,17 @@ def _judge_cell(x: dict | None, p: float | None) -> str:
 
 
 def pooled(rs: list[dict]) -> list[dict]:
-    """Sessions of one stream on one model's weights (the same ``train_steps``, prompt keep-from, window cost and
-    gaps; only their seeds differ) pooled: their paired segments summed per judge, the sign test on the sum. One row
+    """Sessions of one stream on one model's weights (the same ``train_steps``, prompt keep-from, window, window cost
+    and gaps; only their seeds differ) pooled: their paired segments summed per judge, the sign test on the sum. One row
     per group of two or more sessions: {"files", "rates": {judge: {...}}, "verdict"}."""
     groups: dict[tuple, list[dict]] = {}
     for r in rs:
         v = r.get("live")
         if not v or r.get("train_steps") is None or v.get("prompt_keep_from") is None:
             continue
-        key = (r["name"], r["train_steps"], v["prompt_keep_from"], v["cost_frames"], tuple(v["gap_seconds"]))
+        # sessions written before the window was recorded all ran with windows of 40 new frames
+        key = (r["name"], r["train_steps"], v["prompt_keep_from"], v.get("window", 40), v["cost_frames"],
+               tuple(v["gap_seconds"]))
         groups.setdefault(key, []).append(r)
     out = []
     for group in groups.values():
@@ -337,8 +341,9 @@ def section(rs: list[dict]) -> list[str]:
         v = r["live"]
         a, p, h, b = v["rates"]["all"], v["verdict"]["p_worse"], v["halves"], v["blends"]
         rows.append([f"`{r['_file']}`", f"{v['changes']} prompt changes every {v['gap_seconds'][0]:g}–{v['gap_seconds'][1]:g} s, "
-                     f"{v['segments']} segments ({int(np.median(v['segment_frames']))} frames median), windows cost "
-                     f"{v['cost_frames']} frames; {r['hardware']}, load {v['load_avg_1min_end']:.1f}, {v['seconds']:.0f} s",
+                     f"{v['segments']} segments ({int(np.median(v['segment_frames']))} frames median), windows of "
+                     f"{v.get('window', 40)} new frames cost {v['cost_frames']} frames; "
+                     f" {r['hardware']}, load {v['load_avg_1min_end']:.1f}, {v['seconds']:.0f} s",
                      _judge_cell(a.get("classifier"), p.get("classifier")), _judge_cell(a.get("kinematic"), p.get("kinematic")),
                      " / ".join(f"{v['rates_alone_late'][j]['alone']:.0%}" for j in ("classifier", "kinematic")
                                 if j in v["rates_alone_late"]),

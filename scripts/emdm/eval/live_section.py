@@ -103,8 +103,12 @@ def page_row(r: dict) -> str:
     med, p95 = s["latencyMedianS"], s["latencyP95S"]
     gaps = s["frameGapMs"]
     idle = min(gaps["idle"]["p95"], gaps.get("idleAfter", gaps["idle"])["p95"])     # the stricter of the two
+    # the page's stream settings are in results written since 2026-11-28; those before ran windows of 40 new frames
+    window = (r.get("live") or {}).get("window", 40)
+    cost = f", {s['windowMsMedian']} ms median" if "windowMsMedian" in s else ""
     return (f"| `{r['_file']}` | {_where(r)} | "
-            f"{r['steps']} | **{med:.2f} / {p95:.2f} s** over {s['latencies']} of {s['promptsSent']} prompts "
+            f"{r['steps']}; W {window}{cost} | **{med:.2f} / {p95:.2f} s** over {s['latencies']} of "
+            f"{s['promptsSent']} prompts "
             f"({_met(med <= LATENCY_BARS[0] and p95 <= LATENCY_BARS[1])}) | **{s['underruns']}** in {s['seconds']} s "
             f"({_met(s['underruns'] == 0)}) | {s['repeated']} of {s['displayed']} | {gaps['live']['p95']:.1f} / "
             f"{gaps['idle']['p95']:.1f}, after {gaps.get('idleAfter', gaps['idle'])['p95']:.1f} ms "
@@ -138,7 +142,8 @@ def section(runs: list[dict]) -> list[str]:
     if by["live-page"] or by["live-soak"]:
         out += [PAGE_INTRO, ""]
     if by["live-page"]:
-        out += ["| Result | Runtime | Steps | Latency median / p95 (bars 0.5 / 1 s) | Underruns (bar 0) | Repeated frames | "
+        out += ["| Result | Runtime | Steps; window new frames, cost | Latency median / p95 (bars 0.5 / 1 s) | "
+                "Underruns (bar 0) | Repeated frames | "
                 "Frame gaps p95, live / idle |", "| --- | --- | --- | --- | --- | --- | --- |"]
         out += [page_row(r) for r in by["live-page"]] + [""]
     if by["live-soak"]:

@@ -189,6 +189,34 @@ def _quality(results: list[dict], plots: dict[str, str]) -> list[str]:
     return out
 
 
+# RESULTS "Seams and loops": the live stream's windows, 40 → 60 new frames (2026-11-28)
+LIVE_WINDOW_NOTE = (
+    "Since 2026-11-28 a live window is 60 new frames (3 s; `emdm.motion.live.WINDOW`, src/live/core.ts "
+    "`LIVE_WINDOW_FRAMES`), was 40. The failing segments were not the previous action bleeding on: of the "
+    "16 segments only the live session failed (`-w40`, seed 0), one was read as the action before it; the "
+    "classifier read jog-in-circle as run, guide as sneak, climb as walk, sneak or grab-high, walk-right as "
+    "walk, jump as climb, throw as swordplay or slash: each 2-s window began the action again from a second "
+    "of context, and the segment lost what makes the action itself (the circle, the sideways step). With 60 "
+    "new frames per window (a prompt's window too: 40 before "
+    "80-frame windows was tried, 90 / 87 % live, p 0.09 / 0.002, not enough), seeds 0 / 1 / 2 (the third "
+    "in `runs/`, not kept): classifier 92 / 91 / 92 % live against 93 / 94 / 92 % alone (40: 86 / 89 / 86 %, "
+    "p 0.006 / 0.006 / 0.021), kinematic rules 93 / 93 / 94 % against 94 / 95 / 92 % (40: 98 / 97 / 99 %; "
+    "what 40 had over alone was climb: its live climbs rose from the floor within the segment and came "
+    "down, 78 % passing the rule against 32 % alone, while with 60 they go up in the prompt's blend and "
+    "stay there, as the model's climbs alone begin, 5 %); the first halves of segments 93 / 91 % recognised "
+    "(40: 83 / 90 %). Blends within 1.5× the p95 elsewhere: 169 / 175 / 168 of 180 (40: 172 / 178 / 172), "
+    "as often as the same spans mid-segment where nothing is blended (171 / 170 / 164); the largest is a "
+    "climb's leap up in its blend (6.35×, seed 2; 40: the same pair's 2.09×). 80 new frames met the verdict "
+    "too (90 / 92 %) at a costlier prompt window. The Node benchmark, same machine, same hour: latency "
+    "median 0.371 s, p95 0.391 (40: 0.370, 0.395), 0 underruns for both, blends 55 / 56 within 1.5× (40: "
+    "53 / 56); a 60 + 20-frame window costs 228 ms (40 + 20: 174 ms), under the prompt lead's 0.4 s. In "
+    "headless Chromium (the page's benchmark, the same hour, load 2.5–2.8): latency 0.38 / 0.42 s (40: "
+    "0.37 / 0.40 s), windows 324 ms median (40: 224 ms), 0 underruns; on a device slow enough that a "
+    "prompt's window outlasts the 0.4-s prompt lead, the longer window adds its extra cost to the latency. "
+    "Live meaning is met again on the actions the page offers; guide stays the weakest (0 % live, 11–22 % "
+    "alone).")
+
+
 def _benchmarks(results: list[dict], plots: dict[str, str]) -> list[str]:
     """The sections of the per-action and editing benchmarks: coverage, realism, editing, impossible poses."""
     out = []
@@ -250,8 +278,11 @@ def _benchmarks(results: list[dict], plots: dict[str, str]) -> list[str]:
                 "(`PROMPT_KEEP_FROM`; it was kept from t ≤ 0.55 like the later windows'), on the text model of GPU "
                 "slice 2 (the stream's fix was measured on it: 85 % → 93 % of live segments recognised, seed 0); "
                 "`-seed1`: the same run as the plain file with seed 1 (other timelines, loops and live session). The "
-                "plain and `-seed1` files are on the shipped (slice 5) model; the row that pools them (sessions of the same "
-                "weights and stream, `live_meaning.pooled`) judges their paired segments together.", "",
+                "plain and `-seed1` files are on the shipped (slice 5) model with the stream's windows of 60 new "
+                "frames; `-w40` and `-w40-seed1` are the same sessions with the windows of 40 the stream had before "
+                "(`--live-window 40 --live-cost 4`), judged by the same classifier; the rows that pool two seeds "
+                "(sessions of the same weights and stream, `live_meaning.pooled`) judge their paired segments "
+                "together.", "",
                 "Reading, meaning: kept from t ≤ 0.55 (`-prompt055`), the segments' first halves were recognised 78 % "
                 "against 91 % for the alone motions' first halves, their second halves 87 % against 90 %: the last second "
                 "of the previous action held the new prompt back past the blend. Being mid-motion is not what the "
@@ -278,8 +309,8 @@ def _benchmarks(results: list[dict], plots: dict[str, str]) -> list[str]:
                 "too, and the sessions draw them: both seeds fail the classifier's verdict (87 % live against 94–95 % "
                 "alone), and so do the slice-4 weights on the same prompts (85–86 % against 93–94 %, p 0.002–0.003; "
                 "docs/MODELS.md \"Slice 5\"): jump, guide, jog-in-circle and climb, begun from the motion before "
-                "them, fall short of the same prompt alone (3 live-only failures each, seed 0). Live meaning is not "
-                "met on the actions the page now offers.", ""]
+                "them, fall short of the same prompt alone (3 live-only failures each, seed 0).", "",
+                LIVE_WINDOW_NOTE, ""]
         out += seams.section(seam_runs)
     live_runs = [r for r in results if r["task"] in live_section.TASKS]
     if live_runs:

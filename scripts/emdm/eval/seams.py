@@ -48,6 +48,7 @@ from emdm.eval.results import RESULTS_DIR, SCHEMA, hardware, write_result
 from emdm.eval.models_report import total_steps
 from emdm.model.open import open_model
 from emdm.motion import edit as E
+from emdm.motion import live as L
 from emdm.motion.decode import decode_joints
 from emdm.motion.features import heading_angles
 from emdm.outdir import OutputRefused, check_writable
@@ -242,7 +243,8 @@ def run(a, log=print) -> Path:
     loops = measure_loops(model, range(a.seed, a.seed + a.seeds), a.loop_seconds)
     fig = figures(seams, showcase, loops)
     report(fig, log)
-    live = LM.run(model, a.dataset, a.classifier, capabilities, a.live_changes, a.seed, a.live_cost, log) if a.live_changes else None
+    live = (LM.run(model, a.dataset, a.classifier, capabilities, a.live_changes, a.seed, a.live_cost, log,
+                   a.live_window) if a.live_changes else None)
     result = {"schema": SCHEMA, "task": "seams", "name": a.model, "variant": opened.variant,
               "train_steps": total_steps(opened.meta) if opened.meta.get("training") else None,
               "steps": model.settings.steps, "decode": "page (smooth σ=1, foot cleanup)", "segment_seconds": a.seconds,
@@ -266,6 +268,8 @@ def parse_args(argv=None):
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--live-changes", type=int, default=180, help="prompt changes of the live session (0: none)")
     p.add_argument("--live-cost", type=int, default=LM.COST, help="frames each live window costs")
+    p.add_argument("--live-window", type=int, default=L.WINDOW,
+                   help="new frames of each live window (the stream's default)")
     p.add_argument("--capabilities", type=Path, default=None, help="the covered actions' prompts (default: the model's "
                    "capabilities file beside it)")
     p.add_argument("--dataset", type=Path, default=DATASET_DIR, help="the prepared dataset (its test clips: the judges' reference)")
@@ -273,7 +277,7 @@ def parse_args(argv=None):
     p.add_argument("--tag", default="", help="a suffix of the result file's name (e.g. before)")
     p.add_argument("--out", type=Path, default=None)
     a = p.parse_args(argv)
-    for name in ("changes", "seeds", "threads", "live_cost"):
+    for name in ("changes", "seeds", "threads", "live_cost", "live_window"):
         if getattr(a, name) < 1:
             p.error(f"--{name.replace('_', '-')} must be at least 1, got {getattr(a, name)}")
     if a.live_changes < 0:

@@ -28,7 +28,15 @@ from emdm.motion.features import recover_joints
 from emdm.motion.seams import ease_seams, seam_accel
 from emdm.motion.stitch import align_segment
 
-WINDOW = 40             # new frames of a window (2 s at 20 fps; docs/RESULTS.md "Live stream")
+# New frames of a window (3 s at 20 fps). With 40 (2 s) the live segments of the covered actions were recognised as
+# their prompt less often than the same prompts alone (emdm-t2m-web slice 5, int8, 10 steps, python -m emdm.eval.seams,
+# 180 prompt changes, seeds 0 / 1 / 2: 86 / 89 / 86 % against 93 / 94 / 92 %, p 0.006 / 0.006 / 0.021): each window of
+# a jog in a circle, a throw or a climb began again from a second of context, and the segment read as a run, a walk.
+# With 60: 92 / 91 / 92 % against the same alone motions (p 0.50 / 0.07 / 0.71), the kinematic rules as alone (93 / 93 /
+# 94 % against 94 / 95 / 92 %), blends within 1.5x the p95 elsewhere 169 / 175 / 168 of 180 (40: 172 / 178 / 172; the
+# same spans mid-segment, nothing blended: 171 / 170 / 164). 80 was as good (90 / 92 %) at a costlier prompt window;
+# a 40-frame prompt window before 80-frame ones was not (90 / 87 %, p 0.09 / 0.002). docs/RESULTS.md "Seams and loops".
+WINDOW = 60
 LEAD = 30               # the next window starts when fewer frames are buffered after the playhead
 PROMPT_LEAD = 8         # a prompt's window continues the motion this many frames after the playhead
 RECORD_SECONDS = 60     # kept behind the playhead
