@@ -343,7 +343,7 @@ def section(rs: list[dict]) -> list[str]:
         rows.append([f"`{r['_file']}`", f"{v['changes']} prompt changes every {v['gap_seconds'][0]:g}–{v['gap_seconds'][1]:g} s, "
                      f"{v['segments']} segments ({int(np.median(v['segment_frames']))} frames median), windows of "
                      f"{v.get('window', 40)} new frames cost {v['cost_frames']} frames; "
-                     f" {r['hardware']}, load {v['load_avg_1min_end']:.1f}, {v['seconds']:.0f} s",
+                     f"{r['hardware']}, load {v['load_avg_1min_end']:.1f}, {v['seconds']:.0f} s",
                      _judge_cell(a.get("classifier"), p.get("classifier")), _judge_cell(a.get("kinematic"), p.get("kinematic")),
                      " / ".join(f"{v['rates_alone_late'][j]['alone']:.0%}" for j in ("classifier", "kinematic")
                                 if j in v["rates_alone_late"]),
