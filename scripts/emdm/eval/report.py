@@ -214,7 +214,7 @@ LIVE_WINDOW_NOTE = (
     "0.37 / 0.40 s), windows 324 ms median (40: 224 ms), 0 underruns; on a device slow enough that a "
     "prompt's window outlasts the 0.4-s prompt lead, the longer window adds its extra cost to the latency: "
     "with two busy threads beside Node (`--load 2`, 60-s streams) a 60 + 20-frame window took 409 ms (40: 266 ms), "
-    "latency p95 0.39–0.47 s (40: 0.39–0.40 s), medians 0.38–0.39 s for both, no underruns. "
+    "latency p95 0.39–0.47 s (40: 0.39–0.40 s), medians 0.37–0.39 s for both, no underruns. "
     "Live meaning is met again on the actions the page offers; guide stays the weakest (0 % live, 11–22 % "
     "alone).")
 
