@@ -188,11 +188,17 @@ def save_weights_file(path: Path, state: dict, *, step: int, wall: float, meta: 
                  "last_losses": last_losses, "G_ema": weights}, path)
 
 
-def load_weights_file(path: Path | str) -> dict:
-    """A --weights-out file (or a ckpt.pt, which holds the same keys and more), weights as float32."""
+def _read_weights_file(path: Path | str) -> dict:
+    """A --weights-out file (or a ckpt.pt) as stored: its weights in the dtype they were saved in."""
     st = load_file(path, WEIGHTS_KEYS[:3] + ("G_ema",), what="--weights-out file or emdm.train checkpoint")
     if not isinstance(st["G_ema"], dict):
         raise CheckpointError(f"{path}: 'G_ema' is not a state dict")
+    return st
+
+
+def load_weights_file(path: Path | str) -> dict:
+    """A --weights-out file (or a ckpt.pt, which holds the same keys and more), weights as float32."""
+    st = _read_weights_file(path)
     st["G_ema"] = {k: v.float() for k, v in st["G_ema"].items()}
     return st
 
@@ -220,9 +226,7 @@ def portable_meta(meta: dict) -> dict:
 
 def portable_weights_file(src: Path | str, dst: Path | str) -> Path:
     """A --weights-out file with ``portable_meta``; weights, their dtype, step, wall and losses as they were."""
-    st = load_file(src, WEIGHTS_KEYS[:3] + ("G_ema",), what="--weights-out file or emdm.train checkpoint")
-    if not isinstance(st["G_ema"], dict):
-        raise CheckpointError(f"{src}: 'G_ema' is not a state dict")
+    st = _read_weights_file(src)
     dtypes = {v.dtype for v in st["G_ema"].values()}
     if len(dtypes) != 1:
         raise CheckpointError(f"{src}: its weights mix dtypes {sorted(map(str, dtypes))}")
