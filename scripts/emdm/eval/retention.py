@@ -14,7 +14,6 @@ writes a JSON with ``--out``."""
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -26,6 +25,7 @@ from emdm.eval.args import add_model_source
 from emdm.eval.coverage import PROMPTS_FILE, CoverageError, load_prompts, model_defaults
 from emdm.eval.data import load_split
 from emdm.eval.kinematics import descriptors
+from emdm.eval.results import write_result
 from emdm.model.open import ModelError, open_model
 from emdm.motion.features import recover_joints
 from emdm.sampler.condition import make_condition
@@ -128,9 +128,8 @@ def main(argv: list[str] | None = None) -> int:
     except ModelError as e:
         print(f"emdm.eval.retention: {e}", file=sys.stderr)
         return 2
-    if a.steps not in (m.meta.get("supportedSteps") or m.meta.get("supported_steps") or [a.steps]):
-        print(f"emdm.eval.retention: --steps {a.steps}: the model supports "
-              f"{m.meta.get('supportedSteps') or m.meta.get('supported_steps')}", file=sys.stderr)
+    if m.supported_steps and a.steps not in m.supported_steps:
+        print(f"emdm.eval.retention: --steps {a.steps}: the model supports {m.supported_steps}", file=sys.stderr)
         return 2
     g = model_defaults(m)[0] if a.guidance is None else a.guidance
     gmin = float(m.meta.get("guidanceMinTime", 0.0)) if a.guidance_min_time is None else a.guidance_min_time
@@ -164,9 +163,7 @@ def main(argv: list[str] | None = None) -> int:
         print(table(action, prompt, len(clips), summ, res["levels"]) + "\n")
         results["actions"][action] = {"prompt": prompt, "clips": [split.names[i] for i in pick], "descriptors": summ}
     if a.out is not None:
-        a.out.parent.mkdir(parents=True, exist_ok=True)
-        a.out.write_text(json.dumps(results, indent=1) + "\n")
-        print(f"wrote {a.out}")
+        print(f"wrote {write_result(results, a.out)}")
     return 0
 
 
