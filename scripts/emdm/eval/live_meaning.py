@@ -50,6 +50,7 @@ MIN_SEGMENT = 20        # frames: a shorter segment is not judged (counted apart
 FPS = L.FPS
 ALPHA = 0.05            # "as good as alone": met unless a judge finds live worse at this significance (paired sign test)
 SEAM_BAR = 1.5
+UNRECORDED_WINDOW = 40  # new frames per window of the sessions written before results recorded it (2026-11-28)
 
 
 class LiveMeaningError(ValueError):
@@ -306,8 +307,7 @@ def pooled(rs: list[dict]) -> list[dict]:
         v = r.get("live")
         if not v or r.get("train_steps") is None or v.get("prompt_keep_from") is None:
             continue
-        # sessions written before the window was recorded all ran with windows of 40 new frames
-        key = (r["name"], r["train_steps"], v["prompt_keep_from"], v.get("window", 40), v["cost_frames"],
+        key = (r["name"], r["train_steps"], v["prompt_keep_from"], v.get("window", UNRECORDED_WINDOW), v["cost_frames"],
                tuple(v["gap_seconds"]))
         groups.setdefault(key, []).append(r)
     out = []
@@ -342,7 +342,7 @@ def section(rs: list[dict]) -> list[str]:
         a, p, h, b = v["rates"]["all"], v["verdict"]["p_worse"], v["halves"], v["blends"]
         rows.append([f"`{r['_file']}`", f"{v['changes']} prompt changes every {v['gap_seconds'][0]:g}–{v['gap_seconds'][1]:g} s, "
                      f"{v['segments']} segments ({int(np.median(v['segment_frames']))} frames median), windows of "
-                     f"{v.get('window', 40)} new frames cost {v['cost_frames']} frames; "
+                     f"{v.get('window', UNRECORDED_WINDOW)} new frames cost {v['cost_frames']} frames; "
                      f"{r['hardware']}, load {v['load_avg_1min_end']:.1f}, {v['seconds']:.0f} s",
                      _judge_cell(a.get("classifier"), p.get("classifier")), _judge_cell(a.get("kinematic"), p.get("kinematic")),
                      " / ".join(f"{v['rates_alone_late'][j]['alone']:.0%}" for j in ("classifier", "kinematic")
