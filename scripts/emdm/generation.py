@@ -25,8 +25,7 @@ import numpy as np
 from emdm import skeleton as sk
 from emdm.model.open import ModelError, open_shipped
 from emdm.motion.features import recover_joints
-from emdm.sampler import (MAX_SEED, SampleError, SamplingSettings, check_steps, denormalise, make_condition,
-                          sample_features)
+from emdm.sampler import MAX_SEED, SampleError, check_steps, denormalise, make_condition, sample_features
 from emdm.writers.bvh import write_bvh
 from emdm.writers.glb import write_glb
 
@@ -76,15 +75,14 @@ def generate(prompt: str, *, seconds: float = 6.0, seed: int = 0, steps: int | N
     if not 1 <= frames <= max_frames:
         raise SampleError(f"seconds must give 1..{max_frames} frames at {sk.FPS} fps "
                           f"(at most {max_frames / sk.FPS:g} s), got {seconds!r}")
-    steps = check_steps(steps, entry, model)
+    steps = check_steps(steps, entry, model, "steps")          # before the prompt is encoded
     spec = entry["condition"]
     text, action = (prompt, None) if spec["type"] == "text" else (None, prompt)
     cond = make_condition(spec, text, action, False, models_dir)
     g = float(entry.get("guidance", 2.5)) if guidance is None else guidance
     if not (math.isfinite(g) and g >= 0):
         raise SampleError(f"guidance must be a finite number ≥ 0, got {guidance!r}")
-    x = sample_features(opened.step, cond, frames, SamplingSettings.from_entry(entry, steps, g, opened.mean, opened.std),
-                        seed)
+    x = sample_features(opened.step, cond, frames, opened.settings(steps, g), seed)
     feats = denormalise(x[0], opened.mean, opened.std).astype(np.float32)
     if not np.isfinite(feats).all():
         raise SampleError(f"model {model!r} returned non-finite numbers; check its files against the manifest's sha256")

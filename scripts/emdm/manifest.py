@@ -110,6 +110,27 @@ def file_path(models_dir: Path | str, rel: Any, field: str) -> Path:
     return path
 
 
+def verified_file(manifest: dict, models_dir: Path | str, rel: str, what: str, field: str = "files",
+                  remedy: str = "restore the file or re-export the model") -> Path:
+    """``models_dir / rel`` if it lies inside ``models_dir`` (``field``: the manifest field naming it), the manifest
+    lists it under ``files`` and it has that size and sha256; else a ManifestError naming the file and ``remedy``."""
+    path = file_path(models_dir, rel, field)      # relative, and inside models_dir once links are resolved
+    man = Path(models_dir) / MANIFEST_NAME
+    listed = manifest.get("files", {}).get(rel)
+    if not isinstance(listed, dict):
+        raise ManifestError(f"{path}: {what}, but {man} does not list it under 'files'; refusing an unverified file "
+                            f"({remedy})")
+    if not path.is_file():
+        raise ManifestError(f"{path}: missing ({what} in {man}); {remedy}")
+    size = path.stat().st_size
+    if size != listed.get("bytes"):
+        raise ManifestError(f"{path}: {size} bytes, {man} lists {listed.get('bytes')} (a changed or truncated file); "
+                            f"{remedy}")
+    if sha256_file(path) != listed.get("sha256"):
+        raise ManifestError(f"{path}: sha256 differs from {man} (a changed or corrupt file); {remedy}")
+    return path
+
+
 def _check_structure(data: Any, path: Path) -> dict[str, Any]:
     """The manifest's shape: an object of schema 1 whose sections are objects, whose 'files' table maps relative
     paths to {bytes, sha256}, and whose entries' paths (files, onnx, meanStd, variants, trainingWeights, dir) are

@@ -20,6 +20,7 @@ A refusal is an ``OutputRefused`` whose message is one line: the path and why.
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import re
@@ -28,6 +29,8 @@ import sys
 import tempfile
 from pathlib import Path
 from typing import Callable, Iterable
+
+import numpy as np
 
 from emdm import paths
 
@@ -250,3 +253,23 @@ def write_text_atomic(path: Path | str, text: str) -> Path:
     tmp.write_text(text)
     os.replace(tmp, path)
     return path
+
+
+def write_bytes_atomic(path: Path | str, data: bytes) -> Path:
+    """``write_text_atomic`` for bytes: a killed run leaves no half-written file (the old one, or none)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    try:
+        tmp.write_bytes(data)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return path
+
+
+def write_npy_atomic(path: Path | str, array) -> Path:
+    """``numpy.save`` of ``array`` to exactly ``path`` (no .npy appended), whole or not at all."""
+    buf = io.BytesIO()
+    np.save(buf, array)
+    return write_bytes_atomic(path, buf.getvalue())

@@ -54,7 +54,7 @@ from emdm.motion import edit as E
 from emdm.motion.features import recover_joints
 from emdm.motion.mask import KeepSpecError, keep_mask, parse_keep
 from emdm.motion.stitch import pin_kept_root
-from emdm.outdir import OutputRefused, writable_folder
+from emdm.outdir import OutputRefused, writable_folder, write_npy_atomic
 from emdm.sampler.flags import add_sampling_settings, with_flags
 from emdm.sampler import (MAX_SEED, SampleError, SamplingSettings, StepFn, check_steps, check_x0_smoothing,
                           denormalise, make_condition, sample_features)
@@ -74,17 +74,43 @@ def load_model(args) -> tuple[StepFn, dict, np.ndarray, np.ndarray]:
     return m.step, m.meta, m.mean, m.std
 
 
+# the names --out's prefix is given: one of them, given whole, stands for its prefix (--out out/walk.npy = out/walk)
+OUT_SUFFIXES = (".features.npy", ".centimetres.bvh", ".metres.bvh", ".npy", ".bvh")
+
+
+def out_prefix(given: str | Path) -> Path:
+    """--out as the prefix every output's name is appended to: ``out/walk`` writes out/walk.npy, .features.npy and
+    .metres.bvh; dots of the prefix stay (``run.v2`` is not ``run``); one of those names given whole stands for its
+    prefix. A folder (an existing one, or a path ending in a separator) is refused: it names no file."""
+    text = str(given)
+    example = "a path prefix such as out/walk (writes walk.npy, walk.features.npy, walk.metres.bvh)"
+    if not text.strip():
+        raise SampleError(f"--out is empty; give {example}")
+    if text.endswith(("/", "\\")) or Path(text).is_dir():
+        raise SampleError(f"--out {text}: a folder; give {example} inside it")
+    p = Path(text)
+    for suffix in OUT_SUFFIXES:
+        if p.name.endswith(suffix) and len(p.name) > len(suffix):
+            return p.with_name(p.name[:-len(suffix)])
+    return p
+
+
+def out_file(prefix: Path, suffix: str) -> Path:
+    """``prefix`` with ``suffix`` appended (``with_suffix`` would replace a dotted prefix's last part)."""
+    return prefix.with_name(prefix.name + suffix)
+
+
 def bvh_paths(out: Path, num: int, units: str) -> list[Path]:
     """<out>.metres.bvh, or <out>_<i>.metres.bvh per sample with --num > 1 (.centimetres.bvh for units "cm")."""
     if num == 1:
-        return [bvh_path(out.with_suffix(""), units)]
+        return [bvh_path(out, units)]
     return [bvh_path(out.with_name(f"{out.name}_{i}"), units) for i in range(num)]
 
 
 def check_out(out: Path, num: int, bvh_units: str | None) -> None:
     """Refuse an output prefix that cannot be written, before any sampling: the nearest existing folder
     must take a new file, and no output name may be an existing folder. ``bvh_units`` None: no BVH."""
-    names = [out.with_suffix(".npy"), out.with_suffix(".features.npy")]
+    names = [out_file(out, ".npy"), out_file(out, ".features.npy")]
     if bvh_units is not None:
         names += bvh_paths(out, num, bvh_units)
     for p in names:
@@ -117,6 +143,7 @@ def check_args(a) -> None:
         raise SampleError(f"--threads must be in 1..{MAX_THREADS}, got {a.threads}")
     if a.ckpt is not None and a.variant not in (None, "fp32"):
         raise SampleError(f"--variant {a.variant!r} needs --model (a checkpoint has only its fp32 weights)")
+    a.out = out_prefix(a.out)
     check_out(a.out, a.num, None if a.no_bvh else a.bvh_units)
     if edit_mode(a):
         check_edit_args(a)
@@ -285,7 +312,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_sampling_settings(p)
     p.add_argument("--num", type=int, default=1, help="number of samples")
     p.add_argument("--threads", type=int, default=1)
-    p.add_argument("--out", type=Path, required=True, help="output path prefix (.npy, .features.npy, .metres.bvh)")
+    p.add_argument("--out", required=True, help="output path prefix: out/walk writes out/walk.npy (joints), "
+                   "out/walk.features.npy and out/walk.metres.bvh (an existing file of these names is replaced)")
     p.add_argument("--no-bvh", action="store_true")
     p.add_argument("--bvh-units", choices=["m", "cm"], default="m",
                    help="BVH length unit, also in the file name: m (default; Blender's import at scale 1.0) or cm")
@@ -369,9 +397,8 @@ def write_motion(a: argparse.Namespace, feats: np.ndarray, joints: np.ndarray) -
     if not np.isfinite(joints).all():
         raise SampleError("recovering joints gave non-finite positions; nothing written")
     a.out.parent.mkdir(parents=True, exist_ok=True)
-    np.save(a.out.with_suffix(".npy"), joints[0] if a.num == 1 else joints)
-    np.save(a.out.with_suffix(".features.npy"), feats[0] if a.num == 1 else feats)
-    written = [a.out.with_suffix(".npy")]
+    written = [write_npy_atomic(out_file(a.out, ".npy"), joints[0] if a.num == 1 else joints),
+               write_npy_atomic(out_file(a.out, ".features.npy"), feats[0] if a.num == 1 else feats)]
     if not a.no_bvh:
         for i, path in enumerate(bvh_paths(a.out, a.num, a.bvh_units)):
             written.append(write_bvh(joints[i], path, units=a.bvh_units))

@@ -132,3 +132,14 @@ def test_editor_encodes_prompts_from_the_models_folder_it_opened(venv, tmp_path)
     $EMDM_MODELS_DIR, no public/models beside the installed package)."""
     r = ok(run([venv / "bin" / "python", "-c", EDITOR, MODELS], cwd=tmp_path))
     assert r.stdout.strip().splitlines()[-1] == "[20, 263]"
+
+
+def test_the_documented_loop_runs_as_written(venv, tmp_path):
+    """docs/PYTHON.md's loop example, verbatim, from a folder whose models/ is the shipped folder (its settings once
+    lacked the mean and std the model's speed cap needs, and the example raised)."""
+    doc = (REPO / "docs" / "PYTHON.md").read_text()
+    (block,) = [b.split("\n", 1)[1] for b in doc.split("```")[1::2] if b.startswith("python") and ".settings(" in b]
+    (tmp_path / "models").symlink_to(MODELS)
+    r = ok(run([venv / "bin" / "python", "-c", block + "\nprint(list(features.shape), settings.speed_cap > 0)"],
+               cwd=tmp_path))
+    assert r.stdout.strip().splitlines()[-1] == "[120, 263] True"

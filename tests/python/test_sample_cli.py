@@ -263,6 +263,29 @@ def test_unwritable_out_is_found_before_sampling(models, tmp_path, capsys, monke
     assert "dir.npy is a folder" in capsys.readouterr().err
 
 
+def test_out_is_a_prefix_its_dots_kept_and_a_folder_refused(models, tmp_path, capsys):
+    """--out run.v2 and run.v3 are two prefixes (with_suffix once made both run.npy); --out walk.npy stands for walk;
+    a folder, or a path ending in a separator, names no file and is refused before sampling."""
+    def names():
+        return sorted(p.name for p in (tmp_path / "o").iterdir())
+
+    for given in ("run.v2", "run.v3"):
+        assert sample_main(_cli(models, tmp_path / "o" / given, "--steps", "2")) == 0
+    assert names() == [f"run.v{i}{s}" for i in (2, 3) for s in (".features.npy", ".metres.bvh", ".npy")]
+    said = capsys.readouterr().out
+    assert "run.v3.npy" in said and "run.v3.features.npy" in said and "run.v3.metres.bvh" in said, said
+    for given in ("walk.npy", "walk.metres.bvh", "walk.features.npy"):
+        assert sample_main(_cli(models, tmp_path / "o" / given, "--steps", "2")) == 0
+    assert [n for n in names() if n.startswith("walk")] == ["walk.features.npy", "walk.metres.bvh", "walk.npy"]
+    assert not list((tmp_path / "o").glob(".*tmp*"))                        # written whole, through a rename
+    capsys.readouterr()
+    for given in (str(tmp_path / "o"), str(tmp_path / "new") + "/"):
+        assert sample_main(_cli(models, given, "--steps", "2")) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and f"--out {given}: a folder; give a path prefix such as out/walk" in err[0], err
+    assert not (tmp_path / "new").exists()
+
+
 def test_non_finite_motion_is_an_error_and_not_written(models, tmp_path, capsys, monkeypatch):
     import emdm.model.open as opener            # where emdm.sample opens its model
 

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from emdm import manifest as mf
+import emdm.text as text_pkg
 from emdm.text import TextEncoderError, encode_texts, load_encoder
 from emdm.text import fixtures as fx
 from emdm.text.minilm import MiniLMEncoder
@@ -120,6 +121,50 @@ def test_unknown_encoder_id_names_the_manifest(tmp_path):
         load_encoder("nope")
     with pytest.raises(TextEncoderError, match="missing; run `python -m emdm.text.export_minilm`"):
         load_encoder(ENC_ID, model_dir=tmp_path)
+
+
+def _models_copy(tmp_path):
+    """A models folder holding the manifest and the shipped encoder's files (what load_encoder reads)."""
+    import shutil
+
+    dst = tmp_path / "models"
+    entry = mf.load()["textEncoders"][ENC_ID]
+    for rel in entry["files"]:
+        (dst / rel).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(mf.DEFAULT_MODELS_DIR / rel, dst / rel)
+    shutil.copyfile(mf.DEFAULT_MODELS_DIR / mf.MANIFEST_NAME, dst / mf.MANIFEST_NAME)
+    return dst, entry
+
+
+@pytest.mark.parametrize("name", ["tokenizer.json", "onnx/model_quantized.onnx"])
+def test_a_changed_encoder_file_is_refused_by_its_sha256(tmp_path, name):
+    """As the page does, Python checks the encoder's files against the manifest before use: a file of the same size
+    with one byte changed (a tokenizer that would read "walk" as another word) is one line naming it."""
+    models, entry = _models_copy(tmp_path)
+    assert load_encoder(ENC_ID, models_dir=models).encode(["a person walks"]).shape == (1, 384)   # the copy works
+    text_pkg._CACHE.clear()                  # an encoder once loaded is reused; the checks run when one is loaded
+    f = models / entry["dir"] / name
+    data = bytearray(f.read_bytes())
+    i = data.find(b'"walk"') + 1 if name == "tokenizer.json" else len(data) // 2
+    data[i] ^= 0x01
+    f.write_bytes(bytes(data))
+    with pytest.raises(TextEncoderError, match=rf"{name}: sha256 differs from .*manifest\.json.*restore the folder"):
+        load_encoder(ENC_ID, models_dir=models)
+    f.write_bytes(bytes(data) + b" ")
+    with pytest.raises(TextEncoderError, match=rf"{name}: {len(data) + 1} bytes, .* lists {len(data)}"):
+        load_encoder(ENC_ID, models_dir=models)
+    f.unlink()
+    with pytest.raises(TextEncoderError, match=rf"{name}: missing \(text encoder 'all-MiniLM-L6-v2' lists it"):
+        load_encoder(ENC_ID, models_dir=models)
+
+
+def test_a_malformed_tokenizer_in_a_folder_given_directly_is_one_line(tmp_path):
+    models, entry = _models_copy(tmp_path)
+    folder = models / entry["dir"]
+    (folder / "tokenizer.json").write_text('{"version": "1.0", "model": ')
+    with pytest.raises(TextEncoderError, match=r"tokenizer\.json: not a tokenizer file") as e:
+        load_encoder(ENC_ID, model_dir=folder)
+    assert "\n" not in str(e.value)
 
 
 def test_pooling_ignores_padding_and_normalises():

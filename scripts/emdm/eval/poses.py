@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from emdm import skeleton as sk
-from emdm.sampler import SampleError, SamplingSettings, make_condition, sample_features
+from emdm.sampler import SampleError, make_condition, sample_features
 from emdm.eval.args import add_model_source
 from emdm.eval.results import RESULTS_DIR, hardware, slug
 from emdm.model.open import ModelError, open_model
@@ -159,7 +159,7 @@ def run_grid(opened, steps: list[int], guidance: list[float], seconds: list[floa
         raise PosesError(f"--seconds {','.join(map(str, too_long))}: lengths must be in (0, {max_s:g}] s for this model")
     if any(not np.isfinite(g) or g < 1 for g in guidance):
         raise PosesError(f"--guidance {guidance}: scales must be finite and ≥ 1")
-    model = SamplingSettings.from_entry(meta, mean=opened.mean, std=opened.std)
+    model = opened.settings()
     gmin = model.guidance_min_time if guidance_min_time is None else guidance_min_time
     sigma = model.x0_smoothing if x0_smoothing is None else x0_smoothing
     rows = []

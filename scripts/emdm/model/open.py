@@ -33,6 +33,7 @@ import numpy as np
 from emdm import manifest as mf
 from emdm import paths
 from emdm.paths import display_path
+from emdm.sampler.settings import SamplingSettings, check_steps
 
 StepFn = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
@@ -159,27 +160,11 @@ def variant_file(entry: dict, name: str, variant: str | None) -> str:
 
 
 def verified_file(manifest: dict, models_dir: Path, rel: str, what: str, field: str = "files") -> Path:
-    """``models_dir / rel`` if it lies inside ``models_dir`` (``field``: the manifest field naming it), the manifest
-    lists it under ``files`` and it has that size and sha256."""
+    """``manifest.verified_file`` (inside ``models_dir``, listed, its size and sha256) as a ModelError."""
     try:
-        path = mf.file_path(models_dir, rel, field)      # relative, and inside models_dir once links are resolved
+        return mf.verified_file(manifest, models_dir, rel, what, field)
     except mf.ManifestError as e:
         raise ModelError(str(e)) from None
-    man = Path(models_dir) / mf.MANIFEST_NAME
-    listed = manifest.get("files", {}).get(rel)
-    if not isinstance(listed, dict):
-        raise ModelError(f"{path}: {what}, but {man} does not list it under 'files'; refusing an unverified file "
-                         "(re-export the model with python -m emdm.export)")
-    if not path.is_file():
-        raise ModelError(f"{path}: missing ({what} in {man}); restore the file or re-export the model")
-    size = path.stat().st_size
-    if size != listed.get("bytes"):
-        raise ModelError(f"{path}: {size} bytes, {man} lists {listed.get('bytes')} (a changed or truncated file); "
-                         "restore the file or re-export the model")
-    if mf.sha256_file(path) != listed.get("sha256"):
-        raise ModelError(f"{path}: sha256 differs from {man} (a changed or corrupt file); restore the file or "
-                         "re-export the model")
-    return path
 
 
 # ----------------------------------------------------------------------------- the opened model
@@ -229,6 +214,12 @@ class OpenedModel:
         if steps is None and self.checkpoint_meta is not None:
             steps = self.checkpoint_meta.get("supported_steps")
         return list(steps) if steps else None
+
+    def settings(self, steps: int | None = None, guidance: float | None = None):
+        """Its sampling settings as the page's (``SamplingSettings.from_entry`` of its entry with its mean/std, which
+        its speed cap needs); ``steps`` (checked against ``supported_steps``) and ``guidance`` given override them."""
+        checked = check_steps(steps, {**self.meta, "supportedSteps": self.supported_steps}, self.name, "steps")
+        return SamplingSettings.from_entry(self.meta, checked, guidance, self.mean, self.std)
 
 
 def is_checkpoint(ref: str | Path) -> bool:

@@ -1,7 +1,7 @@
 """Sampling motions from a step model, file for file the twin of src/sampler/ (docs/ARCHITECTURE.md "Sampling"):
 
     from emdm.sampler import SamplingSettings, make_condition, sample_features
-    settings = SamplingSettings.from_entry(entry, steps=10)          # method, guidance, interval, smoothing, sizes
+    settings = SamplingSettings.from_entry(entry, steps=10, mean=mean, std=std)   # method, guidance, interval, ...
     x = sample_features(step, make_condition(entry["condition"], "a person waves", None, False), 120, settings, seed=1)
 
 - ``schedule``: the variance-preserving schedule (DDGAN posterior and DDIM marginals) for T steps;

@@ -2,7 +2,7 @@
 rule, the step count, guidance and its interval, x̂0 smoothing and inpainting. The sampling loop
 (``emdm.sampler.sampler``) takes it instead of a dozen positional parameters:
 
-    settings = SamplingSettings.from_entry(manifest["models"]["emdm-t2m-web"], steps=10)
+    settings = open_model("emdm-t2m-web").settings(steps=10)      # from_entry(entry, steps, mean=, std=) underneath
     x = sample_features(step, cond, 120, settings, seed=3)
     x = sample_features(step, cond, 120, dataclasses.replace(settings, known=known, keep=keep), seed=3)
 
@@ -110,18 +110,21 @@ def check_speed_cap(cap: float, root_norm) -> float:
         norm = None if root_norm is None else np.asarray(root_norm, np.float64).ravel()
         if norm is None or norm.size != 4 or not np.all(np.isfinite(norm)) or not (norm[2] > 0 and norm[3] > 0):
             raise SampleError("speed_cap needs root_norm: the mean and std of root velocity channels 1 and 2 "
-                              f"(m1, m2, s1, s2; the model's meanstd, stds > 0), got {root_norm!r}")
+                              f"(m1, m2, s1, s2; the model's meanstd, stds > 0), got {root_norm!r}; pass mean= and "
+                              "std= to SamplingSettings.from_entry, or use OpenedModel.settings()")
     return float(cap)
 
 
-def check_steps(steps: int | None, entry: dict, name: str) -> int:
-    """The step count to run: ``steps`` (None: the model's default) if the model supports it, as the page."""
+def check_steps(steps: int | None, entry: dict, name: str, option: str = "--steps") -> int:
+    """The step count to run: ``steps`` (None: the model's default) if the model supports it, as the page.
+    ``option``: how the caller's user gave it (the CLI's "--steps", Python's "steps"), for the error."""
     supported = entry.get("supportedSteps")
     if steps is None:
         return int(entry.get("defaultSteps", 10))
+    sep = ": " if option.startswith("-") else "="
     if supported:
         if steps not in supported:
-            raise SampleError(f"--steps: {steps} is not supported by model {name!r}; use one of {list(supported)}")
+            raise SampleError(f"{option}{sep}{steps} is not supported by model {name!r}; use one of {list(supported)}")
     elif not 1 <= steps <= MAX_STEPS:
-        raise SampleError(f"--steps must be in 1..{MAX_STEPS}, got {steps}")
+        raise SampleError(f"{option} must be in 1..{MAX_STEPS}, got {steps}")
     return steps

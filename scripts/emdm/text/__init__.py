@@ -85,10 +85,29 @@ def load_encoder(encoder_id: str = DEFAULT_ENCODER, *, models_dir: Path | str | 
         if entry.get("kind") != "minilm":
             raise TextEncoderError(f"manifest textEncoders.{encoder_id}: field 'kind' is {entry.get('kind')!r}, "
                                    f"this loader runs 'minilm' folders (use model_dir= for clip)")
-        folder = mf.file_path(models_dir, entry.get("dir"), f"textEncoders.{encoder_id}.dir")   # inside models_dir
+        folder = verified_folder(manifest, models_dir, encoder_id, entry)
         enc = MiniLMEncoder(folder, encoder_id=encoder_id, max_tokens=entry.get("maxTokens"))
     _CACHE[key] = enc
     return enc
+
+
+def verified_folder(manifest: dict, models_dir: Path, encoder_id: str, entry: dict) -> Path:
+    """The encoder's folder (inside ``models_dir``) once every file its entry lists (``files``: the ONNX file, the
+    tokenizer's) has the size and sha256 the manifest's ``files`` gives, as the page checks them before use."""
+    where = f"textEncoders.{encoder_id}"
+    remedy = "restore the folder from the repository's public/models or run `python -m emdm.text.export_minilm`"
+    try:
+        folder = mf.file_path(models_dir, entry.get("dir"), f"{where}.dir")   # inside models_dir
+        listed = entry.get("files")
+        if not isinstance(listed, list) or not listed:
+            raise mf.ManifestError(f"{Path(models_dir) / mf.MANIFEST_NAME}: field '{where}.files' must list the "
+                                   f"encoder's files (their sha256 under 'files'); {remedy}")
+        for rel in listed:
+            mf.verified_file(manifest, models_dir, rel, f"text encoder {encoder_id!r} lists it", f"{where}.files",
+                             remedy)
+    except mf.ManifestError as e:
+        raise TextEncoderError(str(e)) from None
+    return folder
 
 
 def encode_texts(texts: Sequence[str], encoder_id: str = DEFAULT_ENCODER, batch_size: int = 64,

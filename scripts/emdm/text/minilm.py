@@ -56,7 +56,11 @@ class MiniLMEncoder:
         self.max_tokens = int(max_tokens if max_tokens is not None else cfg.get("model_max_length", 128))
         if self.max_tokens < 2:
             raise TextEncoderError(f"{self.id}: maxTokens must be >= 2 ([CLS] and [SEP]), got {self.max_tokens}")
-        self.tokenizer = Tokenizer.from_file(str(tok_path))
+        try:
+            self.tokenizer = Tokenizer.from_file(str(tok_path))
+        except Exception as e:   # tokenizers raises a bare Exception for a malformed file
+            raise TextEncoderError(f"{tok_path}: not a tokenizer file ({str(e).splitlines()[0] if str(e) else e!r}); "
+                                   "restore the encoder folder or run `python -m emdm.text.export_minilm`") from None
         self.tokenizer.no_padding()
         self.tokenizer.enable_truncation(self.max_tokens)
         self.untruncated = Tokenizer.from_file(str(tok_path))

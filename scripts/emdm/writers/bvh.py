@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from emdm import skeleton as sk
+from emdm.outdir import write_text_atomic
 from emdm.motion.ik import solve_ik
 
 UNITS = {"m": (1.0, 6, "metres"), "cm": (100.0, 4, "centimetres")}   # unit → (per metre, decimals, word)
@@ -122,6 +123,4 @@ def bvh_text(joints: np.ndarray, fps: float = sk.FPS, units: str = "m") -> str:
 
 def write_bvh(joints: np.ndarray, path: Path | str, fps: float = sk.FPS, units: str = "m") -> Path:
     """Write ``bvh_text`` to ``path`` (name it with ``bvh_path`` so that it says the unit)."""
-    path = Path(path)
-    path.write_text(bvh_text(joints, fps, units))
-    return path
+    return write_text_atomic(path, bvh_text(joints, fps, units))   # whole, or the old file kept

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from emdm import skeleton as sk
+from emdm.outdir import write_bytes_atomic
 from emdm.motion.ik import forward_kinematics, quaternions, solve_ik
 
 FLOAT, UBYTE, USHORT = 5126, 5121, 5123          # glTF componentType codes
@@ -129,6 +130,4 @@ def _pack(doc: dict, binary: bytes) -> bytes:
 
 def write_glb(joints: np.ndarray, path: Path | str, fps: float = sk.FPS) -> Path:
     """Write ``glb_bytes(joints, fps)`` to ``path``; the path written."""
-    path = Path(path)
-    path.write_bytes(glb_bytes(joints, fps))
-    return path
+    return write_bytes_atomic(path, glb_bytes(joints, fps))   # whole, or the old file kept
