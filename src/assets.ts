@@ -67,16 +67,21 @@ export function copyOrt(dest: string, options: OrtOptions = {}): string[] {
 }
 
 /** manifest.json and every file its `files` table lists, relative to `dir`; `verify`: each has its listed size and
- * sha256. The first problem is an AssetError naming the file. */
-export function modelFiles(dir: string, verify = false): string[] {
+ * sha256; `browser`: only what a browser may load, without the models' `trainingWeights` (the PyTorch weights a
+ * training run continues from: 22 MB no page fetches). The first problem is an AssetError naming the file. */
+export function modelFiles(dir: string, verify = false, { browser = false }: { browser?: boolean } = {}): string[] {
   const man = path.join(dir, 'manifest.json');
-  if (!fs.existsSync(man)) throw new AssetError(`${man} not found; the models folder is a copy of the repository's public/models`);
+  if (!fs.existsSync(man)) throw new AssetError(`${man} not found; the models folder is a copy of emdm-web's public/models (the models are not in the npm package)`);
   let listed: Record<string, { bytes?: number; sha256?: string }>;
+  let training: string[];
   try {
-    listed = (JSON.parse(fs.readFileSync(man, 'utf8')) as { files?: typeof listed }).files ?? {};
+    const data = JSON.parse(fs.readFileSync(man, 'utf8')) as { files?: typeof listed; models?: Record<string, { trainingWeights?: unknown }> };
+    listed = data.files ?? {};
+    training = Object.values(data.models ?? {}).map((m) => m?.trainingWeights).filter((f): f is string => typeof f === 'string');
   } catch (e) {
     throw new AssetError(`${man}: not JSON (${(e as Error).message})`);
   }
+  if (browser) listed = Object.fromEntries(Object.entries(listed).filter(([rel]) => !training.includes(rel)));
   for (const [rel, want] of Object.entries(listed)) {
     const p = path.resolve(dir, rel);
     if (!p.startsWith(path.resolve(dir) + path.sep)) throw new AssetError(`${man}: files entry '${rel}' lies outside the folder`);
@@ -90,9 +95,10 @@ export function modelFiles(dir: string, verify = false): string[] {
   return ['manifest.json', ...Object.keys(listed)];
 }
 
-/** Copy a models folder into `dest` after verifying every file (nothing is copied when one is wrong). */
+/** Copy a models folder into `dest` (an app's static folder) after verifying every file (nothing is copied when one
+ * is wrong): the manifest and the files a browser loads, not the training weights (`modelFiles`'s `browser`). */
 export function copyModels(src: string, dest: string): string[] {
-  const rels = modelFiles(src, true);
+  const rels = modelFiles(src, true, { browser: true });
   for (const rel of rels) {
     fs.mkdirSync(path.dirname(path.join(dest, rel)), { recursive: true });
     fs.copyFileSync(path.join(src, rel), path.join(dest, rel));

@@ -48,7 +48,7 @@ export interface CreateGeneratorOptions {
    * manifest's chooseVariant decides, for the page too. Results are bit-identical between Node and the page.
    */
   variant?: string;
-  /** run in a Web Worker (default: true where `Worker` exists, i.e. in browsers; false in Node) */
+  /** run in a Web Worker (default: true on a browser page's thread; false in Node and inside a worker) */
   worker?: boolean;
   /** keep verified model files in Cache Storage (worker only; default true) */
   cache?: boolean;
@@ -139,7 +139,12 @@ function defaultModelsUrl(): string {
 export async function createGenerator(opts: CreateGeneratorOptions = {}): Promise<MotionGenerator> {
   const baseUrl = opts.baseUrl ?? defaultModelsUrl();
   const manifest = opts.manifest ?? (await loadManifest(baseUrl));
-  const inWorker = opts.worker ?? typeof Worker !== 'undefined';
+  // a page's thread: the worker. Not Node, whose global Worker ONNX Runtime's own module sets (worker_threads: a
+  // second createGenerator in one process then started a browser worker there and crashed), nor a worker itself
+  const inWorker = opts.worker ?? (typeof window !== 'undefined' && typeof Worker !== 'undefined');
+  if (opts.threads !== undefined && !(Number.isInteger(opts.threads) && opts.threads >= 1)) {
+    throw new RangeError(`createGenerator: threads must be a whole number ≥ 1 (WASM threads), got ${String(opts.threads)}`);
+  }
   const backend = opts.backend ?? 'auto';
   const events: Partial<ClientEvents> = {
     download: (m, l, t) => opts.onDownload?.(m, l, t),

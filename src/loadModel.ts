@@ -11,6 +11,7 @@
  */
 import { type GenerateOptions, type GenerateResult, type Generator, type GeneratorOptions, openModel } from './openModel';
 import { ModelFileError } from './manifest';
+import { AbortError } from './sampler/sampler';
 import { type Backend, type BackendRequest, type RuntimeFileList, servedRuntimes, WEBGPU_RUNTIME_FILE, webgpuAvailable } from './runtime/ort';
 
 export interface LoadModelOptions extends Omit<GeneratorOptions, 'backend'> {
@@ -98,7 +99,9 @@ export async function withFallback<T>(
   reloadOnWasm: () => Promise<Generator>,
   onFallback: (reason: string) => void = () => undefined,
 ): Promise<{ gen: Generator; result: T }> {
-  if (signal?.aborted) throw signal.reason;
+  if (signal?.aborted) {   // the library's AbortError, as a cancel mid-run gives (signal.reason: a DOMException)
+    throw Object.assign(new AbortError('generation cancelled before it started'), { cause: signal.reason });
+  }
   try {
     return { gen, result: await run(gen) };
   } catch (e) {

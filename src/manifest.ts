@@ -173,7 +173,7 @@ export async function fetchBytes(
     throw new ModelFileError(path, 'network', `cannot fetch ${url}: ${(e as Error).message}`);
   }
   if (res.status === 404 || res.status === 410) {
-    throw new ModelFileError(path, 'missing', `not found at ${url} (HTTP ${res.status}); put the file there (public/models/ in this repository) or fix the models URL`);
+    throw new ModelFileError(path, 'missing', `not found at ${url} (HTTP ${res.status}); put the file there (from a copy of emdm-web's public/models folder) or fix the models URL`);
   }
   if (!res.ok) throw new ModelFileError(path, 'network', `fetching ${url} failed: HTTP ${res.status} ${res.statusText}`);
   if (!isHtmlPath(path) && /^\s*text\/html\b/i.test(res.headers.get('content-type') ?? '')) {
@@ -200,7 +200,7 @@ function missingAsHtml(path: string, url: string, status?: number): ModelFileErr
   return new ModelFileError(
     path, 'missing',
     `not found at ${url}: the server answered with an HTML page${status ? ` (HTTP ${status})` : ''} instead of the file, as a single-page-app ` +
-      `fallback answers a path it does not have; put the file there (public/models/ in this repository) or fix the models URL`,
+      `fallback answers a path it does not have; put the file there (from a copy of emdm-web's public/models folder) or fix the models URL`,
   );
 }
 

@@ -18,7 +18,8 @@
  *   in workers too; ES-module workers; `optimizeDeps.exclude` for the packages whose
  *   `import.meta.url` lookups pre-bundling would break.
  * - `models` (a copy of the repository's public/models): served at `<base>models/` in dev, and the manifest with
- *   every file it lists copied there by the build (createGenerator's default baseUrl).
+ *   every file a browser loads copied there by the build, each checked against its sha256 first (createGenerator's
+ *   default baseUrl; the training weights stay behind: src/assets.ts modelFiles).
  * - Cross-origin isolation headers on the dev and preview servers, so ORT runs on several threads.
  */
 import fs from 'node:fs';
@@ -92,6 +93,7 @@ export function emdm(options: EmdmPluginOptions = {}): Plugin[] {
   const ortOptions = { webgpu: options.webgpu ?? false };
   let ort: ReturnType<typeof ortFiles> | null = null;
   const ortNow = () => (ort ??= ortFiles(ortOptions));
+  const written = new Set<string>();               // the output folders this build has written the files into
   const main: Plugin = {
     name: 'emdm-web',
     config: () => ({
@@ -120,9 +122,15 @@ export function emdm(options: EmdmPluginOptions = {}): Plugin[] {
         else fs.createReadStream(file!).pipe(res);
       });
     },
+    buildStart() {
+      written.clear();
+    },
     writeBundle(out) {
+      // once per build and output folder: a flag, not a file there (an app's public/ort/ from `npx emdm-web ort`
+      // is in the output before this runs, and its files.json once made the build skip the models and WebGPU's runtime)
       const dir = out.dir;
-      if (!dir || fs.existsSync(path.join(dir, 'ort', 'files.json'))) return;   // once per build
+      if (!dir || written.has(path.resolve(dir))) return;
+      written.add(path.resolve(dir));
       copyOrt(path.join(dir, 'ort'), ortOptions);
       if (models) copyModels(models, path.join(dir, 'models'));
     },

@@ -8,7 +8,7 @@ import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
 import { chooseBackend, type GpuState } from '../../src/loadModel';
 import { type RuntimeFileList, WASM_RUNTIME_FILE, WEBGPU_RUNTIME_FILE } from '../../src/runtime/ort';
-import { ortFiles } from '../../src/assets';
+import { copyOrt, ortFiles } from '../../src/assets';
 import { emdm } from '../../src/vite';
 
 const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'emdm-backend-'));
@@ -71,5 +71,18 @@ describe('the ORT files an app serves (src/assets.ts, the emdm-web/vite plugin)'
       expect(fs.readdirSync(ort).filter((f) => f.endsWith('.wasm')).sort()).toEqual(want);
       expect(wasmOf(fs.readFileSync(path.join(ort, 'files.json'), 'utf8'))).toEqual(want);
     }
+  });
+
+  it("an app's own public/ort/ (from `npx emdm-web ort`) does not stop the build writing the models and WebGPU's runtime", () => {
+    const out = fs.mkdtempSync(path.join(tmp, 'dist-'));
+    copyOrt(path.join(out, 'ort'));                 // what Vite copied from the app's public/ before writeBundle
+    const models = fs.mkdtempSync(path.join(tmp, 'models-'));
+    fs.writeFileSync(path.join(models, 'manifest.json'), JSON.stringify({ files: {} }));
+    const main = emdm({ models, webgpu: true }).find((p) => p.name === 'emdm-web')!;
+    (main.buildStart as () => void).call({});
+    (main.writeBundle as (o: { dir: string }) => void).call({}, { dir: out });
+    expect(fs.readdirSync(path.join(out, 'ort')).filter((f) => f.endsWith('.wasm')).sort()).toEqual([WEBGPU_RUNTIME_FILE, WASM_RUNTIME_FILE]);
+    expect(wasmOf(fs.readFileSync(path.join(out, 'ort', 'files.json'), 'utf8'))).toEqual([WEBGPU_RUNTIME_FILE, WASM_RUNTIME_FILE]);
+    expect(fs.existsSync(path.join(out, 'models', 'manifest.json'))).toBe(true);
   });
 });

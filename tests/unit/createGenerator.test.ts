@@ -57,6 +57,29 @@ describe('createGenerator', () => {
     await g.dispose();
   });
 
+  it("Node stays in-process once ONNX Runtime has set a global Worker (worker_threads'); bad threads and an aborted signal are said plainly", async () => {
+    const dir = tinyModels(tmp).dir;
+    const had = Object.getOwnPropertyDescriptor(globalThis, 'Worker');
+    (globalThis as { Worker?: unknown }).Worker = class {};          // what ORT's wasm module does in Node
+    try {
+      const g = await createGenerator({ baseUrl: dir, threads: 1 });
+      expect(g.inWorker).toBe(false);                               // was a browser worker, which then crashed
+      const m = await g.generate({ action: 1, seconds: 1, seed: 1 });
+      expect(m.frames).toBe(20);
+      const stop = new AbortController();
+      stop.abort();
+      const aborted = g.generate({ action: 1, seconds: 1, seed: 1, signal: stop.signal });
+      await expect(aborted).rejects.toBeInstanceOf(AbortError);    // the library's, as a cancel mid-run gives
+      await g.dispose();
+    } finally {
+      if (had) Object.defineProperty(globalThis, 'Worker', had);
+      else delete (globalThis as { Worker?: unknown }).Worker;
+    }
+    for (const threads of [0, -1, 1.5, Number.NaN]) {
+      await expect(createGenerator({ baseUrl: dir, threads })).rejects.toThrow(/createGenerator: threads must be a whole number ≥ 1 \(WASM threads\), got/);
+    }
+  });
+
   it('a timeline through the library with its windows begun together: the motion of the windows run in turn', async () => {
     const g = await createGenerator({ baseUrl: tinyModels(tmp).dir, threads: 1, worker: false });
     const gen: EditGenerate = (r) => g.generate(r);

@@ -205,9 +205,13 @@ describe('emdm-web command', () => {
     const body = Buffer.from('step model bytes');
     fs.writeFileSync(path.join(src, 'text', 'm.onnx'), body);
     const sha256 = createHash('sha256').update(body).digest('hex');
-    fs.writeFileSync(path.join(src, 'manifest.json'), JSON.stringify({ schema: 1, files: { 'text/m.onnx': { bytes: body.length, sha256 } } }));
+    // a model's training weights (PyTorch, for the next training run) are listed but no browser loads them: left behind
+    fs.writeFileSync(path.join(src, 'm.weights.f16.pt'), body);
+    fs.writeFileSync(path.join(src, 'manifest.json'), JSON.stringify({ schema: 1, models: { m: { trainingWeights: 'm.weights.f16.pt' } },
+      files: { 'text/m.onnx': { bytes: body.length, sha256 }, 'm.weights.f16.pt': { bytes: body.length, sha256 } } }));
     expect(cli('models', src, 'static/models').code).toBe(0);
     expect(fs.readFileSync(path.join(app, 'static', 'models', 'text', 'm.onnx'))).toEqual(body);
+    expect(fs.existsSync(path.join(app, 'static', 'models', 'm.weights.f16.pt'))).toBe(false);
     fs.writeFileSync(path.join(src, 'text', 'm.onnx'), 'changed');
     const bad = cli('models', src, 'static/models2');
     expect(bad.code).toBe(2);
@@ -298,6 +302,9 @@ describe('Vite app with emdm-web/vite', () => {
     execFileSync(process.execPath, [VITE, 'build'], { cwd: app, encoding: 'utf8' });
     const dist = path.join(app, 'dist');
     expect(fs.existsSync(path.join(dist, 'models', 'manifest.json'))).toBe(true);
+    const served = fs.readdirSync(path.join(dist, 'models'));
+    expect(served).toContain('emdm-t2m-web.int8.onnx');
+    expect(served.filter((f) => f.endsWith('.pt'))).toEqual([]);        // training weights stay behind (22 MB)
     // ONE ONNX Runtime .wasm (WASM's; WebGPU's only with emdm({ webgpu: true })), listed in files.json
     expect(Object.keys(JSON.parse(fs.readFileSync(path.join(dist, 'ort', 'files.json'), 'utf8')))).toEqual(['ort-wasm-simd-threaded.wasm']);
     const wasm = fs.readdirSync(dist, { recursive: true, encoding: 'utf8' }).filter((f) => f.endsWith('.wasm')).map((f) => f.split(path.sep).join('/'));
