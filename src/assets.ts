@@ -95,10 +95,15 @@ export function modelFiles(dir: string, verify = false, { browser = false }: { b
   return ['manifest.json', ...Object.keys(listed)];
 }
 
+/** The models folder's terms of use (the weights' licence and their data's attributions), not a file the manifest
+ * lists: copied along where present. */
+export const MODELS_TERMS = 'LICENSE.md';
+
 /** Copy a models folder into `dest` (an app's static folder) after verifying every file (nothing is copied when one
  * is wrong): the manifest and the files a browser loads, not the training weights (`modelFiles`'s `browser`). */
 export function copyModels(src: string, dest: string): string[] {
   const rels = modelFiles(src, true, { browser: true });
+  if (fs.existsSync(path.join(src, MODELS_TERMS))) rels.push(MODELS_TERMS);   // the weights' licence goes with them
   for (const rel of rels) {
     fs.mkdirSync(path.dirname(path.join(dest, rel)), { recursive: true });
     fs.copyFileSync(path.join(src, rel), path.join(dest, rel));

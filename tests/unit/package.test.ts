@@ -212,6 +212,7 @@ describe('emdm-web command', () => {
     expect(cli('models', src, 'static/models').code).toBe(0);
     expect(fs.readFileSync(path.join(app, 'static', 'models', 'text', 'm.onnx'))).toEqual(body);
     expect(fs.existsSync(path.join(app, 'static', 'models', 'm.weights.f16.pt'))).toBe(false);
+    expect(fs.existsSync(path.join(app, 'static', 'models', 'LICENSE.md'))).toBe(false);        // none in this folder
     fs.writeFileSync(path.join(src, 'text', 'm.onnx'), 'changed');
     const bad = cli('models', src, 'static/models2');
     expect(bad.code).toBe(2);
@@ -305,6 +306,7 @@ describe('Vite app with emdm-web/vite', () => {
     const served = fs.readdirSync(path.join(dist, 'models'));
     expect(served).toContain('emdm-t2m-web.int8.onnx');
     expect(served.filter((f) => f.endsWith('.pt'))).toEqual([]);        // training weights stay behind (22 MB)
+    expect(fs.readFileSync(path.join(dist, 'models', 'LICENSE.md'), 'utf8')).toContain('CC BY-NC 4.0');   // their terms go along
     // ONE ONNX Runtime .wasm (WASM's; WebGPU's only with emdm({ webgpu: true })), listed in files.json
     expect(Object.keys(JSON.parse(fs.readFileSync(path.join(dist, 'ort', 'files.json'), 'utf8')))).toEqual(['ort-wasm-simd-threaded.wasm']);
     const wasm = fs.readdirSync(dist, { recursive: true, encoding: 'utf8' }).filter((f) => f.endsWith('.wasm')).map((f) => f.split(path.sep).join('/'));
