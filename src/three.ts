@@ -10,13 +10,13 @@
  * ```
  */
 import { Box3, type PerspectiveCamera, Vector3 } from 'three';
-import { applyPose, type Character, createCharacter as createSkinnedCharacter } from './character/character';
+import { applyPose, type Character, createCharacter as createSkinnedCharacter, placeBones } from './character/character';
 import { MotionPlayer, type PoseTrack } from './character/player';
 import { solvePose } from './motion/ik';
 import type { Motion } from './motion/types';
 import type { SkeletonLike } from './skeleton';
 
-export { applyPose } from './character/character';
+export { applyPose, placeBones } from './character/character';
 export type { Character } from './character/character';
 export { HEAD_PITCH } from './character/body';
 export { MotionPlayer, checkTrack, samplePose, trackDuration } from './character/player';
@@ -24,13 +24,17 @@ export type { PoseTrack } from './character/player';
 export { buildBones, restPositions } from './character/rig';
 export { motionToGLB, trackToClip } from './export/builtinGlb';
 
-/** A motion with bone rotations already solved (createGenerator's results carry them as `pose`). */
-export type PosedMotion = Motion & { pose?: { rootPos: Float32Array; quats: Float32Array } };
+/** A motion with bone rotations already solved (createGenerator's results carry them as `pose`, with the rest
+ * `offsets` they go with). */
+export type PosedMotion = Motion & { pose?: { rootPos: Float32Array; quats: Float32Array; offsets?: Float32Array } };
 
-/** The pose track of a motion: its `pose` when it has one, else the joints solved into rotations (IK). */
+/** The pose track of a motion: its `pose` when it has one, else the joints solved into rotations (IK); with the
+ * offsets the rotations go with, where known (a pose without them plays on the reference offsets). */
 export function poseTrack(motion: PosedMotion, skeleton: SkeletonLike): PoseTrack {
   const pose = motion.pose ?? solvePose(motion.joints, motion.frames, skeleton);
-  return { frames: motion.frames, fps: motion.fps, joints: skeleton.joints.length, rootPos: pose.rootPos, quats: pose.quats };
+  const track: PoseTrack = { frames: motion.frames, fps: motion.fps, joints: skeleton.joints.length, rootPos: pose.rootPos, quats: pose.quats };
+  if (pose.offsets) track.offsets = pose.offsets;
+  return track;
 }
 
 /** The built-in character with a player: `play(motion)`, then `update(dt)` once per rendered frame. */
@@ -51,6 +55,7 @@ export function createCharacter(skeleton: SkeletonLike): PlayableCharacter {
     play(motion) {
       player.setTrack(poseTrack(motion, skeleton));
       player.playing = true;
+      placeBones(character.bones, skeleton, player.track!.offsets);   // the motion's own proportions
       applyPose(character.bones, player.root, player.quats);
     },
     update(dt) {

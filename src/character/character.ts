@@ -11,7 +11,6 @@ export interface Character {
   mesh: SkinnedMesh;
   bones: Bone[];
   skeleton: Skeleton;
-  /** Rest-pose local positions of the bones (offsets), for resetting. */
   dispose(): void;
 }
 
@@ -44,6 +43,22 @@ export function createCharacter(s: SkeletonLike): Character {
       skeleton.dispose();
     },
   };
+}
+
+/**
+ * Put the bones (but the root) at the rest offsets a pose's rotations go with: solveIK's `offsets`, carried by a
+ * motion's pose and its pose track (the motion's own hip and shoulder spacing and bone lengths, joints × 3), or the
+ * skeleton's reference offsets when none are given. Rotations solved for one set of offsets misplace the joints on
+ * bones at another: the shipped text model's walks, posed on the reference offsets, stood 5 cm into the floor.
+ */
+export function placeBones(bones: Bone[], skeleton: SkeletonLike, offsets?: ArrayLike<number>): void {
+  if (offsets && offsets.length !== bones.length * 3) {
+    throw new RangeError(`placeBones: offsets has ${offsets.length} numbers, expected joints (${bones.length}) × 3`);
+  }
+  for (let j = 1; j < bones.length; j++) {
+    if (offsets) bones[j].position.set(offsets[j * 3], offsets[j * 3 + 1], offsets[j * 3 + 2]);
+    else bones[j].position.fromArray(skeleton.offsets[j]);
+  }
 }
 
 /**

@@ -9,6 +9,9 @@ export interface PoseTrack {
   joints: number;          // joints per frame
   rootPos: Float32Array;   // frames × 3
   quats: Float32Array;     // frames × joints × 4 (xyzw, local)
+  /** the rest offsets the rotations go with (joints × 3; a MotionPose's): the rig's bones go there (placeBones);
+   * absent: the skeleton's reference offsets */
+  offsets?: Float32Array;
 }
 
 export function checkTrack(t: PoseTrack): void {
@@ -17,6 +20,9 @@ export function checkTrack(t: PoseTrack): void {
   if (t.rootPos.length !== t.frames * 3) throw new Error(`pose track: rootPos has ${t.rootPos.length} numbers, expected frames×3 = ${t.frames * 3}`);
   if (t.quats.length !== t.frames * t.joints * 4) {
     throw new Error(`pose track: quats has ${t.quats.length} numbers, expected frames×joints×4 = ${t.frames * t.joints * 4}`);
+  }
+  if (t.offsets !== undefined && (t.offsets.length !== t.joints * 3 || !t.offsets.every(Number.isFinite))) {
+    throw new Error(`pose track: offsets has ${t.offsets.length} numbers, expected joints×3 = ${t.joints * 3}, all finite`);
   }
 }
 

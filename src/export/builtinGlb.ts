@@ -9,7 +9,7 @@
  */
 import { AnimationClip, QuaternionKeyframeTrack, VectorKeyframeTrack } from 'three';
 import { GLTFExporter } from 'three/addons/exporters/GLTFExporter.js';
-import { createCharacter } from '../character/character';
+import { createCharacter, placeBones } from '../character/character';
 import type { PoseTrack } from '../character/player';
 import type { SkeletonLike } from '../skeleton';
 
@@ -29,6 +29,7 @@ export function trackToClip(s: SkeletonLike, t: PoseTrack, name = 'emdm'): Anima
 /** Binary glTF (.glb): the skinned character (own copy) with the motion as its one animation. */
 export async function motionToGLB(s: SkeletonLike, t: PoseTrack): Promise<ArrayBuffer> {
   const ch = createCharacter(s);
+  placeBones(ch.bones, s, t.offsets);   // the nodes' rest translations: the offsets the track's rotations go with
   try {
     const clip = trackToClip(s, t);
     const out = await new GLTFExporter().parseAsync(ch.object, { binary: true, animations: [clip], onlyVisible: false });

@@ -128,6 +128,8 @@ function restBendAxes(rest: V3[], I: (j: JointName) => number) {
 export interface MotionPose {
   rootPos: Float32Array; // frames × 3
   quats: Float32Array; // frames × 22 × 4, xyzw
+  /** the rest offsets the rotations go with (solveIK's `offsets`), 22 × 3: a rig puts its bones there (placeBones) */
+  offsets: Float32Array;
   ikMs: number;
 }
 
@@ -139,7 +141,7 @@ export interface MotionPose {
 export function solvePose(joints: Float32Array, frames: number, skeleton: SkeletonLike): MotionPose {
   const t0 = performance.now();
   const ik = solveIK(joints, frames, skeleton);
-  return { rootPos: ik.rootPos, quats: ik.quats, ikMs: performance.now() - t0 };
+  return { rootPos: ik.rootPos, quats: ik.quats, offsets: new Float32Array(ik.offsets.flat()), ikMs: performance.now() - t0 };
 }
 
 /** solveIK as a generator that yields (the share of frames solved) after each frame, so a caller can run it in slices (src/character/retarget). */

@@ -330,7 +330,9 @@ export class LivePanel implements PoseDriver {
       const { session, controls, view } = this.page;
       const t0 = performance.now();
       const pose = await session.engine.client.solve(m.joints, m.frames);
-      const track: PoseTrack = { frames: m.frames, fps: m.fps, joints: session.manifest.skeleton.joints.length, rootPos: pose.rootPos, quats: pose.quats };
+      const track: PoseTrack = {
+        frames: m.frames, fps: m.fps, joints: session.manifest.skeleton.joints.length, rootPos: pose.rootPos, quats: pose.quats, offsets: pose.offsets,
+      };
       const ms = performance.now() - t0;
       const result: GenerateResult = {
         motion: { frames: m.frames, fps: m.fps, joints: m.joints, features: m.features },

@@ -227,6 +227,7 @@ export class Session {
     assertFinite(pose.rootPos, 'the solved root positions');
     const track: PoseTrack = {
       frames: result.motion.frames, fps: result.motion.fps, joints: this.manifest.skeleton.joints.length, rootPos: pose.rootPos, quats: pose.quats,
+      offsets: pose.offsets,
     };
     return { model, result, track, ikMs: pose.ikMs };
   }

@@ -196,13 +196,13 @@ function partsOf(shown: Shown, calls: Calls, spent: { genMs: number; jobMs: numb
 
 /** The pose track of bone rotations the worker solved with the motion. */
 function trackOf(page: PageContext, p: WirePose, m: EditMotion): PoseTrack {
-  return { frames: m.frames, fps: m.fps, joints: page.session.manifest.skeleton.joints.length, rootPos: p.rootPos, quats: p.quats };
+  return { frames: m.frames, fps: m.fps, joints: page.session.manifest.skeleton.joints.length, rootPos: p.rootPos, quats: p.quats, offsets: p.offsets };
 }
 
 /** Bone rotations (the worker's IK) for the joints shown. */
 async function solve(page: PageContext, joints: Float32Array, m: EditMotion): Promise<PoseTrack> {
   const p = await page.session.engine.client.solve(joints, m.frames);
-  return { frames: m.frames, fps: m.fps, joints: page.session.manifest.skeleton.joints.length, rootPos: p.rootPos, quats: p.quats };
+  return trackOf(page, p, m);
 }
 
 /** The request's result as the page's Generation (what the view shows and the downloads write). */

@@ -7,7 +7,7 @@
 // own); the character on screen is `view.character` (the visitor's own, once dropped, is swapped in by
 // web/ui/character-picker.ts through `view.picker`).
 import { type Bone, MeshStandardMaterial, Quaternion, Vector3 } from 'three';
-import { HEAD_PITCH, applyPose, createCharacter, MotionPlayer, motionToGLB, type PoseTrack } from '../../src/three';
+import { HEAD_PITCH, applyPose, createCharacter, MotionPlayer, motionToGLB, placeBones, type PoseTrack } from '../../src/three';
 import { ModelFileError, motionToJSON, NonFiniteMotionError, type Manifest } from '../../src/index';
 import type { GenerateResult } from '../../src/openModel';
 import type { WireStepPreview } from '../../src/worker/client';
@@ -217,6 +217,7 @@ export class View {
   play(track: PoseTrack, snap = true): void {
     this.player.setTrack(track);
     this.player.playing = true;
+    placeBones(this.character.bones, this.skeleton, track.offsets);   // the motion's own proportions
     if (snap) this.stage.snapTo(track.rootPos);
   }
 
@@ -284,7 +285,7 @@ export class View {
     const pose = p.pose;
     // a non-finite prediction is not shown; the final result reports it if it stays so
     if (!pose || !pose.quats.every(Number.isFinite) || !pose.rootPos.every(Number.isFinite)) return;
-    this.play({ frames: p.frames, fps: p.fps, joints: this.skeleton.joints.length, rootPos: pose.rootPos, quats: pose.quats }, p.step === 1);
+    this.play({ frames: p.frames, fps: p.fps, joints: this.skeleton.joints.length, rootPos: pose.rootPos, quats: pose.quats, offsets: pose.offsets }, p.step === 1);
     entry.played = true;
   }
 
@@ -336,6 +337,7 @@ export class View {
     this.compareShown = ddim;
     if (ddim) {
       this.player2.setTrack(ddim.track);
+      placeBones(this.ddimCharacter.bones, this.skeleton, ddim.track.offsets);
       this.player2.playing = false;
     }
     // the visitor's character, when one is shown, performs both motions (a second copy for DDIM)
