@@ -229,6 +229,37 @@ test.describe('phone on load (390×844)', () => {
   });
 });
 
+test.describe('a short phone on load (360×640)', () => {
+  test.use({ viewport: { width: 360, height: 640 } });
+
+  test('the prompt box and Generate show without scrolling (the model files list scrolls within three lines)', async ({ page }, info) => {
+    test.setTimeout(180_000);
+    await open(page);
+    await shot(page, info, 'short-phone-load');
+    for (const sel of ['#prompt', '#generate']) expect.soft(await onScreen(page, sel), sel).toBe('');
+    expect(await page.evaluate(() => [scrollY, document.getElementById('panel')!.scrollTop])).toEqual([0, 0]);
+  });
+});
+
+test.describe('a phone held sideways (844×390)', () => {
+  test.use({ viewport: { width: 844, height: 390 } });
+
+  test('the stage takes most of the width and the scrubber can be dragged (it was 2 px beside a 230 px rail)', async ({ page }, info) => {
+    test.setTimeout(180_000);
+    await open(page);
+    await page.evaluate(() => window.emdm.generate({ text: 'a person walks forward', steps: 2, seconds: 2 }));
+    await shot(page, info, 'sideways-phone');
+    const stage = (await page.locator('#scene').boundingBox())!;
+    const scrub = (await page.locator('#scrub').boundingBox())!;
+    expect(stage.width).toBeGreaterThan(844 / 2);
+    expect(scrub.width).toBeGreaterThan(150);
+    for (const sel of ['#scrub', '#play', '#generate']) expect.soft(await onScreen(page, sel), sel).toBe('');
+    const chars = await page.evaluate(() => window.emdm.characterRects());
+    for (const c of chars) expect.soft(c.x + c.width, 'the character inside the stage').toBeLessThanOrEqual(stage.x + stage.width + 1);
+    expect(await page.evaluate(() => document.documentElement.scrollWidth)).toBeLessThanOrEqual(844);
+  });
+});
+
 /**
  * What of the timeline panel's fields does not show whole: a select narrower than the same select sized to its
  * longest option (a copy with `width: auto` beside it: the browser's own measure, arrow included), a text field whose

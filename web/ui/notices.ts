@@ -87,7 +87,12 @@ export class ErrorPanel {
   private readonly hint = byId('error-hint');
 
   constructor() {
-    byId('error-dismiss').addEventListener('click', () => this.hide());
+    byId('error-dismiss').addEventListener('click', () => {
+      const hadFocus = this.panel.contains(document.activeElement);
+      this.hide();
+      // a keyboard user who dismissed it goes on where the work is, not at the top of the page
+      if (hadFocus) (document.getElementById('generate') as HTMLButtonElement | null)?.focus();
+    });
   }
 
   show(title: string, reason: string, hint = ''): void {
@@ -96,6 +101,8 @@ export class ErrorPanel {
     this.hint.textContent = hint;
     this.hint.hidden = !hint;
     this.panel.hidden = false;
+    // the panel sits at the top of the controls, which may be scrolled far down (on a phone: under the stage)
+    this.panel.scrollIntoView({ block: 'nearest' });
   }
 
   hide(): void {

@@ -50,6 +50,7 @@ export type StatusKind = 'loading' | 'ready' | 'error';
 export class StatusLine {
   private readonly dot = byId('status-dot');
   private readonly text = byId('status-text');
+  private readonly say = byId('status-say');
   private readonly bar = byId('download-bar');
   private readonly fill = byId('download-fill');
   private readonly loading = new Set<string>();
@@ -57,6 +58,8 @@ export class StatusLine {
   kind: StatusKind = 'loading';
 
   private set(kind: StatusKind, text: string): void {
+    // announced once per state (loading, then ready or an error), never per download tick (170 a cold load)
+    if (kind !== this.kind || kind !== 'loading' || !this.say.textContent) this.say.textContent = text;
     this.kind = kind;
     this.dot.className = `dot ${kind}`;
     this.text.textContent = text;
@@ -169,6 +172,7 @@ export class View {
   private readonly progress = byId('progress');
   private readonly progressFill = byId('progress-fill');
   private readonly progressText = byId('progress-text');
+  private readonly progressBar = byId('progress-bar');
   private readonly caption = byId('caption');
   private readonly timingsHud = byId('timings');
   readonly comparePanels = byId('compare-panels');
@@ -268,6 +272,8 @@ export class View {
     this.showCompare(null);
     this.stage.setPath(this.shown.track.rootPos, this.shown.track.frames);
     this.showTimings(this.shown.result, this.shown.ikMs);
+    // one character now: the caption names its motion's steps, not the comparison's "EMDM n vs DDIM m"
+    if (this.captionShown?.plan) this.showCaption({ ...this.captionShown, plan: null });
   }
 
   /** Start of a generation: clear the step previews (and the strip when they will be shown). */
@@ -293,6 +299,7 @@ export class View {
   showProgress(fraction: number, text: string): void {
     this.progress.hidden = false;
     this.progressFill.style.width = `${Math.round(fraction * 100)}%`;
+    this.progressBar.setAttribute('aria-valuenow', String(Math.round(fraction * 100)));   // read on demand, not announced
     this.progressText.textContent = text;
   }
 
