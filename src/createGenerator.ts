@@ -252,7 +252,7 @@ export async function liveOn(g: LiveHost, o: LiveCallOptions, solveFrames?: Live
   };
   const solve = (joints: Float32Array) => {
     const p = solvePose(joints, 1, g.skeleton);
-    return { rootPos: p.rootPos, quats: p.quats };
+    return { rootPos: p.rootPos, quats: p.quats, offsets: p.offsets };
   };
   return startLive((r) => g.generate({ ...r, ...sampling }), limits, live, { solve, solveFrames, check });
 }

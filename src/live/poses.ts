@@ -19,6 +19,8 @@
 export interface FramePose {
   rootPos: Float32Array;
   quats: Float32Array;
+  /** the rest offsets (22 × 3) the rotations were solved with (a solve's MotionPose.offsets): a rig's bones go there */
+  offsets?: Float32Array;
 }
 
 const Q = 22 * 4;
@@ -28,6 +30,7 @@ export class PoseRing {
   private readonly stamp: Int32Array;
   private readonly root: Float64Array;
   private readonly quats: Float32Array;
+  private readonly offsets: (Float32Array | undefined)[];     // per slot: its solve's offsets (shared, not copied)
   private epoch = 0;
 
   /** `capacity`: frames held (must exceed the frames buffered ahead of the playhead: LiveCore's lead + window + kept). */
@@ -36,6 +39,7 @@ export class PoseRing {
     this.stamp = new Int32Array(capacity);
     this.root = new Float64Array(capacity * 3);
     this.quats = new Float32Array(capacity * Q);
+    this.offsets = new Array<Float32Array | undefined>(capacity);
   }
 
   /** Frames [from, to) changed: their poses are dropped; returns the epoch a solve of the new frames is requested at. */
@@ -67,6 +71,7 @@ export class PoseRing {
       this.root[i * 3 + 1] = pose.rootPos[k * 3 + 1];
       this.root[i * 3 + 2] = pose.rootPos[k * 3 + 2] + origin[1];
       this.quats.set(pose.quats.subarray(k * Q, (k + 1) * Q), i * Q);
+      this.offsets[i] = pose.offsets;
     }
   }
 
@@ -75,7 +80,8 @@ export class PoseRing {
     const i = f % this.capacity;
     if (this.tag[i] !== f) return null;
     const rootPos = new Float32Array([this.root[i * 3] - origin[0], this.root[i * 3 + 1], this.root[i * 3 + 2] - origin[1]]);
-    return { rootPos, quats: this.quats.slice(i * Q, (i + 1) * Q) };
+    const offsets = this.offsets[i];
+    return { rootPos, quats: this.quats.slice(i * Q, (i + 1) * Q), ...(offsets ? { offsets } : {}) };
   }
 }
 
@@ -94,5 +100,5 @@ export function mixPose(a: FramePose, b: FramePose, w: number): FramePose {
     n = Math.sqrt(n) || 1;
     for (let k = 0; k < 4; k++) quats[j + k] /= n;
   }
-  return { rootPos, quats };
+  return { rootPos, quats, ...(a.offsets ? { offsets: a.offsets } : {}) };   // the bones stay where frame a's are
 }

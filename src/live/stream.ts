@@ -220,7 +220,7 @@ function showFrames(core: LiveCore, { solve, solveFrames }: LiveHooks, fail: (e:
     fallbacks++;
     const p = solve(rows(q, q + 1));
     poses.put(q, p, 1, poses.now, core.origin);
-    return { rootPos: Float32Array.from(p.rootPos), quats: Float32Array.from(p.quats) };
+    return { rootPos: Float32Array.from(p.rootPos), quats: Float32Array.from(p.quats), ...(p.offsets ? { offsets: p.offsets } : {}) };
   };
   return {
     get fallbacks() {

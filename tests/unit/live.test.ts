@@ -120,6 +120,9 @@ describe('generator.live (the tiny action model, in-process)', () => {
     const f = s.frameAt(0.5);
     expect(f.joints).toHaveLength(66);
     expect(f.pose!.quats).toHaveLength(22 * 4);
+    // the rest offsets its rotations were solved for, where the page puts the character's bones (placeBones)
+    expect(f.pose!.offsets).toHaveLength(66);
+    expect(f.pose!.offsets!.every(Number.isFinite)).toBe(true);
     expect(() => s.prompt('')).toThrow(/live: the edit: the prompt is empty|prompt is empty/);
     expect(() => s.prompt({ action: 'zz' })).toThrow(/^live: .*action 'zz' is not a label/);
     expect(() => s.frameAt(-1)).toThrow(/frameAt takes seconds ≥ 0/);

@@ -225,7 +225,7 @@ export class LivePanel implements PoseDriver {
   }
 
   /** The pose at the live clock's now: the stream's two frames around it, interpolated as the player does. */
-  pose(): { root: ArrayLike<number>; quats: ArrayLike<number> } | null {
+  pose(): { root: ArrayLike<number>; quats: ArrayLike<number>; offsets?: Float32Array } | null {
     const s = this.stream;
     if (!s) return null;
     let track: PoseTrack;
@@ -245,7 +245,7 @@ export class LivePanel implements PoseDriver {
     samplePose(track, t - f / s.fps, this.root, this.quats);
     this.count(t);
     this.poseMs += performance.now() - t0;
-    return { root: this.root, quats: this.quats };
+    return { root: this.root, quats: this.quats, ...(track.offsets ? { offsets: track.offsets } : {}) };
   }
 
   /** Count a displayed frame, and whether it showed exactly the pose of the one before. */
@@ -417,7 +417,10 @@ export function framePair(s: Pick<LiveStream, 'fps' | 'frameAt'>, f: number): { 
   if (!a.pose || !b.pose) throw new Error('the live stream gave a frame without its pose (the stream has no solver)');
   const n = a.pose.quats.length / 4;
   return {
-    track: { frames: 2, fps: s.fps, joints: n, rootPos: concat(a.pose.rootPos, b.pose.rootPos), quats: concat(a.pose.quats, b.pose.quats) },
+    track: {
+      frames: 2, fps: s.fps, joints: n, rootPos: concat(a.pose.rootPos, b.pose.rootPos), quats: concat(a.pose.quats, b.pose.quats),
+      ...(a.pose.offsets ? { offsets: a.pose.offsets } : {}),
+    },
     shown: { frame: a.frame, joints: a.joints },
   };
 }

@@ -138,7 +138,7 @@ export interface Shown {
  * yet, the player's motion is shown) and its clock, which the visitor's character follows too.
  */
 export interface PoseDriver {
-  pose(dt: number): { root: ArrayLike<number>; quats: ArrayLike<number> } | null;
+  pose(dt: number): { root: ArrayLike<number>; quats: ArrayLike<number>; offsets?: Float32Array } | null;
   time(): number;
 }
 
@@ -166,6 +166,8 @@ export class View {
   picker!: CharacterPicker;
   stepStrip!: StepStrip;
   private loopBones: Bone[] = [];
+  /** the rest offsets the built-in character's bones are at (undefined: the skeleton's reference offsets) */
+  private placed: Float32Array | undefined;
   /** poses the character instead of the player (live mode), null otherwise */
   private driver: PoseDriver | null = null;
 
@@ -221,8 +223,15 @@ export class View {
   play(track: PoseTrack, snap = true): void {
     this.player.setTrack(track);
     this.player.playing = true;
-    placeBones(this.character.bones, this.skeleton, track.offsets);   // the motion's own proportions
+    this.place(track.offsets);                                        // the motion's own proportions
     if (snap) this.stage.snapTo(track.rootPos);
+  }
+
+  /** Put the built-in character's bones at `offsets` (the ones its pose was solved for), when they are not there. */
+  private place(offsets: Float32Array | undefined): void {
+    if (offsets === this.placed) return;
+    placeBones(this.character.bones, this.skeleton, offsets);
+    this.placed = offsets;
   }
 
   /**
@@ -427,7 +436,11 @@ export class View {
       let second: ArrayLike<number> | null = null;
       const player = this.player;
       const driven = this.driver?.pose(dt) ?? null;
-      if (driven) applyPose(this.loopBones, driven.root, driven.quats);
+      if (driven) {
+        // the bones where this frame's solve put them (a window's solve: they change once per window, by millimetres)
+        if (driven.offsets) this.place(driven.offsets);
+        applyPose(this.loopBones, driven.root, driven.quats);
+      }
       else if (player.track) {
         player.update(dt);
         applyPose(this.loopBones, player.root, player.quats);
