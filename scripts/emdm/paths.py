@@ -7,10 +7,13 @@ import os
 from pathlib import Path
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
+# run from a checkout (scripts/emdm), or installed (site-packages/emdm: REPO_ROOT is then inside the environment)
+IN_CHECKOUT = (REPO_ROOT / "package.json").is_file()
 MODELS_DIR = REPO_ROOT / "public" / "models"
-DATA_DIR = REPO_ROOT / "data"                 # git-ignored: unpacked sources, prepared datasets
+# git-ignored in a checkout: unpacked sources, prepared datasets; installed: ./data of the folder it runs in
+DATA_DIR = REPO_ROOT / "data" if IN_CHECKOUT else Path("data")
 DATASET_DIR = DATA_DIR / "dataset"            # default output of `python -m emdm.data.prepare`
-RUNS_DIR = REPO_ROOT / "runs"                 # git-ignored: checkpoints and logs
+RUNS_DIR = REPO_ROOT / "runs" if IN_CHECKOUT else Path("runs")   # checkpoints and logs
 FIXTURES_DIR = REPO_ROOT / "tests" / "fixtures"
 
 
@@ -36,7 +39,7 @@ def require_models_dir(given: Path | str | None = None) -> Path:
     d = models_dir(given)
     if (d / "manifest.json").is_file():
         return d
-    if given is None and not os.environ.get(MODELS_ENV) and not (REPO_ROOT / "package.json").is_file():
+    if given is None and not os.environ.get(MODELS_ENV) and not IN_CHECKOUT:
         raise ModelsDirError(f"no models folder: the installed package does not include the models; pass "
                              f"models_dir= / --models-dir or set ${MODELS_ENV} to a copy of the repository's "
                              "public/models (docs/PYTHON.md)")
@@ -48,19 +51,22 @@ def require_models_dir(given: Path | str | None = None) -> Path:
 
 
 def shared_data_dir() -> Path:
-    """The read-only folder of mocap archives and the CLIP tokenizer (see its README)."""
+    """The read-only folder of mocap archives and the CLIP tokenizer (see its README): $EMDM_SHARED_DATA, else
+    ../shared/data beside the checkout (installed: ./shared/data of the working folder)."""
     env = os.environ.get("EMDM_SHARED_DATA")
-    return Path(env) if env else REPO_ROOT.parent / "shared" / "data"
+    if env:
+        return Path(env)
+    return REPO_ROOT.parent / "shared" / "data" if IN_CHECKOUT else Path("shared") / "data"   # installed: ./shared/data
 
 
 def shared_file(name: str) -> Path:
     """A file or folder inside the shared data folder; FileNotFoundError says where it looked."""
     p = shared_data_dir() / name
     if not p.exists():
-        raise FileNotFoundError(
-            f"{p}: not found. Put the shared data folder beside the checkout (../shared/data) "
-            f"or set EMDM_SHARED_DATA to its path."
-        )
+        where = ("Put the shared data folder beside the checkout (../shared/data) or set EMDM_SHARED_DATA to its path."
+                 if IN_CHECKOUT or os.environ.get("EMDM_SHARED_DATA") else
+                 "Set EMDM_SHARED_DATA to the folder of mocap archives (the installed package has no checkout beside it).")
+        raise FileNotFoundError(f"{p}: not found. {where}")
     return p
 
 

@@ -98,7 +98,11 @@ def test_generate_outside_the_checkout(venv, tmp_path):
 
 
 def test_prepare_needs_no_extra(venv, tmp_path):
+    """Installed, its folders are the working folder's (data/dataset, data/raw), not inside the environment."""
     assert "--sources" in ok(run([venv / "bin" / "emdm-prepare", "--help"], cwd=tmp_path)).stdout
+    code = "from emdm import paths; print(paths.DATASET_DIR, paths.DATA_DIR / 'raw', paths.RUNS_DIR, paths.shared_data_dir())"
+    out = ok(run([venv / "bin" / "python", "-c", code], cwd=tmp_path)).stdout.split()
+    assert out == ["data/dataset", "data/raw", "runs", "shared/data"], out
 
 
 @pytest.mark.parametrize("command", ["emdm-train", "emdm-export", "emdm-eval"])
