@@ -4,7 +4,7 @@
 // of the prompt's nearest action (the capabilities file's realSpeed, the action from the prompt check) when the
 // check knows the prompt.
 import type { Capabilities, PromptCheck, RealSpeed } from '../../src/capabilities';
-import { byId, el } from './dom';
+import { byId } from './dom';
 import { motionFigures, type MotionFigures } from './motion-figures';
 
 interface ShownMotion { joints: ArrayLike<number>; frames: number; fps: number }
@@ -35,9 +35,11 @@ export function showFigures(emdm: ShownMotion, ddim: ShownMotion, real: { action
     for (const side of ['emdm', 'ddim'] as const) {
       const td = byId(`fig-${side}-${row}`);
       fillCell(td, figs[side], key, top);
-      if (row === 'speed' && real) td.firstChild!.after(el('span', 'fig-real', ` (${realSpeedNote(real)})`));
     }
   }
+  // the real clips' range on a row of its own, under both speeds (beside each, it made the table wider than the rail)
+  byId('fig-real').textContent = real ? `${realSpeedNote(real)} m/s (5th–95th percentile of its clips)` : '';
+  byId('fig-real-row').hidden = !real;
 }
 
 function fillCell(td: HTMLElement, f: MotionFigures, key: keyof MotionFigures, top: number): void {
