@@ -405,7 +405,7 @@ export function framesOnOneStage(s: Pick<LiveStream, 'fps' | 'frameAt'>, from: n
       }
     }
     g.joints = moved[0];
-    if (g.pose) g.pose = { rootPos: moved[1], quats: g.pose.quats };
+    if (g.pose) g.pose = { ...g.pose, rootPos: moved[1] };
     g.origin = [last[0], last[1]];
   }
   return got;
