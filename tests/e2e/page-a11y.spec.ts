@@ -80,3 +80,25 @@ test('live mode on, a prompt sent: no serious or critical axe violation', async 
   await expectAccessible(page, 'live mode');
   watch.assertClean();
 });
+
+test('what a screen reader hears: the status once per state (not per download tick), no step by step, the scrubber as a time', async ({ page }) => {
+  test.setTimeout(180_000);
+  // every text the status's live region takes, from the first byte on
+  await page.addInitScript(() => {
+    const said: string[] = [];
+    (window as unknown as { said: string[] }).said = said;
+    document.addEventListener('DOMContentLoaded', () => {
+      const say = document.getElementById('status-say')!;
+      new MutationObserver(() => said.push(say.textContent ?? '')).observe(say, { childList: true, characterData: true, subtree: true });
+    });
+  });
+  await open(page);
+  await page.evaluate(() => window.emdm.generate({ text: 'a person walks forward', steps: 4, seconds: 2 }));
+  const said = await page.evaluate(() => (window as unknown as { said: string[] }).said);
+  expect(said.filter((t) => t.startsWith('Downloading')).length, said.join(' | ')).toBeLessThanOrEqual(3);
+  expect(said.some((t) => t.startsWith('Ready')), said.join(' | ')).toBe(true);
+  // the live regions are the status's line, the caption and the notices: not the file list, nor each denoising step
+  for (const id of ['status', 'progress', 'file-list']) expect(await page.locator(`#${id}`).getAttribute('aria-live')).toBeNull();
+  await expect(page.locator('#progress-bar')).toHaveAttribute('role', 'progressbar');
+  await expect(page.locator('#scrub')).toHaveAttribute('aria-valuetext', /^\d+\.\d of \d\.\d seconds$/);
+});

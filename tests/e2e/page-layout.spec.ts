@@ -241,6 +241,20 @@ test.describe('a short phone on load (360×640)', () => {
   });
 });
 
+test.describe('a touch phone on load (390×844, a finger for a pointer)', () => {
+  test.use({ viewport: { width: 390, height: 844 }, isMobile: true, hasTouch: true });
+
+  test('the example chips are at least 28 px tall, and the prompt box and every chip still show without scrolling', async ({ page }) => {
+    test.setTimeout(180_000);
+    await open(page);
+    expect(await page.evaluate(() => matchMedia('(pointer: coarse)').matches)).toBe(true);
+    const heights = await page.locator('#examples .chip').evaluateAll((cs) => cs.map((c) => c.getBoundingClientRect().height));
+    expect(Math.min(...heights)).toBeGreaterThanOrEqual(28);
+    for (const sel of ['#prompt', '#generate']) expect.soft(await onScreen(page, sel), sel).toBe('');
+    for (let i = 1; i <= heights.length; i++) expect.soft(await onScreen(page, `#examples .chip:nth-child(${i})`)).toBe('');
+  });
+});
+
 test.describe('a phone held sideways (844×390)', () => {
   test.use({ viewport: { width: 844, height: 390 } });
 

@@ -48,5 +48,8 @@ export class PlaybackBar {
     const d = p.duration;
     if (!this.dragging) this.scrub.value = String(d > 0 ? p.time / d : 0);
     this.time.textContent = `${p.time.toFixed(1)} / ${d.toFixed(1)} s`;
+    // what a screen reader says of the scrubber: the time, not the fraction (0.593)
+    const said = `${p.time.toFixed(1)} of ${d.toFixed(1)} seconds`;
+    if (this.scrub.getAttribute('aria-valuetext') !== said) this.scrub.setAttribute('aria-valuetext', said);
   }
 }
