@@ -437,7 +437,7 @@ export class View {
       const player = this.player;
       const driven = this.driver?.pose(dt) ?? null;
       if (driven) {
-        // the bones where this frame's solve put them (a window's solve: they change once per window, by millimetres)
+        // the bones where this frame's solve put them (they change when a new window's solve comes into play)
         if (driven.offsets) this.place(driven.offsets);
         applyPose(this.loopBones, driven.root, driven.quats);
       }
