@@ -102,3 +102,27 @@ test('what a screen reader hears: the status once per state (not per download ti
   await expect(page.locator('#progress-bar')).toHaveAttribute('role', 'progressbar');
   await expect(page.locator('#scrub')).toHaveAttribute('aria-valuetext', /^\d+\.\d of \d\.\d seconds$/);
 });
+
+test('the mode tabs are one tab stop; the arrows, Home and End choose a mode, as a click does', async ({ page }) => {
+  test.setTimeout(120_000);
+  await open(page);
+  const selected = () => page.locator('.modes [aria-selected="true"]').getAttribute('id');
+  await page.locator('#mode-text').focus();
+  await page.keyboard.press('ArrowRight');
+  expect(await selected()).toBe('mode-action');
+  await expect(page.locator('#mode-action')).toBeFocused();
+  await expect(page.locator('#pane-action')).toBeVisible();
+  await expect(page.locator('#pane-text')).toBeHidden();
+  await page.keyboard.press('End');
+  expect(await selected()).toBe('mode-random');
+  await page.keyboard.press('ArrowRight');                  // wraps round
+  expect(await selected()).toBe('mode-text');
+  await page.keyboard.press('ArrowLeft');
+  expect(await selected()).toBe('mode-random');
+  await page.keyboard.press('Home');
+  expect(await selected()).toBe('mode-text');
+  // only the selected tab is in the Tab order: Tab leaves the list for the prompt box
+  expect(await page.locator('.modes [role="tab"]').evaluateAll((ts) => ts.map((t) => (t as HTMLElement).tabIndex))).toEqual([0, -1, -1]);
+  await page.keyboard.press('Tab');
+  await expect(page.locator('#prompt')).toBeFocused();
+});

@@ -7,6 +7,6 @@ describe('promptLanguageNote', () => {
     for (const p of ['一个人在跳舞', '🕺', 'человек прыгает', '  人が歩く 🕺 ', '1 2 3']) expect(promptLanguageNote(p)).toMatch(/English/);
   });
   it('is silent for English prompts (also mixed with other scripts) and for an empty prompt', () => {
-    for (const p of ['a person walks', 'a person dances 🕺', 'walk 歩く', '', '   ']) expect(promptLanguageNote(p)).toBe('');
+    for (const p of ['a person walks', 'a person dances 🕺', 'walk 歩く', 'a', '', '   ']) expect(promptLanguageNote(p)).toBe(''); // 'a': the first key typed
   });
 });

@@ -12,7 +12,7 @@ import {
  */
 export function promptLanguageNote(text: string): string {
   const t = text.trim();
-  return t !== '' && !/[A-Za-z]{2}/.test(t)
+  return t !== '' && !/[A-Za-z]/.test(t)   // one Latin letter will do: "a", typed first, is no cause for the note
     ? 'The model was trained on English descriptions: this prompt has no English words, so the motion will not follow it.'
     : '';
 }
@@ -91,7 +91,10 @@ export class Controls {
     }
     byId('examples').hidden = examples.length === 0;
 
-    for (const tab of this.tabs) tab.addEventListener('click', () => this.setMode(tab.dataset.mode as Mode, true));
+    for (const tab of this.tabs) {
+      tab.addEventListener('click', () => this.setMode(tab.dataset.mode as Mode, true));
+      tab.addEventListener('keydown', (e) => this.tabKey(e, tab));
+    }
     this.prompt.addEventListener('input', () => this.refresh(true));
     this.prompt.addEventListener('keydown', (e) => {
       if (e.key === 'Enter' && !e.shiftKey && !e.isComposing) {
@@ -226,6 +229,20 @@ export class Controls {
     this.refresh();
   }
 
+  /** The tab list's keys (WAI-ARIA tabs): the arrows, Home and End move to another mode and select it, as a click
+   * does; Tab leaves the list from the selected tab (the others are out of the Tab order). Disabled tabs are skipped. */
+  private tabKey(e: KeyboardEvent, tab: HTMLButtonElement): void {
+    const order = this.tabs.filter((t) => !t.disabled);
+    const i = order.indexOf(tab);
+    const step = { ArrowRight: 1, ArrowDown: 1, ArrowLeft: -1, ArrowUp: -1 }[e.key];
+    const to = step !== undefined ? order[(i + step + order.length) % order.length]
+      : e.key === 'Home' ? order[0] : e.key === 'End' ? order[order.length - 1] : undefined;
+    if (!to || i < 0) return;
+    e.preventDefault();
+    to.focus();
+    to.click();
+  }
+
   setMode(mode: Mode, user = false): void {
     this.mode = mode;
     if (this.compare.checked && !this.compareUsable(mode)) {
@@ -233,7 +250,10 @@ export class Controls {
       this.compare.checked = false;
       this.syncSteps(steps);
     }
-    for (const tab of this.tabs) tab.setAttribute('aria-selected', String(tab.dataset.mode === mode));
+    for (const tab of this.tabs) {
+      tab.setAttribute('aria-selected', String(tab.dataset.mode === mode));
+      tab.tabIndex = tab.dataset.mode === mode ? 0 : -1;    // one tab stop for the list: the selected mode
+    }
     for (const pane of Array.from(document.querySelectorAll<HTMLElement>('[data-pane]'))) pane.hidden = pane.dataset.pane !== mode;
     byId('guidance-param').hidden = mode === 'random';
     this.refresh(user);
