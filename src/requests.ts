@@ -87,9 +87,12 @@ export function resolveRequest(manifest: Manifest, req: MotionRequest): { model:
   let condition: WireGenerateOptions['condition'];
   if (req.prompt !== undefined) condition = { type: 'text', text: req.prompt };
   else if (req.action !== undefined) {
-    const labels = entry.condition.type === 'action' ? entry.condition.labels : [];
+    if (entry.condition.type !== 'action') throw new Error(`generate: ${model} takes a prompt, not an action (action: ${JSON.stringify(req.action)})`);
+    const labels = entry.condition.labels;
     const label = typeof req.action === 'number' ? req.action : labels.indexOf(req.action);
-    if (label < 0) throw new RangeError(`generate: action '${req.action}' is not a label of ${model} (${labels.join(', ')})`);
+    if (!Number.isInteger(label) || label < 0 || label >= labels.length) {
+      throw new RangeError(`generate: action '${String(req.action)}' is not a label of ${model} (${labels.join(', ')}): give one of these names or its index, 0 to ${labels.length - 1}`);
+    }
     condition = { type: 'action', label };
   } else condition = { type: 'none' };
   let frames = req.frames;

@@ -27,6 +27,11 @@ describe('createGenerator', () => {
     expect(resolveRequest(manifest, { action: 1, seconds: 1.5, model: 'tiny-ddim' }).options).toMatchObject({ frames: 30, steps: 5 });
     expect(resolveRequest(manifest, { action: 1, seconds: 60 }).options.frames).toBe(196);
     expect(() => resolveRequest(manifest, { action: 'zz' })).toThrow(/action 'zz' is not a label of tiny \(a, b, c, d, e, f, g, h\)/);
+    for (const bad of [-1, 8, 1.5, Number.NaN]) {
+      expect(() => resolveRequest(manifest, { action: bad, seed: 1 })).toThrow(new RegExp(`action '${bad}' is not a label of tiny .*its index, 0 to 7`));
+    }
+    const withText = { ...manifest, models: { ...manifest.models, t: { ...manifest.models.tiny, task: 'text' as const, condition: { type: 'text' as const, encoder: 'x', dim: 4 } } } };
+    expect(() => resolveRequest(withText, { action: 'a', model: 't' })).toThrow(/t takes a prompt, not an action \(action: "a"\)/);
     expect(() => resolveRequest(manifest, { prompt: 'a person walks' })).toThrow(/no text model \(models: tiny, tiny-ddim\)/);
     expect(() => resolveRequest(manifest, { action: 1, seconds: 0 })).toThrow(/seconds must be > 0/);
     expect(() => resolveRequest(manifest, { action: 1, model: 'big' })).toThrow(/model 'big' is not in the manifest/);

@@ -52,11 +52,30 @@ describe('npm package', () => {
     expect(packed.size).toBeLessThan(5_000_000);
     expect(files).toEqual(expect.arrayContaining(['package.json', 'LICENSE', 'README.md', 'dist-lib/index.js', 'dist-lib/index.d.ts',
       'dist-lib/three.js', 'dist-lib/three.d.ts', 'dist-lib/vite.js', 'dist-lib/cli.js', 'dist-lib/worker/generation.worker.js']));
-    expect(files.filter((f) => !f.startsWith('dist-lib/') && !['package.json', 'LICENSE', 'README.md', 'CHANGELOG.md'].includes(f))).toEqual([]);
+    const docs = (f: string) => /^docs\/[A-Z]+\.md$/.test(f) || /^web\/examples\/minimal\.(html|css)$/.test(f);
+    expect(files.filter((f) => !f.startsWith('dist-lib/') && !docs(f) && !['package.json', 'LICENSE', 'README.md', 'CHANGELOG.md'].includes(f))).toEqual([]);
     expect(files.filter((f) => /\.(onnx|pt|f32|py)$/.test(f) || (f.endsWith('.ts') && !f.endsWith('.d.ts')))).toEqual([]);
     expect(pkg.private).toBeUndefined();
     expect(pkg.dependencies.three).toBeUndefined();
     expect(pkg.peerDependencies.three).toBeDefined();
+  });
+
+  it("its README's links lead somewhere inside the package (the docs, the minimal page, their sections)", () => {
+    const target = path.join(app, 'node_modules', 'emdm-web');
+    const readme = fs.readFileSync(path.join(target, 'README.md'), 'utf8');
+    const links = [...readme.matchAll(/\]\(([^)\s]+)\)/g)].map((m) => m[1]).filter((u) => !/^(https?:|mailto:|#)/.test(u));
+    expect(links.length).toBeGreaterThan(5);
+    // GitHub's heading anchors: lower case, punctuation dropped, spaces as hyphens
+    const slug = (h: string) => h.trim().toLowerCase().replace(/[^\p{L}\p{N}\s_-]/gu, '').replace(/\s/g, '-');
+    const broken = links.filter((u) => {
+      const [file, anchor] = u.split('#');
+      const at = path.join(target, file);
+      if (!fs.existsSync(at)) return true;
+      if (!anchor) return false;
+      const heads = [...fs.readFileSync(at, 'utf8').matchAll(/^#+ (.+)$/gm)].map((m) => slug(m[1]));
+      return !heads.includes(anchor);
+    });
+    expect(broken).toEqual([]);
   });
 
   it('plain Node imports it by name and writes a BVH from the shipped models', () => {

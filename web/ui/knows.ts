@@ -6,11 +6,20 @@ import { type PromptCheck } from '../../src/index';
 import type { Capabilities } from '../../src/capabilities';
 import { byId, el } from './dom';
 
+/** A prompt as the notice quotes it: spaces collapsed, and a long one cut at a word near `max` characters, with "…". */
+export function quoted(prompt: string, max = 60): string {
+  const t = prompt.trim().replace(/\s+/g, ' ');
+  if (t.length <= max) return `“${t}”`;
+  const cut = t.slice(0, max + 1);
+  const space = cut.lastIndexOf(' ');
+  return `“${(space > max / 2 ? cut.slice(0, space) : t.slice(0, max)).replace(/[\s,.;:!?-]+$/, '')}…”`;
+}
+
 /** The notice's words for an unknown prompt (`weak`: the action it reads as, one the model does not do well yet). */
 export function farNote(prompt: string, weak?: string): string {
   const what = weak
-    ? `“${prompt.trim()}” reads as ${weak.replace(/[_-]+/g, ' ')}, which this model does not do well yet`
-    : `The model has not learned anything close to “${prompt.trim()}”`;
+    ? `${quoted(prompt)} reads as ${weak.replace(/[_-]+/g, ' ')}, which this model does not do well yet`
+    : `The model has not learned anything close to ${quoted(prompt)}`;
   return `${what}, so the motion will probably be walking, standing or a raised arm. These prompts are the closest it does well:`;
 }
 
