@@ -12,7 +12,8 @@
  * and benchmark prompts and training captions of the uncovered ones. A prompt is *known* when its closest anchor is of a
  * covered action and their cosine is at least `check.threshold` (calibrated on held-apart paraphrases); otherwise it is
  * *unknown*, and `action` names the uncovered action it reads as where that is the closest. The suggestions are the
- * closest well-covered prompts, one per action. Python computes the same (emdm.eval.capabilities).
+ * closest well-covered prompts, one per action (for a prompt read as an uncovered action with a close covered relative,
+ * closest to the prompt and that action together: `RELATED`). Python computes the same (emdm.prompt_check).
  * The file is verified like a model file when the manifest lists it; an unlisted one is read and checked for shape,
  * and one built for another encoder file is ignored (its embeddings would be stale).
  */
@@ -126,18 +127,69 @@ function anchorVectors(caps: Capabilities, file: string): Float32Array {
   return v;
 }
 
+/**
+ * A prompt that reads as an uncovered action whose anchors lie this close (cosine of the two actions' anchor means) to
+ * a covered action's gets its suggestions ranked by the prompt and that action's mean together: "a person waves" reads
+ * as wave-both-hands (0.73 to raise-both-hands) and is offered the raised hands, not the bow, walk and run its words
+ * alone are nearest to. Below it the relation is too loose to lead (kick's nearest covered mean is sneak's, 0.70).
+ * Python: emdm.prompt_check.RELATED.
+ */
+export const RELATED = 0.72;
+
+const means = new WeakMap<Capabilities, Map<string, Float64Array>>();
+
+/** Each action's anchors' mean, as a unit vector. */
+function actionMeans(caps: Capabilities, v: Float32Array): Map<string, Float64Array> {
+  let m = means.get(caps);
+  if (m) return m;
+  const a = caps.anchors!;
+  m = new Map();
+  const counts = new Map<string, number>();
+  for (const [i, x] of a.actions.entries()) {
+    if (!m.has(x)) m.set(x, new Float64Array(a.dim));
+    const row = m.get(x)!;
+    for (let k = 0; k < a.dim; k++) row[k] += v[i * a.dim + k];
+    counts.set(x, (counts.get(x) ?? 0) + 1);
+  }
+  for (const [x, row] of m) {
+    let n = 0;
+    for (let k = 0; k < a.dim; k++) n += (row[k] / counts.get(x)!) ** 2;
+    const s = 1 / Math.max(Math.sqrt(n), 1e-12) / counts.get(x)!;
+    for (let k = 0; k < a.dim; k++) row[k] *= s;
+  }
+  means.set(caps, m);
+  return m;
+}
+
+const dot = (v: ArrayLike<number>, i: number, w: ArrayLike<number>, dim: number) => {
+  let s = 0;
+  for (let k = 0; k < dim; k++) s += v[i * dim + k] * w[k];
+  return s;
+};
+
 /** Check a unit prompt embedding against a text model's capabilities (see the header). */
 export function checkPrompt(caps: Capabilities, embedding: ArrayLike<number>): PromptCheck {
   const a = caps.anchors;
   if (!a || !caps.check) throw new Error(`checkPrompt: ${capabilitiesFile(caps.model)} has no anchors (an action model's file)`);
   if (embedding.length !== a.dim) throw new RangeError(`checkPrompt: the embedding has ${embedding.length} values, ${capabilitiesFile(caps.model)} ${a.dim}`);
   const v = anchorVectors(caps, capabilitiesFile(caps.model));
-  const cos = a.texts.map((_, i) => {
-    let s = 0;
-    for (let k = 0; k < a.dim; k++) s += v[i * a.dim + k] * embedding[k];
-    return s;
-  });
-  const order = cos.map((_, i) => i).sort((x, y) => cos[y] - cos[x] || x - y);
+  const cos = a.texts.map((_, i) => dot(v, i, embedding, a.dim));
+  const best = cos.map((_, i) => i).sort((x, y) => cos[y] - cos[x] || x - y)[0];
+  const action = a.actions[best];
+  const coveredSet = new Set(caps.actions.filter((r) => r.covered).map((r) => r.label));
+  const covered = coveredSet.has(action);
+  let rank = cos;
+  if (!covered) { // an uncovered action's prompt: led by the covered action nearest to it (RELATED)
+    const m = actionMeans(caps, v);
+    const mine = m.get(action)!;
+    const near = Math.max(-1, ...[...coveredSet].filter((x) => m.has(x)).map((x) => dot(mine, 0, m.get(x)!, a.dim)));
+    if (near >= RELATED) {
+      const q = Float64Array.from(mine, (x, k) => x + embedding[k]);
+      const n = Math.max(Math.hypot(...q), 1e-12);
+      rank = a.texts.map((_, i) => dot(v, i, q, a.dim) / n);
+    }
+  }
+  const order = rank.map((_, i) => i).sort((x, y) => rank[y] - rank[x] || x - y);
   const nearest: string[] = [];
   const seen = new Set<string>();
   for (const i of order) {
@@ -146,9 +198,7 @@ export function checkPrompt(caps: Capabilities, embedding: ArrayLike<number>): P
     nearest.push(a.texts[i]);
     if (nearest.length === (caps.check.suggestions ?? 3)) break;
   }
-  const score = cos[order[0]];
-  const action = a.actions[order[0]];
-  const covered = caps.actions.some((r) => r.label === action && r.covered);
+  const score = cos[best];
   return { known: covered && score >= caps.check.threshold, score: Math.round(score * 1e4) / 1e4, action, covered, nearest };
 }
 

@@ -16,6 +16,11 @@ from emdm import paths
 
 SCHEMA = 2             # 2: anchors of the uncovered actions too; known = nearest anchor covered and close enough
 SUGGESTIONS = 3        # closest working prompts offered for an unknown one
+# A prompt that reads as an uncovered action whose anchors lie this close (cosine of the two actions' anchor means) to a
+# covered action's gets its suggestions ranked by the prompt and that action's mean together: "a person waves" reads as
+# wave-both-hands (0.73 to raise-both-hands) and is offered the raised hands, not the bow, walk and run its words
+# alone are nearest to. Below it the relation is too loose to lead (kick's nearest covered mean is sneak's, 0.70).
+RELATED = 0.72
 
 
 class CapabilitiesError(ValueError):
@@ -42,18 +47,37 @@ def check(caps: dict, emb: np.ndarray) -> dict:
     action and its cosine is at least ``check.threshold``."""
     a = caps["anchors"]
     vecs = dequantise(np.frombuffer(base64.b64decode(a["embeddings"]), np.int8).reshape(len(a["texts"]), -1))
-    cos = vecs @ np.asarray(emb, np.float32)
+    emb = np.asarray(emb, np.float32)
+    cos = vecs @ emb
+    best = int(np.argmax(cos))
+    action = a["actions"][best]
+    covered = action in covered_actions(caps)
+    rank = cos
+    if not covered:                 # an uncovered action's prompt: led by the covered action nearest to it (RELATED)
+        means = action_means(vecs, a["actions"])
+        near = max((float(means[action] @ means[x]) for x in covered_actions(caps) if x in means), default=-1.0)
+        if near >= RELATED:
+            q = emb + means[action]
+            rank = vecs @ (q / max(float(np.linalg.norm(q)), 1e-12))
     nearest, seen = [], set()
-    for i in np.argsort(-cos, kind="stable"):
+    for i in np.argsort(-rank, kind="stable"):
         if a["suggest"][i] and a["actions"][i] not in seen:
             seen.add(a["actions"][i])
             nearest.append(a["texts"][i])
             if len(nearest) == SUGGESTIONS:
                 break
-    best = int(np.argmax(cos))
-    covered = a["actions"][best] in covered_actions(caps)
     return {"known": bool(covered and cos[best] >= caps["check"]["threshold"]), "score": round(float(cos[best]), 4),
-            "action": a["actions"][best], "covered": covered, "nearest": nearest}
+            "action": action, "covered": covered, "nearest": nearest}
+
+
+def action_means(vecs: np.ndarray, actions: list[str]) -> dict[str, np.ndarray]:
+    """Each action's anchors' mean, as a unit vector (float64)."""
+    acts = np.asarray(actions)
+    out = {}
+    for x in dict.fromkeys(actions):
+        m = vecs[acts == x].astype(np.float64).mean(0)
+        out[x] = m / max(float(np.linalg.norm(m)), 1e-12)
+    return out
 
 
 def notice(result: dict) -> str | None:

@@ -39,6 +39,7 @@ test('a far prompt gets the notice and three working prompts, and still generate
   await expect(chips).toHaveCount(3);
   const suggestions = await chips.allTextContents();
   expect(new Set(suggestions).size).toBe(3);
+  expect(suggestions[0]).toBe('a person raises the right hand'); // the wave's close covered relative leads (RELATED)
 
   // editing the prompt hides the notice of the old one
   await page.locator('#prompt').fill('a person waves the right hand twice');

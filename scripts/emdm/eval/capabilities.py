@@ -55,7 +55,7 @@ from emdm.paths import DATASET_DIR, display_path
 from emdm import text as text_encoders      # .encode_texts looked up at each call: tests replace it
 
 CAPTIONS = 16          # training captions per covered action kept as anchors
-# per uncovered action: enough that its paraphrases find it (8: "someone jumps up and down" → jump, not hop), few
+# per uncovered action: enough that its paraphrases find it (8: "a person hops on one foot" → hop, not walk), few
 # enough to keep the page's download small (~1.6 × the covered-only file)
 UNCOVERED_CAPTIONS = 8
 MOVES = 0.5            # covered (and a chip) only where at least this share of its motions move (realism ``moving``)
@@ -63,7 +63,7 @@ SCALE = 127            # int8 embedding = round(v · SCALE); unit vectors, so |q
 # prompts a new visitor tried (issue 30) and covered ones: checked by both runtimes against the file's answers
 EXAMPLES = ["a person kicks", "bows", "throws a punch", "dances", "swims", "a person walks", "a person walks forward",
             "a person raises the left hand", "a person jumps", "someone jumps up and down", "a person bows",
-            "a person punches"]
+            "a person punches", "a person waves", "a person waves goodbye", "a person hops on one foot"]
 
 
 # ----------------------------------------------------------------------------- pure parts
