@@ -83,8 +83,8 @@ def test_the_examples_cover_the_parity_cases(caps):
     on, with the answers this side gives now."""
     want = {"a person jumps": True, "someone jumps up and down": True, "a person walks": True,
             "a person raises the left hand": True, "a person bows": True, "a person punches": False,
-            "a person kicks": False, "dances": False, "swims": False, "a person waves": False, "a person hops on one foot": False,
-            "a person waves goodbye": False}
+            "a person kicks": False, "dances": False, "swims": False, "a person waves": False,
+            "a person hops on one foot": False, "a person waves goodbye": False}
     ex = {e["prompt"]: e for e in caps["examples"]}
     assert {p: ex[p]["known"] for p in want} == want
     for e in caps["examples"]:
