@@ -57,6 +57,68 @@ def test_commands_write_results_and_report(world):
     assert "| python-cpu |" in md and "Tab. D3: naive DDGAN" in md
 
 
+@pytest.fixture(scope="module")
+def judges(world):
+    """The tiny matcher and classifier (m.pt, c.pt) the tests below judge with."""
+    from emdm.eval import evaluators
+
+    root, ds = world
+    small = ["--epochs", "2", "--hidden", "16", "--emb-dim", "16", "--batch-size", "8", "--dataset", str(ds)]
+    for kind, f in (("matcher", "m.pt"), ("classifier", "c.pt")):
+        if not (root / f).exists():
+            assert evaluators._main([kind, "--out", str(root / f), *small]) == 0
+    return world
+
+
+def test_a_trial_run_does_not_replace_a_larger_committed_result(judges, monkeypatch, tmp_path, capsys):
+    """A run on fewer clips or repeats, or of a model trained fewer steps, than the result already at the default
+    path stops with one line (the committed row stays); --out-dir writes beside it, --replace replaces it."""
+    from emdm.eval import evaluate
+
+    root, ds = judges
+    monkeypatch.setattr(evaluate, "RESULTS_DIR", tmp_path)
+    committed = tmp_path / "json" / "text-real.json"
+    committed.parent.mkdir()
+    committed.write_text(json.dumps({"name": "Real motion", "n": 892, "repeats": 20, "info": {"variant": "real"}}))
+    common = ["--dataset", str(ds), "--matcher", str(root / "m.pt"), "--repeats", "1", "--plaus-n", "4"]
+    assert evaluate.main(["text", "--source", "real", *common]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "text-real.json holds a larger measurement (892 clips (this run 36); 20 repeats" in err
+    assert "--out-dir DIR (suite: --results DIR), or pass --replace" in err
+    assert json.loads(committed.read_text())["n"] == 892
+    assert evaluate.main(["text", "--source", "real", *common, "--out-dir", str(tmp_path / "trial")]) == 0
+    assert json.loads((tmp_path / "trial" / "text-real.json").read_text())["n"] == 36
+    assert json.loads(committed.read_text())["n"] == 892
+    # a model trained longer: the tiny checkpoint (2 steps) does not replace it
+    longer = {"n": 36, "repeats": 1, "info": {"train_steps": 3685}}
+    (tmp_path / "json" / "text-emdm-2.json").write_text(json.dumps(longer))
+    assert evaluate.main(["text", "--ckpt", str(root / "run" / "ckpt.pt"), "--steps", "2", *common]) == 2
+    assert "a model trained 3685 steps (this one 2)" in capsys.readouterr().err
+    assert evaluate.main(["text", "--source", "real", *common, "--replace"]) == 0
+    assert json.loads(committed.read_text())["n"] == 36
+
+
+def test_too_few_clips_and_another_dataset_build_are_one_line(judges, tmp_path, capsys):
+    from emdm.eval import evaluate
+
+    root, ds = judges
+    assert evaluate.main(["text", "--source", "real", "--dataset", str(ds), "--max-items", "16",
+                          "--out", str(tmp_path / "r.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "test.txt: 16 clips (--max-items 16); R-precision needs at least 32" in err
+    # a classifier trained on another build of the dataset (its vocabulary differs): named, with how to retrain it
+    c = torch.load(root / "c.pt", weights_only=False)
+    c["meta"]["labels"] = list(reversed(c["meta"]["labels"]))
+    torch.save(c, tmp_path / "other.pt")
+    assert evaluate.main(["action", "--source", "real", "--dataset", str(ds), "--classifier",
+                          str(tmp_path / "other.pt"), "--repeats", "1", "--out", str(tmp_path / "a.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "other.pt: the action classifier (retrain it: python -m emdm.eval.evaluators" in err
+    assert "orders them otherwise: it was trained on another dataset build" in err
+    assert not (tmp_path / "a.json").exists() and not (tmp_path / "r.json").exists()
+
+
 def test_action_model_rejected_for_text(world):
     from emdm.eval import evaluate
 
@@ -155,6 +217,26 @@ def test_suite_plans_every_row_of_the_comparisons(monkeypatch):
     assert ("text", "t.pt", "10") in rows and ("text", "n.pt", "10") in rows and ("action", "emdm-a2m-web", "10") in rows
     timing = next(c for c in cmds if c[0] == "timing")
     assert "t.pt=1,2,4,5,8,10" in timing and "d.pt=10,50,100" in timing
+
+
+def test_suite_results_elsewhere_and_its_refusals(monkeypatch, tmp_path, capsys):
+    """--results DIR: every evaluation writes to DIR/json and the report to DIR/RESULTS.md (a trial run leaves the
+    committed results alone); --replace is passed on; a --results that is a file is one line, before anything runs."""
+    from emdm.eval import suite
+
+    cmds, reports = [], []
+    monkeypatch.setattr(suite.evaluate, "main", lambda argv: cmds.append(argv))
+    monkeypatch.setattr(suite.report, "main", lambda argv=None: reports.append(argv))
+    assert suite.main(["--text", "t.pt", "--action", "a.pt", "--repeats", "1", "--timing-runs", "1",
+                       "--results", str(tmp_path / "trial"), "--replace"]) == 0
+    assert all(c[c.index("--out-dir") + 1] == str(tmp_path / "trial" / "json") for c in cmds)
+    assert all("--replace" in c for c in cmds if c[0] != "timing")
+    assert reports == [["--results", str(tmp_path / "trial"), "--out", str(tmp_path / "trial" / "RESULTS.md")]]
+    (tmp_path / "afile").write_text("x")
+    cmds.clear()
+    assert suite.main(["--text", "t.pt", "--results", str(tmp_path / "afile")]) == 2
+    err = capsys.readouterr().err
+    assert cmds == [] and err.startswith("error: --results") and "is a file" in err
 
 
 def test_page_benchmark_json_with_a_diffusion_model_becomes_ddim_rows(world, exported, tmp_path):

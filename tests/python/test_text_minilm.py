@@ -119,8 +119,25 @@ def test_bad_input_types_raise_clear_errors(enc):
 def test_unknown_encoder_id_names_the_manifest(tmp_path):
     with pytest.raises(TextEncoderError, match=r"no textEncoders entry 'nope' \(known: .*all-MiniLM-L6-v2"):
         load_encoder("nope")
-    with pytest.raises(TextEncoderError, match="missing; run `python -m emdm.text.export_minilm`"):
+    with pytest.raises(TextEncoderError, match=f"missing; run `python -m emdm.text.export_minilm --out {tmp_path}`"):
         load_encoder(ENC_ID, model_dir=tmp_path)
+
+
+def test_the_fix_it_hint_names_the_models_dir_it_was_given(tmp_path):
+    """A folder `emdm.export --out` wrote has a manifest without the encoder: the hint's command builds it there."""
+    import json
+    import shutil
+
+    from emdm import manifest as mf
+
+    shutil.copy(mf.DEFAULT_MODELS_DIR / mf.MANIFEST_NAME, tmp_path / mf.MANIFEST_NAME)
+    man = json.loads((tmp_path / mf.MANIFEST_NAME).read_text())
+    man["textEncoders"] = {}
+    (tmp_path / mf.MANIFEST_NAME).write_text(json.dumps(man))
+    with pytest.raises(TextEncoderError, match=f"run `python -m emdm.text.export_minilm --models-dir {tmp_path}`"):
+        load_encoder(ENC_ID, models_dir=tmp_path)
+    with pytest.raises(TextEncoderError, match=r"no textEncoders entry 'nope' .*export_minilm` \(a folder"):
+        load_encoder("nope")
 
 
 def _models_copy(tmp_path):

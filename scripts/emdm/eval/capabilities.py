@@ -286,7 +286,9 @@ def main(argv: list[str] | None = None) -> int:
         cov_path = a.coverage or RESULTS_DIR / "json" / f"coverage-{a.model}.json"
         coverage = read_result(cov_path)
         if coverage is None:
-            raise CoverageError(f"{cov_path}: no coverage result; run python -m emdm.eval.coverage --model {a.model}")
+            where = "" if a.models_dir == mf.DEFAULT_MODELS_DIR else f" --models-dir {a.models_dir}"
+            raise CoverageError(f"{cov_path}: no coverage result; run python -m emdm.eval.coverage --model {a.model}"
+                                f"{where}" + (f" --out {a.coverage}" if a.coverage else ""))
         manifest = mf.load(a.models_dir)
         entry = manifest["models"].get(a.model)
         if entry is None:

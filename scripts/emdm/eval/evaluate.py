@@ -6,7 +6,9 @@
     python -m emdm.eval.evaluate timing --model runs/t2m/ckpt.pt=1,2,4,10 --model runs/ddim/ckpt.pt=10,50,100
 
 Defaults: dataset ``data/dataset``, split ``test``, evaluators ``runs/eval/{matcher,classifier}.pt``,
-20 repeats, output ``docs/results/json/<task>-<variant>-<steps>.json``. On a shared CPU prefix with
+20 repeats, output ``docs/results/json/<task>-<variant>-<steps>.json`` (``--out-dir`` another folder). A result
+there that measured more (clips, repeats, or a model trained longer) is not replaced without ``--replace``: a trial
+run names its own folder. On a shared CPU prefix with
 ``nice -n 19``; ``--threads`` (default 1) sets torch's threads.
 """
 
@@ -27,6 +29,7 @@ from emdm import manifest as mf
 from emdm.data.dataset import cached_text_embeddings
 from emdm.eval import data as evdata
 from emdm.eval import evaluators as E
+from emdm.eval.metrics import R_PRECISION_POOL
 from emdm.eval.protocol import Conditions, RealSource, evaluate_action, evaluate_text
 from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, evaluator_info, hardware, slug, write_result
 from emdm.eval.sources import ModelSource, variant_of
@@ -59,14 +62,24 @@ def run_quality(a) -> Path:
             raise SystemExit(f"error: {a.ckpt or a.model} is a {source.task} model, not {a.task}")
     test = evdata.load_split(a.dataset, a.split, max_items=a.max_items or None,
                              require_action=a.task == "action")
+    check_size(a, test)
     if source is None:
         source = RealSource(test, info={"variant": "real"})
+    elif a.task == "action":
+        check_labels(f"{a.ckpt or a.model}: the action model", source.cond_spec.get("labels"), test)
     if a.name:
         source.name = a.name
-    out = a.out or RESULTS_DIR / "json" / (slug(a.task, source.info.get("variant"), source.info.get("steps")) + ".json")
+    out = a.out or (a.out_dir or RESULTS_DIR / "json") / (slug(a.task, source.info.get("variant"),
+                                                                 source.info.get("steps")) + ".json")
     check_writable(out)
+    if not (a.out or a.out_dir or a.replace):
+        keep_larger(out, len(test), a.repeats, source.info.get("train_steps"))
     path = a.matcher if a.task == "text" else a.classifier
     ev = load_evaluator(path, "matcher" if a.task == "text" else "classifier")
+    if a.task == "action":
+        retrain = f"python -m emdm.eval.evaluators classifier --dataset {display_path(Path(a.dataset))}"
+        check_labels(f"{display_path(path)}: the action classifier (retrain it: {retrain})",
+                     getattr(ev, "meta", {}).get("labels"), test)
     t0 = time.time()
     if a.task == "text":
         caps = evdata.caption_embeddings(test)
@@ -82,8 +95,46 @@ def run_quality(a) -> Path:
     return write_result(result, out)
 
 
+def check_size(a, test) -> None:
+    """The split is large enough for the task's metrics (R-precision draws a pool of clips)."""
+    if a.task == "text" and len(test) < R_PRECISION_POOL:
+        given = f" (--max-items {a.max_items})" if a.max_items else ""
+        raise EvaluateError(f"{display_path(Path(a.dataset))}/{a.split}.txt: {len(test)} clips{given}; R-precision "
+                            f"needs at least {R_PRECISION_POOL}: pass --max-items {R_PRECISION_POOL} or more, "
+                            "or 0 (all)")
+
+
+def check_labels(who: str, labels, test) -> None:
+    """``labels`` (a model's or classifier's action vocabulary, in its order) are the split's: an action model or
+    classifier of another dataset build would read the clips' action ids as other actions."""
+    if labels is None or list(labels) == list(test.action_labels):
+        return
+    missing = [x for x in test.action_labels if x not in labels]
+    what = (f"has no {', '.join(missing)}" if missing else "orders them otherwise")
+    raise EvaluateError(f"{who} knows {len(labels)} actions, the dataset {display_path(Path(test.root))} "
+                        f"{len(test.action_labels)}, and {what}: it was trained on another dataset build")
+
+
+def keep_larger(out: Path, n: int, repeats: int, train_steps) -> None:
+    """Refuse to replace a result that measured more (more clips or repeats, or a model trained longer) than this run
+    will: a trial run on a few clips, or a small model's, would overwrite the committed row of the same name."""
+    try:
+        old = json.loads(out.read_text())
+    except (OSError, ValueError):
+        return
+    old_steps = (old.get("info") or {}).get("train_steps")
+    larger = [f"{old.get('n')} clips (this run {n})" if int(old.get("n") or 0) > n else "",
+              f"{old.get('repeats')} repeats (this run {repeats})" if int(old.get("repeats") or 0) > repeats else "",
+              f"a model trained {old_steps} steps (this one {train_steps})"
+              if old_steps and train_steps is not None and old_steps > train_steps else ""]
+    larger = [x for x in larger if x]
+    if larger:
+        raise EvaluateError(f"{display_path(out)} holds a larger measurement ({'; '.join(larger)}): write this one "
+                            f"elsewhere with --out-dir DIR (suite: --results DIR), or pass --replace to replace it")
+
+
 def run_timing(a) -> Path:
-    out = check_writable(a.out or RESULTS_DIR / "json" / f"timing-{a.runtime}.json")
+    out = check_writable(a.out or (a.out_dir or RESULTS_DIR / "json") / f"timing-{a.runtime}.json")
     rows = []
     load_before = os.getloadavg()[0]
     for spec in a.model:
@@ -204,6 +255,10 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--threads", type=int, default=1)
         p.add_argument("--device", default="cpu", help="with --ckpt: cpu or cuda (the generator's device)")
         p.add_argument("--out", type=Path, default=None)
+        p.add_argument("--out-dir", type=Path, default=None,
+                       help="write <task>-<variant>-<steps>.json here (default docs/results/json)")
+        p.add_argument("--replace", action="store_true",
+                       help="replace a default-path result even if it measured more (clips, repeats, training)")
     p = sub.add_parser("timing")
     p.add_argument("--model", action="append", required=True,
                    help="CKPT=STEPS[,STEPS...] or MANIFEST_MODEL=STEPS[,...] (repeatable)")
@@ -215,6 +270,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--device", default="cpu", help="with checkpoints: cpu or cuda")
     p.add_argument("--out", type=Path, default=None)
+    p.add_argument("--out-dir", type=Path, default=None, help="write timing-<runtime>.json here")
     p = sub.add_parser("import-bench", help="timing JSON from scripts/bench/core-bench.mjs --json output")
     p.add_argument("bench", type=Path)
     p.add_argument("--models-dir", type=Path, default=None)

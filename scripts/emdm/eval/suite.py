@@ -9,7 +9,10 @@ A model is an ``emdm.train`` checkpoint (``.pt``) or the name of a shipped model
 public/models/manifest.json, opened by ``emdm.model.open`` in each evaluation; the suite stops at the first
 evaluation that cannot run (a bad file or name: its one-line error, and the same exit status 2). EMDM-style
 models are evaluated at ``--steps`` (default 10); the diffusion baseline at ``--ddim-steps`` (default 10,50,100). Each run writes its JSON under
-docs/results/json/ as it finishes, so an interrupted suite keeps what it measured.
+docs/results/json/ as it finishes, so an interrupted suite keeps what it measured, and the report rewrites
+docs/RESULTS.md. ``--results DIR`` puts both elsewhere (DIR/json/, DIR/RESULTS.md): a trial run on a few clips or a
+small model belongs there. Without it, a committed result that measured more (clips, repeats, or a model trained
+longer) stops the suite with one line instead of being replaced, unless ``--replace``.
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from pathlib import Path
 
 from emdm.eval import evaluate, report
 from emdm.model.open import is_checkpoint
+from emdm.outdir import OutputRefused, check_writable
 
 
 def _where(model: str) -> list[str]:
@@ -27,14 +31,16 @@ def _where(model: str) -> list[str]:
 
 
 def plan(a) -> list[list[str]]:
+    where = (["--out-dir", str(a.results / "json")] if a.results else []) + (["--replace"] if a.replace else [])
     common = ["--repeats", str(a.repeats), "--max-items", str(a.max_items), "--threads", str(a.threads),
               "--device", a.device, "--batch", str(a.batch),
-              "--mm-texts", str(a.mm_texts), "--mm-repeats", str(a.mm_repeats), "--plaus-n", str(a.plaus_n)]
+              "--mm-texts", str(a.mm_texts), "--mm-repeats", str(a.mm_repeats), "--plaus-n", str(a.plaus_n), *where]
     runs: list[list[str]] = []
+    real = ["--source", "real", "--repeats", str(a.real_repeats), "--max-items", str(a.max_items), *where]
     if not a.skip_real:
-        runs.append(["text", "--source", "real", "--repeats", str(a.real_repeats), "--max-items", str(a.max_items)])
+        runs.append(["text", *real])
         if a.action:
-            runs.append(["action", "--source", "real", "--repeats", str(a.real_repeats), "--max-items", str(a.max_items)])
+            runs.append(["action", *real])
     for model in (a.text, a.naive, a.nodcond):
         if model:
             for T in a.steps:
@@ -51,7 +57,8 @@ def plan(a) -> list[list[str]]:
     if timing and a.timing_runs > 0:
         runs.append(["timing", *sum((["--model", t] for t in timing), []), "--runs", str(a.timing_runs),
                      "--threads", str(a.threads), "--device", a.device,
-                     "--runtime", "python-cuda" if a.device.startswith("cuda") else "python-cpu"])
+                     "--runtime", "python-cuda" if a.device.startswith("cuda") else "python-cpu",
+                     *(["--out-dir", str(a.results / "json")] if a.results else [])])
     return runs
 
 
@@ -78,7 +85,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--batch", type=int, default=64, help="motions per batched sampling call")
     ap.add_argument("--skip-real", action="store_true")
     ap.add_argument("--dry-run", action="store_true", help="print the evaluate commands only")
+    ap.add_argument("--results", type=Path, default=None,
+                    help="write the JSONs to DIR/json and the report to DIR/RESULTS.md (default docs/results, "
+                         "docs/RESULTS.md)")
+    ap.add_argument("--replace", action="store_true",
+                    help="replace committed results even where they measured more (clips, repeats, training)")
     a = ap.parse_args(argv)
+    if a.results is not None:
+        try:
+            check_writable(a.results, folder=True, option="--results")
+        except OutputRefused as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
     runs = plan(a)
     for r in runs:
         print("python -m emdm.eval.evaluate " + " ".join(r), flush=True)
@@ -87,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
             if rc:                  # its one-line error is printed under its command; later rows would fail alike
                 return rc
     if not a.dry_run:
-        report.main([])
+        report.main(["--results", str(a.results), "--out", str(a.results / "RESULTS.md")] if a.results else [])
     return 0
 
 

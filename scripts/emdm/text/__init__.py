@@ -81,7 +81,8 @@ def load_encoder(encoder_id: str = DEFAULT_ENCODER, *, models_dir: Path | str | 
             known = ", ".join(sorted(manifest["textEncoders"])) or "none"
             raise TextEncoderError(
                 f"{Path(models_dir) / mf.MANIFEST_NAME}: no textEncoders entry {encoder_id!r} (known: {known}); "
-                f"run `python -m emdm.text.export_minilm`")
+                f"run `python -m emdm.text.export_minilm{export_where(models_dir)}` (a folder `emdm.export --out` "
+                f"wrote needs its text encoder too)")
         if entry.get("kind") != "minilm":
             raise TextEncoderError(f"manifest textEncoders.{encoder_id}: field 'kind' is {entry.get('kind')!r}, "
                                    f"this loader runs 'minilm' folders (use model_dir= for clip)")
@@ -91,11 +92,17 @@ def load_encoder(encoder_id: str = DEFAULT_ENCODER, *, models_dir: Path | str | 
     return enc
 
 
+def export_where(models_dir: Path | str) -> str:
+    """The ``--models-dir`` a fix-it hint must name: none for the default folder."""
+    return "" if Path(models_dir).resolve() == Path(mf.DEFAULT_MODELS_DIR).resolve() else f" --models-dir {models_dir}"
+
+
 def verified_folder(manifest: dict, models_dir: Path, encoder_id: str, entry: dict) -> Path:
     """The encoder's folder (inside ``models_dir``) once every file its entry lists (``files``: the ONNX file, the
     tokenizer's) has the size and sha256 the manifest's ``files`` gives, as the page checks them before use."""
     where = f"textEncoders.{encoder_id}"
-    remedy = "restore the folder from the repository's public/models or run `python -m emdm.text.export_minilm`"
+    remedy = ("restore the folder from the repository's public/models or run "
+              f"`python -m emdm.text.export_minilm{export_where(models_dir)}`")
     try:
         folder = mf.file_path(models_dir, entry.get("dir"), f"{where}.dir")   # inside models_dir
         listed = entry.get("files")

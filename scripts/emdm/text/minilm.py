@@ -51,7 +51,8 @@ class MiniLMEncoder:
         tok_path = self.dir / "tokenizer.json"
         for p in (onnx_path, tok_path, self.dir / "tokenizer_config.json"):
             if not p.is_file():
-                raise TextEncoderError(f"{p}: missing; run `python -m emdm.text.export_minilm` to build the encoder folder")
+                raise TextEncoderError(f"{p}: missing; run `python -m emdm.text.export_minilm --out {self.dir}` "
+                                       "to build the encoder folder")
         cfg = json.loads((self.dir / "tokenizer_config.json").read_text())
         self.max_tokens = int(max_tokens if max_tokens is not None else cfg.get("model_max_length", 128))
         if self.max_tokens < 2:
