@@ -306,9 +306,10 @@ def run(a) -> Path:
     for act in ("walk", "run", "dance"):
         if act in gen["per_action"]:
             p = gen["per_action"][act]
-            print(f"  {act}: speed {p['speed']:.2f} m/s (× {p.get('speed_ratio', float('nan')):.2f} real), "
-                  f"in range {p.get('speed_in_range', float('nan')):.0%}, kinematic {gen['kinematic'].get(act, float('nan')):.0%}, "
-                  f"classifier {gen['classifier'].get(act, float('nan')):.0%}")
+            real = (f"× {p['speed_ratio']:.2f} real, in range {_p(p.get('speed_in_range'))}" if "speed_ratio" in p
+                    else "no real clips to compare")
+            print(f"  {act}: speed {p['speed']:.2f} m/s ({real}), kinematic {_p(gen['kinematic'].get(act))}, "
+                  f"classifier {_p(gen['classifier'].get(act))}")
     return out
 
 
