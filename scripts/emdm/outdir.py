@@ -114,6 +114,35 @@ def check_writable(path: Path | str, *, folder: bool = False, option: str = "--o
     return path
 
 
+def missing_folders(path: Path | str) -> list[Path]:
+    """The folders at and above ``path`` that do not exist yet, deepest first: those a run that makes ``path``
+    creates (``remove_made_folders`` takes them away again when it fails)."""
+    out, d = [], Path(path)
+    while not d.exists() and not d.is_symlink() and d.parent != d:
+        out.append(d)
+        d = d.parent
+    return out
+
+
+def remove_made_folders(made: list[Path], ours: Iterable[str] = ()) -> None:
+    """Undo ``made`` (``missing_folders`` before a run that then failed): in the deepest, the files matching the
+    glob patterns ``ours`` (what the run writes there) are removed, then each folder while it is empty. Anything
+    else found in them stays, and with it its folders: nothing that is not this run's is ever deleted."""
+    if not made or not made[0].is_dir():
+        return
+    for pattern in ours:
+        for f in made[0].glob(pattern):
+            if f.is_file() and not f.is_symlink():
+                f.unlink(missing_ok=True)
+    for d in made:
+        if not d.is_dir() or d.is_symlink():
+            continue
+        try:
+            d.rmdir()
+        except OSError:          # not empty (or not ours to remove): it and the folders above it stay
+            return
+
+
 def check_place(out: Path, given: Path | str, option: str = "--out") -> Path:
     """OutputRefused unless the folder that will hold ``out`` (and its temp folder, beside it) can be made
     and written: its nearest existing ancestor is a folder that takes a new file."""

@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import csv
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -41,9 +42,10 @@ from emdm.distributed import Dist
 from emdm.model.discriminator import Discriminator
 from emdm.model.generator import Generator, count_parameters
 from emdm.model.objectives import GanWeights, Geo, Nets, ScheduleTables, ddgan_step, diffusion_step
+from emdm.outdir import OutputRefused, check_writable, missing_folders, remove_made_folders
 from emdm.sampler.schedule import SUPPORTED_STEPS
 from emdm.train_log import LOG_FIELDS, NonFiniteLoss, StepLog, truncate_log
-from emdm.train_options import build_parser
+from emdm.train_options import build_parser, check_args, supported_steps
 
 __all__ = ["main", "build_parser", "Trainer", "cosine_lr", "save_weights_file", "atomic_save"]   # save_weights_file: re-exported
 
@@ -76,14 +78,13 @@ class Trainer:
         if args.threads:
             torch.set_num_threads(args.threads)
         self.dist = Dist(self.device)
-        args.out.mkdir(parents=True, exist_ok=True)
-        self.supported = sorted({int(s) for s in str(args.supported_steps).split(",") if s.strip()})
-        if not self.supported or min(self.supported) < 1:
-            raise SystemExit(f"--supported-steps: expected positive integers, got {args.supported_steps!r}")
+        self.supported = supported_steps(args.supported_steps)      # checked by check_args (ValueError)
         self.lr_scale = lr_factor(args.lr_scale, args.batch * self.dist.world)
         self.lr_g = (args.lr_g if args.lr_g is not None else DEFAULT_LR_G[args.task]) * self.lr_scale
         self.lr_d = args.lr_d * self.lr_scale
         self._init_st: dict | None = None          # the --init-weights file once read (init_state)
+        if args.init_weights is not None:
+            self.init_state()                       # a bad file is refused before the captions are embedded
         self.load_data()
         self.build_models()
         self.batcher = BucketBatcher(self.ms.lengths, args.batch, seed=args.seed, rank=self.dist.rank,
@@ -119,7 +120,7 @@ class Trainer:
             self.cond_dim = int(emb.shape[1])
         else:
             if not self.ms.action_labels:
-                raise SystemExit(f"{self.data_dir}: --task action needs actions.json and metadata.csv")
+                raise DatasetError(f"{self.data_dir}: --task action needs actions.json and metadata.csv")
             if a.init_weights is not None:
                 self.take_labels_of(a.init_weights, self.init_state()["meta"])
             self.cond_dim = len(self.ms.action_labels)
@@ -379,6 +380,7 @@ class Trainer:
 
     def run(self) -> None:
         a = self.args
+        a.out.mkdir(parents=True, exist_ok=True)      # only now: a run refused while setting up leaves no folder
         log_path = a.out / "log.csv"
         new_log = not log_path.exists() or self.step == 0
         fields = LOG_FIELDS
@@ -466,27 +468,31 @@ class Trainer:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Train; 0 on success, 2 (one line on stderr) for an unusable checkpoint or dataset or a non-finite loss."""
+    """Train; 0 on success, 2 (one line on stderr) for an unusable checkpoint, dataset or output or a NaN loss."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.weights_minutes is not None and (args.weights_out is None or not args.weights_minutes >= 0):
-        parser.error("--weights-minutes needs --weights-out and a number of minutes ≥ 0")
-    if args.geo_weight_t1 is not None and not (args.geo_weight_t1 > 0 and args.geo_weight > 0
-                                               and args.objective == "ddgan"):
-        parser.error(f"--geo-weight-t1 {args.geo_weight_t1:g}: needs a number > 0, --geo-weight > 0 and the ddgan "
-                     "objective (it sets how L_geo's weight changes with t)")
-    trainer = None
+    check_args(parser, args)
+    made, trainer = missing_folders(args.out), None
     try:
+        check_writable(args.out, folder=True, option="--out")
+        if args.weights_out is not None:
+            check_writable(args.weights_out, option="--weights-out")
         trainer = Trainer(args)
         trainer.run()
         if args.weights_out is not None:
             trainer.save_weights(args.weights_out, args.weights_dtype)
-    except (CheckpointError, DatasetError, NonFiniteLoss) as e:
+    except (CheckpointError, DatasetError, NonFiniteLoss, OutputRefused) as e:
         print(f"emdm.train: {e}", file=sys.stderr)
         return 2
     finally:
         if trainer is not None:
             trainer.dist.close()
+        elif os.environ.get("RANK", "0") == "0":   # Trainer(args) failed: the --out folders it made go, with its cache
+            remove_made_folders(made, ours=("text-*.npy",))
+    ckpt = args.out / "ckpt.pt"
+    if trainer.dist.main:
+        print((f"checkpoint {ckpt} (step {trainer.step})" if ckpt.is_file() else "no checkpoint written")
+              + (f"; weights {args.weights_out}" if args.weights_out is not None else ""))
     return 0
 
 

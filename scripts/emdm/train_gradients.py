@@ -30,7 +30,7 @@ from emdm.checkpoints import CheckpointError
 from emdm.data.dataset import DatasetError
 from emdm.model.objectives import pairs
 from emdm.train import Trainer
-from emdm.train_options import build_parser
+from emdm.train_options import build_parser, check_args
 
 TERMS = ("recon", "pos", "vel", "foot", "bone")
 GROUPS = ("all", "t=1", "t<1")
@@ -114,6 +114,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--batches", type=int, default=8, help="batches to average over")
     parser.add_argument("--json", type=Path, default=None, help="also write the figures here")
     args = parser.parse_args(argv)
+    check_args(parser, args)
     if args.batches < 1:
         parser.error(f"--batches: expected ≥ 1, got {args.batches}")
     if args.objective != "ddgan":

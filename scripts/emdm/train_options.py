@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from emdm.model.generator import PRESETS
 from emdm.sampler.schedule import SUPPORTED_STEPS
 
 DESCRIPTION = "Train the EMDM generator (DDGAN with geometric losses, or the plain diffusion baseline)."
@@ -18,7 +19,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--task", choices=["text", "action"], default="text")
     p.add_argument("--encoder", default="all-MiniLM-L6-v2", help="text encoder id (emdm.text)")
     p.add_argument("--out", type=Path, required=True, help="run folder (checkpoint, log, text-embedding cache)")
-    p.add_argument("--preset", default="web", help="generator preset: web | paper | tiny")
+    p.add_argument("--preset", choices=sorted(PRESETS), default="web", help="generator preset")
     p.add_argument("--objective", choices=["ddgan", "diffusion"], default="ddgan")
     p.add_argument("--steps", type=int, default=20000, help="total optimisation steps (cosine LR horizon)")
     p.add_argument("--batch", type=int, default=64, help="batch per process")
@@ -87,3 +88,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--weights-dtype", choices=["float32", "float16"], default="float32",
                    help="storage type of --weights-out (float16 halves it again; loaded back as float32)")
     return p
+
+
+def supported_steps(text: str) -> list[int]:
+    """``--supported-steps``' step counts, sorted; ValueError unless they are positive integers."""
+    try:
+        steps = sorted({int(s) for s in str(text).split(",") if s.strip()})
+    except ValueError:
+        steps = []
+    if not steps or min(steps) < 1:
+        raise ValueError(f"--supported-steps: expected positive integers, got {text!r}")
+    return steps
+
+
+def check_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """``parser.error`` (exit 2) for options that cannot run together; asked before anything is read or written."""
+    if args.weights_minutes is not None and (args.weights_out is None or not args.weights_minutes >= 0):
+        parser.error("--weights-minutes needs --weights-out and a number of minutes ≥ 0")
+    if args.geo_weight_t1 is not None and not (args.geo_weight_t1 > 0 and args.geo_weight > 0
+                                               and args.objective == "ddgan"):
+        parser.error(f"--geo-weight-t1 {args.geo_weight_t1:g}: needs a number > 0, --geo-weight > 0 and the ddgan "
+                     "objective (it sets how L_geo's weight changes with t)")
+    try:
+        supported_steps(args.supported_steps)
+    except ValueError as e:
+        parser.error(str(e))

@@ -69,24 +69,35 @@ test.describe('generation worker', () => {
     await openReady(page);
     await page.evaluate((t) => window.emdm.generate({ mode: 'text', text: t, seconds: 1, steps: 1, seed: 1 }), PROMPT);
     const c0 = await page.evaluate(() => ({ ...window.emdm.counters }));
-    const out = await page.evaluate(async (t) => {
+    const { out, pending } = await page.evaluate(async (t) => {
       const calls: Promise<unknown>[] = [];
+      const settled: boolean[] = [];
+      const pending: boolean[] = []; // request i was still running when request i + 1 was sent
       for (let i = 0; i < 5; i++) {
-        calls.push(window.emdm.generate({ mode: 'text', text: t, seconds: 9.8, steps: 10, seed: 100 + i }));
+        if (i > 0) pending.push(!settled[i - 1]);
+        const call = window.emdm.generate({ mode: 'text', text: t, seconds: 9.8, steps: 10, seed: 100 + i });
+        call.then(() => { settled[i] = true; }, () => { settled[i] = true; });
+        calls.push(call);
         await new Promise((r) => setTimeout(r, 30));
       }
-      const settled = await Promise.allSettled(calls);
-      return settled.map((s) => (s.status === 'fulfilled' ? { ok: true, seed: (s.value as { state: { seed: number } }).state.seed } : { ok: false, name: (s.reason as Error).name }));
+      const all = await Promise.allSettled(calls);
+      return { pending, out: all.map((s) => (s.status === 'fulfilled' ? { ok: true, seed: (s.value as { state: { seed: number } }).state.seed } : { ok: false, name: (s.reason as Error).name })) };
     }, PROMPT);
     expect(out[4]).toEqual({ ok: true, seed: 104 });
-    expect(out.slice(0, 4)).toEqual(Array(4).fill({ ok: false, name: 'AbortError' }));
+    // Every request still running when a newer one came is cancelled. On a calm machine that is all four (a 10-step,
+    // 196-frame motion takes ~0.5 s, the requests come 30 ms apart); a machine so loaded that the page's 30 ms timer
+    // fires after a whole generation sends the next request only once the last has finished, and nothing is left
+    // to cancel (seen once, under a second test run on the same two cores).
+    expect(out.slice(0, 4)).toEqual(pending.map((p, i) => (p ? { ok: false, name: 'AbortError' } : { ok: true, seed: 100 + i })));
+    const cancelled = pending.filter(Boolean).length;
+    if (cancelled < 4) test.info().annotations.push({ type: 'load', description: `machine overloaded: ${4 - cancelled} of the first four requests finished before the next was sent` });
     const c1 = await page.evaluate(() => ({ ...window.emdm.counters }));
-    expect(c1.generations - c0.generations).toBe(1);
-    expect(c1.cancelled - c0.cancelled).toBe(4);
+    expect(c1.generations - c0.generations).toBe(5 - cancelled);
+    expect(c1.cancelled - c0.cancelled).toBe(cancelled);
     // the cancelled ones stopped early (before the worker all five ran their 10 steps: 50). How many steps
     // they ran depends on when the 30 ms timers fire on a loaded machine, so only the total is bounded.
-    console.log(`five requests: ${c1.stepsRun - c0.stepsRun} steps run in all (10 of them the last request's)`);
-    expect(c1.stepsRun - c0.stepsRun).toBeLessThan(5 * 10);
+    console.log(`five requests: ${c1.stepsRun - c0.stepsRun} steps run in all (10 for each of the ${5 - cancelled} that finished)`);
+    if (cancelled > 0) expect(c1.stepsRun - c0.stepsRun).toBeLessThan(5 * 10);
     await expect(page.locator('#caption')).toContainText('seed 104');
   });
 
@@ -98,6 +109,7 @@ test.describe('generation worker', () => {
     // warm-up, and the duration of one step on this machine now
     const warm = await page.evaluate((t) => window.emdm.generate({ mode: 'text', text: t, seconds: 9.8, steps: 10, seed: 1 }), PROMPT);
     const stepMax = Math.max(...warm.timings.stepMs);
+    const idle = await probeResponsiveness(page, null); // is the machine calm enough for the page to see step 2 in time?
     const r = await page.evaluate(async (t) => {
       const before = window.emdm.counters.stepsRun;
       const first = window.emdm.generate({ mode: 'text', text: t, seconds: 9.8, steps: 10, seed: 7 });
@@ -111,6 +123,14 @@ test.describe('generation worker', () => {
       return { how: f.how, stopMs: f.at - clicked, stepsOfFirst };
     }, PROMPT);
     console.log(`click → running generation stopped in ${r.stopMs.toFixed(0)} ms after ${r.stepsOfFirst} of 10 steps (one step takes up to ${stepMax.toFixed(0)} ms now)`);
+    // A machine too loaded to keep a 50 ms timer within 25 ms while idle can hold the page's thread until the worker
+    // has sent all 10 steps: the click then comes after the end, and there is nothing left to stop (seen once, under
+    // a second test run on the same two cores). On a calm machine the click always stops it.
+    const calm = idle.maxTimerDelay <= 25 && idle.maxFrameGap <= 50;
+    if (!calm && r.how === 'finished') {
+      test.info().annotations.push({ type: 'load', description: `machine overloaded (idle timer ${idle.maxTimerDelay.toFixed(0)} ms late): the generation finished before the click reached it` });
+      return;
+    }
     expect(r.how).toBe('AbortError');
     expect(r.stepsOfFirst).toBeLessThan(10);
     // at most the step under way finishes, plus a message each way (before the worker the click waited for

@@ -1,5 +1,9 @@
 """The evaluators learn what they should on synthetic motions whose content is known, and behave
-as a measuring instrument must (independent of batching, same after save/load, clear errors)."""
+as a measuring instrument must (independent of batching, same after save/load, clear errors); the command line
+refuses a dataset, --out or count it cannot use in one line (exit 2) before it writes anything."""
+
+import json
+import shutil
 
 import numpy as np
 import pytest
@@ -138,3 +142,71 @@ def test_every_epoch_trains_with_dropout_after_a_validation(kind, monkeypatch):
         motions = [_motion(np.eye(4)[k], 48, rng) for k in labels]
         E.train_classifier(motions, labels, 2, MEAN, STD, cfg, val=(motions[:8], labels[:8]))
     assert len(seen) >= 3 and all(seen), seen
+
+
+# ----------------------------------------------------------------------------- the command line
+
+SMALL_CLI = ["--epochs", "1", "--hidden", "8", "--emb-dim", "8", "--batch-size", "4"]
+
+
+@pytest.fixture(scope="module")
+def synth(tmp_path_factory):
+    from model_synth_data import write_synthetic_dataset
+
+    return write_synthetic_dataset(tmp_path_factory.mktemp("ds"), n_clips=12)
+
+
+def _refusal(capsys) -> str:
+    cap = capsys.readouterr()
+    lines = cap.err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and "Traceback" not in cap.err, cap.err
+    return lines[0]
+
+
+def test_cli_refuses_a_missing_dataset_in_one_line_and_writes_nothing(tmp_path, capsys):
+    for kind in ("matcher", "classifier"):
+        rc = E._main([kind, "--dataset", str(tmp_path / "nope"), "--out", str(tmp_path / "o" / "m.pt"), *SMALL_CLI])
+        line = _refusal(capsys)
+        assert rc == 2 and f"{tmp_path / 'nope' / 'train.txt'}: split file not found" in line, line
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_refuses_an_unusable_out_or_dataset_in_one_line(synth, tmp_path, capsys):
+    blocker = tmp_path / "blocker"
+    blocker.write_text("a file where a folder should be")
+    for out, says in ((tmp_path, f"--out {tmp_path}: is a folder; give a file path"),
+                      (blocker / "m.pt", f"--out {blocker / 'm.pt'}: {blocker} is a file, not a folder")):
+        assert E._main(["classifier", "--dataset", str(synth), "--out", str(out), *SMALL_CLI]) == 2
+        line = _refusal(capsys)
+        assert line.startswith(f"error: {says}"), line
+    no_actions = tmp_path / "ds"
+    shutil.copytree(synth, no_actions)
+    (no_actions / "actions.json").unlink()
+    (no_actions / "metadata.csv").unlink()
+    assert E._main(["classifier", "--dataset", str(no_actions), "--out", str(tmp_path / "o" / "c.pt"), *SMALL_CLI]) == 2
+    assert "train.txt: no usable clips" in _refusal(capsys)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["blocker", "ds"]
+
+
+@pytest.mark.parametrize("flag", ["--threads", "--epochs", "--batch-size"])
+def test_cli_refuses_a_count_below_one(synth, tmp_path, capsys, flag):
+    with pytest.raises(SystemExit) as e:
+        E._main(["matcher", "--dataset", str(synth), "--out", str(tmp_path / "m.pt"), *SMALL_CLI, flag, "0"])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and f"{flag}: expected ≥ 1, got 0" in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("kind", ["matcher", "classifier"])
+def test_cli_trains_and_writes_the_checkpoint_and_its_log(synth, tmp_path, capsys, monkeypatch, kind):
+    from model_synth_data import fake_text_encoder
+
+    fake_text_encoder(monkeypatch)
+    monkeypatch.setenv("EMDM_EVAL_CACHE", str(tmp_path / "cache"))
+    out = tmp_path / "eval" / f"{kind}.pt"
+    assert E._main([kind, "--dataset", str(synth), "--out", str(out), *SMALL_CLI]) == 0
+    assert capsys.readouterr().out.strip().splitlines()[-1].startswith(f"wrote {out} (")
+    model = E.load(out, kind)
+    rows = [json.loads(line) for line in out.with_suffix(".log.jsonl").read_text().splitlines()]
+    assert model.meta["epochs_run"] == len(rows) == 1 and model.meta["train_items"] == 12
+    assert model.meta.get("labels", ["walk", "wave", "turn"]) == ["walk", "wave", "turn"]

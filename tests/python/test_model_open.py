@@ -60,6 +60,8 @@ CASES = {
                      r"corrupt_onnx/m\.onnx: cannot load as an ONNX model"),
     "unknown_model": (lambda r: ["--model", "nope", "--models-dir", str(r / "models")],
                       r"models/manifest\.json: no model 'nope'"),
+    "ckpt_typo": (lambda r: ["--model", str(r / "run" / "ckpt.ptt"), "--models-dir", str(r / "models")],
+                  r"run/ckpt\.ptt: no such checkpoint file .*; did you mean .*run/ckpt\.pt\?$"),
     "missing_file": (lambda r: ["--model", "m", "--models-dir", str(r / "bad" / "missing")],
                      r"missing/m\.onnx: missing \(model 'm' names it as its ONNX step file"),
     "sha_mismatch": (lambda r: ["--model", "m", "--models-dir", str(r / "bad" / "sha")],
@@ -206,6 +208,37 @@ def test_checkpoint_refusals_name_the_file(world, tmp_path):
     atomic_save(st, tmp_path / "nogen.pt")
     with pytest.raises(ModelError, match=r"nogen\.pt: not an emdm.train checkpoint \(meta lacks the generator"):
         open_model(tmp_path / "nogen.pt")
+
+
+def test_a_reference_that_reads_as_a_path_is_refused_as_one(world, tmp_path, monkeypatch):
+    """A text reference with a separator, a suffix or naming an existing path is a checkpoint's: an existing .pt
+    file opens as one, anything else is refused naming it (not looked up as a manifest name); plain names are."""
+    from emdm.model.open import ModelError, open_model
+
+    models, run = world / "models", world / "run"
+    ckpt = re.escape(str(run / "ckpt.pt"))
+    refused = {str(run / "ckpt.ptt"): r"no such checkpoint file \(a checkpoint is an existing \.pt file: "
+                                      rf"emdm\.train's ckpt\.pt or a --weights-out file\); did you mean {ckpt}\?$",
+               str(tmp_path / "none" / "x.pt"): r"no such checkpoint file \(.*\)$",
+               str(run): rf"is a folder, not a checkpoint file; did you mean {ckpt}\?$",
+               str(world / "prompts.json"): r"not a \.pt file \(a checkpoint is emdm\.train's ckpt\.pt or a "
+                                            r"--weights-out file\)$",
+               str(run / "log.csv"): r"not a \.pt file"}
+    for ref, says in refused.items():
+        for device in ("cpu", "cuda"):
+            with pytest.raises(ModelError, match=rf"^{re.escape(ref)}: {says}"):
+                open_model(ref, models_dir=models, device=device)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ModelError, match=r"^ckpt\.ptt: no such checkpoint file .*, nor a model of .*manifest\.json "
+                                         r"\(have: m\)$"):
+        open_model("ckpt.ptt", models_dir=models)
+    with pytest.raises(ModelError, match=r"manifest\.json: no model 'nope' \(have: m\)$"):
+        open_model("nope", models_dir=models)
+    (tmp_path / "m").mkdir()                       # a folder named as a shipped model does not hide it
+    assert open_model("m", models_dir=models).kind == "shipped"
+    shutil.copy(run / "ckpt.pt", tmp_path / "c.pt")
+    for ref in (str(run / "ckpt.pt"), "c.pt"):
+        assert open_model(ref, models_dir=models).kind == "checkpoint"
 
 
 def test_only_the_opener_opens_models():

@@ -11,12 +11,14 @@ pelvis path with the first frame's facing arrow. The title shows the id and its 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import numpy as np
 
 from emdm import paths
 from emdm import skeleton as sk
+from emdm.outdir import OutputRefused, check_writable
 
 LEFT = {1, 4, 7, 10, 13, 16, 18, 20}
 RIGHT = {2, 5, 8, 11, 14, 17, 19, 21}
@@ -72,6 +74,7 @@ def render_strip(joints: np.ndarray, out: Path, title: str = "", frames: int = 8
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Render the strip; 0, or 2 with one line on stderr for a clip, --out or --frames it cannot use."""
     ap = argparse.ArgumentParser(prog="python -m emdm.data.viewer", description=__doc__.split("\n\n")[0])
     ap.add_argument("clip", help="a dataset id (new_joints/<id>.npy) or a .npy file of (frames, 22, 3) joints")
     ap.add_argument("--dataset", default=str(paths.DATASET_DIR))
@@ -79,18 +82,36 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--frames", type=int, default=8)
     ap.add_argument("--view", choices=["side", "front"], default="side")
     args = ap.parse_args(argv)
+    if args.frames < 1:
+        ap.error(f"--frames: expected ≥ 1, got {args.frames}")
     p = Path(args.clip)
     title = p.stem
     if p.suffix != ".npy":
         p = Path(args.dataset) / "new_joints" / f"{args.clip}.npy"
         t = Path(args.dataset) / "texts" / f"{args.clip}.txt"
         if t.is_file():
-            title = f"{args.clip}: {t.read_text().splitlines()[0].split('#')[0]}"
-    if not p.is_file():
-        raise SystemExit(f"{p}: not found (give a dataset id or a .npy file)")
-    out = render_strip(np.load(p), Path(args.out), title, args.frames, args.view)
-    print(out)
+            title = f"{args.clip}: {(t.read_text().splitlines() or [''])[0].split('#')[0]}"
+    try:
+        if not p.is_file():
+            raise ValueError(f"{p}: not found (give a dataset id or a .npy file)")
+        out = check_writable(args.out)
+        joints = _read_joints(p)
+    except (ValueError, OutputRefused) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    print(render_strip(joints, out, title, args.frames, args.view))
     return 0
+
+
+def _read_joints(p: Path) -> np.ndarray:
+    """A (frames, 22, 3) joints array from ``p``, or ValueError naming the file."""
+    try:
+        J = np.load(p, allow_pickle=False)
+    except (OSError, ValueError, EOFError) as e:
+        raise ValueError(f"{p}: cannot read as a .npy array ({e})") from None
+    if J.ndim != 3 or J.shape[1:] != (sk.NUM_JOINTS, 3) or len(J) == 0:
+        raise ValueError(f"{p}: expected joints of shape (frames, {sk.NUM_JOINTS}, 3), got {J.shape}")
+    return J
 
 
 if __name__ == "__main__":

@@ -42,6 +42,7 @@ from torch.nn.utils.rnn import pack_padded_sequence
 from emdm.checkpoints import torch_load
 from emdm.eval import data as evdata
 from emdm.eval import metrics as M
+from emdm.outdir import OutputRefused, check_writable
 from emdm.paths import DATASET_DIR, RUNS_DIR
 
 FEATURE_DIM = 263
@@ -373,7 +374,7 @@ def load(path: Path | str, kind: str | None = None) -> MatchingModel | ActionCla
 
 # ----------------------------------------------------------------------------- CLI
 
-def _main(argv: list[str] | None = None) -> int:
+def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="python -m emdm.eval.evaluators", description=__doc__.split("\n\n")[0])
     ap.add_argument("kind", choices=["matcher", "classifier"])
     ap.add_argument("--dataset", type=Path, default=DATASET_DIR)
@@ -382,22 +383,20 @@ def _main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-items", type=int, default=0, help="use at most this many train clips (0 = all)")
     for f, v in asdict(TrainConfig()).items():
         ap.add_argument("--" + f.replace("_", "-"), type=type(v), default=v)
-    a = ap.parse_args(argv)
-    torch.set_num_threads(a.threads)
-    cfg = TrainConfig(**{f: getattr(a, f) for f in asdict(TrainConfig())})
-    out = a.out or RUNS_DIR / "eval" / f"{a.kind}.pt"
-    log_path = out.with_suffix(".log.jsonl")
-    log_path.parent.mkdir(parents=True, exist_ok=True)
-    logf = open(log_path, "w")
+    return ap
 
-    history: list[dict] = []
 
-    def log(row: dict) -> None:
-        history.append(row)
-        logf.write(json.dumps(row) + "\n")
-        logf.flush()
-        print(" ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()), flush=True)
+def _check_args(ap: argparse.ArgumentParser, a: argparse.Namespace) -> None:
+    """``ap.error`` (exit 2) for a count the training cannot use."""
+    for name, least in (("threads", 1), ("epochs", 1), ("batch_size", 1), ("max_items", 0)):
+        if getattr(a, name) < least:
+            ap.error(f"--{name.replace('_', '-')}: expected ≥ {least}, got {getattr(a, name)}")
 
+
+def _inputs(a: argparse.Namespace) -> tuple[evdata.EvalSplit, tuple | None, list | None]:
+    """The train split, the validation pair the training reports on (None: no usable val split) and, for the
+    matcher, the train captions' embeddings; a ValueError (DatasetError, TextEncoderError: one line naming the
+    file) for a dataset it cannot train on."""
     need_action = a.kind == "classifier"
     train = evdata.load_split(a.dataset, "train", max_items=a.max_items or None, require_action=need_action)
     try:
@@ -405,21 +404,52 @@ def _main(argv: list[str] | None = None) -> int:
     except Exception as e:  # noqa: BLE001 - a dataset without a val split still trains
         print(f"no validation split used: {e}", file=sys.stderr)
         val = None
+    if need_action:
+        evdata.action_labels(train)
+        return train, (val.motions, val.actions) if val is not None else None, None
+    cap_emb = evdata.caption_embeddings(train)
+    vpair = None
+    if val is not None:
+        vemb = evdata.caption_embeddings(val)
+        vpair = (val.motions, np.stack([e[0] for e in vemb]))
+    return train, vpair, cap_emb
+
+
+def _main(argv: list[str] | None = None) -> int:
+    """Train one evaluator; 0, or 2 with one line on stderr for a dataset or --out it cannot use (checked before
+    anything is written: a refused run leaves no checkpoint, log or folder)."""
+    ap = _parser()
+    a = ap.parse_args(argv)
+    _check_args(ap, a)
+    torch.set_num_threads(a.threads)
+    cfg = TrainConfig(**{f: getattr(a, f) for f in asdict(TrainConfig())})
+    out = a.out or RUNS_DIR / "eval" / f"{a.kind}.pt"
+    log_path = out.with_suffix(".log.jsonl")
+    try:
+        check_writable(out)
+        check_writable(log_path, option="--out (its log)")
+        train, vpair, cap_emb = _inputs(a)
+    except (OutputRefused, ValueError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    log_path.parent.mkdir(parents=True, exist_ok=True)
+    history: list[dict] = []
     meta = {"dataset": str(a.dataset), "train_items": len(train), "config": asdict(cfg)}
     t0 = time.time()
-    if a.kind == "matcher":
-        cap_emb = evdata.caption_embeddings(train)
-        vpair = None
-        if val is not None:
-            vemb = evdata.caption_embeddings(val)
-            vpair = (val.motions, np.stack([e[0] for e in vemb]))
-        model = train_matcher(train.motions, cap_emb, train.mean, train.std, cfg, val=vpair, log=log)
-        meta["text_encoder"] = evdata.TEXT_ENCODER
-    else:
-        labels, vocab = evdata.action_labels(train)
-        vpair = (val.motions, val.actions) if val is not None else None
-        model = train_classifier(train.motions, labels, len(vocab), train.mean, train.std, cfg, val=vpair, log=log)
-        meta["labels"] = vocab
+    with open(log_path, "w") as logf:
+        def log(row: dict) -> None:
+            history.append(row)
+            logf.write(json.dumps(row) + "\n")
+            logf.flush()
+            print(" ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()), flush=True)
+
+        if a.kind == "matcher":
+            model = train_matcher(train.motions, cap_emb, train.mean, train.std, cfg, val=vpair, log=log)
+            meta["text_encoder"] = evdata.TEXT_ENCODER
+        else:
+            labels, vocab = evdata.action_labels(train)
+            model = train_classifier(train.motions, labels, len(vocab), train.mean, train.std, cfg, val=vpair, log=log)
+            meta["labels"] = vocab
     meta["minutes"] = (time.time() - t0) / 60
     meta["epochs_run"] = len(history)
     meta["final"] = history[-1] if history else {}

@@ -24,6 +24,7 @@ exit with status 2.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
@@ -228,6 +229,25 @@ def is_checkpoint(ref: str | Path) -> bool:
     return isinstance(ref, Path) or str(ref).endswith(".pt")
 
 
+def has_separator(ref: str) -> bool:
+    """Whether a model reference given as text holds a path separator: a file path, never a manifest name."""
+    return "/" in ref or os.sep in ref or (os.altsep is not None and os.altsep in ref)
+
+
+def not_a_checkpoint(ref: str) -> str:
+    """Why ``ref``, a reference that reads as a file path, is not a checkpoint this can open (one line naming it)."""
+    p = Path(ref)
+    if p.is_dir():
+        hint = f"; did you mean {p / 'ckpt.pt'}?" if (p / "ckpt.pt").is_file() else ""
+        return f"{ref}: is a folder, not a checkpoint file{hint}"
+    what = "emdm.train's ckpt.pt or a --weights-out file"
+    if p.exists():
+        return f"{ref}: not a .pt file (a checkpoint is {what})"
+    near = p.with_suffix(".pt") if p.suffix else None
+    hint = f"; did you mean {near}?" if near is not None and near.is_file() else ""
+    return f"{ref}: no such checkpoint file (a checkpoint is an existing .pt file: {what}){hint}"
+
+
 def open_checkpoint(path: Path | str, *, device: str = "cpu", weights: str = "G_ema") -> OpenedModel:
     path = Path(path)
     G, meta, summary = load_generator(path, weights)
@@ -257,7 +277,10 @@ def open_shipped(name: str, *, models_dir: Path | str | None = None, variant: st
         raise ModelError(str(e)) from None
     where = models_dir / mf.MANIFEST_NAME
     if name not in man["models"]:
-        raise ModelError(f"{where}: no model {name!r} (have: {', '.join(man['models']) or 'none'})")
+        have = f"(have: {', '.join(man['models']) or 'none'})"
+        if has_separator(name) or Path(name).exists() or Path(name).suffix:     # a file path: a checkpoint's typo?
+            raise ModelError(f"{not_a_checkpoint(name)}, nor a model of {where} {have}")
+        raise ModelError(f"{where}: no model {name!r} {have}")
     try:                                      # every field sampling reads: its type and a bounded size
         entry = mf.check_model_entry(man["models"][name], name, where)
     except mf.ManifestError as e:
@@ -290,12 +313,18 @@ def open_model(name_or_path: str | Path, *, models_dir: Path | str | None = None
                device: str = "cpu", threads: int = 1, weights: str = "G_ema") -> OpenedModel:
     """A model ready to sample. A ``Path`` is a checkpoint (PyTorch on ``device``); a ``str`` is a model of
     ``models_dir``/manifest.json (default public/models), the ONNX file of ``variant`` through onnxruntime
-    (``threads``) on the CPU. Raises ModelError (one line) for anything that cannot be used."""
+    (``threads``) on the CPU; a ``str`` naming an existing .pt file is opened as a checkpoint, one that reads as another
+    path (a separator; or, not in the manifest, a suffix or an existing file) is refused as not a checkpoint file.
+    Raises ModelError (one line) for anything that cannot be used."""
+    if isinstance(name_or_path, str) and Path(name_or_path).suffix == ".pt" and Path(name_or_path).is_file():
+        name_or_path = Path(name_or_path)              # a checkpoint given as text
     if isinstance(name_or_path, Path):
         if variant not in (None, "fp32"):
             raise ModelError(f"--variant {variant!r} needs a shipped model (--model); the checkpoint {name_or_path} "
                              "has only its fp32 weights")
         return open_checkpoint(name_or_path, device=device, weights=weights)
+    if has_separator(name_or_path):
+        raise ModelError(not_a_checkpoint(name_or_path))
     if device != "cpu":
         raise ModelError(f"model {name_or_path!r} runs through onnxruntime on the CPU; --device {device} needs a "
                          "checkpoint (--ckpt)")
