@@ -324,12 +324,14 @@ export class LiveCore {
     this.frames -= k;
   }
 
-  /** Joints of frame p as shown (display, 22 × 3, stage coordinates; a copy), frame p made available first (`extend`). */
-  frameAt(p: number): Float32Array {
+  /** Joints of frame p as shown (display, 22 × 3, stage coordinates; a copy), frame p made available first (`extend`);
+   * the stage is first moved under the root of frame `centre` (the playhead: reading frames ahead, or behind, of it
+   * must not move the stage away from what plays). */
+  frameAt(p: number, centre = p): Float32Array {
     if (this.frames === 0) throw new EditError('live: no frame yet (the first window is not ready)');
     const q = Math.max(p, this.base);
     this.extend(q);
-    this.recentre(q);
+    this.recentre(Math.max(centre, this.base));
     return this.display.slice((q - this.base) * JV, (q - this.base + 1) * JV);
   }
 }

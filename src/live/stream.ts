@@ -168,7 +168,9 @@ export async function startLive(gen: LiveGenerate, limits: EditLimits, opts: Liv
       check('frameAt()');
       if (!Number.isFinite(t) || t < 0) throw new EditError(`live: frameAt takes seconds ≥ 0 on the stream's clock, got ${t}`);
       const frame = Math.floor(t * fps + 1e-9);
-      const { joints, pose } = shown.at(frame, t * fps - frame > 1e-6 ? t * fps - frame : 0);
+      // the stage follows the playhead, not the frame asked for: a frame ahead (a retargeted character's piece) is
+      // given on the stage of what plays now
+      const { joints, pose } = shown.at(frame, t * fps - frame > 1e-6 ? t * fps - frame : 0, playhead());
       if (!running) core.trim(frame);
       pump();
       return { frame, joints, origin: [...core.origin] as [number, number], ...(pose ? { pose } : {}) };
@@ -228,8 +230,8 @@ function showFrames(core: LiveCore, { solve, solveFrames }: LiveHooks, fail: (e:
     },
     /** every solve asked for so far has come back */
     settled: () => Promise.all([...solving]),
-    at(frame: number, w: number): { joints: Float32Array; pose?: FramePose } {
-      let joints = core.frameAt(frame);
+    at(frame: number, w: number, centre: number): { joints: Float32Array; pose?: FramePose } {
+      let joints = core.frameAt(frame, centre);
       const q = Math.max(frame, core.base);
       let pose = solve ? poseOf(q, true)! : undefined;
       const next = w > 0 && q + 1 < core.end ? (solve ? poseOf(q + 1, false) : true) : null;

@@ -298,3 +298,30 @@ test("the visitor's character in the compare view: a second copy performs the DD
   expect(await page.evaluate(() => [window.emdmCharacter.active, window.emdmCharacter.builtInVisible])).toEqual([false, true]);
   watch.assertClean();
 });
+
+test("the visitor's character in live mode walks under the camera, where the stream's root is", async ({ page }) => {
+  // The stage moves back under what plays by whole metres as a walk goes on; the character's piece of the stream was
+  // read on the stage of its last frame (the stream's frameAt moved the stage to each frame asked for), 2–6 m from
+  // the root the camera follows, and jumped by metres with each new piece.
+  test.setTimeout(180_000);
+  const watch = watchPage(page);
+  await page.goto('/?noauto=1&backend=wasm&mode=text&text=a+person+walks+forward');
+  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+  const vrm = new Uint8Array(fs.readFileSync(path.join(process.cwd(), 'tests/fixtures/rigs/cryptovoxels.vrm')));
+  await drop(page, [{ name: 'cryptovoxels.vrm', bytes: vrm }]);
+  await page.waitForFunction(() => window.emdmCharacter.name === 'cryptovoxels.vrm', null, { timeout: 30_000 });
+  await page.locator('#live').click();
+  await page.waitForFunction(() => window.emdm.live?.active, null, { timeout: 60_000 });
+  const gaps: number[] = [];
+  for (let i = 0; i < 16; i++) { // 8 s: four windows, and the stage moves at least once for a walk
+    await page.waitForTimeout(500);
+    const w = await page.evaluate(() => ({ p: window.emdmCharacter.jointWorld('pelvis'), live: window.emdm.live?.last() }));
+    if (!w.p || !w.live) continue;
+    gaps.push(Math.hypot(w.p[0] - w.live.root[0], w.p[2] - w.live.root[2]));
+  }
+  console.log(`live, visitor's character: pelvis to the stream's root ${gaps.map((g) => g.toFixed(2)).join(' ')} m`);
+  expect(gaps.length).toBeGreaterThanOrEqual(12);
+  expect(Math.max(...gaps)).toBeLessThan(0.15);
+  await page.locator('#live').click();
+  watch.assertClean();
+});

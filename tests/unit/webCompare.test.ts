@@ -1,12 +1,20 @@
 // The compare view's pure rules (web/ui/compare.ts) and its URL state (web/ui/state.ts).
 import { describe, expect, it } from 'vitest';
 import { compareNote, compareStepChoices, planCompare } from '../../web/ui/compare';
-import { parseState, stateToSearch, stepChoices, type StateLimits } from '../../web/ui/state';
+import { emdmSteps, parseState, stateToSearch, stepChoices, type StateLimits } from '../../web/ui/state';
 
 const EMDM = [1, 2, 4, 5, 8, 10];
 const DDIM = [1, 2, 4, 5, 8, 10, 20, 50, 100];
 
 describe('compare plan', () => {
+  it("a timeline, an edit and live mode run EMDM's count for the slider: the compare view's own EMDM side", () => {
+    // with the compare view on, the slider offers DDIM's 20/50/100; those requests have no DDIM side and refused them
+    for (const n of DDIM) expect(emdmSteps(n, EMDM), `${n}`).toBe(planCompare(n, EMDM, DDIM).emdm);
+    expect([20, 50, 100].map((n) => emdmSteps(n, EMDM))).toEqual([10, 10, 10]);
+    expect(emdmSteps(3, EMDM)).toBe(2);
+    expect(emdmSteps(0, EMDM)).toBe(1);
+  });
+
   it('the slider offers both models\u2019 counts; EMDM stays at its maximum past 10 and says so', () => {
     expect(compareStepChoices({ supportedSteps: EMDM }, { supportedSteps: DDIM })).toEqual(DDIM);
     expect(planCompare(4, EMDM, DDIM)).toEqual({ emdm: 4, ddim: 4, emdmCapped: false });

@@ -2,7 +2,7 @@
 // dice, Generate. It owns the DOM of the controls and turns it into a PageState; it never runs a model itself.
 import { byId, el } from './dom';
 import {
-  MAX_GUIDANCE, MAX_SECONDS, MAX_SEED, MIN_GUIDANCE, MIN_SECONDS, nearestSteps, randomSeed,
+  MAX_GUIDANCE, MAX_SECONDS, MAX_SEED, MIN_GUIDANCE, MIN_SECONDS, emdmSteps, nearestSteps, randomSeed,
   stepChoices, type Mode, type PageState, type StateLimits,
 } from './state';
 
@@ -185,6 +185,13 @@ export class Controls {
   }
 
   /** The state the controls show. */
+  /** The state with the step count the EMDM model runs (the slider may show DDIM's 20/50/100 in the compare view):
+   * what a timeline, an edit and live mode run, which have no DDIM side. */
+  readEmdm(): PageState {
+    const s = this.read();
+    return { ...s, steps: emdmSteps(s.steps, this.limits.supportedSteps) };
+  }
+
   read(): PageState {
     const compare = this.compare.checked;
     return {

@@ -84,7 +84,7 @@ export class LivePanel implements PoseDriver {
   /** the stream frame under the pose shown last (a reference to the stream's frame, not a copy) */
   private shownFrame: { frame: number; joints: Float32Array } | null = null;
   /** the piece of the stream the visitor's character was given: from/to on the live clock, windows seen then */
-  private piece: { from: number; to: number; windows: number } | null = null;
+  private piece: { from: number; to: number; windows: number; origin: readonly [number, number] } | null = null;
   private timer = 0;
   private counts = { started: 0, closed: 0 };
 
@@ -96,7 +96,7 @@ export class LivePanel implements PoseDriver {
     this.recordButton.addEventListener('click', () => void this.record());
     // steps or guidance changed while live: a new stream with them (the old one plays until it is ready)
     for (const id of ['steps', 'guidance']) byId(id).addEventListener('change', () => {
-      if (this.on) void this.start(`Restarting with ${page.controls.read().steps} steps, guidance ${page.controls.read().guidance.toFixed(1)}…`);
+      if (this.on) void this.start(`Restarting with ${page.controls.readEmdm().steps} steps, guidance ${page.controls.readEmdm().guidance.toFixed(1)}…`);
     });
     for (const tab of Array.from(document.querySelectorAll<HTMLButtonElement>('.modes [data-mode]'))) {
       tab.addEventListener('click', () => {
@@ -118,7 +118,7 @@ export class LivePanel implements PoseDriver {
     this.setOn(true);
     this.say(note);
     controls.setMode('text');
-    const s = controls.read();
+    const s = controls.readEmdm();
     const first = s.text.trim() || session.limits.defaultText;
     session.engine.cancel(); // a generation under way gives way to the stream
     let stream: LiveStream;
@@ -149,7 +149,7 @@ export class LivePanel implements PoseDriver {
     this.latencies = 0;
     this.add({ text: first, at: 0, latency: null });
     view.drive(this);
-    view.liveCaption(first, this.page.controls.read().steps);
+    view.liveCaption(first, this.page.controls.readEmdm().steps);
     clearInterval(this.timer);
     this.timer = window.setInterval(() => this.poll(), POLL_MS);
     this.say('Live: type a prompt and press Enter; the character blends into it.');
@@ -236,6 +236,10 @@ export class LivePanel implements PoseDriver {
       const pair = framePair(s, f);
       track = pair.track;
       this.shownFrame = pair.shown;
+      // the stage moved under the playhead (whole metres, as a walk goes on): the visitor's character's piece is on
+      // the old one, so it gets a new piece now rather than walk a metre or more off the camera until the next poll
+      const o = this.piece?.origin;
+      if (o && (o[0] !== pair.origin[0] || o[1] !== pair.origin[1])) this.feedCharacter(s, s.stats(), true);
     } catch (e) {
       this.notices.show('error', `Live mode stopped: ${describe(e)}`);
       this.stop();
@@ -272,14 +276,14 @@ export class LivePanel implements PoseDriver {
       if (last && last.latency === null && this.log.length > 1) {
         last.latency = st.latencies[st.latencies.length - 1];
         this.render();
-        this.page.view.liveCaption(last.text, this.page.controls.read().steps);
+        this.page.view.liveCaption(last.text, this.page.controls.readEmdm().steps);
       }
     }
     this.feedCharacter(s, st);
   }
 
   /** The visitor's character, when one is on the stage: the stream's frames from now to what is made, retargeted as a piece. */
-  private feedCharacter(s: LiveStream, st: LiveStats): void {
+  private feedCharacter(s: LiveStream, st: LiveStats, moved = false): void {
     const picker = this.page.view.picker;
     if (!picker.active) {
       this.piece = null;
@@ -288,13 +292,14 @@ export class LivePanel implements PoseDriver {
     const now = s.now();
     const made = st.windows + st.dropped;
     const p = this.piece;
-    if (p && p.windows === made && p.to - now > PIECE_MARGIN_S) return;
+    if (!moved && p && p.windows === made && p.to - now > PIECE_MARGIN_S) return;
     const from = Math.floor(now * s.fps);
     const to = Math.floor(st.bufferedTo * s.fps);
     if (to - from < 2) return;
     const joints = new Float32Array((to - from) * 66);
-    framesOnOneStage(s, from, to).forEach((g, k) => joints.set(g.joints, k * 66));
-    this.piece = { from: from / s.fps, to: to / s.fps, windows: made };
+    const frames = framesOnOneStage(s, from, to);
+    frames.forEach((g, k) => joints.set(g.joints, k * 66));
+    this.piece = { from: from / s.fps, to: to / s.fps, windows: made, origin: frames[0].origin };
     picker.setMotion({ frames: to - from, fps: s.fps, joints, features: new Float32Array(0) }, 'emdm-live', from / s.fps);
   }
 
@@ -337,10 +342,10 @@ export class LivePanel implements PoseDriver {
       const result: GenerateResult = {
         motion: { frames: m.frames, fps: m.fps, joints: m.joints, features: m.features },
         timings: { encodeMs: 0, stepMs: [], decodeMs: 0, totalMs: ms, backend: session.backend === 'webgpu' ? 'webgpu' : 'wasm', threads: 0 },
-        modelCalls: 0, sampler: 'ddgan', steps: controls.read().steps,
+        modelCalls: 0, sampler: 'ddgan', steps: controls.readEmdm().steps,
       };
-      const last = this.log[this.log.length - 1]?.text ?? controls.read().text;
-      const state = { ...controls.read(), mode: 'text' as const, text: last, seconds: m.frames / m.fps, compare: false };
+      const last = this.log[this.log.length - 1]?.text ?? controls.readEmdm().text;
+      const state = { ...controls.readEmdm(), mode: 'text' as const, text: last, seconds: m.frames / m.fps, compare: false };
       this.recorded = { state, label: `live recording (${(m.frames / m.fps).toFixed(1)} s)`, plan: null, main: { model: session.models.text!.name, result, track, ikMs: ms }, ddim: null };
       view.show(this.recorded);
       this.piece = null; // the visitor's character takes the stream again at the next poll
@@ -412,7 +417,7 @@ export function framesOnOneStage(s: Pick<LiveStream, 'fps' | 'frameAt'>, from: n
 }
 
 /** Stream frames f and f + 1 (on one stage) as a two-frame track; `shown` is frame f's joints on that stage. */
-export function framePair(s: Pick<LiveStream, 'fps' | 'frameAt'>, f: number): { track: PoseTrack; shown: { frame: number; joints: Float32Array } } {
+export function framePair(s: Pick<LiveStream, 'fps' | 'frameAt'>, f: number): { track: PoseTrack; shown: { frame: number; joints: Float32Array }; origin: readonly [number, number] } {
   const [a, b] = framesOnOneStage(s, f, f + 2);
   if (!a.pose || !b.pose) throw new Error('the live stream gave a frame without its pose (the stream has no solver)');
   const n = a.pose.quats.length / 4;
@@ -422,6 +427,7 @@ export function framePair(s: Pick<LiveStream, 'fps' | 'frameAt'>, f: number): { 
       ...(a.pose.offsets ? { offsets: a.pose.offsets } : {}),
     },
     shown: { frame: a.frame, joints: a.joints },
+    origin: a.origin,
   };
 }
 

@@ -67,6 +67,14 @@ export function framesFor(seconds: number, l: Pick<StateLimits, 'fps' | 'maxFram
   return Math.max(2, Math.min(l.maxFrames, Math.round(seconds * l.fps)));
 }
 
+/** The step count the EMDM model runs for a slider value: the largest it supports up to it, else its smallest (as
+ * the compare view's EMDM side: 20, 50 and 100, DDIM's counts, run 10). */
+export function emdmSteps(n: number, supported: number[]): number {
+  const e = [...supported].sort((a, b) => a - b);
+  const below = e.filter((s) => s <= n);
+  return below.length ? below[below.length - 1] : e[0];
+}
+
 /** The supported step count nearest to n (ties go to the larger count). */
 export function nearestSteps(n: number, supported: number[]): number {
   let best = supported[0];

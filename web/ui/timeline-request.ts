@@ -88,7 +88,7 @@ export type EditJob = (gen: EditGenerate, signal: AbortSignal, calls: Calls) => 
  */
 export async function runEditRequest(p: RequestPanel, kind: EditKind, job: EditJob): Promise<EditSummary> {
   const { session, view, controls } = p.page;
-  const state = controls.read();
+  const state = controls.readEmdm(); // the compare view's DDIM counts (20/50/100) are not EMDM's
   const t0 = performance.now();
   p.say('', null, kind);
   for (const k of ['timeline', 'inbetween', 'body', 'loop'] as const) p.working(k, '');

@@ -228,7 +228,7 @@ export class TimelinePanel implements RequestPanel {
     }
     history.replaceState(null, '', withTimeline(location.search, segs));
     // segments are reused only when made with the same steps and guidance as now
-    const st = this.page.controls.read();
+    const st = this.page.controls.readEmdm();
     const settings = `${st.steps}|${st.guidance}`;
     const previous = this.timelineSettings === settings ? this.timeline : null;
     return this.request('timeline', async (_gen, signal, calls) => {

@@ -228,11 +228,12 @@ class LiveCore:
             self.display = self.display[frm - self.base:]
             self.base = frm
 
-    def frame_at(self, p: int) -> np.ndarray:
-        """Joints of frame p as shown (display, (22, 3)), stage coordinates."""
+    def frame_at(self, p: int, centre: int | None = None) -> np.ndarray:
+        """Joints of frame p as shown (display, (22, 3)), stage coordinates; the stage first moved under the root of
+        frame ``centre`` (default p; the playhead: frames read ahead of it must not move the stage from what plays)."""
         q = max(p, self.base)
         self.extend(q)
-        self._recentre(q)
+        self._recentre(max(p if centre is None else centre, self.base))
         return self.display[q - self.base].copy()
 
 
