@@ -181,7 +181,8 @@ export function planTimeline(segments: readonly TimelineSegment[], limits: EditL
     conditionOf(s, i);
     const n = Number.isFinite(s.seconds) ? Math.round(s.seconds * fps) : NaN;
     if (!(n >= 1)) {
-      throw new EditError(`${label(i)} is ${Number.isFinite(s.seconds) ? fmtS(s.seconds) : String(s.seconds)} long; a segment needs at least one frame (${fmtS(1 / fps)}): set its seconds or remove it`, i);
+      const len = Number.isFinite(s.seconds) ? `is ${fmtS(s.seconds)} long` : Number.isNaN(s.seconds) ? 'has no length' : `is ${String(s.seconds)} long`;
+      throw new EditError(`${label(i)} ${len}; a segment needs at least one frame (${fmtS(1 / fps)}): set its seconds or remove it`, i);
     }
     if (!Number.isInteger(s.seed) || s.seed < 0 || s.seed > 0xffffffff) throw new EditError(`${label(i)}: seed must be an integer in 0…4294967295, got ${s.seed}`, i);
     // a segment longer than the whole timeline may be, refused before its windows are counted (1e308 s has Infinity frames)

@@ -59,6 +59,7 @@ describe('timeline plan', () => {
 
   it.each([
     ['a 0 s segment', [three10s[0], { prompt: 'wave', seconds: 0, seed: 1 }], 1, /segment 2 is 0 s long; a segment needs at least one frame \(0\.05 s\)/],
+    ['a segment with its seconds left blank', [three10s[0], { prompt: 'wave', seconds: Number.NaN, seed: 1 }], 1, /segment 2 has no length; a segment needs at least one frame/],
     ['a segment under one frame', [{ prompt: 'wave', seconds: 0.02, seed: 1 }], 0, /segment 1 is 0\.02 s long/],
     ['an empty prompt', [three10s[0], three10s[1], { prompt: '   ', seconds: 2, seed: 1 }], 2, /segment 3: the prompt is empty; type what the character should do in it, or remove the segment/],
     ['61 s in all', [...three10s, { prompt: 'walk', seconds: 31, seed: 4 }], null, /the timeline is 61 s in all; at most 60 s/],

@@ -290,7 +290,9 @@ export class CharacterPicker {
       this.shown = null;
     }
     this.host.builtIn.visible = true;
+    const hadFocus = document.activeElement === this.back;
     this.back.hidden = true;
+    if (hadFocus) document.getElementById('char-open')?.focus(); // the hidden button held the keyboard focus
     this.dlGlb.disabled = true;
     this.dlBvh.disabled = true;
     if (say) {

@@ -133,6 +133,11 @@ export class Controls {
    * Live mode on (`send` takes the prompts that Enter and the chips would generate; Generate is disabled, saying why)
    * or off (null).
    */
+  /** Whether live mode plays (what the prompt box sends goes to the stream). */
+  get liveOn(): boolean {
+    return this.live !== null;
+  }
+
   setLive(send: ((text: string) => void) | null): void {
     this.live = send;
     this.refresh();

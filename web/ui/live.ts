@@ -330,6 +330,7 @@ export class LivePanel implements PoseDriver {
     if (!s) return;
     const m = s.record();
     if (m.frames < 2) return this.say('Nothing to record yet.');
+    const hadFocus = document.activeElement === this.recordButton;
     this.recordButton.disabled = true;
     try {
       const { session, controls, view } = this.page;
@@ -354,6 +355,8 @@ export class LivePanel implements PoseDriver {
       this.notices.show('error', `Recording failed: ${describe(e)}`);
     } finally {
       this.recordButton.disabled = false;
+      // a disabled button drops the keyboard focus to the page: give it back to the button pressed
+      if (hadFocus && (document.activeElement === document.body || document.activeElement === null)) this.recordButton.focus();
     }
   }
 

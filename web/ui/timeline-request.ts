@@ -88,6 +88,11 @@ export type EditJob = (gen: EditGenerate, signal: AbortSignal, calls: Calls) => 
  */
 export async function runEditRequest(p: RequestPanel, kind: EditKind, job: EditJob): Promise<EditSummary> {
   const { session, view, controls } = p.page;
+  if (controls.liveOn) { // its result would play under the stream, unseen (Generate is off in live mode too)
+    const e = new EditError('Live mode is on: stop it with the Live button first, then make a timeline or an edit.');
+    p.say(e.message, null, kind);
+    throw e;
+  }
   const state = controls.readEmdm(); // the compare view's DDIM counts (20/50/100) are not EMDM's
   const t0 = performance.now();
   p.say('', null, kind);

@@ -15,7 +15,7 @@ interface Row {
 
 /** What the rows ask of their panel. */
 export interface RowEvents {
-  /** Enter in a prompt: generate the timeline */
+  /** Enter in a prompt or a seconds field: generate the timeline */
   generate(): void;
   /** ↻ on row i */
   regenerate(i: number): void;
@@ -52,9 +52,11 @@ export class TimelineRows {
     };
     kind.addEventListener('change', sync);
     seconds.addEventListener('input', () => this.refreshTotal());
-    prompt.addEventListener('keydown', (e) => {
-      if (e.key === 'Enter') this.on.generate();
-    });
+    for (const field of [prompt, seconds]) { // Enter in a segment's prompt or its seconds: generate the timeline
+      field.addEventListener('keydown', (e) => {
+        if (e.key === 'Enter') this.on.generate();
+      });
+    }
     this.rows.push(row);
     this.list.append(li);
     sync();
