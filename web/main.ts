@@ -23,6 +23,7 @@ import { pageFlagNotices, parseState, randomSeed, stateToSearch, unknownParamsNo
 import { connectTestApi, installTestApi } from './ui/testapi';
 import { KnowsPanel, markWeakActions } from './ui/knows';
 import { LivePanel } from './ui/live';
+import { linkOf } from './ui/provenance';
 import { TimelinePanel } from './ui/timeline';
 import { describe, promptNote, View } from './ui/view';
 
@@ -78,6 +79,8 @@ async function main(): Promise<void> {
   // ------------------------------------------------------------ controls, and generating as the page does
   let generate: PageContext['generate'] = () => Promise.reject(new Error('the page is still starting'));
   const { controls, knows } = buildControls(manifest, models, limits, session, parsed.state, (s) => void generate(s).catch(() => undefined));
+  // a motion shown (one generation, a timeline, an edit, a live recording): the address says what the link makes
+  view.onShown = () => writeLink(controls.read());
   generate = pageGenerate(session, controls, knows, models);
 
   // ------------------------------------------------------------ panels and the test API get the page
@@ -171,7 +174,7 @@ function buildControls(manifest: Manifest, models: Models, limits: StateLimits, 
     generate: () => generate(controls.read()),
     cancel: () => session.engine.cancel(),
     change: (s) => {
-      history.replaceState(null, '', stateToSearch(s));
+      writeLink(s);
       if (s.compare) preloadDiffusion();
       else view.leaveCompare();
     },
@@ -199,6 +202,21 @@ function buildControls(manifest: Manifest, models: Models, limits: StateLimits, 
   }
   history.replaceState(null, '', stateToSearch(controls.read()));
   return { controls, knows };
+}
+
+/**
+ * The page's address for the controls' state and the motion on screen (web/ui/provenance.ts linkOf): a timeline stays
+ * in it across control changes; an edit or a live recording, which a link cannot hold, is named in a note under
+ * Copy link (#link-note, which then describes the button).
+ */
+function writeLink(state: PageState): void {
+  const { search, note } = linkOf(state, view.shown);
+  history.replaceState(null, '', search);
+  const el = byId('link-note');
+  el.textContent = note;
+  el.hidden = !note;
+  if (note) byId('copy-link').setAttribute('aria-describedby', 'link-note');
+  else byId('copy-link').removeAttribute('aria-describedby');
 }
 
 /** What the models do well (capabilities files): the list beside the prompt, the weak actions, the far-prompt notice. */

@@ -20,7 +20,9 @@ export interface JointsDocument {
   positions: number[][][];
 }
 
-/** The JSON text of `joints` (frames × joints × 3, metres); `generator` says what made it (model, seed, …). */
+/** The JSON text of `joints` (frames × joints × 3, metres); `generator` says what made it (model, seed, …; the demo
+ * page's block, with a timeline's segments, an edit's inputs or a live recording's prompts: docs/ARCHITECTURE.md
+ * "Motion files"). */
 export function motionToJSON(s: SkeletonLike & { parents: number[] }, joints: Float32Array, frames: number, fps: number,
   generator: Record<string, unknown>): string {
   const J = s.joints.length;

@@ -32,6 +32,10 @@ test('live mode: keyboard toggle, a character that keeps moving, prompts by Ente
   await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
   expect(await page.evaluate(() => window.emdm.error)).toBe('');
   await page.locator('#prompt').fill('a person walks');
+  // a motion on screen before live mode: its downloads are on
+  await page.evaluate(() => window.emdm.generate({ mode: 'text', text: 'a person walks', seconds: 1, steps: 2 }));
+  await expect(page.locator('#dl-bvh')).toBeEnabled();
+  const streamSeed = Number(await page.locator('#seed').inputValue());
 
   // on by keyboard: the toggle says it is pressed, the prompt box has the focus, the playback bar gives way
   const toggle = page.locator('#live');
@@ -43,6 +47,13 @@ test('live mode: keyboard toggle, a character that keeps moving, prompts by Ente
   await expect(page.locator('#prompt')).toBeFocused();
   await expect(page.locator('#playback')).toBeHidden();
   await expect(page.locator('#generate')).toBeDisabled();
+  // nothing recorded yet: the downloads would write the motion from before live mode, so they are off, saying why
+  for (const id of ['#dl-bvh', '#dl-glb', '#dl-json']) {
+    await expect(page.locator(id)).toBeDisabled();
+    await expect(page.locator(id)).toHaveAttribute('aria-describedby', 'dl-note');
+  }
+  await expect(page.locator('#dl-note')).toBeVisible();
+  await expect(page.locator('#dl-note')).toContainText('Record last 60 s');
 
   // the character moves on its own: two looks at the live clock, two poses
   await page.waitForFunction(() => window.emdm.live!.last() !== null);
@@ -95,10 +106,28 @@ test('live mode: keyboard toggle, a character that keeps moving, prompts by Ente
   expect(typeof s.stats!.underruns).toBe('number');
   expect(s.stats!.windows).toBeGreaterThan(3);
 
+  // another seed in the controls does not change the stream's (the recording's JSON names the stream's)
+  await page.evaluate(() => {
+    const seed = document.getElementById('seed') as HTMLInputElement;
+    seed.value = '123';
+    seed.dispatchEvent(new Event('input'));
+  });
   // Record: the last seconds become the page's motion, the BVH download writes them
   await page.locator('#live-record').click();
   await expect(page.locator('#live-hint')).toContainText('Recorded the last');
   await expect(page.locator('#dl-bvh')).toBeEnabled();
+  await expect(page.locator('#dl-note')).toBeHidden();
+  expect(await page.locator('#dl-json').getAttribute('aria-describedby')).toBeNull();
+  // the JSON says what was recorded: the prompts (times in the recording), the stream's seed
+  const [jsonDl] = await Promise.all([page.waitForEvent('download'), page.locator('#dl-json').click()]);
+  const doc = JSON.parse(fs.readFileSync((await jsonDl.path())!, 'utf8'));
+  const recorded = doc.frames / doc.fps;
+  expect(doc.generator).toMatchObject({ kind: 'live', mode: 'text', text: chipText, seed: streamSeed, steps: 2 });
+  const texts = (doc.generator.prompts as { text: string; at: number }[]).map((p) => p.text);
+  expect(texts.at(-1)).toBe(chipText);
+  expect(texts).toContain('a person squats down');
+  for (const p of doc.generator.prompts.slice(1) as { at: number }[]) expect(p.at).toBeGreaterThan(0);
+  for (const p of doc.generator.prompts as { at: number }[]) expect(p.at).toBeLessThanOrEqual(recorded + 0.1);
   const [dl] = await Promise.all([page.waitForEvent('download'), page.locator('#dl-bvh').click()]);
   const bvh = fs.readFileSync((await dl.path())!, 'utf8');
   expect(bvh.split('\n')[0].trim()).toBe('HIERARCHY');

@@ -178,6 +178,69 @@ test('a regenerated timeline\'s link reproduces it exactly (every window depends
   await Promise.all([mine.close(), other.close()]);
 });
 
+/** The joints JSON the page's download writes now. */
+async function downloadJson(p: Page): Promise<{ frames: number; generator: Record<string, unknown> }> {
+  const [dl] = await Promise.all([p.waitForEvent('download'), p.locator('#dl-json').click()]);
+  return JSON.parse(fs.readFileSync((await dl.path())!, 'utf8'));
+}
+
+test('the link and the JSON say what is on screen: a timeline stays in the link, an edit is named, a new Generate replaces it', async ({ browser }) => {
+  const mine = await browser.newPage();
+  const watchMine = watchPage(mine);
+  await mine.goto(`/?noauto=1&backend=wasm&steps=${STEPS}&mode=text&text=a+person+walks`);
+  await mine.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+  const segs = [
+    { prompt: 'a person walks forward', seconds: 2, seed: 1 },
+    { prompt: 'a person waves', seconds: 1.5, seed: 2 },
+    { prompt: 'a person sits down', seconds: 1, seed: 3 },
+  ];
+  const tl = JSON.stringify(segs.map((s) => [s.prompt, s.seconds, s.seed]));
+  const param = (name: string) => new URL(mine.url()).searchParams.get(name);
+  await mine.evaluate((x) => window.emdm.edit!.setSegments(x), segs);
+  await mine.evaluate(() => window.emdm.edit!.generateAll());
+  expect(param('tl')).toBe(tl);
+
+  // Length nudged, the prompt box typed in: the link still makes the timeline on screen
+  await mine.locator('#seconds').fill('4');
+  await mine.locator('#prompt').fill('a person jumps');
+  expect([param('seconds'), param('text'), param('tl')]).toEqual(['4', 'a person jumps', tl]);
+  await expect(mine.locator('#link-note')).toBeHidden();
+  // the JSON names every segment, and the first one (not the prompt box) stands for the timeline
+  const json = await downloadJson(mine);
+  expect(json.frames).toBe(90);
+  expect(json.generator).toMatchObject({ kind: 'timeline', mode: 'text', text: 'a person walks forward', seed: 1, steps: STEPS });
+  expect((json.generator.segments as { prompt: string; seconds: number; seed: number }[]).map((g) => [g.prompt, g.seconds, g.seed])).toEqual(JSON.parse(tl));
+
+  // the same timeline again: nothing is regenerated, and "Last generation" says so (no "0 threads", no "× 0")
+  expect((await mine.evaluate(() => window.emdm.edit!.generateAll())).windows).toBe(0);
+  await expect(mine.locator('#t-step')).toHaveText('none: nothing was regenerated');
+  await expect(mine.locator('#t-backend')).not.toContainText('0 threads');
+  await expect(mine.locator('#t-encode')).toHaveText('–');
+
+  // an in-between: a link cannot hold it; the link stays the timeline's and the note under Copy link says so
+  await mine.evaluate(() => window.emdm.edit!.inBetween('a person spins around'));
+  expect(param('tl')).toBe(tl);
+  await expect(mine.locator('#link-note')).toBeVisible();
+  await expect(mine.locator('#link-note')).toContainText('The in-between on screen is not in this link');
+  await expect(mine.locator('#copy-link')).toHaveAttribute('aria-describedby', 'link-note');
+  await mine.locator('#prompt').fill('a person walks');
+  expect(param('tl')).toBe(tl);
+  const edited = await downloadJson(mine);
+  const seed = Number(/seed (\d+)/.exec((await mine.locator('#caption small').textContent())!)![1]);
+  expect(edited.generator).toMatchObject({ kind: 'edit', text: 'a person spins around', seed, edit: { type: 'inbetween', keepFirstSeconds: 1, keepLastSeconds: 1 } });
+  expect(edited.generator.base).toEqual(json.generator);
+
+  // one motion generated: it replaces the timeline in the link, the note goes, the JSON is that generation's
+  await mine.evaluate((s) => window.emdm.generate({ mode: 'text', text: 'a person walks', seconds: 1, steps: s, seed: 3 }), STEPS);
+  expect(param('tl')).toBeNull();
+  expect(param('seed')).toBe('3');
+  await expect(mine.locator('#link-note')).toBeHidden();
+  expect(await mine.locator('#copy-link').getAttribute('aria-describedby')).toBeNull();
+  expect((await downloadJson(mine)).generator).toEqual({ kind: 'generate', model: 'emdm-t2m-web', mode: 'text', text: 'a person walks', steps: STEPS, guidance: expect.any(Number), seed: 3 });
+  watchMine.assertClean();
+  await mine.close();
+});
+
 test('regenerating segment 2 keeps segment 1 as it was', async () => {
   const before = (await page.evaluate(() => window.emdm.edit!.current()))!;
   const r = await page.evaluate(() => window.emdm.edit!.regenerate(1));

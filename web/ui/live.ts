@@ -16,6 +16,7 @@ import { fileStem } from './downloads';
 import type { KnowsPanel } from './knows';
 import type { Notices } from './notices';
 import type { PageContext } from './page-context';
+import { liveSource } from './provenance';
 import type { Generation } from './session';
 import type { PoseDriver } from './view';
 import { describe } from './view';
@@ -75,6 +76,8 @@ export class LivePanel implements PoseDriver {
   private unchecked: string | null = null;
   /** the recording that stays when live mode is left */
   private recorded: Generation | null = null;
+  /** the playing stream's seed, steps and guidance (a recording's JSON names them: web/ui/provenance.ts) */
+  private made = { seed: 0, steps: 0, guidance: 0 };
   private displayed = 0;
   private repeated = 0;
   private poseMs = 0;
@@ -141,6 +144,7 @@ export class LivePanel implements PoseDriver {
     }
     const old = this.stream;
     this.stream = stream;
+    this.made = { seed: s.seed, steps: s.steps, guidance: s.guidance };
     this.counts.started++;
     if (old) this.closeStream(old);
     this.piece = null;
@@ -329,6 +333,7 @@ export class LivePanel implements PoseDriver {
     const s = this.stream;
     if (!s) return;
     const m = s.record();
+    const end = s.now(); // where the recording ends on the live clock (its prompts' times: liveSource)
     if (m.frames < 2) return this.say('Nothing to record yet.');
     const hadFocus = document.activeElement === this.recordButton;
     this.recordButton.disabled = true;
@@ -347,7 +352,8 @@ export class LivePanel implements PoseDriver {
       };
       const last = this.log[this.log.length - 1]?.text ?? controls.readEmdm().text;
       const state = { ...controls.readEmdm(), mode: 'text' as const, text: last, seconds: m.frames / m.fps, compare: false };
-      this.recorded = { state, label: `live recording (${(m.frames / m.fps).toFixed(1)} s)`, plan: null, main: { model: session.models.text!.name, result, track, ikMs: ms }, ddim: null };
+      this.recorded = { state, label: `live recording (${(m.frames / m.fps).toFixed(1)} s)`, plan: null, main: { model: session.models.text!.name, result, track, ikMs: ms }, ddim: null,
+        source: liveSource(this.log, end, m.frames / m.fps, this.made) };
       view.show(this.recorded);
       this.piece = null; // the visitor's character takes the stream again at the next poll
       this.say(`Recorded the last ${(m.frames / m.fps).toFixed(1)} s: the downloads write it.`);

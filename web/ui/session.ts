@@ -14,6 +14,7 @@ import type { PoseTrack } from '../../src/three';
 import { compareStepChoices, planCompare, type ComparePlan } from './compare';
 import { Engine, modelForMode, pickModels, type LoadEvents } from './engine';
 import { examplePrompts } from './examples';
+import type { MotionSource } from './provenance';
 import { framesFor, type BackendChoice, type PageState, type StateLimits } from './state';
 import { emptyCounters, type Counters } from './counters';
 
@@ -34,6 +35,9 @@ export interface Generation {
   plan: ComparePlan | null;
   main: Produced;
   ddim: Produced | null;
+  /** what made the motion when it is not one generation of `state` (a timeline, an edit, a live recording):
+   * the JSON download's generator block and the page's link read it (web/ui/provenance.ts) */
+  source?: MotionSource;
 }
 
 export interface GenerationHooks {

@@ -9,6 +9,7 @@ import type { WireBeginOptions } from '../../src/worker/protocol';
 import type { PoseTrack } from '../../src/three';
 import { isAbort } from './engine';
 import type { PageContext } from './page-context';
+import type { MotionSource } from './provenance';
 import type { Generation } from './session';
 import type { PageState } from './state';
 
@@ -47,6 +48,8 @@ export interface Shown {
   model: string;
   seed: number;
   condition: EditCondition | null;
+  /** what made it (the segments, or the edit, its inputs and the motion it edited): the JSON download and the link */
+  source: MotionSource;
 }
 
 /** What one window's generation took (a GenerateResult without its motion). */
@@ -220,14 +223,19 @@ function generationOf(page: PageContext, state: PageState, s: Shown, track: Pose
     motion: { frames: s.motion.frames, fps: s.motion.fps, joints: s.display, features: s.motion.features },
     timings: {
       encodeMs: sum((r) => r.timings.encodeMs), stepMs: results.flatMap((r) => r.timings.stepMs), decodeMs: sum((r) => r.timings.decodeMs),
+      // threads 0: no window ran (the view says nothing was regenerated, not "0 threads")
       totalMs: ms, backend: first?.timings.backend ?? (page.session.backend === 'webgpu' ? 'webgpu' : 'wasm'), threads: first?.timings.threads ?? 0,
     },
     modelCalls: sum((r) => r.modelCalls), sampler: first?.sampler ?? 'ddgan', steps: first?.steps ?? state.steps,
   };
+  // the mode and prompt or action of what was generated (one condition), not the main prompt box's
+  const c = s.condition;
+  const made = !c ? {} : c.action !== undefined ? { mode: 'action' as const, action: String(c.action) } : { mode: 'text' as const, text: c.prompt ?? '' };
   return {
-    state: { ...state, seconds: s.motion.frames / s.motion.fps, compare: false, seed: s.seed },
+    state: { ...state, ...made, seconds: s.motion.frames / s.motion.fps, compare: false, seed: s.seed },
     label: s.label, plan: null,
     main: { model: s.model, result, track, ikMs: 0 },
     ddim: null,
+    source: s.source,
   };
 }

@@ -13,6 +13,7 @@ import { decodeJoints } from '../../src/motion/decode';
 import { recoverJoints } from '../../src/motion/recover';
 import { el } from './dom';
 import type { PageContext } from './page-context';
+import { described, type Described, type EditInputs, type EditSource } from './provenance';
 import { randomSeed } from './state';
 import { type EditJob, type EditKind, type EditSummary, type RequestPanel, type Shown, runEditRequest } from './timeline-request';
 import { TimelineRows, button } from './timeline-rows';
@@ -206,15 +207,15 @@ export class TimelinePanel implements RequestPanel {
     return decodeJoints(features, frames, this.page.session.manifest.skeleton, { smooth: true, footCleanup: true, loop });
   }
 
-  /** The motion the edit tools start from: the one on screen (the page's or this panel's). */
-  private base(): { motion: EditMotion; condition: EditCondition | null } {
+  /** The motion the edit tools start from: the one on screen (the page's or this panel's), and its description. */
+  private base(): { motion: EditMotion; condition: EditCondition | null; shown: Described } {
     const shown = this.page.view.shown;
     if (!shown) throw new EditError('there is no motion on screen yet: generate one first');
     const m = shown.result.motion;
-    if (this.current && this.current.features === m.features) return { motion: this.current, condition: this.currentCondition };
+    if (this.current && this.current.features === m.features) return { motion: this.current, condition: this.currentCondition, shown: described(shown) };
     const s = shown.state;
     const condition = s.mode === 'text' ? { prompt: s.text } : s.mode === 'action' ? { action: s.action } : null;
-    return { motion: { frames: m.frames, fps: m.fps, features: m.features, joints: recoverJoints(m.features, m.frames) }, condition };
+    return { motion: { frames: m.frames, fps: m.fps, features: m.features, joints: recoverJoints(m.features, m.frames) }, condition, shown: described(shown) };
   }
 
   // ------------------------------------------------------------ the four modes
@@ -265,6 +266,7 @@ export class TimelinePanel implements RequestPanel {
         motion: t, display: r.display, pose: r.pose, starts: t.starts, windows: calls.n, results: calls.results,
         label: label.length > 120 ? `${label.slice(0, 117)}…` : label, model: this.modelFor(segs[0]), seed: segs[0].seed,
         condition: one ? (segs[0].action !== undefined ? { action: segs[0].action } : { prompt: segs[0].prompt }) : null,
+        source: { kind: 'timeline', segments: segs.map((g) => ({ ...g })), models: segs.map((g) => this.modelFor(g)), steps: st.steps, guidance: st.guidance },
       };
     }).then((r) => {
       // the URL says what is on screen: the page's state and the timeline (a reload restores the segments)
@@ -281,7 +283,7 @@ export class TimelinePanel implements RequestPanel {
 
   async inBetween(prompt: string, first = 1, last = 1): Promise<EditSummary> {
     return this.request('inbetween', async (gen, _signal, calls) => {
-      const { motion } = this.base();
+      const { motion, shown } = this.base();
       const c = { prompt };
       const seed = randomSeed();
       const fps = motion.fps;
@@ -292,26 +294,28 @@ export class TimelinePanel implements RequestPanel {
       return {
         motion: r, display: this.decode(r.features, r.frames), windows: 1, results: calls.results,
         label: `${prompt.trim()} (in-between)`, model: this.modelFor(c), seed, condition: c,
+        source: editSource({ type: 'inbetween', keepFirstSeconds: first, keepLastSeconds: last }, c, seed, shown),
       };
     });
   }
 
   async bodyEdit(part: KeptPart, prompt: string): Promise<EditSummary> {
     return this.request('body', async (gen, _signal, calls) => {
-      const { motion } = this.base();
+      const { motion, shown } = this.base();
       const c = { prompt };
       const seed = randomSeed();
       const r = await bodyPartEdit(motion, part, c, seed, gen, this.limits());
       return {
         motion: r, display: this.decode(r.features, r.frames), windows: 1, results: calls.results,
         label: `${prompt.trim()} (${part === 'lower' ? 'upper body' : 'legs'} edited)`, model: this.modelFor(c), seed, condition: c,
+        source: editSource({ type: 'body', kept: part }, c, seed, shown),
       };
     });
   }
 
   async loop(inPlace: boolean): Promise<EditSummary> {
     return this.request('loop', async (gen, _signal, calls) => {
-      const { motion, condition: own } = this.base();
+      const { motion, condition: own, shown } = this.base();
       // a timeline of several prompts loops its last window with its last segment's prompt (src/edit.ts makeLoop)
       const last = this.timeline && motion.features === this.timeline.features ? this.timeline.segments.at(-1)?.segment : undefined;
       const condition = own ?? (last ? (last.action !== undefined ? { action: last.action } : { prompt: last.prompt }) : null);
@@ -323,6 +327,7 @@ export class TimelinePanel implements RequestPanel {
       return {
         motion: r.clip, display: this.decode(r.clip.features, r.clip.frames, true), windows: 1, results: calls.results,
         label: `${what} (loop${inPlace ? ', in place' : ''})`, model: this.modelFor(condition), seed, condition,
+        source: editSource({ type: 'loop', inPlace }, condition, seed, shown),
       };
     });
   }
@@ -349,6 +354,11 @@ export class TimelinePanel implements RequestPanel {
       lastLoopFull: () => (this.lastLoop ? { frames: this.lastLoop.frames, joints: Array.from(this.lastLoop.joints) } : null),
     };
   }
+}
+
+/** An edit's source: its inputs, the condition and seed of its window, the motion it edited. */
+function editSource(edit: EditInputs, condition: EditCondition, seed: number, base: Described): EditSource {
+  return { kind: 'edit', edit, condition: { ...condition }, seed, base };
 }
 
 // ---------------------------------------------------------------- small DOM helpers

@@ -14,14 +14,16 @@ import type { WireStepPreview } from '../../src/worker/client';
 import type { Capabilities } from '../../src/capabilities';
 import { CharacterPicker } from './character-picker';
 import { byId, formatBytes, formatMs, saveBlob } from './dom';
-import { fileStem, motionToBVH } from './downloads';
+import { LIVE_DOWNLOAD_NOTE, fileStem, motionToBVH, setDownloads } from './downloads';
 import type { ErrorPanel, Notices } from './notices';
 import { PlaybackBar } from './playback';
 import type { Generation, Produced } from './session';
 import { realSpeedOf, showFigures } from './compare-figures';
 import { Stage } from './stage';
+import { generatorOf, seedOf, type MotionSource } from './provenance';
 import type { PageState } from './state';
 import { StepStrip } from './step-strip';
+import { timingCells } from './timings';
 
 type Skeleton = Manifest['skeleton'];
 type Character = ReturnType<typeof createCharacter>;
@@ -131,6 +133,8 @@ export interface Shown {
   model: string;
   steps: number;
   ikMs: number;
+  /** what made it, when not one generation of `state` (web/ui/provenance.ts) */
+  source?: MotionSource;
 }
 
 /**
@@ -170,6 +174,10 @@ export class View {
   private placed: Float32Array | undefined;
   /** poses the character instead of the player (live mode), null otherwise */
   private driver: PoseDriver | null = null;
+  /** live mode with no recording of it shown yet: the downloads would write a motion that is not on screen */
+  private liveUnrecorded = false;
+  /** called after each show() (the page rewrites its link: web/main.ts) */
+  onShown: (() => void) | null = null;
 
   private readonly progress = byId('progress');
   private readonly progressFill = byId('progress-fill');
@@ -239,7 +247,10 @@ export class View {
    * hidden), or from the player again (null).
    */
   drive(driver: PoseDriver | null): void {
+    // entering live mode (not a restarted stream): nothing of it is recorded yet
+    if (!driver || !this.driver) this.liveUnrecorded = !!driver;
     this.driver = driver;
+    this.syncDownloads();
     byId('playback').hidden = !!driver;
     // the last generation's caption and timings do not describe a live stream: liveCaption names what plays
     this.timingsHud.hidden = !!driver || !this.shown || !!this.compareShown;
@@ -258,12 +269,19 @@ export class View {
     this.stage.setPath(main.track.rootPos, ddim || this.driver ? 0 : main.track.frames);
     if (!this.driver) this.stage.snapTo(main.track.rootPos);
     if (ddim) this.stage.snapTo2(ddim.track.rootPos);
-    this.shown = { state: s, result: main.result, track: main.track, label, model: main.model, steps: main.result.steps, ikMs: main.ikMs };
+    this.shown = { state: s, result: main.result, track: main.track, label, model: main.model, steps: main.result.steps, ikMs: main.ikMs, ...(g.source ? { source: g.source } : {}) };
+    if (this.driver && g.source?.kind === 'live') this.liveUnrecorded = false; // a recording of live mode: the downloads write it
     this.picker.setMotion(main.result.motion, fileStem(label, s.seed));
     this.showCaption(g);
     if (ddim) this.showPanels(main, ddim, realSpeedOf(this.textCapabilities, main.result.promptCheck));
     else this.showTimings(main.result, main.ikMs);
-    for (const id of ['dl-bvh', 'dl-glb', 'dl-json']) byId(id, HTMLButtonElement).disabled = false;
+    this.syncDownloads();
+    this.onShown?.();
+  }
+
+  /** The download buttons: enabled with a motion to write, except in live mode before a recording (#dl-note says why). */
+  private syncDownloads(): void {
+    setDownloads(!!this.shown && !this.liveUnrecorded, this.liveUnrecorded ? LIVE_DOWNLOAD_NOTE : '');
   }
 
   /** The text model's capabilities, once loaded (they arrive after the models): a compare view already on screen gets
@@ -317,14 +335,10 @@ export class View {
   }
 
   private showTimings(r: GenerateResult, ikMs: number): void {
-    const t = r.timings;
-    const mean = t.stepMs.length ? t.stepMs.reduce((a, b) => a + b, 0) / t.stepMs.length : NaN;
-    byId('t-encode').textContent = formatMs(t.encodeMs);
-    byId('t-step').textContent = `${formatMs(mean)} × ${t.stepMs.length}`;
-    byId('t-decode').textContent = formatMs(t.decodeMs + ikMs);
-    byId('t-total').textContent = formatMs(t.totalMs + ikMs);
-    byId('t-backend').textContent = `${t.backend === 'webgpu' ? 'WebGPU' : 'WASM'} · ${t.threads} thread${t.threads === 1 ? '' : 's'}`;
-    byId('t-calls').textContent = String(r.modelCalls);
+    const c = timingCells(r, ikMs);
+    for (const [id, text] of [['t-encode', c.encode], ['t-step', c.step], ['t-decode', c.decode], ['t-total', c.total], ['t-backend', c.backend], ['t-calls', c.calls]]) {
+      byId(id).textContent = text;
+    }
     this.timingsHud.hidden = false;
   }
 
@@ -410,19 +424,17 @@ export class View {
       }
     };
     byId('dl-bvh').addEventListener('click', guard((s) => {
-      const { blob, filename } = motionToBVH(skeleton, s.result.motion, fileStem(s.label, s.state.seed), byId('dl-bvh-units', HTMLSelectElement).value);
+      const { blob, filename } = motionToBVH(skeleton, s.result.motion, fileStem(s.label, seedOf(s)), byId('dl-bvh-units', HTMLSelectElement).value);
       saveBlob(blob, filename);
     }));
     byId('dl-glb').addEventListener('click', guard(async (s) => {
       const glb = await motionToGLB(skeleton, s.track);
-      saveBlob(new Blob([glb], { type: 'model/gltf-binary' }), `${fileStem(s.label, s.state.seed)}.glb`);
+      saveBlob(new Blob([glb], { type: 'model/gltf-binary' }), `${fileStem(s.label, seedOf(s))}.glb`);
     }));
     byId('dl-json').addEventListener('click', guard((s) => {
-      const json = motionToJSON(skeleton, s.result.motion.joints, s.result.motion.frames, s.result.motion.fps, {
-        model: s.model, mode: s.state.mode, text: s.state.mode === 'text' ? s.state.text : undefined,
-        action: s.state.mode === 'action' ? s.state.action : undefined, steps: s.steps, guidance: s.state.guidance, seed: s.state.seed,
-      });
-      saveBlob(new Blob([json], { type: 'application/json' }), `${fileStem(s.label, s.state.seed)}.json`);
+      // what made the motion on screen: one generation, a timeline's segments, an edit and its base, a live recording's prompts
+      const json = motionToJSON(skeleton, s.result.motion.joints, s.result.motion.frames, s.result.motion.fps, generatorOf(s));
+      saveBlob(new Blob([json], { type: 'application/json' }), `${fileStem(s.label, seedOf(s))}.json`);
     }));
   }
 
