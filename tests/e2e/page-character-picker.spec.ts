@@ -321,7 +321,10 @@ test("the visitor's character in live mode walks under the camera, where the str
   }
   console.log(`live, visitor's character: pelvis to the stream's root ${gaps.map((g) => g.toFixed(2)).join(' ')} m`);
   expect(gaps.length).toBeGreaterThanOrEqual(12);
-  expect(Math.max(...gaps)).toBeLessThan(0.15);
+  // the two readings are a frame or two apart on a loaded machine (0.25 m once: 0.2 s of walking); the bug was 2–6 m
+  const sorted = [...gaps].sort((a, b) => a - b);
+  expect(sorted[Math.floor(sorted.length / 2)]).toBeLessThan(0.05);
+  expect(sorted[sorted.length - 1]).toBeLessThan(0.6);
   await page.locator('#live').click();
   watch.assertClean();
 });

@@ -195,15 +195,16 @@ test('the link and the JSON say what is on screen: a timeline stays in the link,
     { prompt: 'a person sits down', seconds: 1, seed: 3 },
   ];
   const tl = JSON.stringify(segs.map((s) => [s.prompt, s.seconds, s.seed]));
-  const param = (name: string) => new URL(mine.url()).searchParams.get(name);
+  // the page's own address (page.url() follows history.replaceState only when its event arrives: late on a loaded machine)
+  const param = (name: string) => mine.evaluate((n) => new URLSearchParams(location.search).get(n), name);
   await mine.evaluate((x) => window.emdm.edit!.setSegments(x), segs);
   await mine.evaluate(() => window.emdm.edit!.generateAll());
-  expect(param('tl')).toBe(tl);
+  expect(await param('tl')).toBe(tl);
 
   // Length nudged, the prompt box typed in: the link still makes the timeline on screen
   await mine.locator('#seconds').fill('4');
   await mine.locator('#prompt').fill('a person jumps');
-  expect([param('seconds'), param('text'), param('tl')]).toEqual(['4', 'a person jumps', tl]);
+  expect(await Promise.all([param('seconds'), param('text'), param('tl')])).toEqual(['4', 'a person jumps', tl]);
   await expect(mine.locator('#link-note')).toBeHidden();
   // the JSON names every segment, and the first one (not the prompt box) stands for the timeline
   const json = await downloadJson(mine);
@@ -219,12 +220,12 @@ test('the link and the JSON say what is on screen: a timeline stays in the link,
 
   // an in-between: a link cannot hold it; the link stays the timeline's and the note under Copy link says so
   await mine.evaluate(() => window.emdm.edit!.inBetween('a person spins around'));
-  expect(param('tl')).toBe(tl);
+  expect(await param('tl')).toBe(tl);
   await expect(mine.locator('#link-note')).toBeVisible();
   await expect(mine.locator('#link-note')).toContainText('The in-between on screen is not in this link');
   await expect(mine.locator('#copy-link')).toHaveAttribute('aria-describedby', 'link-note');
   await mine.locator('#prompt').fill('a person walks');
-  expect(param('tl')).toBe(tl);
+  expect(await Promise.all([param('text'), param('tl')])).toEqual(['a person walks', tl]);
   const edited = await downloadJson(mine);
   const seed = Number(/seed (\d+)/.exec((await mine.locator('#caption small').textContent())!)![1]);
   expect(edited.generator).toMatchObject({ kind: 'edit', text: 'a person spins around', seed, edit: { type: 'inbetween', keepFirstSeconds: 1, keepLastSeconds: 1 } });
@@ -232,8 +233,8 @@ test('the link and the JSON say what is on screen: a timeline stays in the link,
 
   // one motion generated: it replaces the timeline in the link, the note goes, the JSON is that generation's
   await mine.evaluate((s) => window.emdm.generate({ mode: 'text', text: 'a person walks', seconds: 1, steps: s, seed: 3 }), STEPS);
-  expect(param('tl')).toBeNull();
-  expect(param('seed')).toBe('3');
+  expect(await param('tl')).toBeNull();
+  expect(await param('seed')).toBe('3');
   await expect(mine.locator('#link-note')).toBeHidden();
   expect(await mine.locator('#copy-link').getAttribute('aria-describedby')).toBeNull();
   expect((await downloadJson(mine)).generator).toEqual({ kind: 'generate', model: 'emdm-t2m-web', mode: 'text', text: 'a person walks', steps: STEPS, guidance: expect.any(Number), seed: 3 });
