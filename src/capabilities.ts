@@ -174,7 +174,7 @@ export function checkPrompt(caps: Capabilities, embedding: ArrayLike<number>): P
   if (embedding.length !== a.dim) throw new RangeError(`checkPrompt: the embedding has ${embedding.length} values, ${capabilitiesFile(caps.model)} ${a.dim}`);
   const v = anchorVectors(caps, capabilitiesFile(caps.model));
   const cos = a.texts.map((_, i) => dot(v, i, embedding, a.dim));
-  const best = cos.map((_, i) => i).sort((x, y) => cos[y] - cos[x] || x - y)[0];
+  const best = cos.reduce((b, c, i) => (c > cos[b] ? i : b), 0); // the first of the largest
   const action = a.actions[best];
   const coveredSet = new Set(caps.actions.filter((r) => r.covered).map((r) => r.label));
   const covered = coveredSet.has(action);

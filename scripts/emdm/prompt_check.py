@@ -51,11 +51,12 @@ def check(caps: dict, emb: np.ndarray) -> dict:
     cos = vecs @ emb
     best = int(np.argmax(cos))
     action = a["actions"][best]
-    covered = action in covered_actions(caps)
+    good = covered_actions(caps)
+    covered = action in good
     rank = cos
     if not covered:                 # an uncovered action's prompt: led by the covered action nearest to it (RELATED)
         means = action_means(vecs, a["actions"])
-        near = max((float(means[action] @ means[x]) for x in covered_actions(caps) if x in means), default=-1.0)
+        near = max((float(means[action] @ means[x]) for x in good if x in means), default=-1.0)
         if near >= RELATED:
             q = emb + means[action]
             rank = vecs @ (q / max(float(np.linalg.norm(q)), 1e-12))

@@ -258,16 +258,21 @@ test('a dropped character performs the motion; bad files keep the built-in one; 
   watch.assertClean();
 });
 
+/** The page ready on WASM (`query` appended), with the VRM fixture dropped on it and taken as the character. */
+async function openWithVrm(page: Page, query: string): Promise<void> {
+  await page.goto(`/?noauto=1&backend=wasm${query}`);
+  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
+  const vrm = new Uint8Array(fs.readFileSync(path.join(process.cwd(), 'tests/fixtures/rigs/cryptovoxels.vrm')));
+  await drop(page, [{ name: 'cryptovoxels.vrm', bytes: vrm }]);
+  await page.waitForFunction(() => window.emdmCharacter.name === 'cryptovoxels.vrm', null, { timeout: 30_000 });
+}
+
 test("the visitor's character in the compare view: a second copy performs the DDIM motion, back to one on leaving", async ({ page }) => {
   test.setTimeout(300_000);
   const m = (await (await page.request.get('/models/manifest.json')).json()) as { models: Record<string, { task: string; objective?: string }> };
   test.skip(!Object.values(m.models).some((e) => e.objective === 'diffusion' && e.task === 'text'), 'no diffusion-objective text model in the manifest');
   const watch = watchPage(page);
-  await page.goto('/?noauto=1&backend=wasm');
-  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
-  const vrm = new Uint8Array(fs.readFileSync(path.join(process.cwd(), 'tests/fixtures/rigs/cryptovoxels.vrm')));
-  await drop(page, [{ name: 'cryptovoxels.vrm', bytes: vrm }]);
-  await page.waitForFunction(() => window.emdmCharacter.name === 'cryptovoxels.vrm', null, { timeout: 30_000 });
+  await openWithVrm(page, '');
   await page.locator('#mode-text').click();
   await page.locator('#compare').check();
   await page.evaluate(() => window.emdm.generate({ text: 'a person walks forward and waves', steps: 20, seconds: 2, seed: 7 }));
@@ -305,11 +310,7 @@ test("the visitor's character in live mode walks under the camera, where the str
   // the root the camera follows, and jumped by metres with each new piece.
   test.setTimeout(180_000);
   const watch = watchPage(page);
-  await page.goto('/?noauto=1&backend=wasm&mode=text&text=a+person+walks+forward');
-  await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });
-  const vrm = new Uint8Array(fs.readFileSync(path.join(process.cwd(), 'tests/fixtures/rigs/cryptovoxels.vrm')));
-  await drop(page, [{ name: 'cryptovoxels.vrm', bytes: vrm }]);
-  await page.waitForFunction(() => window.emdmCharacter.name === 'cryptovoxels.vrm', null, { timeout: 30_000 });
+  await openWithVrm(page, '&mode=text&text=a+person+walks+forward');
   await page.locator('#live').click();
   await page.waitForFunction(() => window.emdm.live?.active, null, { timeout: 60_000 });
   const gaps: number[] = [];
