@@ -25,6 +25,7 @@ import { KnowsPanel, markWeakActions } from './ui/knows';
 import { LivePanel } from './ui/live';
 import { linkOf } from './ui/provenance';
 import { TimelinePanel } from './ui/timeline';
+import { withRawTimeline } from './ui/timeline-url';
 import { describe, promptNote, View } from './ui/view';
 
 const MODELS_URL = `${import.meta.env.BASE_URL}models/`;
@@ -87,6 +88,8 @@ async function main(): Promise<void> {
   const page: PageContext = { session, view, controls, generate };
   connectTestApi(api, page);
   const timeline = new TimelinePanel(page, byId('edit-panel'));
+  openedTimeline = timeline.linkValue;
+  if (openedTimeline !== null) writeLink(controls.read());
   api.edit = timeline.testApi();
   api.live = new LivePanel(page, knows, notices).testApi();
 
@@ -204,6 +207,9 @@ function buildControls(manifest: Manifest, models: Models, limits: StateLimits, 
   return { controls, knows };
 }
 
+/** The `tl` value of the link the page was opened with (writeLink keeps it until a motion is shown). */
+let openedTimeline: string | null = null;
+
 /**
  * The page's address for the controls' state and the motion on screen (web/ui/provenance.ts linkOf): a timeline stays
  * in it across control changes; an edit or a live recording, which a link cannot hold, is named in a note under
@@ -211,7 +217,9 @@ function buildControls(manifest: Manifest, models: Models, limits: StateLimits, 
  */
 function writeLink(state: PageState): void {
   const { search, note } = linkOf(state, view.shown);
-  history.replaceState(null, '', search);
+  // a link with a timeline keeps it, as it was, in the address until a motion is shown (a refused one: the panel says
+  // what is wrong, and the visitor can still copy and mend it)
+  history.replaceState(null, '', openedTimeline !== null && !view.shown ? withRawTimeline(search, openedTimeline) : search);
   const el = byId('link-note');
   el.textContent = note;
   el.hidden = !note;

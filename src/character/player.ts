@@ -26,7 +26,7 @@ export function checkTrack(t: PoseTrack): void {
   }
 }
 
-/** Length of a track in seconds (time of its last frame). */
+/** The time of a track's last frame, in seconds ((frames − 1) / fps; a player plays it one frame longer: MotionPlayer.duration). */
 export function trackDuration(t: PoseTrack): number {
   return (t.frames - 1) / t.fps;
 }
@@ -68,8 +68,13 @@ export class MotionPlayer {
     this.sample();
   }
 
+  /**
+   * How long the track plays: its frames at its frame rate (a 100-frame track at 20 fps plays 5 s, as its caption
+   * says; the last frame is shown for one frame's time, as a video's is, and a seamless loop's last frame is one
+   * frame's time from its first when it wraps). trackDuration is the time of the last frame, one frame less.
+   */
   get duration(): number {
-    return this.track ? trackDuration(this.track) : 0;
+    return this.track ? this.track.frames / this.track.fps : 0;
   }
 
   /** Advance the clock by dt seconds of wall time (scaled by speed) and resample. */

@@ -13,7 +13,7 @@ import { watchExternalRequests, watchPage } from './helpers';
 
 declare global {
   interface Window {
-    emdmCharacter: { active: boolean; builtInVisible: boolean; name: string; mapped: number; status: string; comparing: boolean; jointWorld(j: string, copy?: 'main' | 'compare'): [number, number, number] | null };
+    emdmCharacter: { active: boolean; builtInVisible: boolean; name: string; mapped: number; status: string; comparing: boolean; frames: number; jointWorld(j: string, copy?: 'main' | 'compare'): [number, number, number] | null };
   }
 }
 
@@ -311,6 +311,7 @@ test("the visitor's character in live mode walks under the camera, where the str
   test.setTimeout(180_000);
   const watch = watchPage(page);
   await openWithVrm(page, '&mode=text&text=a+person+walks+forward');
+  await page.evaluate(() => window.emdm.generate({ mode: 'text', text: 'a person walks forward', seconds: 2, seed: 3 })); // shown again after live mode
   await page.locator('#live').click();
   await page.waitForFunction(() => window.emdm.live?.active, null, { timeout: 60_000 });
   const gaps: number[] = [];
@@ -326,6 +327,14 @@ test("the visitor's character in live mode walks under the camera, where the str
   const sorted = [...gaps].sort((a, b) => a - b);
   expect(sorted[Math.floor(sorted.length / 2)]).toBeLessThan(0.05);
   expect(sorted[sorted.length - 1]).toBeLessThan(0.6);
+  // its downloads would write the last ~2 s piece of the stream: off while live, with the reason beside them
+  for (const id of ['#dl-char-glb', '#dl-char-bvh']) await expect(page.locator(id)).toBeDisabled();
+  await expect(page.locator('#char-dl-note')).toBeVisible();
+  await expect(page.locator('#dl-char-glb')).toHaveAttribute('aria-describedby', 'char-dl-note');
   await page.locator('#live').click();
+  // back to the motion shown before live mode: on the character again, and its downloads with it
+  for (const id of ['#dl-char-glb', '#dl-char-bvh']) await expect(page.locator(id)).toBeEnabled({ timeout: 30_000 });
+  await expect(page.locator('#char-dl-note')).toBeHidden();
+  expect(await page.evaluate(() => window.emdmCharacter.frames)).toBe(40);
   watch.assertClean();
 });

@@ -121,9 +121,11 @@ test.describe('character', () => {
     half.toArray().forEach((v, k) => expect(got[k]).toBeCloseTo(v, 6)); // slerp: 45° of the 90° turn
     const p = new MotionPlayer();
     p.setTrack(track);
-    expect(p.duration).toBeCloseTo(0.1, 9);
+    expect(p.duration).toBeCloseTo(0.15, 9); // 3 frames at 20 fps: the last one shown for its 0.05 s
     p.update(0.075);
     expect(p.frame).toBeCloseTo(1.5, 6);
+    p.update(0.05); // the last frame's own time: held, not past the end
+    expect([p.time, p.frame]).toEqual([expect.closeTo(0.125, 6), 2]);
     p.update(0.05); // past the end: wraps to 0.025 s
     expect(p.time).toBeCloseTo(0.025, 6);
     p.speed = 0.5;
@@ -133,7 +135,7 @@ test.describe('character', () => {
     p.update(1);
     expect(p.time).toBeCloseTo(0.05, 6);
     p.seek(5);
-    expect(p.time).toBeCloseTo(0.1, 9);
+    expect(p.time).toBeCloseTo(0.15, 9);
     expect(() => p.setTrack({ ...track, quats: new Float32Array(3) })).toThrow(/quats has 3 numbers, expected frames×joints×4 = 12/);
   });
 });

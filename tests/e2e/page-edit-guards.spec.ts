@@ -25,7 +25,27 @@ test('a timeline with the compare view at 100 steps runs EMDM at its maximum', a
   const before = await page.evaluate(() => window.emdm.counters.generations);
   await page.locator('.tl-generate').click();
   await page.waitForFunction((n) => window.emdm.counters.generations > n, before, { timeout: 120_000 });
-  expect(await page.evaluate(() => window.emdm.edit?.message() ?? '')).toBe('');
+  // the timeline is EMDM's alone, and the panel says so (news, not an error)
+  expect(await page.evaluate(() => window.emdm.edit?.message() ?? '')).toBe('Compare is for one generation: this result is EMDM\'s alone (no diffusion run beside it).');
+  await expect(page.locator('#edit-panel .tl-message.tl-note[role="status"]:visible')).toBeVisible();
+  watch.assertClean();
+});
+
+test('live mode leaves the compare view on screen and says so', async ({ page }) => {
+  test.setTimeout(240_000);
+  const m = (await (await page.request.get('/models/manifest.json')).json()) as { models: Record<string, { task: string; objective?: string }> };
+  test.skip(!Object.values(m.models).some((e) => e.objective === 'diffusion' && e.task === 'text'), 'no diffusion-objective text model in the manifest');
+  const watch = watchPage(page);
+  await open(page);
+  await page.locator('#compare').check();
+  await page.locator('#generate').click();
+  await page.waitForFunction(() => window.emdm.compareInfo().ddimCharacterVisible, null, { timeout: 120_000 });
+  await page.locator('#live').click();
+  await page.waitForFunction(() => window.emdm.live?.active, null, { timeout: 60_000 });
+  // the DDIM character had no stream to play: it stood in a split view beside the stream with its last motion
+  expect(await page.evaluate(() => { const c = window.emdm.compareInfo(); return [c.ddimCharacterVisible, c.split, c.panelsVisible]; })).toEqual([false, false, false]);
+  await expect(page.locator('#live-hint')).toContainText('Compare is off while live: the stream is EMDM\'s alone.');
+  await page.locator('#live').click();
   watch.assertClean();
 });
 

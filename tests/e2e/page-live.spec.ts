@@ -152,7 +152,7 @@ test('live mode: keyboard toggle, a character that keeps moving, prompts by Ente
   await expect(page.locator('#generate')).toBeEnabled();
   await expect(page.locator('#caption')).not.toContainText('live ·');
   const pb = await page.evaluate(() => window.emdm.playback());
-  expect(Math.abs(pb.duration - (frames - 1) / 20)).toBeLessThan(1e-6);
+  expect(Math.abs(pb.duration - frames / 20)).toBeLessThan(1e-6);
   watch.assertClean();
 });
 

@@ -90,7 +90,7 @@ test('a 3-segment 30 s timeline: 600 frames, one BVH and one GLB of 600 frames, 
   expect(await page.evaluate(() => window.emdm.edit!.message())).toBe('');
   // the player plays the whole sequence and scrubs it
   const pb = await page.evaluate(() => window.emdm.playback());
-  expect(pb.duration).toBeCloseTo(599 / 20, 2); // frames 0…599 at 20 fps
+  expect(pb.duration).toBeCloseTo(30, 2); // frames 0…599 at 20 fps: 30 s, as the caption says
   await page.evaluate(() => window.emdm.seek(25, false));
   expect(await page.evaluate(() => window.emdm.frame())).toBeCloseTo(500, 0);
   // the stitched motion has no jump at the seams: the pelvis moves no more across one than within the segments
@@ -150,6 +150,8 @@ test('a link whose timeline cannot be used says why, keeps saying it, and genera
     expect(await other.evaluate(() => window.emdm.edit!.message())).toMatch(msg);
     await expect(other.locator('#edit-panel .tl-body > .tl-message')).toBeVisible();
     expect(await other.evaluate(() => [window.emdm.counters.generations, window.emdm.counters.stepsRun])).toEqual([0, 0]);
+    // the address keeps the link's timeline as it was: the visitor can see, copy and mend what they opened
+    expect(await other.evaluate(() => new URLSearchParams(location.search).get('tl'))).toBe(tl);
     await other.close();
   }
 });
@@ -293,6 +295,12 @@ test('in-between: the first and last second stay as they were, the middle is new
   const diff = (f: number) => Math.max(...Array.from({ length: D }, (_, c) => Math.abs(again.features[f * D + c] - after.features[f * D + c])));
   for (const f of [0, 9, 60, 99]) expect(diff(f), `kept frame ${f}`).toBeLessThan(1e-4);
   expect(Math.max(diff(20), diff(40))).toBeGreaterThan(1e-2);
+  // keeping all of it: said in seconds, nothing generated, the motion stays
+  const steps0 = await page.evaluate(() => window.emdm.counters.stepsRun);
+  await expect(page.evaluate(() => window.emdm.edit!.inBetween('a person jumps', 3, 2))).rejects.toThrow(
+    /keeping the first 3 s and the last 2 s of this 5 s motion leaves no middle to regenerate; keep at least 0\.05 s at each end and at most 4\.95 s in all/);
+  expect(await page.evaluate(() => window.emdm.counters.stepsRun)).toBe(steps0);
+  expect((await page.evaluate(() => window.emdm.edit!.current()))!.features).toEqual(again.features);
 });
 
 test('the edit tools as a visitor uses them: an example prompt ready to run, messages inside the tool', async () => {
@@ -352,7 +360,7 @@ test('loop: the pose at the wrap is the first pose; in place the pelvis does not
   expect(full.frames).toBe(base.frames);
   // frame N−K (where the clip wraps to) repeats frame 0's pose, ≤ 2 cm per joint
   expect(poseDistance(full.joints, base.frames - 10, full.joints, 0)).toBeLessThan(0.02);
-  expect(await page.evaluate(() => window.emdm.playback().duration)).toBeCloseTo((base.frames - 11) / 20, 2);
+  expect(await page.evaluate(() => window.emdm.playback().duration)).toBeCloseTo((base.frames - 10) / 20, 2); // the N − 10 frames of the clip, the last one 0.05 s before the first again
 
   await page.evaluate((s) => window.emdm.generate({ mode: 'text', text: 'a person walks forward', seconds: 5, steps: s, seed: 31 }), STEPS);
   await page.locator('#tl-loop-in-place').check();
@@ -401,6 +409,8 @@ test('a timeline shows its progress per segment and gives way to a newer request
   // while it runs: its windows' early steps run together, then each window's last steps (segments 1 and 2's can pass
   // between two polls of a loaded CPU's page, so the windows' joint phase is the one always seen)
   await expect(page.locator('#progress-text')).toContainText(/windows together: step|Segment [12] of 3: step/);
+  // the main button says what a click does meanwhile: one motion of the side bar in place of the timeline
+  await expect(page.locator('#generate')).toHaveText('Generate (stops the timeline)');
   const single = await page.evaluate((s) => window.emdm.generate({ mode: 'text', text: 'a person walks forward', seconds: 2, steps: s, seed: 71 }), STEPS);
   expect(await running).toBe('AbortError');
   expect(single.frames).toBe(40);
@@ -502,7 +512,9 @@ test('loop of a 60 s timeline: its last window ends on the first pose, the frame
   const cur = (await page.evaluate(() => window.emdm.edit!.current()))!;
   expect(cur.features.slice(0, (1200 - 196) * D)).toEqual(base.features.slice(0, (1200 - 196) * D)); // before the window
   expect(cur.features.slice(1100 * D, 1180 * D)).not.toEqual(base.features.slice(1100 * D, 1180 * D));
-  expect(await page.evaluate(() => window.emdm.edit!.message())).toBe('');
+  // said beside the loop button: only the end was regenerated, with the last segment's prompt (news, not an error)
+  expect(await page.evaluate(() => window.emdm.edit!.message())).toMatch(/^Only the last 9\.8 s were regenerated \(with “a person waves”, the last segment's\) to lead back to the first pose; the 50\.2 s before them are as they were\.$/);
+  await expect(page.locator('#edit-panel .tl-message.tl-note[role="status"]:visible')).toBeVisible();
 });
 
 test('timing: a 3 × 5 s timeline against one 5 s motion (printed)', async () => {

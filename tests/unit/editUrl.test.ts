@@ -1,6 +1,6 @@
 // The timeline in the page URL (web/ui/timeline-url.ts): what a shared link restores, and what it refuses.
 import { describe, expect, it } from 'vitest';
-import { MAX_SEGMENTS, MAX_TIMELINE_CHARS, TimelineUrlError, decodeTimeline, encodeTimeline, withTimeline } from '../../web/ui/timeline-url';
+import { MAX_SEGMENTS, MAX_TIMELINE_CHARS, TimelineUrlError, decodeTimeline, encodeTimeline, withRawTimeline, withTimeline } from '../../web/ui/timeline-url';
 
 const actions = ['sit', 'walk'];
 
@@ -13,6 +13,21 @@ describe('timeline URL', () => {
     expect(decodeTimeline(q.get('tl')!, actions)).toEqual(segs);
     expect(encodeTimeline(segs)).toBe('[["a person walks & waves?",10,4294967295],[{"a":"sit"},2.5,0]]');
     expect(withTimeline(search, null)).toBe('?mode=text&text=x');
+  });
+
+  it('keeps a long prompt whole (a reload makes the timeline that was shared, not a cut one)', () => {
+    const long = `a person walks forward ${'and keeps walking '.repeat(170)}`.trim();
+    expect(long.length).toBeGreaterThan(3000);
+    const segs = [{ prompt: long, seconds: 4, seed: 7 }, { prompt: 'a person sits down', seconds: 3, seed: 8 }];
+    expect(decodeTimeline(new URLSearchParams(withTimeline('', segs)).get('tl')!, actions)).toEqual(segs);
+  });
+
+  it('keeps a value it could not read as it was (the page leaves it in the address)', () => {
+    const search = withRawTimeline('?mode=text&text=a+person+waves', '[["a person walks", 1e308, 2]');
+    const q = new URLSearchParams(search);
+    expect(q.get('text')).toBe('a person waves');
+    expect(q.get('tl')).toBe('[["a person walks", 1e308, 2]');
+    expect(() => decodeTimeline(q.get('tl')!, actions)).toThrow(/not JSON/);
   });
 
   it('keeps bad lengths and empty prompts for planTimeline to name, refuses a broken shape', () => {

@@ -60,6 +60,9 @@ export interface CharacterProbe {
   jointWorld(joint: JointName, copy?: 'main' | 'compare'): [number, number, number] | null;
 }
 
+/** Why the downloads on the visitor's character are off in live mode. */
+export const LIVE_CHARACTER_NOTE = 'Live mode: your character plays the stream. Its GLB and BVH come back when live mode stops (with the last recording, if any).';
+
 export class CharacterPicker {
   private shown: Shown | null = null;
   private motion: Motion | null = null;
@@ -106,7 +109,8 @@ export class CharacterPicker {
       <div class="download-row">
         <button type="button" id="dl-char-glb" class="ghost" disabled title="Your character with the motion (binary glTF)">GLB on it</button>
         <button type="button" id="dl-char-bvh" class="ghost" disabled title="The motion on your character's bone names (BVH, in the unit chosen under Download)">BVH on it</button>
-      </div>`;
+      </div>
+      <p id="char-dl-note" class="hint" hidden>${LIVE_CHARACTER_NOTE}</p>`;
     host.before.parentElement!.insertBefore(el, host.before);
     this.el = el;
     const q = <T extends HTMLElement>(id: string) => el.querySelector<T>(`#${id}`)!;
@@ -150,6 +154,7 @@ export class CharacterPicker {
     this.start = start ?? 0;
     this.piece = start !== undefined;
     this.stem = stem;
+    if (this.piece) this.setDownloads(false); // off at once: the stream's pieces are not a motion to save
     if (this.shown) this.retarget().catch((e) => this.fail(e));
   }
 
@@ -250,8 +255,7 @@ export class CharacterPicker {
     this.back.hidden = false;
     this.editor.show(ch.boneInfos, ch.mapping);
     this.say(summary);
-    this.dlGlb.disabled = !next.result;
-    this.dlBvh.disabled = !next.result;
+    this.setDownloads(!!next.result);
     if (this.motion !== motion) this.retarget().catch((e) => this.fail(e)); // a newer motion came meanwhile
     if (this.compareMotion) this.compare(this.compareMotion);
     this.host.changed?.();
@@ -262,14 +266,12 @@ export class CharacterPicker {
     const s = this.shown;
     if (!s || !this.motion) return;
     s.ch.restPose();
-    this.dlGlb.disabled = true;
-    this.dlBvh.disabled = true;
+    this.setDownloads(false);
     const name = s.ch.name;
     const say = this.piece ? undefined : (f: number) => this.say(`Putting the motion on ${name}… ${Math.round(f * 100)}%`);
     const done = await perform(s, this.motion, s.ch, this.host.skeleton, this.stats, say, this.start);
     if (!done || this.shown !== s) return;
-    this.dlGlb.disabled = false;
-    this.dlBvh.disabled = false;
+    this.setDownloads(true);
     if (this.status.textContent !== s.summary) this.say(s.summary);
   }
 
@@ -293,8 +295,7 @@ export class CharacterPicker {
     const hadFocus = document.activeElement === this.back;
     this.back.hidden = true;
     if (hadFocus) document.getElementById('char-open')?.focus(); // the hidden button held the keyboard focus
-    this.dlGlb.disabled = true;
-    this.dlBvh.disabled = true;
+    this.setDownloads(false);
     if (say) {
       this.editor.editor.hidden = true;
       this.say('');
@@ -318,9 +319,23 @@ export class CharacterPicker {
     saveBlob(new Blob([mappingToJSON(m)], { type: 'application/json' }), `${this.mainName().replace(/\.[^.]+$/, '') || 'character'}.bonemap.json`);
   }
 
+  /**
+   * The GLB/BVH-on-it buttons: on with a motion on the character, except while it plays pieces of the live stream
+   * (they would write the last ~2 s piece; #char-dl-note says why, and the page's downloads save a recording).
+   */
+  private setDownloads(ready: boolean): void {
+    const note = this.el.querySelector<HTMLElement>('#char-dl-note')!;
+    note.hidden = !this.piece || !this.shown;
+    for (const b of [this.dlGlb, this.dlBvh]) {
+      b.disabled = !ready || this.piece;
+      if (!note.hidden) b.setAttribute('aria-describedby', 'char-dl-note');
+      else b.removeAttribute('aria-describedby');
+    }
+  }
+
   private download(kind: 'glb' | 'bvh'): void {
     const s = this.shown;
-    if (!s?.result || s.job) return;
+    if (!s?.result || s.job || this.piece) return;
     const base = `${this.stem}-${s.ch.name.replace(/\.[^.]+$/, '')}`;
     if (kind === 'glb') {
       saveBlob(new Blob([characterToGLB(s.ch, s.result) as BlobPart], { type: 'model/gltf-binary' }), `${base}.glb`);

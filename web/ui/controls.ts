@@ -223,9 +223,11 @@ export class Controls {
     this.refresh();
   }
 
-  setBusy(busy: boolean): void {
+  /** The Generate button while a request runs: `running` names a panel's request (e.g. 'the timeline'), which a
+   * click replaces with one motion of these controls, not restarts. */
+  setBusy(busy: boolean, running = ''): void {
     this.button.classList.toggle('busy', busy);
-    this.button.textContent = busy ? 'Generating… (click to restart)' : 'Generate';
+    this.button.textContent = !busy ? 'Generate' : running ? `Generate (stops ${running})` : 'Generating… (click to restart)';
     this.cancel.hidden = !busy;
   }
 

@@ -156,7 +156,9 @@ export class LivePanel implements PoseDriver {
     view.liveCaption(first, this.page.controls.readEmdm().steps);
     clearInterval(this.timer);
     this.timer = window.setInterval(() => this.poll(), POLL_MS);
-    this.say('Live: type a prompt and press Enter; the character blends into it.');
+    // the compare view's DDIM character has no stream of its own: live mode is EMDM's alone
+    const alone = controls.read().compare ? ' Compare is off while live: the stream is EMDM\'s alone.' : '';
+    this.say(`Live: type a prompt and press Enter; the character blends into it.${alone}`);
     this.prompt.focus();
   }
 

@@ -50,7 +50,12 @@ export interface Shown {
   condition: EditCondition | null;
   /** what made it (the segments, or the edit, its inputs and the motion it edited): the JSON download and the link */
   source: MotionSource;
+  /** what the visitor should know about the result (e.g. a loop of a long timeline regenerated only its end): said next to the mode's controls */
+  note?: string;
 }
+
+/** Said with a result when the compare view is on: the panel's results are EMDM's alone. */
+export const COMPARE_NOTE = 'Compare is for one generation: this result is EMDM\'s alone (no diffusion run beside it).';
 
 /** What one window's generation took (a GenerateResult without its motion). */
 type Run = Pick<GenerateResult, 'timings' | 'modelCalls' | 'sampler' | 'steps'> & { frames: number };
@@ -73,8 +78,10 @@ export interface Calls {
 export interface RequestPanel {
   readonly page: PageContext;
   readonly actions: readonly string[];
-  /** say `text` next to `kind`'s controls, marking `segment`'s row */
+  /** say `text` next to `kind`'s controls, marking `segment`'s row (an error) */
   say(text: string, segment: number | null, kind: EditKind): void;
+  /** say `text` next to `kind`'s controls as news about a result, not an error ('' says nothing) */
+  note(text: string, kind: EditKind): void;
   /** the progress line next to `kind`'s controls ('' hides it) */
   working(kind: EditKind, text: string): void;
   /** the page's model for a condition (an EditError when the demo has none) */
@@ -82,6 +89,9 @@ export interface RequestPanel {
   /** the result is on screen */
   showed(s: Shown): void;
 }
+
+/** What the Generate button says it stops while a panel's request runs. */
+const RUNNING: Record<EditKind, string> = { timeline: 'the timeline', inbetween: 'the in-between', body: 'the body-part edit', loop: 'the loop' };
 
 export type EditJob = (gen: EditGenerate, signal: AbortSignal, calls: Calls) => Promise<Shown>;
 
@@ -101,7 +111,7 @@ export async function runEditRequest(p: RequestPanel, kind: EditKind, job: EditJ
   p.say('', null, kind);
   for (const k of ['timeline', 'inbetween', 'body', 'loop'] as const) p.working(k, '');
   p.working(kind, 'Starting…');
-  controls.setBusy(true);
+  controls.setBusy(true, RUNNING[kind]);
   view.showProgress(0, 'Starting…');
   session.counters.requests++;
   try {
@@ -118,6 +128,7 @@ export async function runEditRequest(p: RequestPanel, kind: EditKind, job: EditJ
     const s1 = performance.now();
     p.page.view.show(generationOf(p.page, state, shown, track, s1 - t0));
     p.showed(shown);
+    p.note([shown.note ?? '', state.compare ? COMPARE_NOTE : ''].filter(Boolean).join(' '), kind);
     const s2 = performance.now();
     session.counters.generations++;
     const parts = partsOf(shown, calls, spent, { ikMs: shown.pose ? shown.pose.ikMs : s1 - s0, showMs: s2 - s1 });

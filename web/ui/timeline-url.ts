@@ -49,7 +49,7 @@ export function decodeTimeline(value: string, actions: readonly string[]): Timel
     const [what, seconds, seed] = e as [unknown, unknown, unknown];
     if (typeof seconds !== 'number' || !Number.isFinite(seconds)) throw new TimelineUrlError(`${where}: seconds must be a number, got ${preview(seconds)}`);
     if (typeof seed !== 'number' || !Number.isInteger(seed) || seed < 0 || seed > 0xffffffff) throw new TimelineUrlError(`${where}: seed must be an integer in 0…4294967295, got ${preview(seed)}`);
-    if (typeof what === 'string') return { prompt: what.slice(0, 2000), seconds, seed };
+    if (typeof what === 'string') return { prompt: what, seconds, seed }; // the whole prompt (the value's length is bounded above)
     const a = (what as { a?: unknown } | null)?.a;
     if (typeof a === 'string' && actions.includes(a)) return { action: a, seconds, seed };
     throw new TimelineUrlError(`${where}: expected a prompt or {"a": action} with an action of ${actions.join(', ') || '(no action model)'}, got ${preview(what)}`);
@@ -63,4 +63,11 @@ export function withTimeline(search: string, segments: readonly TimelineSegment[
   else q.delete(TIMELINE_PARAM);
   const s = q.toString();
   return s ? `?${s}` : '';
+}
+
+/** `search` with the `tl` parameter set to `value` as it is (a link's value the page could not read, kept for the visitor). */
+export function withRawTimeline(search: string, value: string): string {
+  const q = new URLSearchParams(search);
+  q.set(TIMELINE_PARAM, value);
+  return `?${q.toString()}`;
 }

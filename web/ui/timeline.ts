@@ -112,7 +112,7 @@ export class TimelinePanel implements RequestPanel {
     const loopGo = button('Make it loop', 'ghost', () => void this.loop(inPlace.checked).catch(() => undefined));
     body.append(
       el('h2', undefined, 'Edit the motion on screen'),
-      el('p', 'tl-hint', 'Works on a motion of one model window (up to 9.8 s).'),
+      el('p', 'tl-hint', `In-between and body-part edits work on a motion of one model window (up to ${fmtSeconds(this.page.session.limits.maxFrames / this.page.session.limits.fps)} s); a loop of a longer timeline regenerates its last ${fmtSeconds(this.page.session.limits.maxFrames / this.page.session.limits.fps)} s.`),
       group('In-between: keep the start and the end', ibKeep, ibPrompt, ibGo, this.busy.inbetween, this.msgs.inbetween),
       group('Body part', bodyKeep, bodyPrompt, bodyGo, this.busy.body, this.msgs.body),
       group('Loop: last pose = first pose', inPlaceLabel, loopGo, this.busy.loop, this.msgs.loop),
@@ -134,6 +134,7 @@ export class TimelinePanel implements RequestPanel {
     this.rows.refreshTotal();
     this.restored = restored !== null;
     this.linkRefused = refused;
+    this.linkValue = tl;
     if (refused) this.say(refused);
   }
 
@@ -144,6 +145,9 @@ export class TimelinePanel implements RequestPanel {
    * nothing on load (not the example rows, not the single motion), and the message stays in the open panel.
    */
   readonly linkRefused: string;
+  /** The `tl` value of the link the page was opened with (null: none), as it was: the address keeps it until a motion
+   * is shown, so a link refused (here, or when its timeline is planned) can still be seen, copied and mended. */
+  readonly linkValue: string | null;
 
   get restoredFromUrl(): boolean {
     return this.restored;
@@ -159,14 +163,23 @@ export class TimelinePanel implements RequestPanel {
   }
 
   // ------------------------------------------------------------ messages
-  /** Say `text` next to `kind`'s controls (and clear every other mode's message), marking `segment`'s row. */
-  say(text: string, segment: number | null = null, kind: EditKind = 'timeline'): void {
+  /** Say `text` next to `kind`'s controls (and clear every other mode's message), marking `segment`'s row: an error. */
+  say(text: string, segment: number | null = null, kind: EditKind = 'timeline', tone: 'error' | 'note' = 'error'): void {
     for (const [k, m] of Object.entries(this.msgs)) {
       m.textContent = k === kind ? text : '';
       m.hidden = k !== kind || !text;
+      // an error interrupts a screen reader (alert); news about a result waits its turn (status)
+      const note = k === kind && tone === 'note';
+      m.setAttribute('role', note ? 'status' : 'alert');
+      m.classList.toggle('tl-note', note);
     }
     if (text) this.msgs[kind].scrollIntoView?.({ block: 'nearest' });
     this.rows.mark(segment);
+  }
+
+  /** Say `text` next to `kind`'s controls as news about the result on screen (not an error); '' says nothing. */
+  note(text: string, kind: EditKind): void {
+    if (text) this.say(text, null, kind, 'note');
   }
 
   /** The message shown in the panel ('' when none). */
@@ -288,8 +301,12 @@ export class TimelinePanel implements RequestPanel {
       const seed = randomSeed();
       const fps = motion.fps;
       if (!(first > 0) || !(last > 0)) throw new EditError(`in-betweening: keep more than 0 s at each end (got first ${first} s, last ${last} s)`);
-      // keep frames 0…a and b…N−1
+      // keep frames 0…a and b…N−1, with at least one new frame between them
       const range = { a: Math.round(first * fps) - 1, b: motion.frames - Math.round(last * fps) };
+      if (motion.frames <= this.limits().maxFrames && (range.a < 0 || range.b > motion.frames - 1 || range.b < range.a + 2)) {
+        const len = motion.frames / fps;
+        throw new EditError(`in-betweening: keeping the first ${fmtSeconds(first)} s and the last ${fmtSeconds(last)} s of this ${fmtSeconds(len)} s motion leaves no middle to regenerate; keep at least ${fmtSeconds(1 / fps)} s at each end and at most ${fmtSeconds(len - 1 / fps)} s in all`);
+      }
       const r = await inBetween(motion, c, seed, gen, this.limits(), range);
       return {
         motion: r, display: this.decode(r.features, r.frames), windows: 1, results: calls.results,
@@ -324,7 +341,11 @@ export class TimelinePanel implements RequestPanel {
       const r = await makeLoop(motion, condition, seed, gen, this.limits(), { inPlace, decode: (f, n) => recoverJoints(f, n) });
       this.lastLoop = r.full;
       const what = condition.action !== undefined ? String(condition.action) : (condition.prompt ?? '').trim();
+      const { fps, maxFrames } = this.limits();
+      // longer than one window: only its end was regenerated, with its own prompt or the last segment's
+      const note = motion.frames <= maxFrames ? '' : `Only the last ${fmtSeconds(maxFrames / fps)} s were regenerated (with “${quoted(what)}”${own ? '' : ', the last segment\'s'}) to lead back to the first pose; the ${fmtSeconds((motion.frames - maxFrames) / fps)} s before them are as they were.`;
       return {
+        note,
         motion: r.clip, display: this.decode(r.clip.features, r.clip.frames, true), windows: 1, results: calls.results,
         label: `${what} (loop${inPlace ? ', in place' : ''})`, model: this.modelFor(condition), seed, condition,
         source: editSource({ type: 'loop', inPlace }, condition, seed, shown),
@@ -363,6 +384,16 @@ function editSource(edit: EditInputs, condition: EditCondition, seed: number, ba
 
 // ---------------------------------------------------------------- small DOM helpers
 /** A prompt box holding an example (a value, not only a grey placeholder: a visitor can run the tool at once). */
+/** Seconds as the panel writes them: 9.8, 50.2, 4. */
+function fmtSeconds(s: number): string {
+  return String(Number(s.toFixed(2)));
+}
+
+/** A prompt inside a message: at most 60 characters. */
+function quoted(text: string): string {
+  return text.length > 60 ? `${text.slice(0, 59)}…` : text;
+}
+
 function input(id: string, label: string, example: string): HTMLInputElement {
   const i = el('input');
   i.type = 'text';

@@ -249,6 +249,8 @@ export class View {
   drive(driver: PoseDriver | null): void {
     // entering live mode (not a restarted stream): nothing of it is recorded yet
     if (!driver || !this.driver) this.liveUnrecorded = !!driver;
+    // the DDIM character has no stream to play: the split view would show the last comparison beside the stream
+    if (driver) this.leaveCompare();
     this.driver = driver;
     this.syncDownloads();
     byId('playback').hidden = !!driver;
