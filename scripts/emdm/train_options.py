@@ -47,7 +47,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--r1-gamma", type=float, default=0.02)
     p.add_argument("--r1-every", type=int, default=15)
     p.add_argument("--d-cond", action=argparse.BooleanOptionalAction, default=True, help="condition D on c")
-    p.add_argument("--d-width", type=int, default=1024, help="D's first hidden width (released: 1024)")
+    p.add_argument("--d-width", type=int, default=None,
+                   help="D's first hidden width (default 1024, as released; 64 with --preset tiny: its checkpoint "
+                        "stays small)")
     p.add_argument("--cond-drop", type=float, default=0.1, help="probability of the zero (unconditional) condition")
     p.add_argument("--supported-steps", default=",".join(map(str, SUPPORTED_STEPS)))
     p.add_argument("--time-draw", choices=["steps", "pairs"], default="steps",
@@ -109,6 +111,10 @@ def check_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Non
                                                and args.objective == "ddgan"):
         parser.error(f"--geo-weight-t1 {args.geo_weight_t1:g}: needs a number > 0, --geo-weight > 0 and the ddgan "
                      "objective (it sets how L_geo's weight changes with t)")
+    if args.d_width is None:   # the released D (1024) beside a tiny G made a 1.3 GB checkpoint for a smoke test
+        args.d_width = 64 if args.preset == "tiny" else 1024
+    if args.d_width < 1:
+        parser.error(f"--d-width {args.d_width}: needs a width ≥ 1")
     try:
         supported_steps(args.supported_steps)
     except ValueError as e:

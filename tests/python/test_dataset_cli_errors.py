@@ -42,3 +42,17 @@ def test_coverage_on_a_broken_dataset_is_one_line_and_exit_2(tmp_path, how, caps
     rc = coverage.main(["--model", "emdm-t2m-web", "--dataset", str(ds), "--out", str(tmp_path / "cov.json")])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and err[-1].startswith("error: ") and str(ds) in err[-1], err
+
+
+def test_train_with_a_mistyped_text_encoder_is_one_line_naming_it(tmp_path, capsys):
+    """`--encoder all-MiniLM-L6-v3` was a traceback from deep in the caption embedding; now one line, exit 2, the
+    known encoders named, and no run folder left behind."""
+    ds = _broken_dataset(tmp_path, "")
+    capsys.readouterr()
+    run = tmp_path / "run"
+    rc = train.main(["--data", str(ds), "--task", "text", "--encoder", "all-MiniLM-L6-v3", "--out", str(run),
+                     "--steps", "1", "--preset", "tiny", "--d-width", "32", "--batch", "4", "--threads", "1",
+                     "--no-progress"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and err[-1].startswith("emdm.train: text encoder 'all-MiniLM-L6-v3'"), err
+    assert "known: all-MiniLM-L6-v2" in err[-1] and not run.exists(), err

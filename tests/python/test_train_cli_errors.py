@@ -105,3 +105,21 @@ def test_remove_made_folders_removes_only_what_the_run_made(tmp_path):
     remove_made_folders(made, ours=("text-*.npy",))
     assert sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*")) == ["a", "a/b", "a/b/user.txt"]
     assert missing_folders(tmp_path) == []
+
+
+@pytest.mark.parametrize("flags, width", [(["--preset", "tiny"], 64), (["--preset", "web"], 1024), ([], 1024),
+                                          (["--preset", "tiny", "--d-width", "1024"], 1024)])
+def test_the_discriminator_width_follows_the_preset_unless_given(flags, width):
+    """--preset tiny with the released D (1024 wide) wrote a 1.3 GB checkpoint for a smoke-test model."""
+    from emdm.train_options import build_parser, check_args
+
+    parser = build_parser()
+    args = parser.parse_args(["--task", "action", "--out", "x", *flags])
+    check_args(parser, args)
+    assert args.d_width == width
+
+
+def test_a_discriminator_width_below_one_is_refused(capsys):
+    with pytest.raises(SystemExit) as e:
+        train_main(["--task", "action", "--out", "x", "--d-width", "0"])
+    assert e.value.code == 2 and "--d-width 0: needs a width ≥ 1" in capsys.readouterr().err

@@ -203,7 +203,10 @@ def cached_text_embeddings(captions: list[str], encoder_id: str, cache_dir: Path
             return emb
 
     # batch_size 1: exactly what the browser computes (int8 dynamic quantisation scales per call)
-    emb = np.asarray(text_encoders.encode_texts(captions, encoder_id=encoder_id, batch_size=1), dtype=np.float32)
+    try:
+        emb = np.asarray(text_encoders.encode_texts(captions, encoder_id=encoder_id, batch_size=1), dtype=np.float32)
+    except text_encoders.TextEncoderError as e:   # a mistyped --encoder, or one not exported: one line, not a traceback
+        raise DatasetError(f"text encoder {encoder_id!r} for the captions' embeddings: {e}") from None
     if emb.shape[0] != len(captions):
         raise RuntimeError(f"text encoder {encoder_id}: {emb.shape[0]} embeddings for {len(captions)} captions")
     cache_dir.mkdir(parents=True, exist_ok=True)
