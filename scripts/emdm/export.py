@@ -21,7 +21,6 @@ import re
 import shutil
 import sys
 import time
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +32,7 @@ from emdm.checkpoints import first_non_finite, portable_meta, save_weights_file
 from emdm.manifest import ManifestError
 from emdm.model.generator import Generator
 from emdm.model.open import INPUTS, ModelError, load_generator as open_generator, ort_session
+from emdm.model.quiet import quiet_onnx_tools
 from emdm.sampler.schedule import DEFAULT_STEPS, make_schedule
 from emdm.outdir import OutputRefused, check_writable
 
@@ -97,8 +97,7 @@ def export_onnx(G: Generator, path: Path | str, opset: int = 18) -> Path:
     frames = torch.export.Dim("frames", min=1, max=G.max_frames)
     dyn = {"x_t": {0: batch, 1: frames}, "z": {0: batch}, "cond": {0: batch}, "t": {0: batch},
            "mask": {0: batch, 1: frames}}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
+    with quiet_onnx_tools():
         prog = torch.onnx.export(G, ex, dynamo=True, opset_version=opset, input_names=INPUTS, output_names=["x0"],
                                  dynamic_shapes=dyn, optimize=True, verbose=False)
     tmp = path.with_name(path.name + ".tmp")
@@ -132,8 +131,7 @@ def make_int8(src: Path, dst: Path) -> Path:
     overflow (measured on an AVX2-only EPYC: max error / output std 1.2–3.0 instead of ~0.3)."""
     from onnxruntime.quantization import QuantType, quantize_dynamic
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
+    with quiet_onnx_tools():
         quantize_dynamic(str(src), str(dst), weight_type=QuantType.QInt8, per_channel=True, reduce_range=True,
                          op_types_to_quantize=["MatMul", "Gemm"])
     return dst

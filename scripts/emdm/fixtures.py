@@ -41,6 +41,7 @@ import numpy as np
 from emdm import manifest as mf
 from emdm import paths
 from emdm.model.open import onnx_step
+from emdm.model.quiet import quiet_onnx_tools
 from emdm.sampler import SamplingSettings, sample_features
 from emdm.sampler.sampler import cap_root_speed, root_speeds
 from emdm.sampler.schedule import make_schedule
@@ -214,8 +215,9 @@ def export_tiny_model(path: Path, cond_dim: int = TINY_COND_DIM) -> Path:
     bd, ld = torch.export.Dim("batch", min=1, max=64), torch.export.Dim("frames", min=1, max=196)
     dyn = {"x_t": {0: bd, 1: ld}, "z": {0: bd}, "cond": {0: bd}, "t": {0: bd}, "mask": {0: bd, 1: ld}}
     path.parent.mkdir(parents=True, exist_ok=True)
-    prog = torch.onnx.export(model, ex, dynamo=True, opset_version=18, dynamic_shapes=dyn,
-                             input_names=["x_t", "z", "cond", "t", "mask"], output_names=["x0"])
+    with quiet_onnx_tools():
+        prog = torch.onnx.export(model, ex, dynamo=True, opset_version=18, dynamic_shapes=dyn,
+                                 input_names=["x_t", "z", "cond", "t", "mask"], output_names=["x0"])
     prog.save(str(path), external_data=False)
     return path
 

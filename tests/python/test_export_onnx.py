@@ -200,3 +200,23 @@ def test_shipped_weights_name_the_run_s_files_by_name_only(checkpoint, tmp_path)
     assert "/" not in meta["args"]["data"] and "/" not in meta["data"]["path"]
     assert json.loads((out / "manifest.json").read_text())["models"]["emdm-a2m-test"]["trainingWeights"] == \
         "emdm-a2m-test.weights.f16.pt"
+
+
+def test_an_export_prints_its_figures_not_the_exporters_noise(checkpoint, tmp_path):
+    """torch's dynamo exporter logged one line per torchvision operator it skipped (torchvision is not installed, and
+    no model needs it) and onnxruntime's quantiser asked for a pre-processing step: 8 lines of noise around the
+    parity and int8 figures. A fresh process, as a user runs it (both print once per process)."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    scripts = str(Path(__file__).resolve().parents[2] / "scripts")
+    env = {**os.environ, "PYTHONPATH": scripts + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    r = subprocess.run([sys.executable, "-m", "emdm.export", "--ckpt", str(checkpoint), "--name", "emdm-a2m-quiet",
+                        "--out", str(tmp_path), "--variants", "int8"], env=env, capture_output=True, text=True,
+                       timeout=600)
+    assert r.returncode == 0, r.stderr
+    out = r.stdout + r.stderr
+    assert "parity max abs err" in out and "max abs err / output std" in out, out
+    assert "torchvision" not in out and "pre-processing before quantization" not in out, out

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from emdm import manifest as mf
+from emdm.model.quiet import quiet_onnx_tools
 from emdm.text.clip import CONTEXT, PADDED_LENGTH, ClipTextEncoder, ClipTokenizer, random_text_model
 
 ONNX_REL = "onnx/text_model.onnx"
@@ -45,7 +46,7 @@ def export_onnx(model, path: Path) -> None:
     ids[1, 1:6] = torch.tensor([320, 2368, 539, 320, 49407])
     batch = torch.export.Dim("batch", min=1, max=1024)
     path.parent.mkdir(parents=True, exist_ok=True)
-    with torch.no_grad():
+    with torch.no_grad(), quiet_onnx_tools():
         prog = torch.onnx.export(Tower(model).eval(), (ids,), dynamo=True, opset_version=18,
                                  input_names=["input_ids"], output_names=["text_embeds", "last_hidden_state"],
                                  dynamic_shapes={"input_ids": {0: batch}}, external_data=False)

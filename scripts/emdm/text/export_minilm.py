@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from emdm import manifest as mf
+from emdm.model.quiet import quiet_onnx_tools
 from emdm.text.minilm import MiniLMEncoder
 from emdm.text.pooling import l2_normalize, mean_pool
 from emdm.text.quantize import quantize_weights_int8
@@ -75,7 +76,7 @@ def export_fp32(src: Path, path: Path) -> None:
     batch = torch.export.Dim("batch", min=1, max=1024)
     seq = torch.export.Dim("sequence", min=1, max=512)
     shapes = {"input_ids": {0: batch, 1: seq}, "attention_mask": {0: batch, 1: seq}, "token_type_ids": {0: batch, 1: seq}}
-    with torch.no_grad():
+    with torch.no_grad(), quiet_onnx_tools():
         prog = torch.onnx.export(enc, (ids, mask, torch.zeros_like(ids)), dynamo=True, opset_version=18,
                                  input_names=["input_ids", "attention_mask", "token_type_ids"],
                                  output_names=["last_hidden_state"], dynamic_shapes=shapes,
@@ -93,7 +94,8 @@ def quantize(fp32: Path, out: Path, mode: str = "weights") -> str:
     if mode == "dynamic":
         from onnxruntime.quantization import QuantType, quantize_dynamic
 
-        quantize_dynamic(str(fp32), str(out), per_channel=True, weight_type=QuantType.QInt8)
+        with quiet_onnx_tools():
+            quantize_dynamic(str(fp32), str(out), per_channel=True, weight_type=QuantType.QInt8)
         return "int8 dynamic (weights per channel + activations at run time; onnxruntime quantize_dynamic)"
     raise ValueError(f"--quant must be 'weights' or 'dynamic', got {mode!r}")
 
