@@ -346,7 +346,7 @@ test.describe('demo page: faults', () => {
     expect(c.errors).toBe(1);
     await expect(page.locator('#caption')).toContainText(PROMPT); // still showing the good motion
     // the playback bar shows the good motion's length (synced on the next displayed frame)
-    await expect(page.locator('#time')).toContainText(`/ ${((good.frames - 1) / good.fps).toFixed(1)} s`);
+    await expect(page.locator('#time')).toContainText(`/ ${(good.frames / good.fps).toFixed(1)} s`);
   });
 
   test('WebGPU unavailable: falls back to WASM and says so', async ({ page }) => {

@@ -70,6 +70,15 @@ export class CharacterPicker {
   private start = 0;
   /** the motion is a piece of the live stream: its retargeting is not announced (one every ~2 s) */
   private piece = false;
+  /**
+   * Live mode: the stream's stage origin (x, z, metres: world = stage + origin) of what plays now, of the newest piece
+   * and of the piece on the character. The stage moves back under what plays by whole metres as a walk goes on; until a
+   * piece cut on the new stage is on the character (a retarget: 0.1–0.6 s), the old one is drawn moved by the
+   * difference of origins (it stood a metre off the stream's root meanwhile). [0, 0] outside live mode.
+   */
+  private stageOrigin: readonly [number, number] = [0, 0];
+  private motionOrigin: readonly [number, number] = [0, 0];
+  private shownOrigin: readonly [number, number] = [0, 0];
   /** the compare view's second motion (DDIM), null when not comparing */
   private compareMotion: Motion | null = null;
   private stem = 'emdm';
@@ -149,13 +158,40 @@ export class CharacterPicker {
   }
 
   /** The motion on screen changed (live mode: a piece of the stream from the clock's time `start`): put it on the user's character (if one is shown). */
-  setMotion(motion: Motion, stem: string, start?: number): void {
+  setMotion(motion: Motion, stem: string, start?: number, origin: readonly [number, number] = [0, 0]): void {
     this.motion = motion;
     this.start = start ?? 0;
     this.piece = start !== undefined;
+    this.motionOrigin = origin;
+    if (!this.piece) this.stageOrigin = origin;
     this.stem = stem;
     if (this.piece) this.setDownloads(false); // off at once: the stream's pieces are not a motion to save
     if (this.shown) this.retarget().catch((e) => this.fail(e));
+  }
+
+  /** Live mode: the stage origin of the frame shown now. A piece cut on another stage is drawn moved onto this one. */
+  stageAt(origin: readonly [number, number]): void {
+    if (origin[0] === this.stageOrigin[0] && origin[1] === this.stageOrigin[1]) return;
+    this.stageOrigin = origin;
+    this.place();
+  }
+
+  /** Draw the character's clip where its stage is now (see stageOrigin). */
+  private place(): void {
+    const h = this.shown?.holder;
+    if (!h) return;
+    h.position.x = this.shownOrigin[0] - this.stageOrigin[0];
+    h.position.z = this.shownOrigin[1] - this.stageOrigin[1];
+  }
+
+  /** Live mode ended: the stream's pieces are over. The downloads stay off until a motion is put on the character
+   * (setMotion: the one shown before live mode, or the recording), and the live note goes. */
+  leaveLive(): void {
+    if (!this.piece) return;
+    this.piece = false;
+    this.stageOrigin = this.motionOrigin = this.shownOrigin = [0, 0];
+    this.place();
+    this.setDownloads(false);
   }
 
   /**
@@ -242,7 +278,9 @@ export class CharacterPicker {
       this.say(`Putting the motion on ${ch.name}…`);
       this.pending = next;
       try {
+        const origin = this.motionOrigin;
         if (!(await perform(next, motion, ch, this.host.skeleton, this.stats, (f) => this.say(`Putting the motion on ${ch.name}… ${Math.round(f * 100)}%`), this.start))) return;
+        this.shownOrigin = origin;
       } finally {
         if (this.pending === next) this.pending = null;
       }
@@ -251,6 +289,8 @@ export class CharacterPicker {
     this.useBuiltIn(false);
     this.host.add(holder);
     this.shown = next;
+    this.place();
+    poseAt(next, this.host.time()); // on the stage posed, not at rest until the next frame's update
     this.host.builtIn.visible = false;
     this.back.hidden = false;
     this.editor.show(ch.boneInfos, ch.mapping);
@@ -269,8 +309,16 @@ export class CharacterPicker {
     this.setDownloads(false);
     const name = s.ch.name;
     const say = this.piece ? undefined : (f: number) => this.say(`Putting the motion on ${name}… ${Math.round(f * 100)}%`);
-    const done = await perform(s, this.motion, s.ch, this.host.skeleton, this.stats, say, this.start);
+    const origin = this.motionOrigin;
+    const running = perform(s, this.motion, s.ch, this.host.skeleton, this.stats, say, this.start);
+    // its first slice read the rest pose (restPose above) before perform returned: the clip playing now poses the
+    // character again at once, or a retarget begun while a frame is drawn (live mode, the stage moved) shows the rest pose
+    poseAt(s, this.host.time());
+    const done = await running;
     if (!done || this.shown !== s) return;
+    this.shownOrigin = origin; // the new clip plays from this frame on: drawn where its stage is now
+    this.place();
+    poseAt(s, this.host.time()); // posed now (its mixer left the bones at rest), not at the next frame's update
     this.setDownloads(true);
     if (this.status.textContent !== s.summary) this.say(s.summary);
   }

@@ -244,6 +244,8 @@ export class LivePanel implements PoseDriver {
       this.shownFrame = pair.shown;
       // the stage moved under the playhead (whole metres, as a walk goes on): the visitor's character's piece is on
       // the old one, so it gets a new piece now rather than walk a metre or more off the camera until the next poll
+      // until that piece is on it, the one it plays is drawn moved onto the stage shown
+      this.page.view.picker.stageAt(pair.origin);
       const o = this.piece?.origin;
       if (o && (o[0] !== pair.origin[0] || o[1] !== pair.origin[1])) this.feedCharacter(s, s.stats(), true);
     } catch (e) {
@@ -306,7 +308,7 @@ export class LivePanel implements PoseDriver {
     const frames = framesOnOneStage(s, from, to);
     frames.forEach((g, k) => joints.set(g.joints, k * 66));
     this.piece = { from: from / s.fps, to: to / s.fps, windows: made, origin: frames[0].origin };
-    picker.setMotion({ frames: to - from, fps: s.fps, joints, features: new Float32Array(0) }, 'emdm-live', from / s.fps);
+    picker.setMotion({ frames: to - from, fps: s.fps, joints, features: new Float32Array(0) }, 'emdm-live', from / s.fps, frames[0].origin);
   }
 
   private add(p: LivePrompt): void {

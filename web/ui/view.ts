@@ -251,6 +251,7 @@ export class View {
     if (!driver || !this.driver) this.liveUnrecorded = !!driver;
     // the DDIM character has no stream to play: the split view would show the last comparison beside the stream
     if (driver) this.leaveCompare();
+    else this.picker.leaveLive();
     this.driver = driver;
     this.syncDownloads();
     byId('playback').hidden = !!driver;
