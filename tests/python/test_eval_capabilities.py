@@ -112,6 +112,25 @@ def test_held_apart_paraphrases_are_not_anchors_and_the_calibration_is_recorded(
     assert int((s >= c["threshold"]).sum()) == c["misses"]["notWarned"]
 
 
+def test_everyday_prompts_outside_the_vocabulary_are_warned_and_counted(caps):
+    """A visitor's "a person rides a bicycle" or "plays the piano" is no action of the dataset: the shipped check warns
+    each of the 30 held-apart ones, and the file records it (a third of the threshold's calibration)."""
+    outside = C.load_outside()
+    assert len(outside) == caps["check"]["outside"]["n"] == 30
+    anchors = {normalise(t) for t in caps["anchors"]["texts"]}
+    assert not anchors & {normalise(p) for p in outside}
+    said = [C.check(caps, e) for e in encode_texts(outside)]
+    assert [p for p, r in zip(outside, said) if r["known"]] == [] and caps["check"]["outside"]["notWarned"] == 0
+    assert all(len(r["nearest"]) == 3 for r in said)          # each offered three working prompts instead
+
+
+def test_a_broken_outside_file_is_one_error_naming_it(tmp_path):
+    for text in ("[[", '{"prompts": ["a", ""]}', '["a person swims"]'):
+        (tmp_path / "o.json").write_text(text)
+        with pytest.raises(C.CoverageError, match="o.json"):
+            C.load_outside(tmp_path / "o.json")
+
+
 def test_scores_warn_a_prompt_whose_nearest_anchor_is_uncovered():
     anchors = np.array([[1.0, 0.0], [0.0, 1.0]])
     s = C.scores(anchors, np.array([True, False]), np.array([[0.96, 0.28], [0.28, 0.96]]))
@@ -123,6 +142,17 @@ def test_calibrate_separates_and_counts_errors():
     assert r["threshold"] == 0.55                  # all known pass, 2 of 3 unknown warned: the best mean
     assert r["falseWarnings"] == {"n": 3, "warned": 0} and r["misses"] == {"n": 3, "notWarned": 1}
     assert C.calibrate(np.array([0.9]), np.array([0.2]))["falseWarnings"]["warned"] == 0
+    assert "outside" not in r
+
+
+def test_calibrate_weighs_prompts_outside_the_vocabulary_as_a_third():
+    known, unknown = np.array([0.9, 0.85, 0.8, 0.7]), np.array([0.3, 0.5])
+    assert C.calibrate(known, unknown)["threshold"] == 0.6            # every known passes, every unknown warned
+    # four everyday prompts scoring 0.75–0.78 against covered anchors: warning them (one known prompt warned, 0.7)
+    # beats passing them, (3/4 + 1 + 1) / 3 > (1 + 1 + 0) / 3
+    r = C.calibrate(known, unknown, np.array([0.75, 0.76, 0.77, 0.78]))
+    assert r["threshold"] == 0.79 and r["outside"] == {"n": 4, "notWarned": 0}
+    assert r["falseWarnings"] == {"n": 4, "warned": 1} and r["misses"] == {"n": 2, "notWarned": 0}
 
 
 def test_action_model_lists_weak_actions():

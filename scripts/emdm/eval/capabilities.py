@@ -58,6 +58,7 @@ CAPTIONS = 16          # training captions per covered action kept as anchors
 # per uncovered action: enough that its paraphrases find it (8: "a person hops on one foot" → hop, not walk), few
 # enough to keep the page's download small (~1.6 × the covered-only file)
 UNCOVERED_CAPTIONS = 8
+OUTSIDE_FILE = Path(__file__).with_name("prompts_outside.json")
 MOVES = 0.5            # covered (and a chip) only where at least this share of its motions move (realism ``moving``)
 SCALE = 127            # int8 embedding = round(v · SCALE); unit vectors, so |q| ≤ 127
 # prompts a new visitor tried (issue 30) and covered ones: checked by both runtimes against the file's answers
@@ -84,15 +85,32 @@ def scores(anchors: np.ndarray, covered: np.ndarray, emb: np.ndarray) -> np.ndar
     return np.where(np.asarray(covered, bool)[cos.argmax(axis=1)], cos.max(axis=1), -1.0)
 
 
-def calibrate(known: np.ndarray, unknown: np.ndarray) -> dict:
-    """The threshold between scores that should pass (``known``) and those that should be warned (``unknown``):
-    maximises (pass rate of known + warn rate of unknown) / 2, midway between neighbouring scores."""
-    cand = np.unique(np.concatenate([known, unknown]))
+def calibrate(known: np.ndarray, unknown: np.ndarray, outside: np.ndarray | None = None) -> dict:
+    """The threshold between scores that should pass (``known``) and those that should be warned (``unknown``, and
+    ``outside``: prompts of no action of the vocabulary): maximises the mean of the pass rate of known and the warn
+    rates of unknown and outside, midway between neighbouring scores."""
+    sets = [unknown] + ([outside] if outside is not None and outside.size else [])
+    cand = np.unique(np.concatenate([known, *sets]))
     cuts = np.concatenate([[cand[0] - 1e-3], (cand[1:] + cand[:-1]) / 2, [cand[-1] + 1e-3]])
-    best = max(cuts, key=lambda t: ((known >= t).mean() + (unknown < t).mean(), -abs(t - 0.7)))
-    return {"threshold": round(float(best), 4),
-            "falseWarnings": {"n": int(known.size), "warned": int((known < best).sum())},
-            "misses": {"n": int(unknown.size), "notWarned": int((unknown >= best).sum())}}
+    best = max(cuts, key=lambda t: ((known >= t).mean() + sum((u < t).mean() for u in sets), -abs(t - 0.7)))
+    out = {"threshold": round(float(best), 4),
+           "falseWarnings": {"n": int(known.size), "warned": int((known < best).sum())},
+           "misses": {"n": int(unknown.size), "notWarned": int((unknown >= best).sum())}}
+    if len(sets) > 1:
+        out["outside"] = {"n": int(outside.size), "notWarned": int((outside >= best).sum())}
+    return out
+
+
+def load_outside(path: Path | str = OUTSIDE_FILE) -> list[str]:
+    """The everyday prompts outside the action vocabulary (``prompts_outside.json``): the check should warn each."""
+    try:
+        doc = json.loads(Path(path).read_text())
+    except ValueError as e:
+        raise CoverageError(f"{path}: not JSON ({e})") from None
+    ps = doc.get("prompts") if isinstance(doc, dict) else None
+    if not isinstance(ps, list) or not all(isinstance(p, str) and p.strip() for p in ps):
+        raise CoverageError(f"{path}: expected {{\"prompts\": [non-empty strings]}}")
+    return ps
 
 
 # ----------------------------------------------------------------------------- building
@@ -192,10 +210,12 @@ def training_captions(dataset: Path, actions: set[str], per_action: int = CAPTIO
 
 
 def build(coverage: dict, prompts: dict[str, list[str]] | None, captions: dict[str, list[str]],
-          encode: Callable[[list[str]], np.ndarray], encoder: dict, realism: dict | None = None) -> dict:
+          encode: Callable[[list[str]], np.ndarray], encoder: dict, realism: dict | None = None,
+          outside: list[str] | None = None) -> dict:
     """The capabilities file (see the module doc) from a coverage result, the benchmark prompts, the training captions
     of its actions (covered and uncovered), an encoder (``encode``: texts → unit rows; ``encoder``: {id, sha256} of its file) and a
-    realism result's real clips' speed per action (``real_speeds``, with ``source``: the result's file)."""
+    realism result's real clips' speed per action (``real_speeds``, with ``source``: the result's file); ``outside``:
+    prompts of no action of the vocabulary, held apart like the paraphrases (``load_outside``)."""
     moving, prompt_moving = (realism or {}).get("moving", {}), (realism or {}).get("promptMoving", {})
     steps, table = actions_table(coverage, prompts, moving, prompt_moving)
     speeds = (realism or {}).get("speeds", {})
@@ -229,11 +249,14 @@ def build(coverage: dict, prompts: dict[str, list[str]] | None, captions: dict[s
     anchors, of_covered = dequantise(q), np.array([a in covered for a in acts])
     should_pass = [p for a in labels if a in covered for p in held.get(a, [])]
     should_warn = [p for a in labels if a not in covered for p in held.get(a, [])]
-    cal = calibrate(scores(anchors, of_covered, encode(should_pass)), scores(anchors, of_covered, encode(should_warn)))
+    cal = calibrate(scores(anchors, of_covered, encode(should_pass)), scores(anchors, of_covered, encode(should_warn)),
+                    scores(anchors, of_covered, encode(outside)) if outside else None)
     out["encoder"] = encoder
     out["check"] = {**cal, "suggestions": SUGGESTIONS,
                     "heldApart": "prompts.json paraphrases after the first of each covered action (should pass) and "
-                                 "of each uncovered action (should be warned)"}
+                                 "of each uncovered action (should be warned)"
+                                 + ("; prompts_outside.json: everyday prompts of no action of the vocabulary (should be "
+                                    "warned)" if outside else "")}
     out["anchors"] = {"scale": SCALE, "dim": int(q.shape[1]), "texts": texts, "actions": acts, "suggest": suggest,
                       "embeddings": base64.b64encode(q.tobytes()).decode("ascii")}
     # what this side's check says of a few prompts: the page's and the library's check must say the same
@@ -272,6 +295,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--coverage", type=Path, default=None, help="default docs/results/json/coverage-<model>.json")
     ap.add_argument("--dataset", type=Path, default=DATASET_DIR, help="its training captions (text models)")
     ap.add_argument("--prompts", type=Path, default=PROMPTS_FILE)
+    ap.add_argument("--outside", type=Path, default=OUTSIDE_FILE,
+                    help="everyday prompts of no action of the vocabulary, for the threshold (default %(default)s)")
     ap.add_argument("--captions", type=int, default=CAPTIONS, help="training captions per covered action")
     ap.add_argument("--uncovered-captions", type=int, default=UNCOVERED_CAPTIONS,
                     help="training captions per uncovered action")
@@ -311,7 +336,7 @@ def main(argv: list[str] | None = None) -> int:
                      **training_captions(a.dataset, covered, a.captions)} if text else {})
         enc_id = entry["condition"].get("encoder", "")
         caps = build(coverage, prompts, captions, lambda ts: text_encoders.encode_texts(ts, enc_id, models_dir=a.models_dir),
-                     encoder_info(manifest, enc_id) if text else {}, realism)
+                     encoder_info(manifest, enc_id) if text else {}, realism, load_outside(a.outside) if text else None)
         out = a.models_dir / file_name(a.model)
         write(caps, out)
         if a.register:
@@ -323,7 +348,9 @@ def main(argv: list[str] | None = None) -> int:
     print(f"wrote {display_path(out)} ({out.stat().st_size // 1024} KB): "
           f"{sum(r['covered'] for r in caps['actions'])} of {len(caps['actions'])} actions covered"
           + (f"; threshold {c['threshold']}: {c['falseWarnings']['warned']}/{c['falseWarnings']['n']} covered prompts "
-             f"wrongly warned, {c['misses']['notWarned']}/{c['misses']['n']} uncovered ones not warned" if c else ""))
+             f"wrongly warned, {c['misses']['notWarned']}/{c['misses']['n']} uncovered ones not warned"
+             + (f", {c['outside']['notWarned']}/{c['outside']['n']} outside the vocabulary not warned" if "outside" in c
+                else "") if c else ""))
     return 0
 
 
