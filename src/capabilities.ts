@@ -21,6 +21,8 @@ import { type Manifest, ModelFileError, fetchBytes, fetchVerified } from './mani
 
 export interface ActionCapability {
   label: string;
+  /** what a visitor reads for it ("reaching up to grab something" for grab-high); absent in older files: the label */
+  name?: string;
   /** share of the benchmark's motions the action classifier recognised, at the model's default steps */
   rate: number;
   /** rate ≥ thresholds.covered and, where measured, moving ≥ thresholds.moving */
@@ -135,6 +137,18 @@ function anchorVectors(caps: Capabilities, file: string): Float32Array {
  * Python: emdm.prompt_check.RELATED.
  */
 export const RELATED = 0.72;
+
+/**
+ * A far prompt's notice names the uncovered action it reads as only from this cosine up: the held-apart paraphrases of
+ * the uncovered actions read as one at 0.57 and more; what merely lands nearest one (gibberish 0.33, French 0.37, "plays
+ * the guitar" as swordplay 0.47) is said to be far from all the model learned. Python: emdm.prompt_check.NAMED.
+ */
+export const NAMED = 0.55;
+
+/** What a visitor reads for an action of `caps`: its file's `name`, else the label with spaces. */
+export function actionName(caps: Capabilities | null, label: string): string {
+  return caps?.actions.find((a) => a.label === label)?.name ?? label.replace(/[_-]+/g, ' ');
+}
 
 const means = new WeakMap<Capabilities, Map<string, Float64Array>>();
 

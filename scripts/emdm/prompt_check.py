@@ -21,6 +21,25 @@ SUGGESTIONS = 3        # closest working prompts offered for an unknown one
 # wave-both-hands (0.73 to raise-both-hands) and is offered the raised hands, not the bow, walk and run its words
 # alone are nearest to. Below it the relation is too loose to lead (kick's nearest covered mean is sneak's, 0.70).
 RELATED = 0.72
+# The notice names the uncovered action a prompt reads as only from this cosine up: the held-apart paraphrases of the
+# uncovered actions read as one at 0.57 and more; what merely lands nearest one (gibberish 0.33, French 0.37, "plays the
+# guitar" as swordplay 0.47, "sits down on a chair" as deposit-floor 0.51) is said to be far from all it learned.
+NAMED = 0.55
+# What the notice and the page's list call an action whose label is dataset shorthand (others: hyphens as spaces); the
+# capabilities file carries them (``actions[].name``) for the page.
+ACTION_NAMES = {
+    "call": "beckoning someone over", "deposit-floor": "putting something down on the floor",
+    "dribble": "dribbling a ball", "elbow-to-knee": "touching each elbow to the opposite knee",
+    "grab-high": "reaching up to grab something", "guide": "showing the way with a hand",
+    "jog-in-circle": "jogging in a circle", "lie-down": "lying down", "pick-up": "picking something up",
+    "respond": "replying with a raised hand", "rotate-arms": "circling the arms", "slash": "slashing with a sword",
+    "swordplay": "sword fighting", "wash": "washing oneself",
+}
+
+
+def action_name(label: str) -> str:
+    """What a visitor reads for an action label: "reaching up to grab something" for grab-high, "raise left hand"."""
+    return ACTION_NAMES.get(label, label.replace("-", " "))
 
 
 class CapabilitiesError(ValueError):
@@ -85,8 +104,9 @@ def notice(result: dict) -> str | None:
     """The one line the CLI prints for an unknown prompt (None for a known one); the page says the same."""
     if result["known"]:
         return None
-    near = (f"it reads as {result['action'].replace('-', ' ')}, which the model does not do well yet"
-            if not result["covered"] else f"best match {result['score']:.2f}")
+    named = not result["covered"] and result["score"] >= NAMED
+    near = (f"it reads as {action_name(result['action'])}, which the model does not do well yet" if named
+            else f"best match {result['score']:.2f}")
     return (f"this prompt is far from what the model does well ({near}); it may come out as walking or standing. "
             "Closest prompts that work: " + "; ".join(repr(p) for p in result["nearest"]))
 

@@ -21,6 +21,33 @@ async function generated(page: Page, start: () => Promise<void>): Promise<void> 
   await page.waitForFunction((k) => window.emdm.counters.generations === k + 1, n, { timeout: 120_000 });
 }
 
+test('gibberish is far from everything, not an action named; Enter on a suggestion keeps the focus; on a phone the notice is in view', async ({ page }) => {
+  test.setTimeout(300_000);
+  const watch = watchPage(page);
+  await open(page);
+  const notice = page.locator('#prompt-check');
+  // it lands nearest "respond" (cosine 0.33): a visitor read "reads as respond" for their typo
+  await page.locator('#prompt').fill('asdf qwerty');
+  await generated(page, () => page.locator('#generate').click());
+  await expect(notice).toContainText('The model has not learned anything close to “asdf qwerty”');
+  // the chip goes with the notice when its prompt is generated: the keyboard focus was left on the page's body
+  await notice.locator('button.chip').first().focus();
+  await generated(page, () => page.keyboard.press('Enter'));
+  await expect(notice).toBeHidden();
+  await expect(page.locator('#generate')).toBeFocused();
+  // a phone: the side panel scrolls on its own; the notice, added above the chips, went out of its view
+  await page.setViewportSize({ width: 390, height: 844 });
+  for (const p of ['a person waves with both hands', 'a person swims', 'a person plays the guitar']) {
+    await page.locator('#prompt').fill(p);
+    await generated(page, () => page.locator('#generate').click());
+  }
+  await expect(notice).toBeVisible();
+  const [box, panel] = await Promise.all([notice.boundingBox(), page.locator('#panel').boundingBox()]);
+  expect(box!.y, 'notice top below the panel top').toBeGreaterThanOrEqual(panel!.y - 1);
+  expect(box!.y + box!.height, 'notice bottom above the panel bottom').toBeLessThanOrEqual(panel!.y + panel!.height + 1);
+  watch.assertClean();
+});
+
 test('a far prompt gets the notice and three working prompts, and still generates; a covered one none', async ({ page }) => {
   test.setTimeout(300_000);
   const watch = watchPage(page);

@@ -131,6 +131,28 @@ def test_a_broken_outside_file_is_one_error_naming_it(tmp_path):
             C.load_outside(tmp_path / "o.json")
 
 
+def test_the_notice_names_an_uncovered_action_only_for_a_prompt_near_it_and_in_a_visitors_words(caps):
+    """A visitor audit: gibberish read as "respond", French as "dance", "plays the guitar" as "swordplay" and "sits down
+    on a chair" as "deposit floor", dataset shorthand named for a prompt merely landing nearest it. Now: named from
+    NAMED up (the held-apart paraphrases of uncovered actions are all above it), in words ("putting something down on
+    the floor"), and the file carries those words for the page."""
+    from emdm.prompt_check import NAMED, action_name
+
+    for p in ["asdf qwerty", "une personne marche en avant", "a person plays the guitar", "someone sits down on a chair"]:
+        r = C.check(caps, encode_texts([p])[0])
+        assert not r["known"] and not r["covered"] and r["score"] < NAMED, (p, r)
+        assert "reads as" not in C.notice(r) and f"best match {r['score']:.2f}" in C.notice(r), C.notice(r)
+    prompts = load_prompts(PROMPTS_FILE, [x["label"] for x in caps["actions"]])
+    _, held = C.build_split(prompts)
+    covered = {x["label"] for x in caps["actions"] if x["covered"]}
+    said = [C.check(caps, e) for e in encode_texts([p for a in prompts if a not in covered for p in held[a]])]
+    assert min(r["score"] for r in said if not r["covered"]) >= NAMED
+    r = C.check(caps, encode_texts(["a person puts an item down on the floor"])[0])
+    assert r["action"] == "deposit-floor" and "it reads as putting something down on the floor," in C.notice(r)
+    assert {x["label"]: x["name"] for x in caps["actions"]} == {x["label"]: action_name(x["label"]) for x in caps["actions"]}
+    assert action_name("grab-high") == "reaching up to grab something" and action_name("raise-left-hand") == "raise left hand"
+
+
 def test_scores_warn_a_prompt_whose_nearest_anchor_is_uncovered():
     anchors = np.array([[1.0, 0.0], [0.0, 1.0]])
     s = C.scores(anchors, np.array([True, False]), np.array([[0.96, 0.28], [0.28, 0.96]]))

@@ -3,7 +3,7 @@
 // list one click from the prompt, and the weak labels of the Action tab. The check itself runs in the worker with
 // the motion (generate's promptCheck); this module only shows it.
 import { type PromptCheck } from '../../src/index';
-import type { Capabilities } from '../../src/capabilities';
+import { type Capabilities, NAMED, actionName } from '../../src/capabilities';
 import { byId, el } from './dom';
 
 /** A prompt as the notice quotes it: spaces collapsed, and a long one cut at a word near `max` characters, with "…". */
@@ -15,7 +15,8 @@ export function quoted(prompt: string, max = 60): string {
   return `“${(space > max / 2 ? cut.slice(0, space) : t.slice(0, max)).replace(/[\s,.;:!?-]+$/, '')}…”`;
 }
 
-/** The notice's words for an unknown prompt (`weak`: the action it reads as, one the model does not do well yet). */
+/** The notice's words for an unknown prompt (`weak`: what a visitor calls the action it reads as, one the model does
+ * not do well yet). */
 export function farNote(prompt: string, weak?: string): string {
   const what = weak
     ? `${quoted(prompt)} reads as ${weak.replace(/[_-]+/g, ' ')}, which this model does not do well yet`
@@ -34,6 +35,8 @@ export class KnowsPanel {
   private readonly prompt = byId('prompt', HTMLTextAreaElement);
   /** the prompt the notice speaks of (it hides when the prompt changes) */
   private checked = '';
+  /** the text model's capabilities (the names of its actions) */
+  private caps: Capabilities | null = null;
 
   constructor(private readonly usePrompt: (text: string) => void) {
     this.open.hidden = true;
@@ -52,13 +55,14 @@ export class KnowsPanel {
   setCapabilities(text: Capabilities | null, action: Capabilities | null): void {
     const caps = text ?? action;
     if (!caps) return;
+    this.caps = text;
     const good = byId('knows-good');
     const weak = byId('knows-weak');
     good.replaceChildren();
     weak.replaceChildren();
     for (const a of caps.actions) {
       const li = el('li');
-      const name = el('span', 'knows-label', `${a.label.replace(/[_-]+/g, ' ')} `);
+      const name = el('span', 'knows-label', `${a.name ?? a.label.replace(/[_-]+/g, ' ')} `);
       li.append(name, el('span', 'knows-rate', pct(a.rate)));
       const still = caps.thresholds.moving !== undefined && a.moving !== undefined && a.moving < caps.thresholds.moving;
       if (still) li.append(el('span', 'knows-still', ` · holds a pose (${pct(a.moving!)} of its motions move)`));
@@ -85,14 +89,23 @@ export class KnowsPanel {
       this.check.hidden = true;
       return;
     }
-    this.checkText.textContent = farNote(prompt, c.covered ? undefined : c.action);
+    // the uncovered action it reads as, named where the prompt is near it (not gibberish landing nearest one)
+    this.checkText.textContent = farNote(prompt, c.covered || c.score < NAMED ? undefined : actionName(this.caps, c.action));
     this.checkChips.replaceChildren(...c.nearest.map((p) => {
       const chip = el('button', 'chip', p);
       chip.type = 'button';
-      chip.addEventListener('click', () => this.usePrompt(p));
+      chip.addEventListener('click', () => {
+        // the notice (and this chip) goes when the new prompt is generated: the keyboard focus goes to Generate, not to
+        // the page's body (no on-screen keyboard opens on a phone, as the prompt box would)
+        if (document.activeElement === chip) byId('generate').focus();
+        this.usePrompt(p);
+      });
       return chip;
     }));
     this.check.hidden = false;
+    // in view in the side panel (on a phone it scrolls on its own, and kept the chips below in place: the notice,
+    // added above them, ended up above the panel's top edge)
+    this.check.scrollIntoView?.({ block: 'nearest' });
   }
 
   hideCheck(): void {

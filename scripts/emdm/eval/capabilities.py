@@ -48,8 +48,8 @@ from emdm.data.dataset import parse_text_file
 from emdm.eval import realism_bars
 from emdm.eval.coverage import COVERED, PROMPTS_FILE, CoverageError, chips, load_prompts, normalise, read_result
 from emdm.eval.results import RESULTS_DIR
-from emdm.prompt_check import (SCHEMA, SUGGESTIONS, CapabilitiesError, check, dequantise, file_name, load, notice,  # noqa: F401
-                               prompt_notice)
+from emdm.prompt_check import (SCHEMA, SUGGESTIONS, CapabilitiesError, action_name, check, dequantise, file_name,  # noqa: F401
+                               load, notice, prompt_notice)
 from emdm.outdir import OutputRefused, check_writable
 from emdm.paths import DATASET_DIR, display_path
 from emdm import text as text_encoders      # .encode_texts looked up at each call: tests replace it
@@ -220,6 +220,7 @@ def build(coverage: dict, prompts: dict[str, list[str]] | None, captions: dict[s
     steps, table = actions_table(coverage, prompts, moving, prompt_moving)
     speeds = (realism or {}).get("speeds", {})
     for row in table:
+        row["name"] = action_name(row["label"])
         if row["label"] in speeds:
             row["realSpeed"] = speeds[row["label"]]
     out = {"schema": SCHEMA, "model": coverage["name"], "condition": coverage.get("condition", "text"),
