@@ -126,3 +126,28 @@ test('the mode tabs are one tab stop; the arrows, Home and End choose a mode, as
   await page.keyboard.press('Tab');
   await expect(page.locator('#prompt')).toBeFocused();
 });
+
+test('tabbing into the prompt box selects the example it holds: typing replaces it; a click keeps the caret', async ({ page }) => {
+  test.setTimeout(120_000);
+  await open(page);
+  const example = await page.locator('#prompt').inputValue();
+  expect(example.length).toBeGreaterThan(0);
+  // a visitor's words were added to the example's end: "a person walksa person waves"
+  await page.locator('#mode-text').focus();
+  await page.keyboard.press('Tab');
+  await expect(page.locator('#prompt')).toBeFocused();
+  await page.keyboard.type('a person waves with both hands');
+  await expect(page.locator('#prompt')).toHaveValue('a person waves with both hands');
+  // their own words are theirs to edit: Tab back in, type, and the words go on
+  await page.locator('#mode-text').focus();
+  await page.keyboard.press('Tab');
+  await page.keyboard.press('End');
+  await page.keyboard.type(' happily');
+  await expect(page.locator('#prompt')).toHaveValue('a person waves with both hands happily');
+  // a click on an untouched example puts the caret where it lands (to edit it), on a fresh page
+  await open(page);
+  await page.locator('#prompt').click();
+  await page.keyboard.press('End');
+  await page.keyboard.type(' slowly');
+  await expect(page.locator('#prompt')).toHaveValue(`${example} slowly`);
+});

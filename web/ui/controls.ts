@@ -96,6 +96,7 @@ export class Controls {
       tab.addEventListener('keydown', (e) => this.tabKey(e, tab));
     }
     this.prompt.addEventListener('input', () => this.refresh(true));
+    this.selectOnTab();
     this.prompt.addEventListener('keydown', (e) => {
       if (e.key === 'Enter' && !e.shiftKey && !e.isComposing) {
         e.preventDefault();
@@ -118,6 +119,28 @@ export class Controls {
     this.button.addEventListener('click', () => this.on.generate());
     this.cancel.addEventListener('click', () => this.on.cancel?.());
     byId('copy-link').addEventListener('click', (e) => void copyLink(e.currentTarget as HTMLButtonElement));
+  }
+
+  /**
+   * Tabbing into the prompt box while it holds text the visitor has not typed (the page's example, a link's or a chip's
+   * prompt) selects it, so typing replaces it: a visitor's words were added to the example's end ("a person walksa
+   * person waves"). A click still puts the caret where it lands (to edit the prompt).
+   */
+  private selectOnTab(): void {
+    let typed = false;
+    let tabbed = false;
+    this.prompt.addEventListener('input', (e) => {
+      if ((e as InputEvent).isTrusted) typed = true;
+    });
+    document.addEventListener('keydown', (e) => {
+      if (e.key === 'Tab') tabbed = true;
+    }, true);
+    document.addEventListener('pointerdown', () => {
+      tabbed = false;
+    }, true);
+    this.prompt.addEventListener('focus', () => {
+      if (tabbed && !typed) this.prompt.select();
+    });
   }
 
   /** Put `text` in the prompt box (Text mode) and generate it, as an example chip does (in live mode: send it to the stream). */
