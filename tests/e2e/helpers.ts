@@ -1,5 +1,5 @@
 // Shared helpers for the Playwright suites (tests/e2e/*.spec.ts).
-import type { Page } from '@playwright/test';
+import { type Page, test } from '@playwright/test';
 
 /** Collects page errors and console errors; call `assertClean()` at the end of a test. */
 export function watchPage(page: Page): { errors: string[]; logs: string[]; assertClean(): void } {
@@ -88,4 +88,10 @@ export async function probeResponsiveness(page: Page, work: ProbedWork | null, i
       timerTicks: ticks.length, maxTimerDelay: Math.max(0, ...late), ms,
     };
   }, [work, idleMs] as const);
+}
+
+/** Skip the running test when the page's manifest lists no diffusion-objective text model (the compare view's DDIM). */
+export async function skipWithoutDiffusion(page: Page): Promise<void> {
+  const m = (await (await page.request.get('/models/manifest.json')).json()) as { models: Record<string, { task: string; objective?: string }> };
+  test.skip(!Object.values(m.models).some((e) => e.objective === 'diffusion' && e.task === 'text'), 'no diffusion-objective text model in public/models');
 }

@@ -3,7 +3,7 @@
 // serious or critical violation may remain (nor an undecided result of such a rule, save the two listed below), and no moderate one (checked softly); each is listed with the elements it names.
 import AxeBuilder from '@axe-core/playwright';
 import { expect, test, type Page } from '@playwright/test';
-import { watchPage } from './helpers';
+import { skipWithoutDiffusion, watchPage } from './helpers';
 
 async function open(page: Page): Promise<void> {
   await page.goto('/?noauto=1&backend=wasm&steps=4&seconds=2');
@@ -50,8 +50,7 @@ test('after load: no serious or critical axe violation', async ({ page }) => {
 
 test('compare view on, two motions shown: no serious or critical axe violation', async ({ page }) => {
   test.setTimeout(300_000);
-  const m = await (await page.request.get('/models/manifest.json')).json() as { models: Record<string, { objective?: string; task: string }> };
-  test.skip(!Object.values(m.models).some((e) => e.objective === 'diffusion' && e.task === 'text'), 'no diffusion text model in public/models');
+  await skipWithoutDiffusion(page);
   const watch = watchPage(page);
   await open(page);
   await page.evaluate(() => window.emdm.compare({ mode: 'text', text: 'a person walks forward', steps: 20, seconds: 2, seed: 7 }));

@@ -9,7 +9,7 @@ import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { readGlb } from '../../src/character/retarget/load';
 import { writeGlb } from '../../src/export/glb';
 import { RIGS, buildRigGlb, withSkin } from '../unit/retargetRigs';
-import { watchExternalRequests, watchPage } from './helpers';
+import { skipWithoutDiffusion, watchExternalRequests, watchPage } from './helpers';
 
 declare global {
   interface Window {
@@ -269,8 +269,7 @@ async function openWithVrm(page: Page, query: string): Promise<void> {
 
 test("the visitor's character in the compare view: a second copy performs the DDIM motion, back to one on leaving", async ({ page }) => {
   test.setTimeout(300_000);
-  const m = (await (await page.request.get('/models/manifest.json')).json()) as { models: Record<string, { task: string; objective?: string }> };
-  test.skip(!Object.values(m.models).some((e) => e.objective === 'diffusion' && e.task === 'text'), 'no diffusion-objective text model in the manifest');
+  await skipWithoutDiffusion(page);
   const watch = watchPage(page);
   await openWithVrm(page, '');
   await page.locator('#mode-text').click();

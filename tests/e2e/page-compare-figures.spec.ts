@@ -6,7 +6,7 @@
 import fs from 'node:fs';
 import path from 'node:path';
 import { expect, test, type Page } from '@playwright/test';
-import { watchPage } from './helpers';
+import { skipWithoutDiffusion, watchPage } from './helpers';
 
 const PROMPT = 'a person walks forward';
 const J = 22;
@@ -69,8 +69,7 @@ function agrees(shownValue: number, computed: number): boolean {
 
 test('stage labels from the steps run; jerk, foot skate and speed of the motions on screen, updated with them; the real range from the file', async ({ page }) => {
   test.setTimeout(300_000);
-  const m = await (await page.request.get('/models/manifest.json')).json() as { models: Record<string, { objective?: string; task: string }> };
-  test.skip(!Object.values(m.models).some((e) => e.objective === 'diffusion' && e.task === 'text'), 'no diffusion text model in public/models');
+  await skipWithoutDiffusion(page);
   const watch = watchPage(page);
   await page.goto('/?noauto=1&backend=wasm');
   await page.waitForFunction(() => window.emdm?.ready === true, null, { timeout: 120_000 });

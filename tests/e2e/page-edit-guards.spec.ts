@@ -4,7 +4,7 @@
 // - in live mode "Generate timeline" ran under the stream, unseen: it says to stop live mode first;
 // - Enter on "Record last 60 s" left the keyboard focus on the page's body (the button is disabled while it works).
 import { expect, test, type Page } from '@playwright/test';
-import { watchPage } from './helpers';
+import { skipWithoutDiffusion, watchPage } from './helpers';
 
 async function open(page: Page): Promise<void> {
   await page.goto('/?noauto=1&backend=wasm&mode=text&text=a+person+walks+forward&seconds=2');
@@ -14,8 +14,7 @@ async function open(page: Page): Promise<void> {
 
 test('a timeline with the compare view at 100 steps runs EMDM at its maximum', async ({ page }) => {
   test.setTimeout(180_000);
-  const m = (await (await page.request.get('/models/manifest.json')).json()) as { models: Record<string, { task: string; objective?: string }> };
-  test.skip(!Object.values(m.models).some((e) => e.objective === 'diffusion' && e.task === 'text'), 'no diffusion-objective text model in the manifest');
+  await skipWithoutDiffusion(page);
   const watch = watchPage(page);
   await open(page);
   await page.locator('#compare').check();
@@ -33,8 +32,7 @@ test('a timeline with the compare view at 100 steps runs EMDM at its maximum', a
 
 test('live mode leaves the compare view on screen and says so', async ({ page }) => {
   test.setTimeout(240_000);
-  const m = (await (await page.request.get('/models/manifest.json')).json()) as { models: Record<string, { task: string; objective?: string }> };
-  test.skip(!Object.values(m.models).some((e) => e.objective === 'diffusion' && e.task === 'text'), 'no diffusion-objective text model in the manifest');
+  await skipWithoutDiffusion(page);
   const watch = watchPage(page);
   await open(page);
   await page.locator('#compare').check();

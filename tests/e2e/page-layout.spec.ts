@@ -6,7 +6,7 @@
 // view's panels clear both characters, and the playback bar says nothing about a motion before there
 // is one. Each state is screenshotted into the test's output folder (test-results/) to be looked at.
 import { expect, test, type Page, type TestInfo } from '@playwright/test';
-import { watchPage } from './helpers';
+import { skipWithoutDiffusion, watchPage } from './helpers';
 
 const PROMPT = 'a person walks forward and waves';
 /** Five out-of-range URL values, each clamped with a warning (see web/ui/state.ts). */
@@ -194,8 +194,7 @@ for (const size of SIZES) {
 
     test('compare view: both panels clear of both characters', async ({ page }, info) => {
       test.setTimeout(300_000);
-      const m = await (await page.request.get('/models/manifest.json')).json() as { models: Record<string, { objective?: string; task: string }> };
-      test.skip(!Object.values(m.models).some((e) => e.objective === 'diffusion' && e.task === 'text'), 'no diffusion text model in public/models');
+      await skipWithoutDiffusion(page);
       const watch = watchPage(page);
       await open(page);
       await page.evaluate((text) => window.emdm.compare({ mode: 'text', text, steps: 20, seconds: 3, seed: 7 }), PROMPT);

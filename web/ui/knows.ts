@@ -62,7 +62,7 @@ export class KnowsPanel {
     weak.replaceChildren();
     for (const a of caps.actions) {
       const li = el('li');
-      const name = el('span', 'knows-label', `${a.name ?? a.label.replace(/[_-]+/g, ' ')} `);
+      const name = el('span', 'knows-label', `${actionName(caps, a.label)} `);
       li.append(name, el('span', 'knows-rate', pct(a.rate)));
       const still = caps.thresholds.moving !== undefined && a.moving !== undefined && a.moving < caps.thresholds.moving;
       if (still) li.append(el('span', 'knows-still', ` · holds a pose (${pct(a.moving!)} of its motions move)`));

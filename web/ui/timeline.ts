@@ -12,6 +12,7 @@ import { planTimeline } from '../../src/edit';
 import { decodeJoints } from '../../src/motion/decode';
 import { recoverJoints } from '../../src/motion/recover';
 import { el } from './dom';
+import { quoted } from './knows';
 import type { PageContext } from './page-context';
 import { described, type Described, type EditInputs, type EditSource } from './provenance';
 import { randomSeed } from './state';
@@ -109,10 +110,11 @@ export class TimelinePanel implements RequestPanel {
     inPlace.id = 'tl-loop-in-place';
     const inPlaceLabel = el('label', 'tl-check');
     inPlaceLabel.append(inPlace, document.createTextNode(' in place (no travel)'));
+    const windowS = fmtSeconds(page.session.limits.maxFrames / page.session.limits.fps);
     const loopGo = button('Make it loop', 'ghost', () => void this.loop(inPlace.checked).catch(() => undefined));
     body.append(
       el('h2', undefined, 'Edit the motion on screen'),
-      el('p', 'tl-hint', `In-between and body-part edits work on a motion of one model window (up to ${fmtSeconds(this.page.session.limits.maxFrames / this.page.session.limits.fps)} s); a loop of a longer timeline regenerates its last ${fmtSeconds(this.page.session.limits.maxFrames / this.page.session.limits.fps)} s.`),
+      el('p', 'tl-hint', `In-between and body-part edits work on a motion of one model window (up to ${windowS} s); a loop of a longer timeline regenerates its last ${windowS} s.`),
       group('In-between: keep the start and the end', ibKeep, ibPrompt, ibGo, this.busy.inbetween, this.msgs.inbetween),
       group('Body part', bodyKeep, bodyPrompt, bodyGo, this.busy.body, this.msgs.body),
       group('Loop: last pose = first pose', inPlaceLabel, loopGo, this.busy.loop, this.msgs.loop),
@@ -343,7 +345,7 @@ export class TimelinePanel implements RequestPanel {
       const what = condition.action !== undefined ? String(condition.action) : (condition.prompt ?? '').trim();
       const { fps, maxFrames } = this.limits();
       // longer than one window: only its end was regenerated, with its own prompt or the last segment's
-      const note = motion.frames <= maxFrames ? '' : `Only the last ${fmtSeconds(maxFrames / fps)} s were regenerated (with “${quoted(what)}”${own ? '' : ', the last segment\'s'}) to lead back to the first pose; the ${fmtSeconds((motion.frames - maxFrames) / fps)} s before them are as they were.`;
+      const note = motion.frames <= maxFrames ? '' : `Only the last ${fmtSeconds(maxFrames / fps)} s were regenerated (with ${quoted(what)}${own ? '' : ', the last segment\'s'}) to lead back to the first pose; the ${fmtSeconds((motion.frames - maxFrames) / fps)} s before them are as they were.`;
       return {
         note,
         motion: r.clip, display: this.decode(r.clip.features, r.clip.frames, true), windows: 1, results: calls.results,
@@ -383,17 +385,12 @@ function editSource(edit: EditInputs, condition: EditCondition, seed: number, ba
 }
 
 // ---------------------------------------------------------------- small DOM helpers
-/** A prompt box holding an example (a value, not only a grey placeholder: a visitor can run the tool at once). */
 /** Seconds as the panel writes them: 9.8, 50.2, 4. */
 function fmtSeconds(s: number): string {
   return String(Number(s.toFixed(2)));
 }
 
-/** A prompt inside a message: at most 60 characters. */
-function quoted(text: string): string {
-  return text.length > 60 ? `${text.slice(0, 59)}…` : text;
-}
-
+/** A prompt box holding an example (a value, not only a grey placeholder: a visitor can run the tool at once). */
 function input(id: string, label: string, example: string): HTMLInputElement {
   const i = el('input');
   i.type = 'text';

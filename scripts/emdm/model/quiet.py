@@ -1,7 +1,8 @@
 """ONNX export and quantisation without their noise: ``torch.onnx.export(dynamo=True)`` logs one warning per
 torchvision operator it could register when torchvision is not installed (we need none), and onnxruntime's
 ``quantize_dynamic`` asks on the root logger for a pre-processing step our graphs do not need (the parity and
-int8-error figures each export prints are what says whether a file is good). Other warnings and errors still show.
+int8-error figures each export prints are what says whether a file is good). Python ``warnings`` are ignored meanwhile
+(the exporter's deprecation and tracer warnings, as ``emdm.export`` always did); other log records and errors show.
 """
 
 from __future__ import annotations
