@@ -66,6 +66,13 @@ def test_unified_labels_merge_sources_and_mirror():
     assert actions.cmu_action("brisk walk") == actions.BANDAI["walk"] == "walk"
     assert actions.cmu_action("run/jog") == "run"
     assert actions.cmu_action("basketball - forward dribble") == "dribble"
+    # a verb wins over the setting: the playground's forward jumps are jumps, its climbs stay climbs
+    assert actions.cmu_action("playground - forward jumps, turn around") == "jump"
+    assert actions.cmu_action("playground - climb, sit, dangle legs, jump down") == "climb"
+    assert actions.cmu_action("playground - grip bar, swing body") == "climb"
+    # ... and the split keeps stratifying the playground session as one group (the test split the models know)
+    assert actions.cmu_stratum("playground - forward jumps, turn around") == "climb"
+    assert actions.cmu_stratum("run/jog") == actions.cmu_action("run/jog") == "run"
     assert actions.mirror_label("walk-turn-left") == "walk-turn-right"
     assert actions.mirror_label("raise-both-hands") == "raise-both-hands"
     vocab = actions.vocabulary({"wave-left-hand", "walk"})

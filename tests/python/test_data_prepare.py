@@ -160,3 +160,19 @@ def test_real_walk_left_goes_left_and_its_mirror_goes_right(tmp_path):
             assert goes in w["action"], (w["id"], w["action"], J[-1, 0])
             text = " ".join(w["captions"])
             assert goes in text and ({"left", "right"} - {goes}).pop() not in text.split(), text
+
+
+@needs_shared
+def test_real_playground_jumps_are_jumps_and_the_playground_split_stays_as_trained():
+    """CMU 01_01 ("playground - forward jumps, turn around") is labelled jump; the split still stratifies the
+    playground session as one group, so its test takes are those the shipped models were evaluated on."""
+    from emdm.data import sources
+    from emdm.data.split import split_takes
+    from emdm.data.unpack import unpack_archive
+
+    root = unpack_archive(SHARED / prepare.ARCHIVES["cmu"])
+    jobs = {j.take: j for j in sources.cmu_jobs(root) if j.take.startswith("cmu/01_")}
+    assert jobs["cmu/01_01"].action == "jump" and jobs["cmu/01_07"].action == "climb"
+    assert {j.stratum for j in jobs.values()} == {"climb"}
+    held = {t: s for t, s in split_takes({t: j.stratum or j.action for t, j in jobs.items()}).items() if s != "train"}
+    assert held == {"cmu/01_06": "test", "cmu/01_14": "test", "cmu/01_08": "val"}, "the split the models know"

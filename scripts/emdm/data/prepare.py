@@ -362,9 +362,9 @@ def run(args) -> int:
             if per[j.source] <= args.limit:
                 kept.append(j)
         jobs = kept
-    take_actions: dict[str, str] = {}
+    take_actions: dict[str, str] = {}          # take -> what the split stratifies it by (its action, or a stratum)
     for j in jobs:
-        take_actions.setdefault(j.take, j.action)
+        take_actions.setdefault(j.take, j.stratum or j.action)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = temp_dir(out)
     try:

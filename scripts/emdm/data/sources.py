@@ -44,6 +44,7 @@ class Job:
     fps: float = 0.0          # for AMC (BVH files carry their frame time)
     split: str = ""
     extra: dict = field(default_factory=dict)
+    stratum: str = ""         # what the split stratifies the take by, where not its action (actions.cmu_stratum)
 
 
 def _safe(s: str) -> str:
@@ -148,10 +149,11 @@ def cmu_jobs(root: Path, n_captions: int = 4) -> list[Job]:
         caps = captions.cmu_captions(d, n_captions, trial)
         if f.suffix.lower() == ".bvh":
             jobs.append(Job("cmu", "bvh", str(f), "cmu_cc_bvh", take, f"{subj:02d}_{trial:02d}-bvh", actions.cmu_action(d), "", caps,
-                            extra={"description": d}))
+                            extra={"description": d}, stratum=actions.cmu_stratum(d)))
         else:
             jobs.append(Job("cmu", "amc", str(f), "cmu_asfamc", take, f"{subj:02d}_{trial:02d}-amc", actions.cmu_action(d), "", caps,
-                            asf=str(f.parent / f"{subj:02d}.asf"), fps=120.0, extra={"description": d}))
+                            asf=str(f.parent / f"{subj:02d}.asf"), fps=120.0, extra={"description": d},
+                            stratum=actions.cmu_stratum(d)))
     return jobs
 
 
