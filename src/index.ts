@@ -25,6 +25,8 @@ export type { Motion } from './motion/types';
 export type { SampleState } from './openModel';
 export type { WindowRun } from './worker/generationHost';
 export type { PromptCheck } from './capabilities';
+/** whether a prompt reads as English (the text encoder and the captions are English; the page's notice says so) */
+export { readsAsEnglish } from './language';
 export type { Backend, BackendRequest } from './runtime/ort';
 /** the models folder's manifest (createGenerator loads it, or takes one) and the error a bad model file raises */
 export { ModelFileError, loadManifest } from './manifest';

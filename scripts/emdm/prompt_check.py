@@ -13,6 +13,7 @@ import numpy as np
 
 from emdm import manifest as mf
 from emdm import paths
+from emdm.prompt_language import reads_as_english
 
 SCHEMA = 2             # 2: anchors of the uncovered actions too; known = nearest anchor covered and close enough
 SUGGESTIONS = 3        # closest working prompts offered for an unknown one
@@ -100,13 +101,16 @@ def action_means(vecs: np.ndarray, actions: list[str]) -> dict[str, np.ndarray]:
     return out
 
 
-def notice(result: dict) -> str | None:
-    """The one line the CLI prints for an unknown prompt (None for a known one); the page says the same."""
+def notice(result: dict, prompt: str | None = None) -> str | None:
+    """The one line the CLI prints for an unknown prompt (None for a known one); the page says the same. With the
+    ``prompt``, one that does not read as English is told so first (the model reads English only)."""
     if result["known"]:
         return None
     named = not result["covered"] and result["score"] >= NAMED
     near = (f"it reads as {action_name(result['action'])}, which the model does not do well yet" if named
             else f"best match {result['score']:.2f}")
+    if prompt is not None and not reads_as_english(prompt):
+        near = f"it does not read as English, and the model understands English prompts only; best match {result['score']:.2f}"
     return (f"this prompt is far from what the model does well ({near}); it may come out as walking or standing. "
             "Closest prompts that work: " + "; ".join(repr(p) for p in result["nearest"]))
 
@@ -130,6 +134,7 @@ def load(model: str, models_dir: Path | str | None = None) -> dict | None:
     return caps
 
 
-def prompt_notice(model: str, emb: np.ndarray, models_dir: Path | str | None = None) -> str | None:
+def prompt_notice(model: str, emb: np.ndarray, models_dir: Path | str | None = None,
+                  prompt: str | None = None) -> str | None:
     caps = load(model, models_dir)
-    return None if caps is None else notice(check(caps, emb))
+    return None if caps is None else notice(check(caps, emb), prompt)

@@ -364,7 +364,7 @@ def run(a: argparse.Namespace) -> int:
         return write_motion(a, feats[None], joints[None])
     cond = make_condition(entry["condition"], a.text, a.action, a.uncond, a.models_dir)
     try:
-        far = a.text and a.model and prompt_check.prompt_notice(a.model, cond, a.models_dir)
+        far = a.text and a.model and prompt_check.prompt_notice(a.model, cond, a.models_dir, a.text)
     except prompt_check.CapabilitiesError as e:      # advisory: say it once and generate (the page does the same)
         far = f"no prompt check: {e}"
     if far:                                          # the page says the same beside its prompt box

@@ -21,7 +21,7 @@ async function generated(page: Page, start: () => Promise<void>): Promise<void> 
   await page.waitForFunction((k) => window.emdm.counters.generations === k + 1, n, { timeout: 120_000 });
 }
 
-test('gibberish is far from everything, not an action named; Enter on a suggestion keeps the focus; on a phone the notice is in view', async ({ page }) => {
+test('gibberish is far from everything, not an action named; French is not English; Enter on a suggestion keeps the focus; on a phone the notice is in view', async ({ page }) => {
   test.setTimeout(300_000);
   const watch = watchPage(page);
   await open(page);
@@ -35,6 +35,10 @@ test('gibberish is far from everything, not an action named; Enter on a suggesti
   await generated(page, () => page.keyboard.press('Enter'));
   await expect(notice).toBeHidden();
   await expect(page.locator('#generate')).toBeFocused();
+  // another language (it landed nearest "dance"): the model reads English only, and the notice says so first
+  await page.locator('#prompt').fill('une personne marche en avant');
+  await generated(page, () => page.locator('#generate').click());
+  await expect(notice).toContainText('“une personne marche en avant” does not read as English, and the model understands English prompts only');
   // a phone: the side panel scrolls on its own; the notice, added above the chips, went out of its view
   await page.setViewportSize({ width: 390, height: 844 });
   for (const p of ['a person waves with both hands', 'a person swims', 'a person plays the guitar']) {

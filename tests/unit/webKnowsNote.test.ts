@@ -8,6 +8,13 @@ describe('farNote', () => {
     expect(farNote('a person juggles')).toMatch(/^The model has not learned anything close to “a person juggles”, so/);
     expect(farNote('a person bows', 'bow')).toMatch(/^“a person bows” reads as bow, which this model does not do well yet/);
   });
+  it('says a prompt in another language is not English before anything else (the model reads English only)', () => {
+    const fr = farNote('une personne marche en avant', 'dance');
+    expect(fr).toMatch(/^“une personne marche en avant” does not read as English, and the model understands English prompts only, so/);
+    expect(fr).toMatch(/These English prompts are the closest it does well:$/);
+    expect(fr).not.toContain('dance');
+    expect(farNote('a person juggles')).not.toContain('English');
+  });
   it('cuts a long prompt at a word, with an ellipsis, so the notice stays a few lines', () => {
     const long = 'a person slowly walks forward in a wide circle, then stops, turns around twice and sits down on a chair near the door';
     const q = quoted(long);

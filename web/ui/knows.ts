@@ -4,6 +4,7 @@
 // the motion (generate's promptCheck); this module only shows it.
 import { type PromptCheck } from '../../src/index';
 import { type Capabilities, NAMED, actionName } from '../../src/capabilities';
+import { readsAsEnglish } from '../../src/language';
 import { byId, el } from './dom';
 
 /** A prompt as the notice quotes it: spaces collapsed, and a long one cut at a word near `max` characters, with "…". */
@@ -16,12 +17,15 @@ export function quoted(prompt: string, max = 60): string {
 }
 
 /** The notice's words for an unknown prompt (`weak`: what a visitor calls the action it reads as, one the model does
- * not do well yet). */
+ * not do well yet). A prompt that does not read as English is told so first: the model reads English only. */
 export function farNote(prompt: string, weak?: string): string {
-  const what = weak
-    ? `${quoted(prompt)} reads as ${weak.replace(/[_-]+/g, ' ')}, which this model does not do well yet`
-    : `The model has not learned anything close to ${quoted(prompt)}`;
-  return `${what}, so the motion will probably be walking, standing or a raised arm. These prompts are the closest it does well:`;
+  const english = readsAsEnglish(prompt);
+  const what = !english
+    ? `${quoted(prompt)} does not read as English, and the model understands English prompts only`
+    : weak
+      ? `${quoted(prompt)} reads as ${weak.replace(/[_-]+/g, ' ')}, which this model does not do well yet`
+      : `The model has not learned anything close to ${quoted(prompt)}`;
+  return `${what}, so the motion will probably be walking, standing or a raised arm. These ${english ? '' : 'English '}prompts are the closest it does well:`;
 }
 
 const pct = (r: number) => `${Math.round(r * 100)} %`;
