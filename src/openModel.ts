@@ -77,7 +77,9 @@ export type { Motion };
 
 export interface GenerateResult {
   motion: Motion;
+  /** `stepMs`: this call's steps (a resumed run's: those after its begun part, which `begin` timed) */
   timings: { encodeMs: number; stepMs: number[]; decodeMs: number; totalMs: number; backend: Backend; threads: number };
+  /** model calls that made the motion (a resumed run's include those of its begun part) */
   modelCalls: number;
   /** steps that ran the unconditional batch row too (guidance; only those above guidanceMinTime) */
   guidedSteps?: number;
@@ -115,6 +117,9 @@ export interface SampleState {
   rng?: RandomState;
   /** with a speed cap (`speedCap`): the first step's conditional root speed, m per frame, that the finished run is held to */
   speedRef?: number;
+  /** the model calls (and of them the guided steps) the stopped part ran: the finished run's counts include them */
+  modelCalls?: number;
+  guidedSteps?: number;
 }
 
 export interface Generator {
@@ -331,7 +336,10 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     const done: Awaited<ReturnType<typeof sample>>[] = [];
     if (batchesExactly) done.push(...(await together(step, runs.map((r) => (st: StepFn) => sample({ ...r, step: st })))));
     else for (const r of runs) done.push(await sample({ ...r, step }));
-    return done.map((r, i) => ({ x: r.x, frames: os[i].frames, steps: os[i].steps, next: r.next!, ...(r.speedRef !== undefined ? { speedRef: r.speedRef } : {}), ...(rngs[i] ? { rng: rngs[i]!.state() } : {}) }));
+    return done.map((r, i) => ({
+      x: r.x, frames: os[i].frames, steps: os[i].steps, next: r.next!, modelCalls: r.modelCalls, guidedSteps: r.guidedSteps,
+      ...(r.speedRef !== undefined ? { speedRef: r.speedRef } : {}), ...(rngs[i] ? { rng: rngs[i]!.state() } : {}),
+    }));
   }
 
   async function run(o: GenerateOptions): Promise<GenerateResult> {
@@ -352,8 +360,9 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     return {
       motion: { frames: o.frames, fps: entry.fps, joints, features },
       timings: { encodeMs: t1 - t0, stepMs: r.stepMs, decodeMs: t3 - t2, totalMs: t3 - t0, backend, threads: session.threads },
-      modelCalls: r.modelCalls,
-      guidedSteps: r.guidedSteps,
+      // a resumed run counts the calls of its begun part too (a timeline's window: all its steps)
+      modelCalls: r.modelCalls + (o.resume?.modelCalls ?? 0),
+      guidedSteps: r.guidedSteps + (o.resume?.guidedSteps ?? 0),
       sampler: r.sampler,
       steps: o.steps,
       ...(prompt ? { prompt } : {}),

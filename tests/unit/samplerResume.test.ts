@@ -134,6 +134,13 @@ describe('begin on a model that quantises its activations per call (the shipped 
     const inTurn = await generateTimeline(segs, gen, limits);
     expect(calls).toEqual([3]);
     expect(maxAbsDiff(together.features, inTurn.features)).toBe(0);
+    // a finished window counts its begun steps too: the page's "Model calls" of a timeline begun together
+    const one = { ...o, condition: { type: 'vector' as const, vector: vec(1) }, frames: 30, seed: 1 };
+    const [state] = await g.begin([{ ...one, stopAt: 0.55 }]);
+    expect(state.modelCalls).toBeGreaterThan(0);
+    const [plain, resumed] = [await g.generate(one), await g.generate({ ...one, resume: state })];
+    expect([resumed.modelCalls, resumed.guidedSteps]).toEqual([plain.modelCalls, plain.guidedSteps]);
+    expect(plain.modelCalls).toBe(4);
     await g.dispose();
   });
 });

@@ -136,7 +136,12 @@ describe('Last generation cells', () => {
   });
 
   it('show what ran', () => {
-    const c = timingCells({ timings: { ...timings, encodeMs: 5, stepMs: [10, 20], decodeMs: 3, threads: 1 }, modelCalls: 4 }, 2);
-    expect(c).toEqual({ encode: '5.0 ms', step: '15 ms × 2', decode: '5.0 ms', total: '43 ms', backend: 'WASM · 1 thread', calls: '4' });
+    const c = timingCells({ timings: { ...timings, encodeMs: 5, stepMs: [10, 20], decodeMs: 3, threads: 1 }, modelCalls: 2 }, 2);
+    expect(c).toEqual({ encode: '5.0 ms', step: '15 ms × 2', decode: '5.0 ms', total: '43 ms', backend: 'WASM · 1 thread', calls: '2' });
+  });
+
+  it("count a timeline's steps begun together in its calls, and say so beside the timed ones", () => {
+    const c = timingCells({ timings: { ...timings, stepMs: [10, 20], threads: 1 }, modelCalls: 4 }, 0);
+    expect([c.step, c.calls]).toEqual(['15 ms × 2 (and 2 begun together)', '4']);
   });
 });
