@@ -297,3 +297,16 @@ def test_shipped_file_covers_only_actions_whose_motions_move(model):
         prompts = src["generated"]["prompts"]
         chips = [t for t, a, s in zip(c["anchors"]["texts"], c["anchors"]["actions"], c["anchors"]["suggest"]) if s]
         assert chips and all(prompts[t]["moving"] >= C.MOVES for t in chips if t in prompts)
+
+
+def test_a_paraphrase_is_the_chip_before_the_plain_label_prompt_on_a_tie():
+    """The list's chips read "a person walks turn left" and "a person jogs in circle" (the plain prompt, made from the
+    label, won every tie): on a tie a written paraphrase is the chip; a better-recognised plain prompt still wins."""
+    cov = {"default_steps": 10, "runs": [{"steps": 10, "per_action": {
+        "walk-turn-left": {"n": 8, "rate": 1.0}, "bow": {"n": 8, "rate": 1.0}},
+        "prompts": {"a person walks turn left": {"rate": 1.0}, "someone turns left while walking": {"rate": 1.0},
+                    "a person bows": {"rate": 1.0}, "someone takes a deep bow": {"rate": 0.9}}}]}
+    prompts = {"walk-turn-left": ["a person walks turn left", "someone turns left while walking"],
+               "bow": ["a person bows", "someone takes a deep bow"]}
+    rows = {r["label"]: r["prompt"] for r in C.actions_table(cov, prompts)[1]}
+    assert rows == {"walk-turn-left": "someone turns left while walking", "bow": "a person bows"}

@@ -153,6 +153,13 @@ def test_cli_writes_the_json_and_the_report_renders_it(world, capsys):
     assert "## Realism per action" in text and "### Side by side" in text and "### Kinematic rules" in text
     assert "| Action | Real clips | Speed m/s (real) |" in text and "| walk |" in text
     assert (root / "results" / "realism-t2m.png").is_file() and (root / "results" / "realism-t2m-x0s0.png").is_file()
+    assert "Each column's classifier" not in text, "one classifier judged both"
+    # a result judged by another classifier (older weights, not measured again): the table says which judged which
+    other = json.loads(out0.read_text())
+    other["classifier"]["summary"] = "ActionClassifier trained before the relabel"
+    lines = R.comparison([r, other])
+    assert f"Each column's classifier is its own result's: {r['name']}: {r['classifier']['summary']}; t2m-x0s0: " \
+           "ActionClassifier trained before the relabel." in lines[2]
 
 
 def test_cli_names_a_missing_classifier(world, capsys):

@@ -143,8 +143,11 @@ def actions_table(coverage: dict, prompts: dict[str, list[str]] | None,
                "covered": v["rate"] >= COVERED and moving.get(label, 1.0) >= MOVES}
         if label in moving:
             row["moving"] = round(moving[label], 4)
-        ps = sorted((p for p in (prompts or {}).get(label, []) if p in per_prompt and prompt_moving.get(p, 1.0) >= MOVES),
-                    key=lambda p: -per_prompt[p]["rate"])
+        # on a tie a paraphrase (written as a person would) before the plain label prompt (made from the label: "a person
+        # walks turn left", "a person deposits floor" were the list's chips)
+        mine = (prompts or {}).get(label, [])
+        ps = sorted((p for p in mine if p in per_prompt and prompt_moving.get(p, 1.0) >= MOVES),
+                    key=lambda p: (-per_prompt[p]["rate"], p == mine[0]))
         if ps and per_prompt[ps[0]]["rate"] >= COVERED:
             row["prompt"] = ps[0]
         out.append(row)

@@ -451,9 +451,16 @@ def comparison(results: list[dict]) -> list[str]:
                          f"{_p(g.get('motions_over_action'))} · {_p(g.get('moving'))} · {kin} · "
                          f"{_p(r['generated']['classifier'].get(a))}")
         rows.append([a] + cells)
+    # results of older weights cannot be measured again: where a later classifier judged the newer ones, say which
+    judges: dict[str, list[str]] = {}
+    for r in results:
+        judges.setdefault((r.get("classifier") or {}).get("summary", "an unrecorded classifier"), []).append(r["name"])
+    by = ("" if len(judges) < 2 else " Each column's classifier is its own result's: " + "; ".join(
+        f"{', '.join(names)}: {summary}" for summary, names in judges.items()) + ".")
     return ["### Side by side", "", "Per action: speed ÷ real · motions with a joint step over the real maximum (of all actions' clips / of the "
             "action's own) · "
-            "motions that move (peak joint speed ≥ a quarter of the real clips' 5th percentile) · kinematic rule (n/j: not judged) · classifier.", "", md.table(header, rows), ""]
+            "motions that move (peak joint speed ≥ a quarter of the real clips' 5th percentile) · kinematic rule (n/j: not judged) · "
+            "classifier." + by, "", md.table(header, rows), ""]
 
 
 def plot(r: dict, path: Path) -> bool:
