@@ -336,10 +336,8 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     const done: Awaited<ReturnType<typeof sample>>[] = [];
     if (batchesExactly) done.push(...(await together(step, runs.map((r) => (st: StepFn) => sample({ ...r, step: st })))));
     else for (const r of runs) done.push(await sample({ ...r, step }));
-    return done.map((r, i) => ({
-      x: r.x, frames: os[i].frames, steps: os[i].steps, next: r.next!, modelCalls: r.modelCalls, guidedSteps: r.guidedSteps,
-      ...(r.speedRef !== undefined ? { speedRef: r.speedRef } : {}), ...(rngs[i] ? { rng: rngs[i]!.state() } : {}),
-    }));
+    return done.map((r, i) => ({ x: r.x, frames: os[i].frames, steps: os[i].steps, next: r.next!, modelCalls: r.modelCalls, guidedSteps: r.guidedSteps,
+      ...(r.speedRef !== undefined ? { speedRef: r.speedRef } : {}), ...(rngs[i] ? { rng: rngs[i]!.state() } : {}) }));
   }
 
   async function run(o: GenerateOptions): Promise<GenerateResult> {
@@ -360,8 +358,7 @@ export async function openModel(opts: GeneratorOptions): Promise<Generator> {
     return {
       motion: { frames: o.frames, fps: entry.fps, joints, features },
       timings: { encodeMs: t1 - t0, stepMs: r.stepMs, decodeMs: t3 - t2, totalMs: t3 - t0, backend, threads: session.threads },
-      // a resumed run counts the calls of its begun part too (a timeline's window: all its steps)
-      modelCalls: r.modelCalls + (o.resume?.modelCalls ?? 0),
+      modelCalls: r.modelCalls + (o.resume?.modelCalls ?? 0), // a resumed run's include its begun part's
       guidedSteps: r.guidedSteps + (o.resume?.guidedSteps ?? 0),
       sampler: r.sampler,
       steps: o.steps,

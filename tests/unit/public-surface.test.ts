@@ -8,6 +8,8 @@ const PUBLIC = [
   // the generator, its errors, the manifest and the model cache
   'AbortError', 'ModelFileError', 'NonFiniteMotionError', 'clearModelCache', 'createGenerator', 'loadManifest', 'modelCacheUsage',
   'JOINT_NAMES', 'KINEMATIC_CHAINS', 'PARENTS',
+  // whether a prompt reads as English (the unknown-prompt notice says so; src/language.ts)
+  'readsAsEnglish',
   // edits
   'EditError', 'FEATURE_GROUPS', 'KeepSpecError', 'LOOP_END_FRAMES', 'MAX_TIMELINE_SECONDS', 'bodyPartEdit', 'generateTimeline', 'inBetween',
   'keepMask', 'makeLoop', 'parseKeep', 'withNewSeed',
