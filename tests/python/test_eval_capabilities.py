@@ -299,14 +299,29 @@ def test_shipped_file_covers_only_actions_whose_motions_move(model):
         assert chips and all(prompts[t]["moving"] >= C.MOVES for t in chips if t in prompts)
 
 
-def test_a_paraphrase_is_the_chip_before_the_plain_label_prompt_on_a_tie():
+def test_a_paraphrase_is_the_chip_before_a_plain_prompt_no_caption_says_so_on_a_tie():
     """The list's chips read "a person walks turn left" and "a person jogs in circle" (the plain prompt, made from the
-    label, won every tie): on a tie a written paraphrase is the chip; a better-recognised plain prompt still wins."""
+    label, won every tie): where the action's training captions never say the plain prompt's words, a written
+    paraphrase is the chip on a tie; a plain prompt the captions say ("a person bows") keeps it."""
     cov = {"default_steps": 10, "runs": [{"steps": 10, "per_action": {
         "walk-turn-left": {"n": 8, "rate": 1.0}, "bow": {"n": 8, "rate": 1.0}},
         "prompts": {"a person walks turn left": {"rate": 1.0}, "someone turns left while walking": {"rate": 1.0},
-                    "a person bows": {"rate": 1.0}, "someone takes a deep bow": {"rate": 0.9}}}]}
+                    "a person bows": {"rate": 1.0}, "someone takes a deep bow": {"rate": 1.0}}}]}
     prompts = {"walk-turn-left": ["a person walks turn left", "someone turns left while walking"],
                "bow": ["a person bows", "someone takes a deep bow"]}
-    rows = {r["label"]: r["prompt"] for r in C.actions_table(cov, prompts)[1]}
+    captions = {"walk-turn-left": ["A person walks and turns left."], "bow": ["Someone bows politely.", "A man bows."]}
+    unwritten = C.unwritten_plain(prompts, captions)
+    assert unwritten == {"walk-turn-left"}
+    rows = {r["label"]: r["prompt"] for r in C.actions_table(cov, prompts, unwritten=unwritten)[1]}
     assert rows == {"walk-turn-left": "someone turns left while walking", "bow": "a person bows"}
+    assert {r["label"]: r["prompt"] for r in C.actions_table(cov, prompts)[1]}["walk-turn-left"] == "a person walks turn left"
+
+
+def test_the_shipped_file_suggests_no_plain_prompt_its_captions_never_say(caps):
+    """The notice's suggestions and the list's chips were "a person walks turn left", "a person jogs in circle": they
+    stay anchors (the check still knows them) but are never offered."""
+    a = caps["anchors"]
+    offered = {t for t, s in zip(a["texts"], a["suggest"]) if s} | {x.get("prompt") for x in caps["actions"]}
+    unsaid = {"a person walks turn left", "a person walks turn right", "a person jogs in circle", "a person grabs high"}
+    assert unsaid <= set(a["texts"]) and not unsaid & offered
+    assert "a person walks and then turns to the left" in offered and "a person bows" in offered

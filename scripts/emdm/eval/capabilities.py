@@ -37,6 +37,7 @@ import argparse
 import base64
 import csv
 import json
+import re
 import sys
 from pathlib import Path
 from typing import Callable
@@ -126,10 +127,13 @@ def moving_shares(realism: dict, model: str) -> tuple[dict[str, float], dict[str
 
 
 def actions_table(coverage: dict, prompts: dict[str, list[str]] | None,
-                  moving: dict[str, float] | None = None, prompt_moving: dict[str, float] | None = None) -> tuple[int, list[dict]]:
+                  moving: dict[str, float] | None = None, prompt_moving: dict[str, float] | None = None,
+                  unwritten: set[str] | None = None) -> tuple[int, list[dict]]:
     """(steps, [{label, rate, covered, moving?, prompt?}] best first) at the model's default step count; ``moving``
-    (per action) and ``prompt_moving`` (per prompt): shares of motions that move, where measured (``moving_shares``)."""
-    moving, prompt_moving = moving or {}, prompt_moving or {}
+    (per action) and ``prompt_moving`` (per prompt): shares of motions that move, where measured (``moving_shares``).
+    An action's prompt is its best recognised one; on a tie the plain label prompt first, except for the actions in
+    ``unwritten`` (``unwritten_plain``: "a person walks turn left"), where a written paraphrase is."""
+    moving, prompt_moving, unwritten = moving or {}, prompt_moving or {}, unwritten or set()
     steps = int(coverage.get("default_steps", 10))
     run = next((r for r in coverage.get("runs", []) if r["steps"] == steps), None)
     if run is None:
@@ -143,11 +147,9 @@ def actions_table(coverage: dict, prompts: dict[str, list[str]] | None,
                "covered": v["rate"] >= COVERED and moving.get(label, 1.0) >= MOVES}
         if label in moving:
             row["moving"] = round(moving[label], 4)
-        # on a tie a paraphrase (written as a person would) before the plain label prompt (made from the label: "a person
-        # walks turn left", "a person deposits floor" were the list's chips)
         mine = (prompts or {}).get(label, [])
         ps = sorted((p for p in mine if p in per_prompt and prompt_moving.get(p, 1.0) >= MOVES),
-                    key=lambda p: (-per_prompt[p]["rate"], p == mine[0]))
+                    key=lambda p: (-per_prompt[p]["rate"], label in unwritten and p == mine[0]))
         if ps and per_prompt[ps[0]]["rate"] >= COVERED:
             row["prompt"] = ps[0]
         out.append(row)
@@ -193,6 +195,18 @@ def realism_result(model: str, results: Path, entry: dict | None = None) -> Path
     raise CoverageError(f"{results}: no realism-*.json; run python -m emdm.eval.realism --model {model} or pass --realism")
 
 
+def unwritten_plain(prompts: dict[str, list[str]], captions: dict[str, list[str]]) -> set[str]:
+    """The actions whose plain label prompt ("a person walks turn left", made from the label) is not how their training
+    captions say it: its words after "a person" occur in none of them ("raises the left hand", "bows" do)."""
+    out = set()
+    for label, ps in prompts.items():
+        words = re.sub(r"^(a person|someone)\s+", "", ps[0].strip().lower()) if ps else ""
+        pattern = re.compile(r"\b" + re.escape(words) + r"\b")
+        if words and not any(pattern.search(c.lower()) for c in captions.get(label, [])):
+            out.add(label)
+    return out
+
+
 def training_captions(dataset: Path, actions: set[str], per_action: int = CAPTIONS) -> dict[str, list[str]]:
     """Up to ``per_action`` distinct train-split captions per action (evenly spread over the sorted list)."""
     meta = Path(dataset) / "metadata.csv"
@@ -214,13 +228,14 @@ def training_captions(dataset: Path, actions: set[str], per_action: int = CAPTIO
 
 def build(coverage: dict, prompts: dict[str, list[str]] | None, captions: dict[str, list[str]],
           encode: Callable[[list[str]], np.ndarray], encoder: dict, realism: dict | None = None,
-          outside: list[str] | None = None) -> dict:
+          outside: list[str] | None = None, unwritten: set[str] | None = None) -> dict:
     """The capabilities file (see the module doc) from a coverage result, the benchmark prompts, the training captions
     of its actions (covered and uncovered), an encoder (``encode``: texts → unit rows; ``encoder``: {id, sha256} of its file) and a
     realism result's real clips' speed per action (``real_speeds``, with ``source``: the result's file); ``outside``:
-    prompts of no action of the vocabulary, held apart like the paraphrases (``load_outside``)."""
+    prompts of no action of the vocabulary, held apart like the paraphrases (``load_outside``); ``unwritten``: the
+    actions whose plain prompt yields to a paraphrase on a tie (``unwritten_plain``)."""
     moving, prompt_moving = (realism or {}).get("moving", {}), (realism or {}).get("promptMoving", {})
-    steps, table = actions_table(coverage, prompts, moving, prompt_moving)
+    steps, table = actions_table(coverage, prompts, moving, prompt_moving, unwritten)
     speeds = (realism or {}).get("speeds", {})
     for row in table:
         row["name"] = action_name(row["label"])
@@ -242,10 +257,12 @@ def build(coverage: dict, prompts: dict[str, list[str]] | None, captions: dict[s
     used, held = build_split(prompts)
     good = {p for p in chips(coverage, steps) if prompt_moving.get(p, 1.0) >= MOVES}
     texts, acts, suggest = [], [], []
+    # a plain prompt no caption says ("a person walks turn left") is an anchor, not a suggestion
+    unsaid = {prompts[a][0] for a in unwritten or ()}
     for a in labels:          # a covered action's used prompts only where they work (chips); an uncovered one's all
         for p in used.get(a, []):
             if p in good or a not in covered:
-                texts.append(p), acts.append(a), suggest.append(a in covered)
+                texts.append(p), acts.append(a), suggest.append(a in covered and p not in unsaid)
         for c in captions.get(a, []):
             if normalise(c) not in {normalise(t) for t in texts}:
                 texts.append(c), acts.append(a), suggest.append(False)
@@ -334,13 +351,15 @@ def main(argv: list[str] | None = None) -> int:
         realism = {"speeds": speeds, "source": realism["_file"], "moving": moving, "promptMoving": prompt_moving}
         text = entry["condition"]["type"] == "text"
         prompts = load_prompts(a.prompts, coverage["labels"]) if text else None
-        _, table = actions_table(coverage, prompts, moving, prompt_moving)
+        unwritten = unwritten_plain(prompts, training_captions(a.dataset, set(coverage["labels"]), 10**9)) if text else None
+        _, table = actions_table(coverage, prompts, moving, prompt_moving, unwritten)
         covered = {r["label"] for r in table if r["covered"]}
         captions = ({**training_captions(a.dataset, set(coverage["labels"]) - covered, a.uncovered_captions),
                      **training_captions(a.dataset, covered, a.captions)} if text else {})
         enc_id = entry["condition"].get("encoder", "")
         caps = build(coverage, prompts, captions, lambda ts: text_encoders.encode_texts(ts, enc_id, models_dir=a.models_dir),
-                     encoder_info(manifest, enc_id) if text else {}, realism, load_outside(a.outside) if text else None)
+                     encoder_info(manifest, enc_id) if text else {}, realism, load_outside(a.outside) if text else None,
+                     unwritten)
         out = a.models_dir / file_name(a.model)
         write(caps, out)
         if a.register:
