@@ -82,6 +82,7 @@ test('a 3-segment 30 s timeline: 600 frames, one BVH and one GLB of 600 frames, 
   expect(r.frames).toBe(600);
   expect(r.starts).toEqual([0, 200, 400]);
   expect(r.windows).toBe(6); // 10 s = 200 frames: two windows each (a window holds at most 196 frames)
+  await expect(page.locator('#t-calls')).toHaveText(String(6 * STEPS)); // one step: none is begun together
   // every window ran the file the page's own generations run (the manifest's default variant), not a second download
   const variant = await page.evaluate(async () => (await (await fetch('/models/manifest.json')).json()).models['emdm-t2m-web'].defaultVariant as string | undefined);
   const expected = variant ? `emdm-t2m-web.${variant}.onnx` : 'emdm-t2m-web.onnx';
@@ -169,6 +170,9 @@ test('a regenerated timeline\'s link reproduces it exactly (every window depends
   ];
   await mine.evaluate((x) => window.emdm.edit!.setSegments(x), segs);
   await mine.evaluate(() => window.emdm.edit!.generateAll());
+  // every step of every window is a model call, the one begun together too (the count left it out)
+  await expect(mine.locator('#t-calls')).toHaveText('6');
+  await expect(mine.locator('#t-step')).toContainText('× 3 (and 3 begun together)');
   await mine.evaluate(() => window.emdm.edit!.regenerate(1));
   const made = (await mine.evaluate(() => window.emdm.edit!.current()))!;
   const other = await browser.newPage();
