@@ -193,7 +193,22 @@ def test_cli_measures_text_model_and_report_shows_it(world, capsys):
     assert r["chips"]["steps"] == 10 and r["chips"]["prompts"] == C.chips(r, 10)
     # another step count later: merged into the same file, earlier runs kept
     assert C.main(_args(root, ds, out, "--ckpt", str(root / "t2m" / "ckpt.pt"), "--steps", "2")) == 0
-    assert [x["steps"] for x in json.loads(out.read_text())["runs"]] == [1, 2, 10]
+    merged = json.loads(out.read_text())
+    assert [x["steps"] for x in merged["runs"]] == [1, 2, 10] and len(merged["classifier"]["sha256"]) == 16
+    # ... but not beside runs another classifier judged (a retrained one moves single actions a lot): they are dropped
+    from emdm.eval import evaluators
+    other = root / "c-other.pt"
+    assert evaluators._main(["classifier", "--out", str(other), "--epochs", "1", "--hidden", "16", "--emb-dim", "16",
+                             "--batch-size", "8", "--dataset", str(ds), "--seed", "5"]) == 0
+    capsys.readouterr()
+    elsewhere = out.with_name("coverage-t2m-other.json")
+    out.with_name(elsewhere.name).write_text(out.read_text())
+    args = _args(root, ds, elsewhere, "--ckpt", str(root / "t2m" / "ckpt.pt"), "--steps", "2")
+    assert C.main([*args[:2], "--classifier", str(other), *args[4:]]) == 0
+    judged = json.loads(elsewhere.read_text())
+    assert [x["steps"] for x in judged["runs"]] == [2] and judged["classifier"]["sha256"] != merged["classifier"]["sha256"]
+    assert "its runs at 1, 10 step(s) were judged by another classifier; dropped" in capsys.readouterr().err
+    elsewhere.unlink()
     capsys.readouterr()
     assert C.main(_args(root, ds, out, "--ckpt", str(root / "t2m" / "ckpt.pt"), "--chips")) == 0
     printed = capsys.readouterr().out

@@ -288,7 +288,15 @@ def run(a) -> Path:
                             f"do not test generalisation: " + "; ".join(seen[:5]))
     key = _key(a, guidance, gmin, sigma)
     old = read_result(out)
+    judge = evaluator_info(bench.classifier, a.classifier)
     runs = {r["steps"]: r for r in (old or {}).get("runs", [])} if old and old.get("key") == key else {}
+    if runs and (old.get("classifier") or {}).get("sha256") != judge["sha256"]:
+        # another classifier (or one not recorded) judged them: kept beside this one's, they would not compare
+        log_steps = ", ".join(str(s) for s in sorted(set(runs) - set(a.steps)))
+        if log_steps:
+            print(f"{display_path(out)}: its runs at {log_steps} step(s) were judged by another classifier; dropped "
+                  f"(measure them again with this one: --steps)", file=sys.stderr)
+        runs = {}
     result = {}
     for T in a.steps:
         src = ModelSource(opened=opened, steps=T, guidance=guidance, guidance_min_time=gmin, x0_smoothing=sigma, batch_size=a.batch,
@@ -299,7 +307,7 @@ def run(a) -> Path:
                   "kind": "model", "condition": src.task, "info": info, "key": key, "default_steps": default_steps,
                   "labels": bench.labels, "real": bench.real, "thresholds": {"covered": COVERED, "chip": CHIP},
                   "dataset": dataset_info(Path(a.dataset), a.split), "hardware": hardware(),
-                  "classifier": evaluator_info(bench.classifier, a.classifier),
+                  "classifier": judge,
                   "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
                   "runs": [runs[s] for s in sorted(runs)]}
         if src.task == "text" and default_steps in runs:

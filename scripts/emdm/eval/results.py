@@ -11,6 +11,7 @@ docs/RESULTS.md says where, on what and against which evaluator it was measured.
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import os
 import platform
@@ -73,11 +74,14 @@ def dataset_info(root: Path, split: str) -> dict:
 
 
 def evaluator_info(model, path: Path) -> dict:
-    """The trained evaluator (matcher or classifier, :mod:`emdm.eval.evaluators`) a result was judged by."""
+    """The trained evaluator (matcher or classifier, :mod:`emdm.eval.evaluators`) a result was judged by; ``sha256``
+    (the file's first 16 hex digits) tells two judges apart: a retrained classifier moves single actions' rates by up to
+    0.35 (docs/MODELS.md "Between slices (2026-11-28)")."""
     meta = getattr(model, "meta", {})
     final = meta.get("final", {})
     val = ", ".join(f"{k[4:]} {v:.3f}" for k, v in final.items() if k.startswith("val_"))
-    return {"path": display_path(path), "train_items": meta.get("train_items"), "minutes": meta.get("minutes"),
+    digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16] if Path(path).is_file() else None
+    return {"path": display_path(path), "sha256": digest, "train_items": meta.get("train_items"), "minutes": meta.get("minutes"),
             "epochs_run": meta.get("epochs_run"), "config": meta.get("config"), "final": final,
             "summary": f"{type(model).__name__} (hidden {model.config['hidden']}) trained on "
                        f"{meta.get('train_items', '?')} train clips for {meta.get('epochs_run', '?')} epochs "
