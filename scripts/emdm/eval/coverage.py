@@ -17,7 +17,7 @@ fewer than ``--min-clips`` test clips cannot be tested there and are listed apar
 *Chips*: the prompts recognised in ≥ 75 % of their motions at the model's default step count.
 
 Writes ``docs/results/json/coverage-<name>.json``; runs of other step counts already in that file (same
-model, seeds, guidance, prompts) are kept, so step counts can be measured one call at a time.
+model, seeds, guidance, prompts, classifier file) are kept, so step counts can be measured one call at a time.
 ``python -m emdm.eval.report`` turns the files into RESULTS.md's coverage section. On a shared CPU prefix
 with ``nice``; one step count of a shipped model takes a few minutes on one thread.
 """
