@@ -9,13 +9,13 @@ Sampling needs numpy, onnxruntime and tokenizers only (``pip install emdm``); tr
 """
 
 __version__ = "0.1.0"
-__all__ = ["Motion", "generate", "__version__"]
+__all__ = ["Motion", "PromptWarning", "generate", "__version__"]
 
 
 def __getattr__(name: str):
     # emdm.generate / emdm.Motion load emdm.generation on first use: `import emdm` (every console script and
     # `python -m emdm.*` runs it) stays free of onnxruntime, the text encoders and the sampler until they are asked for.
-    if name in ("generate", "Motion"):
+    if name in ("generate", "Motion", "PromptWarning"):
         from emdm import generation  # lazy: `import emdm` stays light (see above)
 
         return getattr(generation, name)

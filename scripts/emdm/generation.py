@@ -11,17 +11,22 @@ public/models; ``emdm.paths.models_dir``) is a copy of the repository's public/m
 ``emdm-sample`` (``emdm.sampler.sample_features``, the shipped ONNX step model through onnxruntime, the text
 encoder of the same folder), so a prompt, seed and step count give the same motion as the CLI; torch is never
 imported. Bad input (a prompt that is empty, a length the model cannot make, an unsupported step count, a models
-folder without a manifest) is a :class:`emdm.sampler.SampleError` whose message is one line.
+folder without a manifest) is a :class:`emdm.sampler.SampleError` whose message is one line. A prompt far from
+what the model does well (the model's capabilities file; ``emdm.prompt_check``) still generates, with a
+:class:`PromptWarning` that says so, as the page's notice and the CLI do ("… does not read as English …", "… reads as
+kick, which the model does not do well yet …", and the closest prompts that work).
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from emdm import prompt_check
 from emdm import skeleton as sk
 from emdm.model.open import ModelError, open_shipped
 from emdm.motion.features import recover_joints
@@ -30,6 +35,10 @@ from emdm.writers.bvh import write_bvh
 from emdm.writers.glb import write_glb
 
 DEFAULT_MODEL = "emdm-t2m-web"
+
+
+class PromptWarning(UserWarning):
+    """``emdm.generate``'s prompt is far from what the model does well (the message says why and what works)."""
 
 
 @dataclass(frozen=True)
@@ -79,6 +88,13 @@ def generate(prompt: str, *, seconds: float = 6.0, seed: int = 0, steps: int | N
     spec = entry["condition"]
     text, action = (prompt, None) if spec["type"] == "text" else (None, prompt)
     cond = make_condition(spec, text, action, False, models_dir)
+    if text is not None:
+        try:
+            far = prompt_check.prompt_notice(model, cond, models_dir, text)
+        except prompt_check.CapabilitiesError as e:      # advisory, as on the page and the CLI: say it and generate
+            far = f"no prompt check: {e}"
+        if far:
+            warnings.warn(far, PromptWarning, stacklevel=2)
     g = float(entry.get("guidance", 2.5)) if guidance is None else guidance
     if not (math.isfinite(g) and g >= 0):
         raise SampleError(f"guidance must be a finite number ≥ 0, got {guidance!r}")

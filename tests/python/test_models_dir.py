@@ -78,6 +78,24 @@ def test_generate_bad_input(kw, what):
         emdm.generate("a person walks forward", **kw)
 
 
+def test_generate_warns_of_a_prompt_the_model_does_not_do_as_the_page_does():
+    """The page and the CLI say a prompt is far from what the model does well; a program calling emdm.generate got
+    nothing: a PromptWarning with the same words (and the motion all the same)."""
+    import warnings
+
+    from emdm.generation import PromptWarning
+
+    assert emdm.PromptWarning is PromptWarning and issubclass(PromptWarning, UserWarning)
+    with pytest.warns(PromptWarning, match="does not read as English.*Closest prompts that work: 'a person"):
+        m = emdm.generate("une personne marche en avant", seconds=1, seed=1, steps=1, models_dir=paths.MODELS_DIR)
+    assert m.joints.shape == (20, 22, 3)
+    with pytest.warns(PromptWarning, match="reads as kick, which the model does not do well yet"):
+        emdm.generate("a person kicks", seconds=1, seed=1, steps=1, models_dir=paths.MODELS_DIR)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PromptWarning)
+        emdm.generate("a person walks forward", seconds=1, seed=1, steps=1, models_dir=paths.MODELS_DIR)
+
+
 def test_generate_empty_prompt():
     with pytest.raises(SampleError, match="prompt must be"):
         emdm.generate("  ")
