@@ -106,11 +106,12 @@ def notice(result: dict, prompt: str | None = None) -> str | None:
     ``prompt``, one that does not read as English is told so first (the model reads English only)."""
     if result["known"]:
         return None
-    named = not result["covered"] and result["score"] >= NAMED
-    near = (f"it reads as {action_name(result['action'])}, which the model does not do well yet" if named
-            else f"best match {result['score']:.2f}")
     if prompt is not None and not reads_as_english(prompt):
         near = f"it does not read as English, and the model understands English prompts only; best match {result['score']:.2f}"
+    elif not result["covered"] and result["score"] >= NAMED:
+        near = f"it reads as {action_name(result['action'])}, which the model does not do well yet"
+    else:
+        near = f"best match {result['score']:.2f}"
     return (f"this prompt is far from what the model does well ({near}); it may come out as walking or standing. "
             "Closest prompts that work: " + "; ".join(repr(p) for p in result["nearest"]))
 

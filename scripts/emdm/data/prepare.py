@@ -362,9 +362,9 @@ def run(args) -> int:
             if per[j.source] <= args.limit:
                 kept.append(j)
         jobs = kept
-    take_actions: dict[str, str] = {}          # take -> what the split stratifies it by (its action, or a stratum)
+    take_strata: dict[str, str] = {}           # take -> what the split stratifies it by (its action, or a stratum)
     for j in jobs:
-        take_actions.setdefault(j.take, j.stratum or j.action)
+        take_strata.setdefault(j.take, j.stratum or j.action)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = temp_dir(out)
     try:
@@ -380,12 +380,12 @@ def run(args) -> int:
         take_windows: dict[str, int] = defaultdict(int)       # the split holds out few of an action's windows
         for r in results:
             take_windows[r["job"]["take"]] += len(r["windows"])
-        split_of = split_takes(take_actions, seed=args.seed, windows=dict(take_windows))
+        split_of = split_takes(take_strata, seed=args.seed, windows=dict(take_windows))
         try:
             info = write_dataset(results, tmp, split_of, {
                 "sources": args.sources, "input_dir": args.input_dir or "", "fps": sk.FPS,
                 "min_frames": args.min_frames, "max_frames": args.max_frames, "stride": args.stride,
-                "mirrored": not args.no_mirror, "takes": len(take_actions), "files": len(jobs), "skipped": len(skipped),
+                "mirrored": not args.no_mirror, "takes": len(take_strata), "files": len(jobs), "skipped": len(skipped),
                 "clips": sum(1 for r in results if r["windows"]),
             })
         except PrepareError as e:

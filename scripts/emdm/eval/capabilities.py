@@ -207,8 +207,9 @@ def unwritten_plain(prompts: dict[str, list[str]], captions: dict[str, list[str]
     return out
 
 
-def training_captions(dataset: Path, actions: set[str], per_action: int = CAPTIONS) -> dict[str, list[str]]:
-    """Up to ``per_action`` distinct train-split captions per action (evenly spread over the sorted list)."""
+def training_captions(dataset: Path, actions: set[str], per_action: int | None = CAPTIONS) -> dict[str, list[str]]:
+    """Up to ``per_action`` distinct train-split captions per action (evenly spread over the sorted list; None: all of
+    them, sorted, to be spread later by ``spread``)."""
     meta = Path(dataset) / "metadata.csv"
     if not meta.is_file():
         raise CoverageError(f"{meta}: missing; pass --dataset (the prepared dataset the model was trained on)")
@@ -218,12 +219,15 @@ def training_captions(dataset: Path, actions: set[str], per_action: int = CAPTIO
             if row.get("split") == "train" and row.get("action") in actions:
                 for cap, _, _ in parse_text_file(Path(dataset) / "texts" / f"{row['id']}.txt"):
                     found[row["action"]].setdefault(normalise(cap), cap.strip())
-    out = {}
-    for a, caps in found.items():
-        cs = sorted(caps.values())
-        stride = max(1, len(cs) // per_action) if cs else 1
-        out[a] = cs[::stride][:per_action]
-    return out
+    return {a: spread(sorted(caps.values()), per_action) for a, caps in found.items()}
+
+
+def spread(captions: list[str], per_action: int | None) -> list[str]:
+    """At most ``per_action`` of the sorted ``captions``, evenly spread over them (None: all)."""
+    if per_action is None:
+        return captions
+    stride = max(1, len(captions) // per_action) if captions else 1
+    return captions[::stride][:per_action]
 
 
 def build(coverage: dict, prompts: dict[str, list[str]] | None, captions: dict[str, list[str]],
@@ -351,11 +355,11 @@ def main(argv: list[str] | None = None) -> int:
         realism = {"speeds": speeds, "source": realism["_file"], "moving": moving, "promptMoving": prompt_moving}
         text = entry["condition"]["type"] == "text"
         prompts = load_prompts(a.prompts, coverage["labels"]) if text else None
-        unwritten = unwritten_plain(prompts, training_captions(a.dataset, set(coverage["labels"]), 10**9)) if text else None
+        every = training_captions(a.dataset, set(coverage["labels"]), None) if text else {}    # read once
+        unwritten = unwritten_plain(prompts, every) if text else None
         _, table = actions_table(coverage, prompts, moving, prompt_moving, unwritten)
         covered = {r["label"] for r in table if r["covered"]}
-        captions = ({**training_captions(a.dataset, set(coverage["labels"]) - covered, a.uncovered_captions),
-                     **training_captions(a.dataset, covered, a.captions)} if text else {})
+        captions = {x: spread(cs, a.captions if x in covered else a.uncovered_captions) for x, cs in every.items()}
         enc_id = entry["condition"].get("encoder", "")
         caps = build(coverage, prompts, captions, lambda ts: text_encoders.encode_texts(ts, enc_id, models_dir=a.models_dir),
                      encoder_info(manifest, enc_id) if text else {}, realism, load_outside(a.outside) if text else None,
