@@ -191,3 +191,13 @@ def test_sessions_of_one_stream_and_weights_are_pooled_and_judged_together():
     w60 = _session("f.json", 1, 6, 11, window=60)
     assert LM.pooled([a, w60]) == []
     assert LM.pooled([a, _session("g.json", 1, 6, 11, window=40)])[0]["files"] == ["a.json", "g.json"]
+
+
+def test_sessions_judged_by_another_classifier_are_not_pooled():
+    """A session records its judge (``live.classifier``, emdm.eval.judge): another judge's verdicts on the same stream
+    are not summed with these; sessions of one judge are, and so are the older ones that recorded none."""
+    a, b = _session("a.json", 0, 15, 6), _session("b.json", 1, 6, 11)
+    three = lambda s: {**s, "live": {**s["live"], "classifier": {"sha256": "43392407131229e9"}}}  # noqa: E731
+    assert LM.pooled([a, three(b)]) == []
+    assert LM.pooled([three(a), three(b)])[0]["files"] == ["a.json", "b.json"]
+    assert LM.pooled([a, b])[0]["files"] == ["a.json", "b.json"]

@@ -8,16 +8,16 @@
 Per action of the dataset vocabulary (actions.json), a text model gets the plain label prompt and the
 paraphrases of ``prompts.json`` (beside this file), an action model the label's one-hot condition. Each
 prompt makes ``--seeds`` motions, with lengths drawn like the test split (``protocol.sample_lengths``: from
-the action's own test clips), at every ``--steps`` count and the model's guidance. The project's action
-classifier (``emdm.eval.evaluators``) names every motion; a motion is *recognised* when it names the
-prompt's action. Per step count: each action's recognition rate, the macro accuracy (mean rate over the
+the action's own test clips), at every ``--steps`` count and the model's guidance. The project's judge
+(``emdm.eval.judge``: the action classifiers of three seeds, by their mean probability) names every motion; a
+motion is *recognised* when it names the prompt's action. Per step count: each action's recognition rate, the macro accuracy (mean rate over the
 vocabulary) and the actions *covered* (rate ≥ 0.5). The real test clips, classified the same way, are the
 reference row: the *reference set* is the actions recognised in ≥ 50 % of their real clips; actions with
 fewer than ``--min-clips`` test clips cannot be tested there and are listed apart with their counts.
 *Chips*: the prompts recognised in ≥ 75 % of their motions at the model's default step count.
 
 Writes ``docs/results/json/coverage-<name>.json``; runs of other step counts already in that file (same
-model, seeds, guidance, prompts, classifier file) are kept, so step counts can be measured one call at a time.
+model, seeds, guidance, prompts, judge files) are kept, so step counts can be measured one call at a time.
 ``python -m emdm.eval.report`` turns the files into RESULTS.md's coverage section. On a shared CPU prefix
 with ``nice``; one step count of a shipped model takes a few minutes on one thread.
 """
@@ -33,19 +33,20 @@ import sys
 import time
 from datetime import datetime, timezone
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
 from emdm.data.dataset import DatasetError, cached_text_embeddings, parse_text_file
 from emdm.eval import data as evdata
-from emdm.eval import evaluators as E
 from emdm.eval.protocol import Conditions, sample_lengths
 from emdm.eval.args import add_model_source
-from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, evaluator_info, hardware, slug, write_result
+from emdm.eval.judge import Judge, JudgeError, add_argument as add_judge_argument
+from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, hardware, slug, write_result
 from emdm.eval.sources import ModelSource
 from emdm.model.open import ModelError, open_model
 from emdm.outdir import OutputRefused, check_writable
-from emdm.paths import DATASET_DIR, RUNS_DIR, display_path
+from emdm.paths import DATASET_DIR, display_path
 from emdm.eval.plausibility import flip_share
 from emdm.sampler.flags import add_sampling_settings
 
@@ -170,23 +171,22 @@ def chips(result: dict, steps: int, threshold: float = CHIP) -> list[str]:
 class Benchmark:
     """The fixed part of a coverage run: test split, classifier, prompts (or labels), lengths, real row."""
 
-    def __init__(self, dataset: Path, split: str, classifier: Path, prompts_file: Path, seeds: int, seed: int = 0,
+    def __init__(self, dataset: Path, split: str, classifier: Path | Sequence[Path], prompts_file: Path, seeds: int, seed: int = 0,
                  min_clips: int = MIN_CLIPS, log=print):
         self.test = evdata.load_split(dataset, split, require_action=True)
         self.labels = list(self.test.action_labels)
         if not self.labels:
             raise CoverageError(f"{dataset}: no actions.json/metadata.csv, so no actions to cover")
         try:
-            self.classifier = E.load(classifier, "classifier")
-        except ValueError as e:                # unreadable or not a classifier: one line naming the file
+            self.judge = Judge(classifier)
+        except JudgeError as e:                # missing, unreadable, not a classifier or not alike: names the file
             raise CoverageError(str(e)) from None
-        self.classifier_path = classifier
-        have = self.classifier.meta.get("labels")
+        have, first = self.judge.labels, display_path(self.judge.paths[0])
         if have is not None and list(have) != self.labels:
-            raise CoverageError(f"{classifier}: trained on labels {have[:4]}… ({len(have)}), the dataset {dataset} has "
+            raise CoverageError(f"{first}: trained on labels {have[:4]}… ({len(have)}), the dataset {dataset} has "
                                 f"{self.labels[:4]}… ({len(self.labels)}); retrain it on this dataset")
-        if self.classifier.config["num_classes"] != len(self.labels):
-            raise CoverageError(f"{classifier}: {self.classifier.config['num_classes']} classes, {dataset} has {len(self.labels)} actions")
+        if self.judge.num_classes != len(self.labels):
+            raise CoverageError(f"{first}: {self.judge.num_classes} classes, {dataset} has {len(self.labels)} actions")
         self.dataset, self.prompts_file, self.seeds, self.seed, self.log = Path(dataset), Path(prompts_file), seeds, seed, log
         t0 = time.time()
         self.real = real_summary(self.labels, self.test.actions, self.predict(self.test.motions), min_clips)
@@ -196,7 +196,7 @@ class Benchmark:
             f"too few clips: {self.real['too_few']} ({time.time() - t0:.0f} s)")
 
     def predict(self, motions) -> np.ndarray:
-        return np.argmax(E.classify(self.classifier, motions)[0], axis=1)
+        return self.judge.predict(motions)
 
     def conditions(self, source):
         """The motions to make: Conditions (one row per motion), the action id and prompt of each row."""
@@ -288,7 +288,7 @@ def run(a) -> Path:
                             f"do not test generalisation: " + "; ".join(seen[:5]))
     key = _key(a, guidance, gmin, sigma)
     old = read_result(out)
-    judge = evaluator_info(bench.classifier, a.classifier)
+    judge = bench.judge.info()
     runs = {r["steps"]: r for r in (old or {}).get("runs", [])} if old and old.get("key") == key else {}
     if runs and (old.get("classifier") or {}).get("sha256") != judge["sha256"]:
         # another classifier (or one not recorded) judged them: kept beside this one's, they would not compare
@@ -340,7 +340,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_sampling_settings(ap)
     ap.add_argument("--dataset", type=Path, default=DATASET_DIR)
     ap.add_argument("--split", default="test")
-    ap.add_argument("--classifier", type=Path, default=RUNS_DIR / "eval" / "classifier.pt")
+    add_judge_argument(ap)
     ap.add_argument("--prompts", type=Path, default=PROMPTS_FILE)
     ap.add_argument("--min-clips", type=int, default=MIN_CLIPS, help="fewer real test clips: listed apart")
     ap.add_argument("--batch", type=int, default=64, help="motions per batched sampling call")

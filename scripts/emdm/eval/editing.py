@@ -46,12 +46,13 @@ from emdm.eval.coverage import PROMPTS_FILE, Benchmark, CoverageError
 from emdm.eval.editing_measures import bars, time_bar
 from emdm.eval.editing_run import (
     ACTIONS, LAST_ONLY, EditingError, measure, page_variant, time_orders, time_ratio)
-from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, evaluator_info, hardware, write_result
+from emdm.eval.judge import add_argument as add_judge_argument
+from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, hardware, write_result
 from emdm.manifest import ManifestError
 from emdm.model.open import ModelError, open_model
 from emdm.motion.edit import EditError, Editor, segment_frames
 from emdm.outdir import OutputRefused, check_writable
-from emdm.paths import DATASET_DIR, RUNS_DIR, display_path
+from emdm.paths import DATASET_DIR, display_path
 
 
 def run(a) -> Path:
@@ -65,7 +66,7 @@ def run(a) -> Path:
     result = {"schema": SCHEMA, "task": "editing", "name": a.model, "variant": opened.variant, "steps": a.steps,
               "guidance": model.settings.guidance, "guidance_min_time": model.settings.guidance_min_time,
               "x0_smoothing": model.settings.x0_smoothing,
-              "seed": a.seed, **m, "bars": bars(m), "classifier": evaluator_info(bench.classifier, a.classifier),
+              "seed": a.seed, **m, "bars": bars(m), "classifier": bench.judge.info(),
               "classifier_real_macro": bench.real.get("macro_accuracy"),
               "dataset": dataset_info(Path(a.dataset), a.split), "hardware": hardware(), "threads": a.threads,
               "seconds": round(time.time() - t0, 1), "load_avg_1min_start": load0, "load_avg_1min_end": os.getloadavg()[0],
@@ -155,7 +156,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--dataset", type=Path, default=DATASET_DIR)
     ap.add_argument("--split", default="test")
-    ap.add_argument("--classifier", type=Path, default=RUNS_DIR / "eval" / "classifier.pt")
+    add_judge_argument(ap)
     ap.add_argument("--prompts", type=Path, default=PROMPTS_FILE)
     ap.add_argument("--variant", default="page", help="the ONNX file: fp32, int8, fp16, or page (default: the entry's "
                     "defaultVariant, the file the page runs)")

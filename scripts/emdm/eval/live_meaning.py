@@ -259,9 +259,9 @@ def measure(model, bench, judged: list[str], prompts: dict[str, str], changes: i
     return out
 
 
-def run(model, dataset: Path, classifier: Path, capabilities: Path, changes: int, seed: int, cost: int = COST,
+def run(model, dataset: Path, classifier: Path | list[Path], capabilities: Path, changes: int, seed: int, cost: int = COST,
         log=print, window: int = L.WINDOW) -> dict:
-    """``measure`` with the coverage judges of ``dataset``'s test clips: the classifier (``coverage.Benchmark``) and
+    """``measure`` with the coverage judges of ``dataset``'s test clips: the classifier file(s) (``coverage.Benchmark``) and
     the kinematic rules that judge their action there (``kinematics.judged``)."""
     prompts = covered_prompts(capabilities)
     bench = C.Benchmark(dataset, "test", classifier, C.PROMPTS_FILE, seeds=1, log=log)
@@ -269,7 +269,8 @@ def run(model, dataset: Path, classifier: Path, capabilities: Path, changes: int
     judged = K.judged(K.validate(bench.labels, bench.test.actions, desc))
     t0 = time.time()
     out = measure(model, bench, judged, prompts, changes, seed, cost, log=log, window=window)
-    return {**out, "capabilities": display_path(capabilities), "seconds": round(time.time() - t0, 1),
+    return {**out, "capabilities": display_path(capabilities), "classifier": bench.judge.info(),
+            "seconds": round(time.time() - t0, 1),
             "load_avg_1min_end": os.getloadavg()[0]}
 
 
@@ -299,8 +300,8 @@ def _judge_cell(x: dict | None, p: float | None) -> str:
 
 
 def pooled(rs: list[dict]) -> list[dict]:
-    """Sessions of one stream on one model's weights (the same ``train_steps``, prompt keep-from, window, window cost
-    and gaps; only their seeds differ) pooled: their paired segments summed per judge, the sign test on the sum. One row
+    """Sessions of one stream on one model's weights (the same ``train_steps``, prompt keep-from, window, window cost,
+    gaps and judge; only their seeds differ) pooled: their paired segments summed per judge, the sign test on the sum. One row
     per group of two or more sessions: {"files", "rates": {judge: {...}}, "verdict"}."""
     groups: dict[tuple, list[dict]] = {}
     for r in rs:
@@ -308,7 +309,8 @@ def pooled(rs: list[dict]) -> list[dict]:
         if not v or r.get("train_steps") is None or v.get("prompt_keep_from") is None:
             continue
         key = (r["name"], r["train_steps"], v["prompt_keep_from"], v.get("window", UNRECORDED_WINDOW), v["cost_frames"],
-               tuple(v["gap_seconds"]))
+               tuple(v["gap_seconds"]), (v.get("classifier") or {}).get("sha256"))   # one judge: sessions judged
+        # by another classifier file (or none recorded, before 2026-11-28) are not summed with these
         groups.setdefault(key, []).append(r)
     out = []
     for group in groups.values():

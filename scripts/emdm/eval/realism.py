@@ -52,13 +52,14 @@ from emdm.eval.poses import check_frames
 from emdm.eval import markdown as md
 from emdm.eval.args import add_model_source
 from emdm.eval.report_plots import save_figure
-from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, evaluator_info, hardware, slug, write_result
+from emdm.eval.judge import add_argument as add_judge_argument
+from emdm.eval.results import RESULTS_DIR, SCHEMA, dataset_info, hardware, slug, write_result
 from emdm.eval.sources import ModelSource
 from emdm.model.open import ModelError, open_model
 from emdm.motion.decode import decode_joints
 from emdm.motion.features import recover_joints
 from emdm.outdir import OutputRefused, check_writable
-from emdm.paths import DATASET_DIR, RUNS_DIR, display_path
+from emdm.paths import DATASET_DIR, display_path
 from emdm.sampler.flags import add_sampling_settings
 
 SPEED_SLACK = 1.15        # a motion's speed is in range within [p5 / this, p95 × this] of its action's real clips
@@ -293,7 +294,7 @@ def run(a) -> Path:
                         for act, v in validation.items()},
               "judged": K.judged(validation), "bar": K.BAR, "min_clips": K.MIN_CLIPS, "speed_slack": SPEED_SLACK,
               "dataset": dataset_info(Path(a.dataset), a.split), "hardware": hardware(),
-              "classifier": evaluator_info(bench.classifier, a.classifier),
+              "classifier": bench.judge.info(),
               "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     write_result(result, out)
     g = gen["all"]
@@ -330,7 +331,7 @@ def build_parser() -> argparse.ArgumentParser:
                          "emdm.motion.decode) or as recovered (raw); the classifier reads the sampler's features")
     ap.add_argument("--data", "--dataset", dest="dataset", type=Path, default=DATASET_DIR)
     ap.add_argument("--split", default="test")
-    ap.add_argument("--classifier", type=Path, default=RUNS_DIR / "eval" / "classifier.pt")
+    add_judge_argument(ap)
     ap.add_argument("--prompts", type=Path, default=C.PROMPTS_FILE)
     ap.add_argument("--batch", type=int, default=64)
     ap.add_argument("--threads", type=int, default=1)

@@ -44,6 +44,7 @@ from emdm.eval import live_meaning as LM
 from emdm.data.dataset import DatasetError
 from emdm.eval.coverage import PROMPTS_FILE, CoverageError
 from emdm.eval.editing_run import page_variant
+from emdm.eval.judge import add_argument as add_judge_argument
 from emdm.eval.results import RESULTS_DIR, SCHEMA, hardware, write_result
 from emdm.eval.models_report import total_steps
 from emdm.model.open import open_model
@@ -52,7 +53,7 @@ from emdm.motion import live as L
 from emdm.motion.decode import decode_joints
 from emdm.motion.features import heading_angles
 from emdm.outdir import OutputRefused, check_writable
-from emdm.paths import DATASET_DIR, RUNS_DIR, models_dir
+from emdm.paths import DATASET_DIR, models_dir
 
 FPS = 20
 SHOWCASE = ("a person walks", "a person waves both hands", "a person bows")
@@ -273,7 +274,7 @@ def parse_args(argv=None):
     p.add_argument("--capabilities", type=Path, default=None, help="the covered actions' prompts (default: the model's "
                    "capabilities file beside it)")
     p.add_argument("--dataset", type=Path, default=DATASET_DIR, help="the prepared dataset (its test clips: the judges' reference)")
-    p.add_argument("--classifier", type=Path, default=RUNS_DIR / "eval" / "classifier.pt")
+    add_judge_argument(p)
     p.add_argument("--tag", default="", help="a suffix of the result file's name (e.g. before)")
     p.add_argument("--out", type=Path, default=None)
     a = p.parse_args(argv)
