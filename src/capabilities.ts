@@ -23,7 +23,8 @@ export interface ActionCapability {
   label: string;
   /** what a visitor reads for it ("reaching up to grab something" for grab-high); absent in older files: the label */
   name?: string;
-  /** share of the benchmark's motions the action classifier recognised, at the model's default steps */
+  /** share of the benchmark's motions the judge recognised (emdm.eval.judge: three action classifiers' mean probability),
+   * at the model's default steps */
   rate: number;
   /** rate ≥ thresholds.covered and, where measured, moving ≥ thresholds.moving */
   covered: boolean;
@@ -50,6 +51,9 @@ export interface Capabilities {
   thresholds: { covered: number; chip?: number; moving?: number };
   /** best first */
   actions: ActionCapability[];
+  /** who recognised the rates (the coverage result's judge): one action classifier, or several by their mean
+   * probability (emdm.eval.judge); `sha256` tells judges apart. Absent in older files: one classifier. */
+  judge?: { classifiers: number; sha256: string };
   encoder?: { id: string; onnx: string; sha256: string };
   check?: { threshold: number; suggestions: number; falseWarnings: { n: number; warned: number }; misses: { n: number; notWarned: number } };
   anchors?: { scale: number; dim: number; texts: string[]; actions: string[]; suggest: boolean[]; embeddings: string };
@@ -88,6 +92,10 @@ export function validateCapabilities(data: unknown, file: string): Capabilities 
     if (s !== undefined && !(['median', 'low', 'high', 'clips'] as const).every((k) => Number.isFinite(s?.[k]))) {
       fail(file, `actions[${i}].realSpeed`, 'must be {median, low, high, clips} numbers');
     }
+  }
+  const j = d.judge;
+  if (j !== undefined && !(Number.isInteger(j?.classifiers) && j.classifiers >= 1 && typeof j.sha256 === 'string')) {
+    fail(file, 'judge', 'must be {classifiers: a count ≥ 1, sha256}');
   }
   const a = d.anchors;
   if (a) {

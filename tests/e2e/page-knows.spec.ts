@@ -115,6 +115,8 @@ test('the list of what the model knows opens from the prompt; weak action labels
   await expect(punch).toContainText('holds a pose');
   await expect(page.locator('#knows-good li', { hasText: 'holds a pose' })).toHaveCount(0);
   await expect(page.locator('#knows-source')).toContainText('of its motions moving as real clips of the action do');
+  // who judged the rates: the file's judge (emdm.eval.judge), three classifiers by their mean probability
+  await expect(page.locator('#knows-source')).toContainText("the project's action classifiers recognised (3, by their mean probability; coverage benchmark, emdm-t2m-web)");
   // a covered action's prompt is a chip that generates it
   await generated(page, () => page.locator('#knows-good button.chip').first().click());
 

@@ -325,3 +325,14 @@ def test_the_shipped_file_suggests_no_plain_prompt_its_captions_never_say(caps):
     unsaid = {"a person walks turn left", "a person walks turn right", "a person jogs in circle", "a person grabs high"}
     assert unsaid <= set(a["texts"]) and not unsaid & offered
     assert "a person walks and then turns to the left" in offered and "a person bows" in offered
+
+
+@pytest.mark.parametrize("model", [T2M, A2M])
+def test_shipped_file_names_the_judge_of_its_rates(model):
+    """The rates the page lists were recognised by the coverage result's judge; the file says who (the page's source
+    line counts its classifiers) and which (sha256), and the realism result that gates `moving` had the same judge."""
+    c = json.loads((mf.DEFAULT_MODELS_DIR / C.file_name(model)).read_text())
+    judge = read_result(REPO_ROOT / c["source"])["classifier"]
+    assert c["judge"] == {"classifiers": len(judge.get("members") or [judge]), "sha256": judge["sha256"]}
+    assert c["judge"]["classifiers"] == 3, "the shipped files are judged by the three seeds' classifiers (emdm.eval.judge)"
+    assert read_result(REPO_ROOT / c["movingSource"])["classifier"]["sha256"] == judge["sha256"]

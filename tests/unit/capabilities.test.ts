@@ -105,6 +105,12 @@ describe('capabilities', () => {
     expect(() => validateCapabilities({ schema: 2, actions: [{ label: 'walk' }] }, 'c.json')).toThrow(/c.json: field 'actions'/);
     const slow = { schema: 2, actions: [{ label: 'walk', rate: 1, covered: true, realSpeed: { median: 1.1, low: 0.5 } }] };
     expect(() => validateCapabilities(slow, 'c.json')).toThrow(/c.json: field 'actions\[0\]\.realSpeed'/);
+    for (const judge of [{ classifiers: 0, sha256: 'ab' }, { classifiers: 3 }, { classifiers: 1.5, sha256: 'ab' }, 'three']) {
+      const judged = { schema: 2, actions: [{ label: 'walk', rate: 1, covered: true }], judge };
+      expect(() => validateCapabilities(judged, 'c.json')).toThrow(/c.json: field 'judge' must be \{classifiers: a count ≥ 1, sha256\}/);
+    }
+    const three = { schema: 2, actions: [{ label: 'walk', rate: 1, covered: true }], judge: { classifiers: 3, sha256: '0123456789abcdef' } };
+    expect(validateCapabilities(three, 'c.json').judge).toEqual({ classifiers: 3, sha256: '0123456789abcdef' });
     const broken = JSON.parse(fs.readFileSync(path.join(MODELS, 'capabilities-emdm-t2m-web.json'), 'utf8'));
     broken.anchors.suggest.pop();
     expect(() => validateCapabilities(broken, 'c.json')).toThrow(ModelFileError);

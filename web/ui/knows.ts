@@ -78,8 +78,11 @@ export class KnowsPanel {
       }
       (a.covered ? good : weak).append(li);
     }
-    byId('knows-source').textContent = `Share of ${caps.steps}-step motions the project's action classifier recognised `
-      + `(coverage benchmark, ${caps.model}); “does well” is ${pct(caps.thresholds.covered)} or more`
+    const judges = caps.judge?.classifiers ?? 1;
+    byId('knows-source').textContent = `Share of ${caps.steps}-step motions the project's action `
+      + (judges > 1 ? `classifiers recognised (${judges}, by their mean probability; ` : 'classifier recognised (')
+      + `coverage benchmark, ${caps.model})`
+      + `; “does well” is ${pct(caps.thresholds.covered)} or more`
       + (caps.thresholds.moving !== undefined
         ? `, with at least ${pct(caps.thresholds.moving)} of its motions moving as real clips of the action do (realism benchmark).`
         : '.');

@@ -250,6 +250,9 @@ def build(coverage: dict, prompts: dict[str, list[str]] | None, captions: dict[s
            "thresholds": {"covered": COVERED, **({"chip": coverage["thresholds"]["chip"]} if "thresholds" in coverage else {}),
                           **({"moving": MOVES} if moving else {})},
            "actions": table}
+    judge = coverage.get("classifier") or {}
+    if judge.get("sha256"):     # who recognised the rates: one classifier, or several by their mean probability
+        out["judge"] = {"classifiers": len(judge.get("members") or [judge]), "sha256": judge["sha256"]}
     if realism is not None:
         out["realSpeedSource"] = realism["source"]
         if moving:

@@ -226,8 +226,10 @@ def _benchmarks(results: list[dict], plots: dict[str, str]) -> list[str]:
     if cov:
         out += ["## Coverage per action (issue 12)", "",
                 "Does every action of the dataset come out of its prompt? `python -m emdm.eval.coverage` asks each "
-                "model for every action of the vocabulary and lets the action classifier (the evaluator above) "
-                "name each motion. An action is *covered* when at least half its motions are recognised.", ""]
+                "model for every action of the vocabulary and lets the judge name each motion: the action classifier "
+                "(the evaluator above) trained with three seeds, their mean probability (`emdm.eval.judge`; one "
+                "classifier's seed moved a count by 1–2 actions). An action is *covered* when at least half its "
+                "motions are recognised.", ""]
         for r in cov:
             out += coverage_section(r, plots.get("coverage:" + r["_file"]))
     real = sorted((r for r in results if r["task"] == "realism"), key=lambda r: r["name"])
@@ -282,7 +284,9 @@ def _benchmarks(results: list[dict], plots: dict[str, str]) -> list[str]:
                 "`-seed1`: the same run as the plain file with seed 1 (other timelines, loops and live session). The "
                 "plain and `-seed1` files are on the shipped (slice 5) model with the stream's windows of 60 new "
                 "frames; `-w40` and `-w40-seed1` are the same sessions with the windows of 40 the stream had before "
-                "(`--live-window 40 --live-cost 4`), judged by the same classifier; the rows that pool two seeds "
+                "(`--live-window 40 --live-cost 4`), judged by the same classifier (these four: the seed-0 file alone, "
+                "`runs/eval/classifier.pt`, before the judge of three seeds; a session run since records its judge "
+                "under `live.classifier`); the rows that pool two seeds "
                 "(sessions of the same weights and stream, `live_meaning.pooled`) judge their paired segments "
                 "together.", "",
                 "Reading, meaning: kept from t ≤ 0.55 (`-prompt055`), the segments' first halves were recognised 78 % "
@@ -362,7 +366,9 @@ REGENERATE = ["## Regenerate", "",
               "scripts/gpu/eval-all.sh runs/dataset runs/gpu 20            # needs runs/gpu/eval/{matcher,classifier}.pt",
               "```", "", "or, step by step (any machine):", "", "```",
               "python -m emdm.eval.evaluators matcher       # the evaluators (once per dataset build; runs/eval/*.pt)",
-              "python -m emdm.eval.evaluators classifier",
+              "python -m emdm.eval.evaluators classifier   # the judge of meaning: three seeds (emdm.eval.judge), their",
+              "python -m emdm.eval.evaluators classifier --seed 1 --out runs/eval/classifier-seed1.pt   # mean probability",
+              "python -m emdm.eval.evaluators classifier --seed 2 --out runs/eval/classifier-seed2.pt   # names the action",
               "python -m emdm.train --task text --out runs/t2m-web                                # EMDM, text",
               "python -m emdm.train --task action --out runs/a2m-web                              # EMDM, action",
               "python -m emdm.train --task text --objective diffusion --out runs/t2m-diffusion   # Tab. D2 baseline",
