@@ -359,9 +359,33 @@ function checkEditable(m: EditMotion, limits: EditLimits, what: string, min: num
   if (m.features.length !== m.frames * D) throw new Error(`${what}: the motion has ${m.features.length} feature values, expected ${m.frames} × ${D}`);
 }
 
+/** Whether frames 0…a and b…N−1 of an N-frame motion are an in-between's kept ends: a whole frame range each, with at
+ * least one frame between them to generate. */
+const keepsAMiddle = (N: number, { a, b }: { a: number; b: number }): boolean =>
+  Number.isInteger(a) && Number.isInteger(b) && a >= 0 && b <= N - 1 && b - a >= 2;
+
 /**
- * In-betweening: keep frames [0, a] and [b, N−1] of `motion` (default: its first and last second) and generate
- * the frames between from `cond`; the kept end stays where it was in the world.
+ * The range `inBetween` keeps for `firstSeconds` at the start and `lastSeconds` at the end of `motion` (frames 0…a and
+ * b…N−1), or an EditError in those seconds where they leave no middle to regenerate (the page's in-between fields); a
+ * motion `inBetween` cannot edit at all (longer than the model's window, under 3 frames) is refused as it refuses it.
+ */
+export function inBetweenRange(motion: EditMotion, firstSeconds: number, lastSeconds: number, limits: EditLimits): { a: number; b: number } {
+  checkEditable(motion, limits, 'in-betweening', 3);
+  if (!(firstSeconds > 0) || !(lastSeconds > 0)) {
+    throw new EditError(`in-betweening: keep more than 0 s at each end (got first ${firstSeconds} s, last ${lastSeconds} s)`);
+  }
+  const N = motion.frames;
+  const fps = motion.fps;
+  const range = { a: Math.round(firstSeconds * fps) - 1, b: N - Math.round(lastSeconds * fps) };
+  if (!keepsAMiddle(N, range)) {
+    throw new EditError(`in-betweening: keeping the first ${fmtS(firstSeconds)} and the last ${fmtS(lastSeconds)} of this ${fmtS(N / fps)} motion leaves no middle to regenerate; keep at least ${fmtS(1 / fps)} at each end and at most ${fmtS(N / fps - 1 / fps)} in all`);
+  }
+  return range;
+}
+
+/**
+ * In-betweening: keep frames [0, a] and [b, N−1] of `motion` (default: its first and last second; in seconds:
+ * `inBetweenRange`) and generate the frames between from `cond`; the kept end stays where it was in the world.
  */
 export async function inBetween(motion: EditMotion, cond: EditCondition, seed: number, gen: EditGenerate, limits: EditLimits, range?: { a: number; b: number }): Promise<EditMotion> {
   const c = conditionOf(cond, null);
@@ -369,7 +393,7 @@ export async function inBetween(motion: EditMotion, cond: EditCondition, seed: n
   checkEditable(motion, limits, 'in-betweening', 3);
   const a = range?.a ?? OVERLAP_FRAMES - 1;
   const b = range?.b ?? N - OVERLAP_FRAMES;
-  if (!Number.isInteger(a) || !Number.isInteger(b) || a < 0 || b > N - 1 || b - a < 2) {
+  if (!keepsAMiddle(N, { a, b })) {
     throw new EditError(`in-betweening: keep frames 0…a and b…${N - 1} with 0 ≤ a, a + 2 ≤ b ≤ ${N - 1} (at least one frame between); got a = ${a}, b = ${b}`);
   }
   const keep = keepMask(N, [{ frames: [[0, a], [b, N - 1]] }]);

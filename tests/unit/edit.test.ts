@@ -7,7 +7,7 @@ import path from 'node:path';
 import { afterAll, describe, expect, it } from 'vitest';
 import { createGenerator } from '../../src/createGenerator';
 import {
-  EditError, LOOP_END_FRAMES, OVERLAP_FRAMES, SEAM_BLEND_EXTRA, SEAM_EASE_ACCEL, SEAM_EASE_ACCEL_MIN, SEAM_EASE_FRAMES, bodyPartEdit, easeSeams, generateTimeline, inBetween,
+  EditError, LOOP_END_FRAMES, OVERLAP_FRAMES, SEAM_BLEND_EXTRA, SEAM_EASE_ACCEL, SEAM_EASE_ACCEL_MIN, SEAM_EASE_FRAMES, bodyPartEdit, easeSeams, generateTimeline, inBetween, inBetweenRange,
   keptSegments, makeLoop, planTimeline, seamAccel, seamBlendFrames, seamEaseFrames, type EditGenerate, type EditMotion, type EditRequest, type TimelineSegment, withNewSeed,
 } from '../../src/edit';
 import { recoverJoints } from '../../src/motion/recover';
@@ -171,6 +171,26 @@ describe('editing one motion', () => {
     expect(r.frames).toBe(120);
     await expect(inBetween(m, { prompt: 'x' }, 1, gen, limits, { a: 50, b: 51 })).rejects.toThrow(/at least one frame between/);
     await expect(inBetween(await motion(30), { prompt: 'x' }, 1, gen, limits)).rejects.toThrow(/\(at least one frame between\); got a = 19, b = 10/);
+  });
+
+  it('in-between ends given in seconds (as the page fields give them) are the frames inBetween keeps, or a refusal in seconds', async () => {
+    const m = await motion(100); // 5 s at 20 fps
+    expect(inBetweenRange(m, 1, 1, limits)).toEqual({ a: 19, b: 80 }); // inBetween's own default for a whole second
+    expect(inBetweenRange(m, 0.05, 4.9, limits)).toEqual({ a: 0, b: 2 }); // one frame kept, one generated, 98 kept
+    expect(() => inBetweenRange(m, 3, 2, limits)).toThrow(
+      /^in-betweening: keeping the first 3 s and the last 2 s of this 5 s motion leaves no middle to regenerate; keep at least 0\.05 s at each end and at most 4\.95 s in all$/,
+    );
+    expect(() => inBetweenRange(m, 0.01, 1, limits)).toThrow(/keeping the first 0\.01 s .* leaves no middle/); // rounds to no frame kept
+    expect(() => inBetweenRange(m, 0, 1, limits)).toThrow(/keep more than 0 s at each end \(got first 0 s, last 1 s\)/);
+    expect(() => inBetweenRange(m, Number.NaN, 1, limits)).toThrow(EditError);
+    const { gen } = fakeGenerator();
+    const long = await generateTimeline(three10s.slice(0, 2), gen, limits);
+    expect(() => inBetweenRange(long, 1, 1, limits)).toThrow(/at most 196 frames \(9\.8 s\), the model's window; this one is 400 frames/);
+    // what it returns, inBetween takes as is
+    const { gen: g2, calls } = fakeGenerator();
+    await inBetween(m, { prompt: 'jump' }, 2, g2, limits, inBetweenRange(m, 0.5, 1.5, limits));
+    const kept = Array.from({ length: 100 }, (_, t) => calls[0].known!.keep[t * D] === 1);
+    expect(kept.map((v, t) => (v ? t : -1)).filter((t) => t >= 0)).toEqual([...Array.from({ length: 10 }, (_, t) => t), ...Array.from({ length: 30 }, (_, t) => 70 + t)]);
   });
 
   it('refuses a motion longer than the model window', async () => {

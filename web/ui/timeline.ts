@@ -8,7 +8,7 @@
 // (GenerationHost.timeline); the edits send their one window and decode here.
 // The panel builds its DOM inside one container (#edit-panel in index.html) and styles it in timeline.css.
 import { EditError, MAX_TIMELINE_SECONDS, bodyPartEdit, inBetween, makeLoop, type EditCondition, type EditMotion, type KeptPart, type Timeline, type TimelineSegment } from '../../src/index';
-import { planTimeline } from '../../src/edit';
+import { inBetweenRange, planTimeline } from '../../src/edit';
 import { decodeJoints } from '../../src/motion/decode';
 import { recoverJoints } from '../../src/motion/recover';
 import { el } from './dom';
@@ -301,14 +301,7 @@ export class TimelinePanel implements RequestPanel {
       const { motion, shown } = this.base();
       const c = { prompt };
       const seed = randomSeed();
-      const fps = motion.fps;
-      if (!(first > 0) || !(last > 0)) throw new EditError(`in-betweening: keep more than 0 s at each end (got first ${first} s, last ${last} s)`);
-      // keep frames 0…a and b…N−1, with at least one new frame between them
-      const range = { a: Math.round(first * fps) - 1, b: motion.frames - Math.round(last * fps) };
-      if (motion.frames <= this.limits().maxFrames && (range.a < 0 || range.b > motion.frames - 1 || range.b < range.a + 2)) {
-        const len = motion.frames / fps;
-        throw new EditError(`in-betweening: keeping the first ${fmtSeconds(first)} s and the last ${fmtSeconds(last)} s of this ${fmtSeconds(len)} s motion leaves no middle to regenerate; keep at least ${fmtSeconds(1 / fps)} s at each end and at most ${fmtSeconds(len - 1 / fps)} s in all`);
-      }
+      const range = inBetweenRange(motion, first, last, this.limits()); // in the fields' seconds where none is left
       const r = await inBetween(motion, c, seed, gen, this.limits(), range);
       return {
         motion: r, display: this.decode(r.features, r.frames), windows: 1, results: calls.results,
