@@ -156,10 +156,16 @@ def test_cli_writes_the_json_and_the_report_renders_it(world, capsys):
     assert "Each column's classifier" not in text, "one classifier judged both"
     # a result judged by another classifier (older weights, not measured again): the table says which judged which
     other = json.loads(out0.read_text())
-    other["classifier"]["summary"] = "ActionClassifier trained before the relabel"
+    other["classifier"].update(summary="ActionClassifier trained before the relabel", sha256="0" * 16)
     lines = R.comparison([r, other])
     assert f"Each column's classifier is its own result's: {r['name']}: {r['classifier']['summary']}; t2m-x0s0: " \
            "ActionClassifier trained before the relabel." in lines[2]
+    # judges are told apart by their files, not their words: two files of one summary are named by sha256
+    twin = {**other, "classifier": {**r["classifier"], "sha256": "f" * 16}}
+    lines = R.comparison([r, twin])
+    assert f"{r['name']}: {r['classifier']['summary']} (sha256 {r['classifier']['sha256']}); t2m-x0s0: " \
+           f"{r['classifier']['summary']} (sha256 {'f' * 16})." in lines[2]
+    assert "Each column's classifier" not in R.comparison([r, {**other, "classifier": r["classifier"]}])[2]
 
 
 def test_cli_names_a_missing_classifier(world, capsys):

@@ -453,11 +453,15 @@ def comparison(results: list[dict]) -> list[str]:
                          f"{_p(r['generated']['classifier'].get(a))}")
         rows.append([a] + cells)
     # results of older weights cannot be measured again: where a later classifier judged the newer ones, say which
-    judges: dict[str, list[str]] = {}
+    # (told apart by the files' sha256 where recorded: two classifiers of one config can share a summary)
+    judges: dict[str, tuple[str, list[str]]] = {}
     for r in results:
-        judges.setdefault((r.get("classifier") or {}).get("summary", "an unrecorded classifier"), []).append(r["name"])
+        c = r.get("classifier") or {}
+        summary = c.get("summary", "an unrecorded classifier")
+        judges.setdefault(c.get("sha256") or summary, (summary, []))[1].append(r["name"])
     by = ("" if len(judges) < 2 else " Each column's classifier is its own result's: " + "; ".join(
-        f"{', '.join(names)}: {summary}" for summary, names in judges.items()) + ".")
+        f"{', '.join(names)}: {summary}" + ("" if sum(s == summary for s, _ in judges.values()) < 2 else f" (sha256 {key})")
+        for key, (summary, names) in judges.items()) + ".")
     return ["### Side by side", "", "Per action: speed ÷ real · motions with a joint step over the real maximum (of all actions' clips / of the "
             "action's own) · "
             "motions that move (peak joint speed ≥ a quarter of the real clips' 5th percentile) · kinematic rule (n/j: not judged) · "
