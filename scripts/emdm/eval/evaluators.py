@@ -20,6 +20,8 @@ generator's own normalisation never matters.
 CLI (``nice -n 19`` on shared machines; one thread by default):
     python -m emdm.eval.evaluators matcher    --dataset data/dataset --out runs/eval/matcher.pt
     python -m emdm.eval.evaluators classifier --dataset data/dataset --out runs/eval/classifier.pt
+    python -m emdm.eval.evaluators classifier --seed 1 --out runs/eval/classifier-seed1.pt   # the judge of meaning
+    python -m emdm.eval.evaluators classifier --seed 2 --out runs/eval/classifier-seed2.pt   # is all three (emdm.eval.judge)
 """
 
 from __future__ import annotations
