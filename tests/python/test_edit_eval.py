@@ -164,6 +164,12 @@ def test_the_committed_result_claims_only_what_its_figures_say(tmp_path, name):
     assert text.count("**met**") == sum(b["met"] for b in r["bars"].values())
     assert text.count("**not met**") == sum(not b["met"] for b in r["bars"].values())
     assert r["bars"]["seam_acceleration"]["figure"] in text
+    # the seams whose root jumps are named, as many as the bar counts out (results from before 2026-11-28: none listed)
+    if "root_failing" in r["seams"]:
+        failing = r["seams"]["root_failing"]
+        assert len(failing) == r["seams"]["count"] - r["seams"]["root_within_bar"]
+        assert all(max(f["jump_ratio"], f["turn_jump_ratio"]) > em.BARS["seam_root"] for f in failing)
+        assert all(f"of {' → '.join(f['order'])} (position" in text for f in failing)
 
 
 def test_semantics_and_root_are_judged_on_their_bar_figures():

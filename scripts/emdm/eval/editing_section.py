@@ -137,7 +137,9 @@ def _root(s: dict) -> str:
             f"max {_f(s['root_step_ratio']['max'])}× its 95th percentile (max {_f(s['root_step_cm']['max'], 1)} cm), the heading's "
             f"change median {_f(s['root_turn_ratio']['median'])}×, max {_f(s['root_turn_ratio']['max'])}× (max "
             f"{_f(s['root_turn_deg']['max'], 1)}°); real middle frames reach {_f(rs['max'])}× and {_f(rt['max'])}× on these "
-            f"(a walk turning on through a seam at its own rate)")
+            f"(a walk turning on through a seam at its own rate)"
+            + "".join(f"; over 1.5× at the seam into segment {f['seam'] + 1} of {' → '.join(f['order'])} (position "
+                      f"{_f(f['jump_ratio'])}×, heading {_f(f['turn_jump_ratio'])}×)" for f in s.get("root_failing", [])))
 
 
 def _semantics(sem: dict) -> str:
