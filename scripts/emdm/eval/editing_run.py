@@ -247,6 +247,7 @@ def seam_figures(bench, r: Runs) -> dict:
                 "single": [x for _, j in singles for x in seam_root(j, [len(j) // 2])]}
     near = [x for tl, s in zip(timelines, seams) for x in seam_flips(tl.features, s)]
     failing = [i for i, x in enumerate(acc) if x > bar]
+    root_failing = [i for i, x in enumerate(root) if max(x["jump_ratio"], x["turn_jump_ratio"]) > BARS["seam_root"]]
     where = [(ti, k + 1) for ti, s in enumerate(seams) for k in range(len(s))]     # (timeline, seam) of acc[i], root[i]
     shares = {"real": flip_share(bench.test.motions), "single": flip_share([f for f, _ in singles]),
               "timeline": flip_share([tl.features for tl in timelines])}
@@ -269,12 +270,10 @@ def seam_figures(bench, r: Runs) -> dict:
             "root_turn_deg": summary([x["turn_deg"] for x in root]),
             "root_jump_ratio": summary([x["jump_ratio"] for x in root]),
             "root_turn_jump_ratio": summary([x["turn_jump_ratio"] for x in root]),
-            "root_within_bar": int(sum(x["jump_ratio"] <= BARS["seam_root"] and x["turn_jump_ratio"] <= BARS["seam_root"]
-                                       for x in root)),
+            "root_within_bar": len(root) - len(root_failing),
             "root_failing": [{"timeline": where[i][0], "order": list(tl_orders[where[i][0]]), "seam": where[i][1],
-                              "jump_ratio": x["jump_ratio"], "turn_jump_ratio": x["turn_jump_ratio"]}
-                             for i, x in enumerate(root)
-                             if x["jump_ratio"] > BARS["seam_root"] or x["turn_jump_ratio"] > BARS["seam_root"]],
+                              "jump_ratio": root[i]["jump_ratio"], "turn_jump_ratio": root[i]["turn_jump_ratio"]}
+                             for i in root_failing],
             "reference_root_step_ratio": ref("step_ratio"), "reference_root_turn_ratio": ref("turn_ratio"),
             "reference_root_jump_ratio": ref("jump_ratio"), "reference_root_turn_jump_ratio": ref("turn_jump_ratio"),
             "real_clips": len(real)}

@@ -53,12 +53,11 @@ class JudgeError(ValueError):
     """A classifier file is missing, unreadable, or does not fit the others (the message names the file)."""
 
 
-def add_argument(ap, help_extra: str = "") -> None:
+def add_argument(ap) -> None:
     """``--classifier FILE [FILE ...]`` (default: the three seeds' files) on an argparse parser."""
     ap.add_argument("--classifier", type=Path, nargs="+", default=default_paths(),
                     help="the action classifier file(s) that judge meaning; several: their mean probability names "
-                         "the action (default: runs/eval/classifier.pt, classifier-seed1.pt, classifier-seed2.pt)"
-                         + help_extra)
+                         "the action (default: runs/eval/classifier.pt, classifier-seed1.pt, classifier-seed2.pt)")
 
 
 class Judge:
