@@ -21,13 +21,14 @@
  * The contract (frames at `fps`, C = OVERLAP_FRAMES = 1 s):
  * - Timeline: segment k has n_k = round(seconds·fps) ≥ 1 new frames, made in windows. The timeline's first
  *   window is an ordinary generation; every later one holds c + m frames, c = min(C, frames so far), its first c
- *   frames kept (all channels) from the sequence's last c frames, generated with its segment's condition. A segment
+ *   frames kept (all channels) from the sequence's last c frames (the last one's root velocity [0:3], its step into
+ *   the window, replaced by the frame's before: the window before never took it), generated with its segment's condition. A segment
  *   of n ≤ cap = maxFrames − C frames is one window (the first segment: up to maxFrames); a longer one is split
  *   into ⌈n/cap⌉ near-equal windows (the first ones one frame longer), window j seeded seed + j. Each later
  *   window's features are eased at the seam (`easeSeams`, at the `seamAccel` of the window before it) before
  *   anything else reads them. Joints: each window
  *   recovered, then `appendSegment(prev, window, c)`; features: the first window's, then every later window's
- *   frames [c, …).
+ *   frames [c, …), the frame before each of those taking the step its context gave it.
  *   Changing segment i regenerates i and every later one (they continue from it); those before are kept.
  *   With `begin` (the generator's), every window to generate is started at once, one model call per step for all,
  *   and stopped where its context joins (t ≤ TIMELINE_KEEP_FROM; its context frames sit those steps out, so they
@@ -48,7 +49,7 @@
  * exactly in its normalised space.
  */
 import { recoverJoints } from './motion/recover';
-import { SEAM_EASE_FRAMES, easeSeams, seamAccel } from './motion/seams';
+import { ROOT_STEP_CHANNELS, SEAM_EASE_FRAMES, easeSeams, seamAccel } from './motion/seams';
 import { appendSegment, pinKeptRoot } from './motion/stitch';
 import { keepMask, type FeatureGroup, type KnownMotion } from './sampler/mask';
 import { AbortError } from './sampler/sampler';
@@ -260,6 +261,8 @@ export function stitchTimeline(segments: SegmentResult[], fps: number): Timeline
   let frames = wins[0].w.frames;
   features.set(wins[0].w.features, 0);
   for (const { w, c } of wins.slice(1)) {
+    // the step into the window's first new frame: the step before it (the window's context, as generateTimeline gave it)
+    if (c >= 2) features.copyWithin((frames - 1) * D, (frames - 2) * D, (frames - 2) * D + ROOT_STEP_CHANNELS);
     features.set(w.features.subarray(c * D), frames * D);
     const next = appendSegment(joints, frames, w.joints, w.frames, c);
     joints = next.joints;
@@ -332,6 +335,8 @@ export async function generateTimeline(segments: readonly TimelineSegment[], gen
         const prev = (result.windows.at(-1) ?? out.at(-1)?.windows.at(-1))!;
         const known = new Float32Array((c + m) * D);
         known.set(prev.features.subarray((prev.frames - c) * D), 0);
+        // its last frame's step is into the window: the step before it (as easeSeams takes it)
+        if (c >= 2) known.copyWithin((c - 1) * D, (c - 2) * D, (c - 2) * D + ROOT_STEP_CHANNELS);
         const keep = contextKeep(c, m);
         const raw = await gen({ ...cond, frames: c + m, seed, known: { features: known, keep, fromTime: TIMELINE_KEEP_FROM }, ...resume });
         checkMotion(raw, c + m, label(i));

@@ -42,7 +42,7 @@ import { type EditCondition, type EditLimits, EditError, OVERLAP_FRAMES, TIMELIN
 import { decodeJoints } from '../motion/decode';
 import type { FootRig } from '../motion/footContact';
 import { recoverJoints } from '../motion/recover';
-import { SEAM_EASE_FRAMES, easeSeams, seamAccel } from '../motion/seams';
+import { ROOT_STEP_CHANNELS, SEAM_EASE_FRAMES, easeSeams, seamAccel } from '../motion/seams';
 import { alignSegment } from '../motion/stitch';
 import type { KnownMotion } from '../sampler/mask';
 import { FOOT_JOINT_NAMES, JOINT_NAMES, PARENTS } from '../skeleton';
@@ -214,7 +214,7 @@ export class LiveCore {
     if (k >= req.frames) return { from: cut, shown: cut, late, dropped: true, cost };
     if (late > 0) {
       const known = Float32Array.from(f);
-      known.set(this.rows(this.features, cut, cut + late, D), c * D);
+      known.set(this.rows(this.features, cut - 1, cut + late, D), (c - 1) * D); // as shown (the first easing took a step out of row c − 1)
       f = easeSeams(known, req.frames, contextKeep(k, req.frames - k), SEAM_EASE_FRAMES, D, seamAccel(this.rows(this.features, cut + late - before, cut + late, D), before));
     }
     const at = cut + late;
@@ -224,6 +224,8 @@ export class LiveCore {
     const shown = alignSegment(prev, k, decodeJoints(f, req.frames, RIG, { smooth: true, footCleanup: true }), req.frames, k, rec);
     const s = Math.max(p + 1, at - LIVE_DISPLAY_PAD, this.base);
     this.splice(at, f.subarray(k * D), aligned.subarray(k * JV), s, shown.subarray((k - (at - s) - 1) * JV));
+    // the step into the window's first new frame is the seam's (easeSeams)
+    if (at - 1 >= this.base) this.features.set(f.subarray((k - 1) * D, (k - 1) * D + ROOT_STEP_CHANNELS), (at - 1 - this.base) * D);
     this.recentre(p);
     this.trim(p);
     return { from: at, shown: s, late, dropped: false, cost };

@@ -88,6 +88,23 @@ export function seamBlendFrames(r: number, accel = SEAM_EASE_ACCEL, fps = 20): n
   return Math.ceil(Math.PI * Math.sqrt((r * fps * fps) / (2 * accel)) - 1e-9) - 1;
 }
 
+/** Root angular and linear velocity, channels [0, 3): frame t's is the root's step from t to t + 1. At a left seam
+ * `easeSeams` takes it for the last kept frame from the frame before; callers that keep their own copy of the kept
+ * frames (timelines, the live stream) take that row's step from the eased window. */
+export const ROOT_STEP_CHANNELS = 3;
+
+/** The farthest frame k0 + step·q, q = 1…SEAM_BLEND_VELOCITY, with every frame from k0 to it kept (−1: k0 + step is
+ * not kept): the kept side's velocity at a seam is (f[k0] − f[k]) / q (Python `_kept_back`). */
+function keptBack(kept: boolean[], k0: number, step: number): number {
+  let k = -1;
+  for (let q = 1; q <= SEAM_BLEND_VELOCITY; q++) {
+    const t = k0 + step * q;
+    if (t < 0 || t >= kept.length || !kept[t]) break;
+    k = t;
+  }
+  return k;
+}
+
 /**
  * Ease out the jump between kept frames and generated ones (Python `emdm.motion.edit.ease_seams`, the same
  * arithmetic): the sampler keeps the known frames exactly, but the model's first generated frame need not
@@ -106,20 +123,11 @@ export function seamBlendFrames(r: number, accel = SEAM_EASE_ACCEL, fps = 20): n
  * β_i·f[s+i], β_i = (1 − cos(π(i+1)/(b+1)))/2, b = min(m + SEAM_BLEND_EXTRA, e − s), left seam then right (mirrored):
  * the offset fixes where the first generated frame is, the cross-fade damps the model's own fast first frames
  * (raised hands dropped in two frames: 13× the 95th percentile). Foot contacts [259:263] stay; frames kept in part
- * (body-part edits) are left alone.
+ * (body-part edits) are left alone. First of all, at a left seam with two kept frames before it, the last kept frame's
+ * root velocity [0:3] becomes the one before it (`ROOT_STEP_CHANNELS`): it is the step into the first generated frame,
+ * which the window before a timeline's seam never took (its last frames wander: 3 of 144 timeline seams had root
+ * jumps over 1.5× the timeline's 95th percentile, each on that step).
  */
-/** The farthest frame k0 + step·q, q = 1…SEAM_BLEND_VELOCITY, with every frame from k0 to it kept (−1: k0 + step is
- * not kept): the kept side's velocity at a seam is (f[k0] − f[k]) / q (Python `_kept_back`). */
-function keptBack(kept: boolean[], k0: number, step: number): number {
-  let k = -1;
-  for (let q = 1; q <= SEAM_BLEND_VELOCITY; q++) {
-    const t = k0 + step * q;
-    if (t < 0 || t >= kept.length || !kept[t]) break;
-    k = t;
-  }
-  return k;
-}
-
 export function easeSeams(features: ArrayLike<number>, frames: number, keep: ArrayLike<number>, ease = SEAM_EASE_FRAMES, dim = D, accel = SEAM_EASE_ACCEL): Float32Array {
   if (features.length !== frames * dim || keep.length !== frames * dim) {
     throw new RangeError(`easeSeams: features (${features.length}) and keep (${keep.length}) must both hold frames (${frames}) × ${dim} values`);
@@ -136,6 +144,11 @@ export function easeSeams(features: ArrayLike<number>, frames: number, keep: Arr
     }
     kept.push(all);
     free.push(!any);
+  }
+  // a left seam's last kept frame: its root velocity [0:3] is its step into the first generated frame (the seam's,
+  // not the kept motion's), so it repeats the step before it (Python twin's doc)
+  for (let s = 2; s < frames; s++) {
+    if (free[s] && kept[s - 1] && kept[s - 2]) for (let c = 0; c < ROOT_STEP_CHANNELS; c++) f[(s - 1) * dim + c] = f[(s - 2) * dim + c];
   }
   const row = (t: number) => f.subarray(t * dim, (t + 1) * dim);
   const adds: { t: number; w: number; o: Float64Array }[] = [];

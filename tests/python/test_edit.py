@@ -72,20 +72,26 @@ def test_a_timeline_continues_each_segment_from_the_last_second_of_the_sequence(
     for k, c in enumerate(spy.calls[1:], 1):
         so_far = tl.features[:tl.starts[k]]
         assert np.array_equal(c["known"][:20], ed.normalise(so_far[-20:]))         # the last second
+        assert np.array_equal(c["known"][19, :3], c["known"][18, :3])     # its last step (into the window): the one before
         assert np.array_equal(c["keep"][:20], np.ones((20, 263))) and not c["keep"][20:].any()
         assert np.array_equal(c["x"][:20], c["known"][:20])                        # kept exactly
         before = spy.calls[k - 1]["frames"]                                        # the window before: its c + n
         accel = E.seam_accel(so_far[-before:])
         assert E.SEAM_ACCEL_MIN <= accel <= E.SEAM_ACCEL
         eased = E.ease_seams(ed.denormalise(c["x"]), c["keep"], accel=accel)
-        assert np.array_equal(tl.features[tl.starts[k]:tl.starts[k] + tl.frames[k]], eased[20:])   # then its new frames
+        new = tl.features[tl.starts[k]:tl.starts[k] + tl.frames[k]]                # then its new frames,
+        last = len(spy.calls) - 1
+        assert np.array_equal(new[:-1], eased[20:-1]) and np.array_equal(new[-1, 3:], eased[-1, 3:])
+        assert np.array_equal(new[-1, :3], new[-2, :3] if k < last else eased[-1, :3])   # the last one's step: the next's
         raw = ed.denormalise(c["x"])
         o = raw[19] + (raw[19] - raw[18] + raw[21] - raw[20]) / 2 - raw[20]      # the seam's offset
         b = min(E.seam_ease_frames(o, accel=accel) + E.SEAM_BLEND_EXTRA, len(raw) - 20)   # its fade, the cross-fade
         changed = np.nonzero((eased != raw).any(1))[0]
         assert changed.min() == 20 and changed.max() >= 19 + b                 # the cross-fade: b frames or more
         assert np.array_equal(eased[changed.max() + 1:], raw[changed.max() + 1:])
-    assert np.array_equal(tl.features[:30], ed.denormalise(spy.calls[0]["x"]))
+    first = ed.denormalise(spy.calls[0]["x"])
+    assert np.array_equal(tl.features[:29], first[:29]) and np.array_equal(tl.features[29, 3:], first[29, 3:])
+    assert np.array_equal(tl.features[29, :3], first[28, :3])
     assert np.array_equal(tl.x, ed.normalise(tl.features))
 
 
@@ -109,10 +115,12 @@ def test_easing_a_seam_removes_the_jump_and_leaves_kept_frames_and_contacts_alon
     keep[:20] = 1
     g = E.ease_seams(f, keep)
     m = E.seam_ease_frames(g[20] - f[20])                              # 0.8·√3 m per joint: 12 frames
-    assert m == math.ceil(math.pi * math.sqrt(0.8 * math.sqrt(3) * 400 / (2 * E.SEAM_ACCEL))) > E.SEAM_EASE and np.array_equal(g[:20], f[:20])
+    assert m == math.ceil(math.pi * math.sqrt(0.8 * math.sqrt(3) * 400 / (2 * E.SEAM_ACCEL))) > E.SEAM_EASE
+    assert np.array_equal(g[:19], f[:19]) and np.array_equal(g[19, 3:], f[19, 3:])   # kept, but the last one's step:
+    assert np.array_equal(g[19, :3], f[18, :3])                                     # the root velocity before it
     assert np.array_equal(g[20 + m + E.SEAM_BLEND_EXTRA:], f[20 + m + E.SEAM_BLEND_EXTRA:])   # offset fade, then the cross-fade
     assert np.array_equal(g[:, 259:], f[:, 259:])
-    acc = lambda x: np.abs(np.diff(x[:, 0], 2))                         # noqa: E731
+    acc = lambda x: np.abs(np.diff(x[:, 4], 2))                         # noqa: E731  (a joint's channel)
     assert acc(f)[18:20].max() > 0.5 and acc(g).max() < 0.1            # the jump is gone, spread over m frames
     keep[35:] = 1                                                      # a kept end too: eased backwards into 34, 33, ...
     f[35:] -= 1.6
@@ -340,7 +348,9 @@ def test_inbetweening_keeps_the_first_and_last_second_where_they_were(model, tl)
     assert np.abs(m.joints[50:] - want[50:]).max() < 1e-3                      # ≤ 1 mm after the free frames
     assert np.abs(m.joints[20:50] - want[20:50]).max() > 1e-2
     changed = np.argwhere(np.abs(m.features - src) > 1e-4 * (1 + np.abs(src)))
-    assert changed[:, 0].min() >= 20 and changed[:, 0].max() < 50
+    assert changed[:, 0].min() >= 19 and changed[:, 0].max() < 50
+    assert set(changed[changed[:, 0] == 19, 1]) <= {0, 1, 2}       # frame 19's step, into a generated frame 20
+    assert np.allclose(m.features[19, :3], src[18, :3], atol=1e-5)
     m2 = E.inbetween(model, src, "d", 5, keep_until=9, keep_from=60)             # any marked range
     assert np.abs(m2.joints[60:] - want[60:]).max() < 1e-3 and np.abs(m2.joints[10:60] - want[10:60]).max() > 1e-2
 

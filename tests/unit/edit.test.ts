@@ -93,16 +93,25 @@ describe('timeline generation (a generator that keeps the known entries)', () =>
     ]);
     expect(seen).toEqual([0, 1, 2, 3, 4, 5, 6]);
     expect(calls[0].known).toBeUndefined();
-    // every later window: its first C frames are the previous window's last C, all channels kept
+    // every later window: its first C frames are the previous window's last C, all channels kept, the last one's
+    // root velocity [0:3] (its step into the window) the one before it
+    const w = t.segments.flatMap((s) => s.windows);
     for (let j = 1; j < calls.length; j++) {
       const k = calls[j].known!;
       expect(k.keep.subarray(0, C * D).every((v) => v === 1)).toBe(true);
       expect(k.keep.subarray(C * D).every((v) => v === 0)).toBe(true);
+      const prev = w[j - 1].features.subarray((w[j - 1].frames - C) * D);
+      expect(maxDiff(k.features.subarray(0, (C - 1) * D), prev.subarray(0, (C - 1) * D))).toBe(0);
+      expect(maxDiff(k.features.subarray((C - 1) * D + 3, C * D), prev.subarray((C - 1) * D + 3))).toBe(0);
+      expect(maxDiff(k.features.subarray((C - 1) * D, (C - 1) * D + 3), prev.subarray((C - 2) * D, (C - 2) * D + 3))).toBe(0);
     }
-    // features: the windows' new frames in order; the stitched joints are what those features decode to
-    const w = t.segments.flatMap((s) => s.windows);
-    expect(maxDiff(t.features.subarray(0, 100 * D), w[0].features)).toBe(0);
-    expect(maxDiff(t.features.subarray(100 * D, 200 * D), w[1].features.subarray(C * D))).toBe(0);
+    // features: the windows' new frames in order, the frame before a window's taking the step its context gave it;
+    // the stitched joints are what those features decode to
+    expect(maxDiff(t.features.subarray(0, 99 * D), w[0].features.subarray(0, 99 * D))).toBe(0);
+    expect(maxDiff(t.features.subarray(99 * D + 3, 100 * D), w[0].features.subarray(99 * D + 3))).toBe(0);
+    expect(maxDiff(t.features.subarray(99 * D, 99 * D + 3), calls[1].known!.features.subarray((C - 1) * D, (C - 1) * D + 3))).toBe(0);
+    expect(maxDiff(t.features.subarray(100 * D, 199 * D), w[1].features.subarray(C * D, (C + 99) * D))).toBe(0);
+    expect(maxDiff(t.features.subarray(199 * D + 3, 200 * D), w[1].features.subarray((C + 99) * D + 3))).toBe(0);
     expect(maxDiff(t.joints, recoverJoints(t.features, 600))).toBeLessThan(1e-4);
     // no jump at the seams: a seam step is no bigger than the steps inside a window
     const step = (f: number) => Math.hypot(t.joints[f * 66] - t.joints[(f - 1) * 66], t.joints[f * 66 + 2] - t.joints[(f - 1) * 66 + 2]);
@@ -242,7 +251,10 @@ describe('the real path: createGenerator (in-process, tiny step model) with know
     expect(t.frames).toBe(50);
     const [w0, w1] = t.segments.map((s) => s.windows[0]);
     expect(w1.frames).toBe(40);
-    expect(maxDiff(w1.features.subarray(0, C * D), w0.features.subarray(10 * D))).toBeLessThan(1e-4);
+    // w1's context: w0's last C frames, the last one's step into w1 (root velocity [0:3]) the one before it
+    expect(maxDiff(w1.features.subarray(0, (C - 1) * D), w0.features.subarray(10 * D, 29 * D))).toBeLessThan(1e-4);
+    expect(maxDiff(w1.features.subarray((C - 1) * D + 3, C * D), w0.features.subarray(29 * D + 3))).toBeLessThan(1e-4);
+    expect(maxDiff(w1.features.subarray((C - 1) * D, (C - 1) * D + 3), w0.features.subarray(28 * D, 28 * D + 3))).toBeLessThan(1e-4);
     expect(maxDiff(t.joints, recoverJoints(t.features, 50))).toBeLessThan(1e-3);
     const ib = await inBetween(t, { action: 'e' }, 3, gen, lim);
     // kept frames decode where they were (first and last second), ≤ 1 mm

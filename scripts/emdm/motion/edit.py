@@ -18,10 +18,12 @@ Frame bookkeeping (the contract with ``src/edit.ts``; FPS 20, C = ``OVERLAP`` = 
   near-equal ones, window j seeded seed + j). The first window is an ordinary generation. Every later window
   samples c + n frames, c = min(C, frames so far), whose frames [0, c) are kept (all channels) from the
   sequence's last c
-  de-normalised frames (normalised as the sampler takes them), imposed at the steps with t ≤
+  de-normalised frames (the last one's root velocity [0:3], its step into the window, replaced by the frame's
+  before: the window before never took it; normalised as the sampler takes them), imposed at the steps with t ≤
   ``TIMELINE_KEEP_FROM`` (``keep_from_time``; the other edits impose theirs at every step); the window's features are eased
   (``ease_seams``) and its joints appended by ``append_segment(prev, window, c)``. The sequence's
-  de-normalised features are concat(window_0, window_1[c:], …). ``regenerate`` from segment i reuses frames
+  de-normalised features are concat(window_0, window_1[c:], …), the frame before each window's new ones taking the
+  step its context gave it. ``regenerate`` from segment i reuses frames
   before segment i.
 * in-betweening: known = the motion (N ≤ maxFrames frames), kept frames [0, a] ∪ [b, N−1] (default a = 19,
   b = N − 20). The features of in-betweening, body-part edits and loops are
@@ -49,7 +51,7 @@ import numpy as np
 from emdm.model.open import quantises_per_call
 from emdm.motion.features import recover_joints
 from emdm.motion.mask import KeepRect, keep_mask
-from emdm.motion.seams import (CONTACTS, SEAM_ACCEL, SEAM_ACCEL_MIN, SEAM_BLEND_EXTRA, SEAM_BLEND_TAU,  # noqa: F401  (re-exported)
+from emdm.motion.seams import (CONTACTS, ROOT_STEP, SEAM_ACCEL, SEAM_ACCEL_MIN, SEAM_BLEND_EXTRA, SEAM_BLEND_TAU,  # noqa: F401  (re-exported)
                                SEAM_BLEND_VELOCITY, SEAM_EASE, ease_seams, joint_acceleration, seam_accel,
                                seam_blend_frames, seam_ease_frames)
 from emdm.motion.stitch import append_segment, pin_kept_root
@@ -342,13 +344,16 @@ def timeline(model: Editor, segments: Sequence[Segment], overlap: int = OVERLAP,
             before = n
             continue
         known = np.zeros((c + n, feats.shape[1]), np.float32)
-        known[:c] = model.normalise(feats[-c:])
+        context = feats[-c:].copy()
+        if c >= 2:      # its last frame's step is into the window: the step before it (as ease_seams takes it)
+            context[-1, ROOT_STEP] = context[-2, ROOT_STEP]
+        known[:c] = model.normalise(context)
         keep = context_keep(c, n)
         x = model.finish(runs[i], known) if runs else model.sample(prompt, c + n, seed, known, keep, TIMELINE_KEEP_FROM)
         w = ease_seams(model.denormalise(x), keep, accel=seam_accel(feats[-before:]))
         before = c + n
         joints = append_segment(joints, recover_joints(w), c)
-        feats = np.concatenate([feats, w[c:]])
+        feats = np.concatenate([feats[:-1], context[-1:], w[c:]])
     return Timeline(feats, np.asarray(joints, np.float32), segments, tuple(frames), model.normalise(feats), overlap)
 
 

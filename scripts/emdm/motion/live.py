@@ -25,7 +25,7 @@ from emdm import skeleton as sk
 from emdm.motion.decode import decode_joints
 from emdm.motion.edit import OVERLAP, TIMELINE_KEEP_FROM, EditError, Editor, context_keep
 from emdm.motion.features import recover_joints
-from emdm.motion.seams import ease_seams, seam_accel
+from emdm.motion.seams import ROOT_STEP, ease_seams, seam_accel
 from emdm.motion.stitch import align_segment
 
 # New frames of a window (3 s at 20 fps). With 40 (2 s) the live segments of the covered actions were recognised as
@@ -162,7 +162,7 @@ class LiveCore:
             return cut, True
         if late:
             f = f.copy()
-            f[c:k] = rows(cut, cut + late)
+            f[c - 1:k] = rows(cut - 1, cut + late)       # as shown (the first easing took a step out of row c − 1)
             f = ease_seams(f, context_keep(k, n - k), accel=seam_accel(rows(cut + late - before, cut + late)))
         at = cut + late
         prev = self.joints[at - k - self.base:at - self.base]
@@ -180,6 +180,8 @@ class LiveCore:
                 if low < 0:     # the floor stays under the feet (the clean-up's floor step)
                     display[ks + i, :, 1] -= low
         self.features = np.concatenate([self.features[:at - self.base], np.asarray(f[k:], np.float32)])
+        if at - 1 >= self.base:      # the step into the window's first new frame is the seam's (ease_seams)
+            self.features[at - 1 - self.base, ROOT_STEP] = f[k - 1, ROOT_STEP]
         self.joints = np.concatenate([self.joints[:at - self.base], np.asarray(aligned[k:], np.float32)])
         self.display = display
         self._recentre(p)

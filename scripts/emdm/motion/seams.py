@@ -22,6 +22,7 @@ SEAM_BLEND_VELOCITY = 3    # frames: the velocity the cross-fade continues is th
 # (``seam_accel``), between these bounds, m/s²: a calm motion is not ended by a fade faster than anything in it.
 SEAM_ACCEL_MIN = 5.0
 CONTACTS = slice(259, 263)  # foot contact channels: not eased
+ROOT_STEP = slice(0, 3)     # root angular and linear velocity: frame t's is the root's step from t to t + 1
 
 
 def seam_ease_frames(offset: np.ndarray, ease: int = SEAM_EASE, accel: float = SEAM_ACCEL, fps: int = FPS) -> int:
@@ -96,12 +97,23 @@ def ease_seams(features: np.ndarray, keep: np.ndarray, ease: int = SEAM_EASE, ac
     it falls, so an early one hardly shows; where the model continues smoothly, c and f agree and little changes.
     Over 36 timelines (x̂0 smoothed, seeds 0 and 1000): 58–60 → 72 of 72 seams within 1.5× the 95th percentile,
     seam foot skate 1.30–1.35 → 1.16–1.23× the skate within segments. Foot contacts [259:263] stay. Frames that
-    keep only some channels (body-part edits) are neither kept nor free: nothing is eased next to them."""
+    keep only some channels (body-part edits) are neither kept nor free: nothing is eased next to them.
+
+    First of all, at a left seam with two kept frames before it, the last kept frame's root velocity [0:3]
+    (``ROOT_STEP``) becomes the one before it: a frame's root velocity is its step to the next frame, and the next
+    frame is now a generated one. In a timeline (or a live stream) the kept frame ended the window before, whose step
+    out of it was never taken: the model's last frames wander (emdm-t2m-web, int8, 10 steps: climb → walk backward →
+    lie down sped from 0.68 to 1.03 m/s on that step, 1.9× the timeline's 95th percentile of root acceleration; 3 of
+    144 timeline seams over 1.5×, each such a step); in an in-between it was the step to the frame now replaced. Only
+    the root of generated frames moves (every kept frame decodes where it was); callers that keep their own copy of
+    the kept frames (``emdm.motion.edit.timeline``, ``emdm.motion.live``) take that step from the eased window."""
     f = np.asarray(features, np.float64).copy()
     k = np.asarray(keep).astype(bool)
     kept, free = k.all(1), ~k.any(1)
     n = len(f)
     offsets, blends = [], []
+    for s in np.flatnonzero(free[2:] & kept[1:-1] & kept[:-2]) + 2:   # a left seam with two kept frames before it
+        f[s - 1, ROOT_STEP] = f[s - 2, ROOT_STEP]
 
     def fade(o):
         o = o.copy()
