@@ -90,7 +90,8 @@ export function seamBlendFrames(r: number, accel = SEAM_EASE_ACCEL, fps = 20): n
 
 /** Root angular and linear velocity, channels [0, 3): frame t's is the root's step from t to t + 1. At a left seam
  * `easeSeams` takes it for the last kept frame from the frame before; callers that keep their own copy of the kept
- * frames (timelines, the live stream) take that row's step from the eased window. */
+ * frames take the same step (`generateTimeline` gives it to the window's context before sampling, the live stream
+ * writes it back into its buffer). */
 export const ROOT_STEP_CHANNELS = 3;
 
 /** The farthest frame k0 + step·q, q = 1…SEAM_BLEND_VELOCITY, with every frame from k0 to it kept (−1: k0 + step is

@@ -105,8 +105,9 @@ def ease_seams(features: np.ndarray, keep: np.ndarray, ease: int = SEAM_EASE, ac
     out of it was never taken: the model's last frames wander (emdm-t2m-web, int8, 10 steps: climb → walk backward →
     lie down sped from 0.68 to 1.03 m/s on that step, 1.9× the timeline's 95th percentile of root acceleration; 3 of
     144 timeline seams over 1.5×, each such a step); in an in-between it was the step to the frame now replaced. Only
-    the root of generated frames moves (every kept frame decodes where it was); callers that keep their own copy of
-    the kept frames (``emdm.motion.edit.timeline``, ``emdm.motion.live``) take that step from the eased window."""
+    the root of generated frames moves (every kept frame decodes where it was). Callers that keep their own copy of
+    the kept frames take the same step: ``emdm.motion.edit.timeline`` gives it to the window's context before
+    sampling, ``emdm.motion.live`` writes it back into its buffer."""
     f = np.asarray(features, np.float64).copy()
     k = np.asarray(keep).astype(bool)
     kept, free = k.all(1), ~k.any(1)
