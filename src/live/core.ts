@@ -6,7 +6,8 @@
  * The contract (frames at `fps`, C = OVERLAP_FRAMES, W = window frames; frame numbers are the stream's clock):
  * - The buffer holds frames [base, end) of de-normalised features and joints (stage coordinates). The first window
  *   is an ordinary generation of C + W frames. Every later one is a timeline window (src/edit.ts): C + W frames, its
- *   first C kept from the buffer's frames [cut − C, cut) (imposed from TIMELINE_KEEP_FROM on; in a prompt's window from
+ *   first C kept from the buffer's frames [cut − C, cut) (the last one's root velocity, its step into the window, the
+ *   one before it, as in a timeline; imposed from TIMELINE_KEEP_FROM on; in a prompt's window from
  *   LIVE_PROMPT_KEEP_FROM on), seed = seed0 + r
  *   (r: windows requested so far, dropped ones included).
  * - Next window: when fewer than `lead` frames are buffered after the playhead p (end − 1 − p < lead): cut = end.
@@ -18,9 +19,10 @@
  *   motion that will be playing when it is ready.
  * - Accepting a window at playhead p: eased as a timeline window (`easeSeams` at `seamAccel` of the C + W frames
  *   before the cut). Late (p ≥ cut: frames cut…p were shown from the old buffer) it is eased again with those shown
- *   frames kept too (k = C + p + 1 − cut kept frames), so the blend starts at p + 1; a window with nothing left after
- *   them is dropped. Joints: recovered, turned and shifted onto the buffer's frame cut + k − C − 1 (`alignSegment`);
- *   the buffer is cut there and the window's frames after the kept ones appended.
+ *   frames kept too (k = C + p + 1 − cut kept frames, frame cut − 1 as shown), so the blend starts at p + 1; a window
+ *   with nothing left after them is dropped. Joints: recovered, turned and shifted onto the buffer's frame
+ *   cut + k − C − 1 (`alignSegment`); the buffer is cut there and the window's frames after the kept ones appended,
+ *   the frame before them taking the window's step into them (its root velocity [0:3]).
  * - Display (what frameAt gives, what record keeps): the joints as a generated motion is shown (`decodeJoints`: σ = 1
  *   smoothing, feet cleaned up) of each whole window (its kept frames give the smoothing and the clean-up their past),
  *   moved as its recovered joints are. Causal where it joins: frames up to the playhead never change; from
@@ -171,6 +173,7 @@ export class LiveCore {
     const c = OVERLAP_FRAMES;
     const known = new Float32Array((c + W) * D);
     known.set(this.features.subarray((cut - c - this.base) * D, (cut - this.base) * D), 0);
+    known.copyWithin((c - 1) * D, (c - 2) * D, (c - 2) * D + ROOT_STEP_CHANNELS); // its step is into the window (as in a timeline)
     return (this.pending = { ...this.cond, id, seed, frames: c + W, c, cut, prompted, start, known: { features: known, keep: contextKeep(c, W), fromTime: prompted ? LIVE_PROMPT_KEEP_FROM : TIMELINE_KEEP_FROM } });
   }
 

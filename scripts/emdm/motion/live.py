@@ -112,6 +112,7 @@ class LiveCore:
             return self.pending
         known = np.zeros((OVERLAP + self.window, 263), np.float32)
         known[:OVERLAP] = self.features[cut - OVERLAP - self.base:cut - self.base]
+        known[OVERLAP - 1, ROOT_STEP] = known[OVERLAP - 2, ROOT_STEP]     # its step is into the window (as in a timeline)
         self.pending = Request(self.requested, self.prompt, seed, OVERLAP + self.window, OVERLAP, cut, prompted, start,
                                known)
         return self.pending
