@@ -216,10 +216,8 @@ LIVE_WINDOW_NOTE = (
     "with two busy threads beside Node (`--load 2`, 60-s streams) a 60 + 20-frame window took 409 ms (40: 266 ms), "
     "latency p95 0.39–0.47 s (40: 0.39–0.40 s), medians 0.37–0.39 s for both, no underruns. "
     "Live meaning is met again on the actions the page offers; guide stays the weakest (0 % live, 11–22 % "
-    "alone). Judged by the three classifiers, with slash among the covered actions (`-judge3`, seeds 0 / 1): "
-    "classifier 94 / 93 % live against 94 / 96 % alone (p 0.50 / 0.15), kinematic rules 93 / 94 % against "
-    "94 / 93 %: met; slash's live segments 89 / 88 % recognised (alone 100 / 88 %), guide's 0 / 0 % (alone "
-    "25 / 33 %); blends within 1.5× 171 / 171 of 180, seams 50 / 50.")
+    "alone). Judged by the three classifiers, with slash among the covered actions: the `-judge3` rows (seeds "
+    "0 / 1) of the tables below, per action too.")
 
 
 def _benchmarks(results: list[dict], plots: dict[str, str]) -> list[str]:
